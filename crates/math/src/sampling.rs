@@ -1,0 +1,358 @@
+//! Sampling routines. Each warp maps `[0,1)²` to a domain and comes with its density and, where it
+//! is a bijection, its inverse. Local hemisphere directions have the normal along +z.
+
+use crate::{INV_PI, PI};
+use glam::{Vec2, Vec3};
+
+/// Concentric (Shirley–Chiu) map from the unit square to the unit disk.
+#[must_use]
+pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
+    let o = 2.0 * u - Vec2::ONE;
+    if o.x == 0.0 && o.y == 0.0 {
+        return Vec2::ZERO;
+    }
+    let (r, theta) = if o.x.abs() > o.y.abs() {
+        (o.x, (PI / 4.0) * (o.y / o.x))
+    } else {
+        (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y))
+    };
+    Vec2::new(r * theta.cos(), r * theta.sin())
+}
+
+/// Inverse of [`square_to_disk_concentric`].
+#[must_use]
+pub fn disk_concentric_to_square(p: Vec2) -> Vec2 {
+    let r = p.length();
+    if r == 0.0 {
+        return Vec2::splat(0.5);
+    }
+    let mut phi = p.y.atan2(p.x);
+    if phi < -PI / 4.0 {
+        phi += 2.0 * PI;
+    }
+    let (a, b) = if phi < PI / 4.0 {
+        (r, phi * a_over(r))
+    } else if phi < 3.0 * PI / 4.0 {
+        (-(phi - PI / 2.0) * a_over(r), r)
+    } else if phi < 5.0 * PI / 4.0 {
+        (-r, -(phi - PI) * a_over(r))
+    } else {
+        ((phi - 3.0 * PI / 2.0) * a_over(r), -r)
+    };
+    fn a_over(r: f32) -> f32 {
+        4.0 * r / PI
+    }
+    Vec2::new(0.5 * (a + 1.0), 0.5 * (b + 1.0))
+}
+
+/// Cosine-weighted hemisphere direction (Malley's method).
+#[must_use]
+pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
+    let d = square_to_disk_concentric(u);
+    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
+    Vec3::new(d.x, d.y, z)
+}
+
+/// Density of [`square_to_cosine_hemisphere`] per unit solid angle.
+#[must_use]
+pub fn cosine_hemisphere_pdf(w: Vec3) -> f32 {
+    w.z.max(0.0) * INV_PI
+}
+
+/// Inverse of [`square_to_cosine_hemisphere`].
+#[must_use]
+pub fn cosine_hemisphere_to_square(w: Vec3) -> Vec2 {
+    disk_concentric_to_square(Vec2::new(w.x, w.y))
+}
+
+/// Uniform direction on the hemisphere z ≥ 0.
+#[must_use]
+pub fn square_to_uniform_hemisphere(u: Vec2) -> Vec3 {
+    let z = u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Density of [`square_to_uniform_hemisphere`].
+#[must_use]
+pub fn uniform_hemisphere_pdf(w: Vec3) -> f32 {
+    if w.z >= 0.0 {
+        0.5 * INV_PI
+    } else {
+        0.0
+    }
+}
+
+/// Uniform direction on the unit sphere.
+#[must_use]
+pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.x;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// Density of [`square_to_uniform_sphere`].
+pub const UNIFORM_SPHERE_PDF: f32 = 0.25 * INV_PI;
+
+/// Inverse of [`square_to_uniform_sphere`].
+#[must_use]
+pub fn uniform_sphere_to_square(w: Vec3) -> Vec2 {
+    let mut phi = w.y.atan2(w.x) / (2.0 * PI);
+    if phi < 0.0 {
+        phi += 1.0;
+    }
+    Vec2::new((1.0 - w.z) * 0.5, phi)
+}
+
+/// Uniform direction in the cone of directions within angle acos(`cos_max`) of +z.
+#[must_use]
+pub fn square_to_uniform_cone(u: Vec2, cos_max: f32) -> Vec3 {
+    let cos_t = 1.0 - u.x * (1.0 - cos_max);
+    let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
+}
+
+/// Density of [`square_to_uniform_cone`].
+#[must_use]
+pub fn uniform_cone_pdf(cos_max: f32) -> f32 {
+    1.0 / (2.0 * PI * (1.0 - cos_max))
+}
+
+/// Uniform barycentric coordinates `(b1, b2)` on a triangle (Heitz's low-distortion map).
+#[must_use]
+pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
+    if u.y > u.x {
+        let b0 = u.x / 2.0;
+        let b1 = u.y - b0;
+        Vec2::new(b0, b1)
+    } else {
+        let b1 = u.y / 2.0;
+        let b0 = u.x - b1;
+        Vec2::new(b0, b1)
+    }
+}
+
+/// Sample of the tent filter of radius `radius` (density (r − |x|)/r² on [−r, r]).
+#[must_use]
+pub fn sample_tent(u: f32, radius: f32) -> f32 {
+    if u < 0.5 {
+        let v = 2.0 * u;
+        radius * (v.sqrt() - 1.0)
+    } else {
+        let v = 2.0 * u - 1.0;
+        radius * (1.0 - (1.0 - v).sqrt())
+    }
+}
+
+/// Standard normal quantile (Acklam's rational approximation refined by one Halley step on the erf
+/// approximation is unnecessary here: filter sampling tolerates 1e-9 relative error).
+#[must_use]
+pub fn normal_quantile(p: f64) -> f64 {
+    const A: [f64; 6] = [
+        -3.969_683_028_665_376e1,
+        2.209_460_984_245_205e2,
+        -2.759_285_104_469_687e2,
+        1.383_577_518_672_69e2,
+        -3.066_479_806_614_716e1,
+        2.506_628_277_459_239,
+    ];
+    const B: [f64; 5] = [
+        -5.447_609_879_822_406e1,
+        1.615_858_368_580_409e2,
+        -1.556_989_798_598_866e2,
+        6.680_131_188_771_972e1,
+        -1.328_068_155_288_572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784_894_002_430_293e-3,
+        -3.223_964_580_411_365e-1,
+        -2.400_758_277_161_838,
+        -2.549_732_539_343_734,
+        4.374_664_141_464_968,
+        2.938_163_982_698_783,
+    ];
+    const D: [f64; 4] =
+        [7.784_695_709_041_462e-3, 3.224_671_290_700_398e-1, 2.445_134_137_142_996, 3.754_408_661_907_416];
+    let p = p.clamp(1e-300, 1.0 - 1e-16);
+    let pl = 0.02425;
+    if p < pl {
+        let q = (-2.0 * p.ln()).sqrt();
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    } else if p <= 1.0 - pl {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    } else {
+        let q = (-2.0 * (1.0 - p).ln()).sqrt();
+        -(((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    }
+}
+
+/// Standard normal CDF.
+#[must_use]
+pub fn normal_cdf(x: f64) -> f64 {
+    0.5 * erfc(-x / std::f64::consts::SQRT_2)
+}
+
+/// Complementary error function (Numerical Recipes' Chebyshev fit, relative error < 1.2e-7).
+#[must_use]
+pub fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
+/// Sample of a Gaussian of standard deviation `sigma` truncated to `[−radius, radius]`.
+#[must_use]
+pub fn sample_truncated_gaussian(u: f32, sigma: f32, radius: f32) -> f32 {
+    let lo = normal_cdf(-(radius / sigma) as f64);
+    let hi = 1.0 - lo;
+    let p = lo + u as f64 * (hi - lo);
+    ((normal_quantile(p) * sigma as f64) as f32).clamp(-radius, radius)
+}
+
+/// A piecewise-constant 1D distribution over `n` bins (for light selection and environment maps).
+#[derive(Clone, Debug)]
+pub struct Distribution1D {
+    /// Unnormalised bin weights.
+    pub func: Vec<f32>,
+    /// Cumulative distribution, `n + 1` entries from 0 to 1.
+    pub cdf: Vec<f32>,
+    /// Sum of the weights (0 when all are zero).
+    pub integral: f32,
+}
+
+impl Distribution1D {
+    /// Builds the distribution; all-zero weights give a uniform distribution with `integral == 0`.
+    #[must_use]
+    pub fn new(func: &[f32]) -> Distribution1D {
+        let n = func.len().max(1);
+        let mut cdf = Vec::with_capacity(n + 1);
+        cdf.push(0.0f32);
+        let mut acc = 0.0f64;
+        for &f in func {
+            acc += f.max(0.0) as f64;
+            cdf.push(acc as f32);
+        }
+        let integral = acc as f32;
+        if acc > 0.0 {
+            for c in cdf.iter_mut() {
+                *c = (*c as f64 / acc) as f32;
+            }
+        } else {
+            for (i, c) in cdf.iter_mut().enumerate() {
+                *c = i as f32 / n as f32;
+            }
+        }
+        if let Some(last) = cdf.last_mut() {
+            *last = 1.0;
+        }
+        Distribution1D { func: func.to_vec(), cdf, integral }
+    }
+
+    /// Number of bins.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.cdf.len() - 1
+    }
+
+    /// True when there are no bins.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.func.is_empty()
+    }
+
+    /// Probability of bin `i`.
+    #[must_use]
+    pub fn pmf(&self, i: usize) -> f32 {
+        self.cdf[i + 1] - self.cdf[i]
+    }
+
+    /// Samples a bin: returns (bin, probability, `u` rescaled to [0,1) within the bin).
+    #[must_use]
+    pub fn sample(&self, u: f32) -> (usize, f32, f32) {
+        let n = self.len();
+        // Last index with cdf[i] <= u.
+        let i = self.cdf.partition_point(|&c| c <= u).saturating_sub(1).min(n - 1);
+        let p = self.pmf(i);
+        let ur = if p > 0.0 { ((u - self.cdf[i]) / p).clamp(0.0, 1.0 - f32::EPSILON) } else { 0.5 };
+        (i, p, ur)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn concentric_round_trip() {
+        for i in 0..50 {
+            for j in 0..50 {
+                let u = Vec2::new((i as f32 + 0.37) / 50.0, (j as f32 + 0.61) / 50.0);
+                let back = disk_concentric_to_square(square_to_disk_concentric(u));
+                assert!((back - u).length() < 1e-4, "{u} -> {back}");
+            }
+        }
+    }
+
+    #[test]
+    fn sphere_round_trip() {
+        let u = Vec2::new(0.3, 0.8);
+        let back = uniform_sphere_to_square(square_to_uniform_sphere(u));
+        assert!((back - u).length() < 1e-5);
+    }
+
+    #[test]
+    fn quantile_inverts_cdf() {
+        for &x in &[-3.0, -1.0, -0.1, 0.0, 0.5, 2.0] {
+            assert!((normal_quantile(normal_cdf(x)) - x).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn tent_density_matches_histogram() {
+        let n = 200_000;
+        let bins = 20;
+        let mut h = vec![0u32; bins];
+        for i in 0..n {
+            let x = sample_tent((i as f32 + 0.5) / n as f32, 1.0);
+            h[(((x + 1.0) / 2.0 * bins as f32) as usize).min(bins - 1)] += 1;
+        }
+        for (b, &c) in h.iter().enumerate() {
+            let x0 = -1.0 + 2.0 * b as f32 / bins as f32;
+            let x1 = x0 + 2.0 / bins as f32;
+            let f = |x: f32| if x < 0.0 { 0.5 * (1.0 + x).powi(2) } else { 1.0 - 0.5 * (1.0 - x).powi(2) };
+            let expect = (f(x1) - f(x0)) * n as f32;
+            assert!((c as f32 - expect).abs() < 2.0, "bin {b}: {c} vs {expect}");
+        }
+    }
+
+    #[test]
+    fn distribution_samples_proportionally() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0]);
+        assert_eq!(d.sample(0.1).0, 0);
+        assert_eq!(d.sample(0.3).0, 2);
+        assert!((d.pmf(2) - 0.75).abs() < 1e-6);
+        assert_eq!(d.pmf(1), 0.0);
+    }
+}
