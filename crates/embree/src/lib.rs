@@ -1,0 +1,1 @@
+//! Embree 3 wrapper (being written).

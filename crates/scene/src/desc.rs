@@ -1,0 +1,388 @@
+//! The scene description: plain data produced by the loaders and consumed by the renderer.
+//!
+//! Radiometric conventions are Mitsuba 3's: RGB radiance in W m⁻² sr⁻¹ (per channel), a
+//! directional emitter's `irradiance` on a surface facing it, a point light's `intensity` in
+//! W sr⁻¹, area emitters one-sided (emitting on the side the shading normal points to).
+//! All geometry is in world space; `flip_normals` and `to_world` are already applied.
+
+use crate::error::SourceLocation;
+use ircache_image::Image;
+use ircache_math::{Mat4, Rgb, Vec2, Vec3};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// A whole scene.
+#[derive(Clone, Debug)]
+pub struct SceneDesc {
+    /// The file the scene came from.
+    pub source: PathBuf,
+    /// The camera, film and sampler.
+    pub sensor: SensorDesc,
+    /// The integrator and its parameters.
+    pub integrator: IntegratorDesc,
+    /// Every shape, with its BSDF and optional area emitter.
+    pub shapes: Vec<ShapeDesc>,
+    /// Emitters that are not attached to a shape (point, spot, directional, constant, envmap).
+    pub emitters: Vec<EmitterDesc>,
+}
+
+/// A perspective pinhole camera (Mitsuba's `perspective` sensor).
+#[derive(Clone, Debug)]
+pub struct SensorDesc {
+    /// Camera-to-world transform. Camera space looks along +z with +y up and +x to the *left* of
+    /// the image (Mitsuba's convention: the image's x axis runs along camera −x).
+    pub to_world: Mat4,
+    /// Field of view in degrees, measured along `fov_axis`.
+    pub fov_degrees: f32,
+    /// Which image axis `fov_degrees` refers to.
+    pub fov_axis: FovAxis,
+    /// Near clip distance (Mitsuba default 0.01).
+    pub near_clip: f32,
+    /// Far clip distance (Mitsuba default 10000).
+    pub far_clip: f32,
+    /// The film.
+    pub film: FilmDesc,
+    /// Samples per pixel from the sampler's `sample_count`.
+    pub spp: u32,
+    /// Sampler type name as written (`independent`, `stratified`, ...).
+    pub sampler: String,
+}
+
+/// Mitsuba's `fov_axis`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    /// Horizontal (Mitsuba's default).
+    X,
+    /// Vertical.
+    Y,
+    /// Along the image diagonal.
+    Diagonal,
+    /// Along the smaller image side.
+    Smaller,
+    /// Along the larger image side.
+    Larger,
+}
+
+/// The film (`hdrfilm`).
+#[derive(Clone, Debug)]
+pub struct FilmDesc {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Reconstruction filter.
+    pub filter: FilterDesc,
+}
+
+/// Pixel reconstruction filter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilterDesc {
+    /// Box of radius 0.5 pixel.
+    Box,
+    /// Tent (triangle) of the given radius in pixels (Mitsuba default 1).
+    Tent {
+        /// Radius in pixels.
+        radius: f32,
+    },
+    /// Gaussian of the given standard deviation, truncated at 4 σ (Mitsuba default σ = 0.5).
+    Gaussian {
+        /// Standard deviation in pixels.
+        stddev: f32,
+    },
+}
+
+/// The integrator (`<integrator type=...>`).
+#[derive(Clone, Debug)]
+pub struct IntegratorDesc {
+    /// Integrator type name: `path`, `direct`, or one added later (`irrcache`).
+    pub kind: String,
+    /// Longest path depth; −1 is unbounded. 1: emitters seen directly; 2: direct light; 3: one
+    /// indirect bounce (Mitsuba 3's meaning).
+    pub max_depth: i32,
+    /// Depth at which Russian roulette starts (Mitsuba default 5).
+    pub rr_depth: u32,
+    /// Hide directly visible emitters.
+    pub hide_emitters: bool,
+    /// `direct` only: emitter samples per shading point (Mitsuba's `emitter_samples`).
+    pub emitter_samples: u32,
+    /// `direct` only: BSDF samples per shading point (Mitsuba's `bsdf_samples`).
+    pub bsdf_samples: u32,
+    /// Any further parameters of other integrator types, by name, with where they were written.
+    pub extra: Vec<(String, ParamValue, SourceLocation)>,
+}
+
+impl Default for IntegratorDesc {
+    fn default() -> Self {
+        IntegratorDesc {
+            kind: "path".into(),
+            max_depth: -1,
+            rr_depth: 5,
+            hide_emitters: false,
+            emitter_samples: 1,
+            bsdf_samples: 1,
+            extra: Vec::new(),
+        }
+    }
+}
+
+/// A parameter value of a plugin, kept for integrators whose parameters this crate does not know.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParamValue {
+    /// `<integer>`.
+    Integer(i64),
+    /// `<float>`.
+    Float(f64),
+    /// `<boolean>`.
+    Boolean(bool),
+    /// `<string>`.
+    String(String),
+    /// `<rgb>`.
+    Rgb(Rgb),
+}
+
+/// One shape with its material.
+#[derive(Clone, Debug)]
+pub struct ShapeDesc {
+    /// The `id` attribute, if any.
+    pub id: Option<String>,
+    /// World-space geometry.
+    pub geometry: Geometry,
+    /// Its BSDF (shared between shapes that `<ref>` the same one).
+    pub bsdf: Arc<BsdfDesc>,
+    /// Radiance of an attached `area` emitter (one-sided, along the shading normal).
+    pub emitter: Option<Rgb>,
+    /// Where the shape was declared.
+    pub location: SourceLocation,
+}
+
+/// World-space geometry.
+#[derive(Clone, Debug)]
+pub enum Geometry {
+    /// Triangles (obj, ply, rectangle, cube, disk after tessellation).
+    Mesh(TriangleMesh),
+    /// An analytic sphere.
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (> 0).
+        radius: f32,
+        /// Normals point inwards.
+        flip_normals: bool,
+    },
+}
+
+/// A triangle mesh in world space. Triangles wind counter-clockwise around their geometric normal
+/// `(p1 − p0) × (p2 − p0)`.
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals (unit length), absent for flat shading (`face_normals`).
+    pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates.
+    pub uvs: Option<Vec<Vec2>>,
+    /// Vertex indices, three per triangle; no degenerate triangles (loaders reject or drop them).
+    pub indices: Vec<[u32; 3]>,
+}
+
+/// A texture: constant or image-backed.
+#[derive(Clone, Debug)]
+pub enum TextureDesc {
+    /// The same value everywhere.
+    Constant(Rgb),
+    /// An image looked up by the surface's texture coordinates.
+    Bitmap(Arc<BitmapDesc>),
+}
+
+/// An image texture (`<texture type="bitmap">`).
+#[derive(Clone, Debug)]
+pub struct BitmapDesc {
+    /// The file it came from.
+    pub path: PathBuf,
+    /// Linear RGB texels (8-bit sRGB files are decoded to linear unless `raw`).
+    pub image: Arc<Image>,
+    /// Bilinear (default) or nearest lookups.
+    pub filter: TextureFilter,
+    /// Behaviour outside [0, 1]².
+    pub wrap: WrapMode,
+    /// 2D affine transform of uv coordinates (`to_uv`), as a 3×3 matrix acting on (u, v, 1).
+    pub to_uv: ircache_math::Mat3,
+}
+
+/// Texture filter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureFilter {
+    /// Bilinear interpolation.
+    Bilinear,
+    /// Nearest texel.
+    Nearest,
+}
+
+/// Texture wrap mode.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WrapMode {
+    /// Tile.
+    Repeat,
+    /// Tile with mirroring.
+    Mirror,
+    /// Clamp to edge.
+    Clamp,
+}
+
+/// Microfacet normal distribution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MicrofacetDistribution {
+    /// Beckmann.
+    Beckmann,
+    /// Trowbridge–Reitz (GGX).
+    Ggx,
+}
+
+/// A BSDF, with Mitsuba 3's parameters and defaults.
+#[derive(Clone, Debug)]
+pub enum BsdfDesc {
+    /// Lambertian.
+    Diffuse {
+        /// Albedo.
+        reflectance: TextureDesc,
+    },
+    /// The nested BSDF on both sides (Mitsuba: the back side sees the front's BSDF mirrored).
+    TwoSided {
+        /// The front BSDF.
+        front: Arc<BsdfDesc>,
+        /// A different BSDF for the back side, if two were given.
+        back: Option<Arc<BsdfDesc>>,
+    },
+    /// Smooth dielectric coating over a diffuse base.
+    Plastic {
+        /// Base albedo (default 0.5).
+        diffuse_reflectance: TextureDesc,
+        /// Specular scale (default 1).
+        specular_reflectance: Rgb,
+        /// Interior IOR (default polypropylene 1.49).
+        int_ior: f32,
+        /// Exterior IOR (default air 1.000277).
+        ext_ior: f32,
+        /// Account for internal scattering's colour shift.
+        nonlinear: bool,
+    },
+    /// Rough dielectric coating over a diffuse base.
+    RoughPlastic {
+        /// Distribution (default Beckmann).
+        distribution: MicrofacetDistribution,
+        /// Roughness α (default 0.1).
+        alpha: f32,
+        /// Base albedo.
+        diffuse_reflectance: TextureDesc,
+        /// Specular scale.
+        specular_reflectance: Rgb,
+        /// Interior IOR.
+        int_ior: f32,
+        /// Exterior IOR.
+        ext_ior: f32,
+        /// Colour shift of internal scattering.
+        nonlinear: bool,
+    },
+    /// Smooth conductor.
+    Conductor {
+        /// Real part of the IOR.
+        eta: Rgb,
+        /// Imaginary part.
+        k: Rgb,
+        /// Scale.
+        specular_reflectance: Rgb,
+    },
+    /// Rough conductor.
+    RoughConductor {
+        /// Distribution (default Beckmann).
+        distribution: MicrofacetDistribution,
+        /// Roughness along u.
+        alpha_u: f32,
+        /// Roughness along v.
+        alpha_v: f32,
+        /// Real part of the IOR.
+        eta: Rgb,
+        /// Imaginary part.
+        k: Rgb,
+        /// Scale.
+        specular_reflectance: Rgb,
+    },
+    /// Smooth dielectric interface.
+    Dielectric {
+        /// Interior IOR (default BK7 1.5046).
+        int_ior: f32,
+        /// Exterior IOR (default air).
+        ext_ior: f32,
+        /// Reflection scale.
+        specular_reflectance: Rgb,
+        /// Transmission scale.
+        specular_transmittance: Rgb,
+    },
+    /// Thin dielectric sheet (no refraction offset).
+    ThinDielectric {
+        /// Interior IOR.
+        int_ior: f32,
+        /// Exterior IOR.
+        ext_ior: f32,
+        /// Reflection scale.
+        specular_reflectance: Rgb,
+        /// Transmission scale.
+        specular_transmittance: Rgb,
+    },
+    /// Wavefront MTL material: Lambertian `Kd` plus normalised modified-Phong lobe `Ks`, `Ns`
+    /// (Lafortune and Willems 1994); only produced by the OBJ loader.
+    ObjPhong {
+        /// Diffuse albedo (`Kd`, `map_Kd`).
+        diffuse: TextureDesc,
+        /// Specular albedo (`Ks`).
+        specular: Rgb,
+        /// Phong exponent (`Ns`).
+        exponent: f32,
+    },
+}
+
+/// An emitter that is not attached to a shape.
+#[derive(Clone, Debug)]
+pub enum EmitterDesc {
+    /// Isotropic point light.
+    Point {
+        /// Position.
+        position: Vec3,
+        /// Radiant intensity (W/sr).
+        intensity: Rgb,
+    },
+    /// Spot light (Mitsuba: emits along the +z axis of `to_world`).
+    Spot {
+        /// Light-to-world transform.
+        to_world: Mat4,
+        /// Intensity on the axis.
+        intensity: Rgb,
+        /// Half-angle of the cone in degrees (default 20).
+        cutoff_angle: f32,
+        /// Half-angle of the fully lit core in degrees (default 3/4 of cutoff).
+        beam_width: f32,
+    },
+    /// Distant light.
+    Directional {
+        /// Unit direction in which light travels.
+        direction: Vec3,
+        /// Irradiance on a surface perpendicular to the direction.
+        irradiance: Rgb,
+    },
+    /// Uniform environment.
+    Constant {
+        /// Radiance.
+        radiance: Rgb,
+    },
+    /// Latitude–longitude environment map.
+    Envmap {
+        /// The file it came from.
+        path: PathBuf,
+        /// Radiance image (linear).
+        image: Arc<Image>,
+        /// Environment-to-world transform.
+        to_world: Mat4,
+        /// Radiance scale.
+        scale: f32,
+    },
+}
