@@ -30,3 +30,31 @@ impl Image {
         self.pixels[y * self.width + x] = c;
     }
 }
+
+/// Errors reading or writing images.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// The file could not be read or decoded; `message` says why.
+    #[error("{}: {message}", path.display())]
+    Read {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        message: String,
+    },
+    /// The file could not be written.
+    #[error("{}: cannot write: {message}", path.display())]
+    Write {
+        /// The file.
+        path: std::path::PathBuf,
+        /// Why.
+        message: String,
+    },
+}
+
+/// Reads an image for use as a texture or environment map: OpenEXR and Radiance HDR as stored
+/// (linear), 8-bit formats (PNG, JPEG, ...) decoded from sRGB to linear unless `raw`.
+pub fn read_texture(path: &std::path::Path, raw: bool) -> Result<Image, ImageError> {
+    let _ = raw;
+    Err(ImageError::Read { path: path.to_path_buf(), message: "image reading is being written".into() })
+}
