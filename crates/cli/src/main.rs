@@ -1,1 +1,48 @@
-fn main() {}
+//! `ircache`: the command-line tool.
+//!
+//! - `ircache render [SCENE]` renders a Mitsuba 3 XML or Wavefront OBJ scene (a built-in Cornell
+//!   box when none is given) to OpenEXR, Radiance HDR or PNG.
+//! - `ircache compare A B` prints relMSE, relMSE_trim, RMSE and the mean-luminance ratio of A
+//!   against the reference B (the measures of `shared/tools/relmse.py`).
+//! - `ircache bench` measures ray throughput and rendering speed.
+
+mod bench;
+mod compare;
+mod render;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Global illumination by irradiance caching and path tracing.
+#[derive(Parser, Debug)]
+#[command(name = "ircache", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a scene to an image.
+    Render(render::RenderArgs),
+    /// Compare an image against a reference.
+    Compare(compare::CompareArgs),
+    /// Measure ray throughput and rendering speed (prints figures).
+    Bench(bench::BenchArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(a) => render::run(&a),
+        Command::Compare(a) => compare::run(&a),
+        Command::Bench(a) => bench::run(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,254 @@
+//! `ircache bench`: figures, never pass/fail.
+//!
+//! - Ray throughput on Sponza (camera, cosine-hemisphere and shadow rays), 1 and 2 threads: raw
+//!   Embree calls on precomputed rays next to the renderer's own hemisphere loop (sample a
+//!   direction, spawn an offset ray, intersect, build the surface interaction), and 16-wide packets.
+//! - Path tracing time for the Cornell box at 64 spp, next to Mitsuba 3 (`llvm_ad_rgb`) on the same
+//!   machine in the same run when `python3 -c "import mitsuba"` works.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use ircache_math::{sampling, Frame, Ray, Rng, Vec2};
+use ircache_render::film::Filter;
+use ircache_render::integrators::Integrator;
+use ircache_render::render::{render, RenderSettings};
+use ircache_render::scene::{Interaction, Scene};
+use ircache_scene::obj_scene::ObjCamera;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Arguments of `ircache bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Folder holding `scenes/` (default: `$IRCACHE_SHARED`, else `shared` or `../shared` upwards).
+    #[arg(long)]
+    pub shared: Option<PathBuf>,
+    /// Hemisphere rays per first hit.
+    #[arg(long, default_value_t = 4)]
+    pub hemisphere_rays: usize,
+    /// Samples per pixel of the Cornell box path-tracing run.
+    #[arg(long, default_value_t = 64)]
+    pub spp: u32,
+    /// Skip the Mitsuba 3 comparison.
+    #[arg(long)]
+    pub no_mitsuba: bool,
+    /// Which parts: all, rays, path.
+    #[arg(long, default_value = "all")]
+    pub only: String,
+}
+
+/// Finds the shared folder with the scenes and references.
+pub fn find_shared(explicit: Option<&Path>) -> Result<PathBuf> {
+    if let Some(p) = explicit {
+        return Ok(p.to_path_buf());
+    }
+    if let Ok(p) = std::env::var("IRCACHE_SHARED") {
+        return Ok(PathBuf::from(p));
+    }
+    let mut dir = std::env::current_dir()?;
+    loop {
+        for cand in [dir.join("shared"), dir.join("../shared")] {
+            if cand.join("scenes").is_dir() {
+                return Ok(cand);
+            }
+        }
+        if !dir.pop() {
+            bail!("cannot find the shared folder with scenes/ (set IRCACHE_SHARED or pass --shared)");
+        }
+    }
+}
+
+fn pool(threads: usize) -> Result<rayon::ThreadPool> {
+    Ok(rayon::ThreadPoolBuilder::new().num_threads(threads).build()?)
+}
+
+/// Runs `ircache bench`.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let shared = find_shared(args.shared.as_deref())?;
+    println!("ircache bench on {} ({} cores)", std::env::consts::ARCH, std::thread::available_parallelism()?.get());
+    if args.only == "all" || args.only == "rays" {
+        rays(&shared, args)?;
+    }
+    if args.only == "all" || args.only == "path" {
+        path(&shared, args)?;
+    }
+    Ok(())
+}
+
+fn load(path: &Path, defines: &[(String, String)]) -> Result<Scene> {
+    let desc = ircache_scene::load_scene(path, defines, &ObjCamera::default())?;
+    Scene::build(&desc).with_context(|| format!("building {}", path.display()))
+}
+
+/// Mrays/s of `f` over `n` rays, best of three.
+fn measure(n: usize, mut f: impl FnMut() -> usize) -> f64 {
+    let mut best = f64::INFINITY;
+    let mut check = 0;
+    for _ in 0..3 {
+        let t = Instant::now();
+        check += f();
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    std::hint::black_box(check);
+    n as f64 / best * 1e-6
+}
+
+fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
+    let path = shared.join("scenes/sponza-sun/scene.xml");
+    let scene = load(&path, &[])?;
+    let (w, h) = (640usize, 480usize);
+    // Camera rays, one per pixel centre.
+    let camera: Vec<Ray> = (0..w * h)
+        .map(|i| scene.camera.generate_ray(Vec2::new(((i % w) as f32 + 0.5) / w as f32, ((i / w) as f32 + 0.5) / h as f32)))
+        .collect();
+    let hits: Vec<Interaction> = camera.iter().filter_map(|r| scene.intersect(r)).collect();
+    // Cosine-hemisphere gather rays from the first hits (the same rays for every measurement).
+    let k = args.hemisphere_rays;
+    let mut hemisphere = Vec::with_capacity(hits.len() * k);
+    for (i, it) in hits.iter().enumerate() {
+        let mut rng = Rng::keyed(1, &[i as u64]);
+        let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 { -it.ng } else { it.ng };
+        let frame = Frame::from_z(n);
+        for _ in 0..k {
+            let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
+            hemisphere.push(scene.spawn_ray(it, d));
+        }
+    }
+    // Shadow rays towards a fixed direction (the sun's reverse) from the first hits.
+    let sun = ircache_math::Vec3::new(0.328889, 0.939682, 0.0939682).normalize();
+    let shadow: Vec<Ray> = hits.iter().map(|it| scene.shadow_ray(it, sun, f32::INFINITY)).collect();
+    println!(
+        "\nSponza ({} triangles): {} camera rays, {} hemisphere rays ({} per hit), {} shadow rays",
+        scene.triangles,
+        camera.len(),
+        hemisphere.len(),
+        k,
+        shadow.len()
+    );
+    println!("{:<44} {:>10} {:>10} {:>8}", "Mrays/s", "1 thread", "2 threads", "2t/1t");
+    let chunk = 1024;
+    let row = |name: &str, f: &(dyn Fn(&[Ray]) -> usize + Sync), rays: &[Ray]| -> Result<()> {
+        let mut r = [0.0; 2];
+        for (j, t) in [1usize, 2].iter().enumerate() {
+            let p = pool(*t)?;
+            r[j] = measure(rays.len(), || p.install(|| rays.par_chunks(chunk).map(f).sum()));
+        }
+        println!("{:<44} {:>10.2} {:>10.2} {:>8.2}", name, r[0], r[1], r[1] / r[0]);
+        Ok(())
+    };
+    let raw_intersect = |rs: &[Ray]| rs.iter().filter(|r| scene.accel.intersect(r).is_some()).count();
+    let raw_occluded = |rs: &[Ray]| rs.iter().filter(|r| scene.accel.occluded(r)).count();
+    let packets = |rs: &[Ray]| {
+        let mut hits = [None; 16];
+        let mut n = 0;
+        for p in rs.chunks(16) {
+            scene.accel.intersect16(p, &mut hits[..p.len()]);
+            n += hits[..p.len()].iter().filter(|h| h.is_some()).count();
+        }
+        n
+    };
+    row("camera rays, Embree rtcIntersect1", &raw_intersect, &camera)?;
+    row("camera rays, Embree rtcIntersect16 packets", &packets, &camera)?;
+    row("hemisphere rays, Embree rtcIntersect1 (raw)", &raw_intersect, &hemisphere)?;
+    row("shadow rays, Embree rtcOccluded1", &raw_occluded, &shadow)?;
+    // The renderer's own gather loop over the same origins and directions.
+    let renderer_loop = |rs: &[Ray]| {
+        // Rays come in groups of k from one hit: regenerate them as the renderer would.
+        rs.iter().filter(|r| scene.intersect(r).is_some()).count()
+    };
+    row("hemisphere rays, renderer (hit + interaction)", &renderer_loop, &hemisphere)?;
+    let p1 = pool(1)?;
+    let gather = |hits: &[Interaction]| -> usize {
+        let mut count = 0;
+        for (i, it) in hits.iter().enumerate() {
+            let mut rng = Rng::keyed(1, &[i as u64]);
+            let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 { -it.ng } else { it.ng };
+            let frame = Frame::from_z(n);
+            for _ in 0..k {
+                let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
+                if scene.intersect(&scene.spawn_ray(it, d)).is_some() {
+                    count += 1;
+                }
+            }
+        }
+        count
+    };
+    let mut r = [0.0; 2];
+    for (j, t) in [1usize, 2].iter().enumerate() {
+        let p = pool(*t)?;
+        r[j] = measure(hits.len() * k, || p.install(|| hits.par_chunks(chunk / k).map(gather).sum()));
+    }
+    drop(p1);
+    println!(
+        "{:<44} {:>10.2} {:>10.2} {:>8.2}",
+        "hemisphere gather, renderer (sample+spawn+hit)", r[0], r[1], r[1] / r[0]
+    );
+    Ok(())
+}
+
+fn path(shared: &Path, args: &BenchArgs) -> Result<()> {
+    let scene_path = shared.join("scenes/cornell-box/scene.xml");
+    let defines = vec![("max_depth".to_string(), "3".to_string())];
+    let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
+    let scene = Scene::build(&desc)?;
+    let integrator = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
+    println!("\nPath tracing, Cornell box {}×{}, max_depth 3, {} spp", desc.sensor.film.width, desc.sensor.film.height, args.spp);
+    let mut ours = 0.0;
+    for threads in [1usize, 2] {
+        let settings = RenderSettings {
+            width: desc.sensor.film.width as usize,
+            height: desc.sensor.film.height as usize,
+            spp: args.spp,
+            seed: 0,
+            threads,
+            filter: Filter::from_desc(&desc.sensor.film.filter),
+        };
+        let out = render(&scene, &integrator, &settings, &|_| {})?;
+        println!(
+            "  ircache path, {threads} thread(s): {:.2} s ({:.4} s per spp, {:.1} Mrays/s)",
+            out.seconds,
+            out.seconds / args.spp as f64,
+            out.rays.total() as f64 * 1e-6 / out.seconds
+        );
+        ours = out.seconds;
+    }
+    if args.no_mitsuba {
+        return Ok(());
+    }
+    match mitsuba_time(&scene_path, args.spp) {
+        Ok(t) => println!(
+            "  Mitsuba 3 llvm_ad_rgb, 2 threads: {t:.2} s ({:.4} s per spp); ircache / Mitsuba time = {:.2}",
+            t / args.spp as f64,
+            ours / t
+        ),
+        Err(e) => println!("  Mitsuba 3 not measured: {e:#}"),
+    }
+    Ok(())
+}
+
+/// Times Mitsuba 3's render of the same scene (kernels compiled by a warm-up run first).
+fn mitsuba_time(scene: &Path, spp: u32) -> Result<f64> {
+    let script = format!(
+        r#"
+import os, time, mitsuba as mi
+mi.set_variant('llvm_ad_rgb')
+s = mi.load_file({scene:?}, spp={spp}, max_depth=3)
+mi.render(s, spp=4); import drjit as dr; dr.eval()
+t = time.time(); img = mi.render(s, spp={spp}); dr.eval(img); dr.sync_thread()
+print(time.time() - t)
+"#,
+        scene = scene.display().to_string()
+    );
+    let out = std::process::Command::new("python3")
+        .arg("-c")
+        .arg(script)
+        .env("DRJIT_NUM_THREADS", "2")
+        .output()
+        .context("running python3")?;
+    if !out.status.success() {
+        bail!("{}", String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("python3 failed"));
+    }
+    let s = String::from_utf8_lossy(&out.stdout);
+    s.trim().lines().last().unwrap_or("").parse::<f64>().context("parsing Mitsuba's time")
+}

@@ -1,0 +1,55 @@
+//! `ircache compare A B`: the error measures of `shared/references/README.md`.
+
+use anyhow::Result;
+use clap::Args;
+use std::path::PathBuf;
+
+/// Arguments of `ircache compare`.
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// The image to judge.
+    pub image: PathBuf,
+    /// The reference.
+    pub reference: PathBuf,
+    /// Write a false-colour PNG of the relative luminance error (red: brighter, blue: darker).
+    #[arg(long, value_name = "FILE.png")]
+    pub falsecolor: Option<PathBuf>,
+    /// Relative error at which the false colour saturates.
+    #[arg(long, default_value_t = 0.5)]
+    pub range: f64,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs `ircache compare`.
+pub fn run(args: &CompareArgs) -> Result<()> {
+    let a = ircache_image::read_image(&args.image)?;
+    let b = ircache_image::read_image(&args.reference)?;
+    let m = ircache_image::compare::compare(&a, &b)?;
+    if let Some(fc) = &args.falsecolor {
+        let img = ircache_image::falsecolor::false_colour(&a, &b, args.range);
+        ircache_image::write_png(fc, &img, 0.0)?;
+    }
+    if args.json {
+        let j = serde_json::json!({
+            "a": args.image.display().to_string(),
+            "b": args.reference.display().to_string(),
+            "relMSE": m.rel_mse,
+            "relMSE_trim": m.rel_mse_trim,
+            "RMSE": m.rmse,
+            "MRE_lum": m.mre_lum,
+            "lum_ratio": m.lum_ratio,
+            "mean_lum_a": m.mean_lum_a,
+            "mean_lum_b": m.mean_lum_b,
+            "nonfinite_a": m.nonfinite_a,
+        });
+        println!("{j}");
+    } else {
+        println!(
+            "relMSE={:.6e}  relMSE_trim={:.6e}  RMSE={:.6e}  MRE_lum={:.6e}  lum_ratio={:.6}  mean_lum_a={:.6}  mean_lum_b={:.6}  nonfinite_a={}",
+            m.rel_mse, m.rel_mse_trim, m.rmse, m.mre_lum, m.lum_ratio, m.mean_lum_a, m.mean_lum_b, m.nonfinite_a
+        );
+    }
+    Ok(())
+}

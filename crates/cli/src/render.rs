@@ -1,0 +1,264 @@
+//! `ircache render`: load, render, write, report.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use ircache_math::Vec3;
+use ircache_render::film::Filter;
+use ircache_render::integrators::Integrator;
+use ircache_render::render::{render, RenderOutput, RenderSettings};
+use ircache_render::scene::Scene;
+use ircache_scene::obj_scene::ObjCamera;
+use ircache_scene::SceneDesc;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The built-in scene: Bitterli's Cornell box (CC0), as in `shared/scenes/cornell-box`.
+pub const BUILTIN_CORNELL_BOX: &str = include_str!("../assets/cornell-box.xml");
+
+/// Arguments of `ircache render`.
+#[derive(Args, Debug, Clone)]
+pub struct RenderArgs {
+    /// Scene file: Mitsuba 3 XML (.xml) or Wavefront OBJ (.obj). Default: a built-in Cornell box.
+    pub scene: Option<PathBuf>,
+    /// Set a scene parameter: `-D name=value` overrides `<default name=...>` (Mitsuba's -D).
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    pub define: Vec<String>,
+    /// Output image (.exr float, .hdr Radiance, .png sRGB). Default: the scene's name with .exr.
+    #[arg(short = 'o', long = "output")]
+    pub output: Option<PathBuf>,
+    /// Samples per pixel (overrides the scene's sampler).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Worker threads (default: all cores).
+    #[arg(long, short = 't')]
+    pub threads: Option<usize>,
+    /// Seed of the random streams: the same seed gives the same image, bit for bit.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Integrator (overrides the scene's): path, direct.
+    #[arg(long)]
+    pub integrator: Option<String>,
+    /// Maximum path depth (overrides the scene's; Mitsuba's meaning: 2 = direct light only).
+    #[arg(long)]
+    pub max_depth: Option<i32>,
+    /// Image width (overrides the film's).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (overrides the film's).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Exposure in stops for PNG output.
+    #[arg(long, default_value_t = 0.0)]
+    pub exposure: f32,
+    /// No progress bar and no summary.
+    #[arg(long, short = 'q')]
+    pub quiet: bool,
+    /// Write run statistics as JSON to this file.
+    #[arg(long, value_name = "FILE.json")]
+    pub stats: Option<PathBuf>,
+    /// OBJ scenes: eye position `x,y,z`.
+    #[arg(long, value_parser = parse_vec3)]
+    pub eye: Option<Vec3>,
+    /// OBJ scenes: point looked at `x,y,z`.
+    #[arg(long, value_parser = parse_vec3)]
+    pub target: Option<Vec3>,
+    /// OBJ scenes: up vector `x,y,z`.
+    #[arg(long, value_parser = parse_vec3)]
+    pub up: Option<Vec3>,
+    /// OBJ scenes: vertical field of view in degrees.
+    #[arg(long)]
+    pub fov: Option<f32>,
+}
+
+fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let v: Vec<f32> = s
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .map(|t| t.parse::<f32>().map_err(|_| format!("expected three numbers x,y,z, found \"{s}\"")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(Vec3::new(x, y, z)),
+        _ => Err(format!("expected three finite numbers x,y,z, found \"{s}\"")),
+    }
+}
+
+/// Parses `-D name=value` pairs.
+pub fn parse_defines(defines: &[String]) -> Result<Vec<(String, String)>> {
+    defines
+        .iter()
+        .map(|d| match d.split_once('=') {
+            Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
+            _ => bail!("-D {d}: expected NAME=VALUE"),
+        })
+        .collect()
+}
+
+/// Loads the scene named by the arguments (or the built-in one), with command-line overrides
+/// applied to the description.
+pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
+    let defines = parse_defines(&args.define)?;
+    let obj_camera = ObjCamera {
+        eye: args.eye,
+        target: args.target,
+        up: args.up,
+        fov: args.fov,
+        width: args.width,
+        height: args.height,
+    };
+    let mut desc = match &args.scene {
+        Some(path) => ircache_scene::load_scene(path, &defines, &obj_camera)?,
+        None => ircache_scene::mitsuba::load_str(BUILTIN_CORNELL_BOX, Path::new("<built-in cornell-box.xml>"), &defines)?,
+    };
+    if let Some(w) = args.width {
+        desc.sensor.film.width = w;
+    }
+    if let Some(h) = args.height {
+        desc.sensor.film.height = h;
+    }
+    if desc.sensor.film.width == 0 || desc.sensor.film.height == 0 {
+        bail!("image size {}×{} is empty", desc.sensor.film.width, desc.sensor.film.height);
+    }
+    if let Some(spp) = args.spp {
+        desc.sensor.spp = spp;
+    }
+    if desc.sensor.spp == 0 {
+        bail!("--spp must be at least 1");
+    }
+    if let Some(i) = &args.integrator {
+        desc.integrator.kind = i.clone();
+    }
+    if let Some(d) = args.max_depth {
+        desc.integrator.max_depth = d;
+    }
+    Ok(desc)
+}
+
+fn default_output(args: &RenderArgs) -> PathBuf {
+    let stem = args
+        .scene
+        .as_ref()
+        .and_then(|p| {
+            // `scene.xml` in a folder is better named after the folder.
+            let s = p.file_stem()?.to_string_lossy().into_owned();
+            if s == "scene" {
+                p.canonicalize().ok()?.parent()?.file_name().map(|n| n.to_string_lossy().into_owned())
+            } else {
+                Some(s)
+            }
+        })
+        .unwrap_or_else(|| "cornell-box".into());
+    PathBuf::from(format!("{stem}.exr"))
+}
+
+/// Runs `ircache render`.
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let output = args.output.clone().unwrap_or_else(|| default_output(args));
+    check_writable(&output)?;
+    let desc = load(args)?;
+    let integrator = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
+    let scene = Scene::build(&desc).context("building the scene")?;
+    let load_seconds = t0.elapsed().as_secs_f64();
+    let settings = RenderSettings {
+        width: desc.sensor.film.width as usize,
+        height: desc.sensor.film.height as usize,
+        spp: desc.sensor.spp,
+        seed: args.seed,
+        threads: args.threads.unwrap_or(0),
+        filter: Filter::from_desc(&desc.sensor.film.filter),
+    };
+    let show = !args.quiet && std::io::stderr().is_terminal();
+    let bar = if show {
+        let b = ProgressBar::new((settings.width * settings.height) as u64);
+        b.set_style(
+            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        b
+    } else {
+        ProgressBar::hidden()
+    };
+    let out = render(&scene, &integrator, &settings, &|n| bar.set_position(n))?;
+    bar.finish_and_clear();
+    ircache_image::write_image(&output, &out.image, args.exposure)?;
+    let wall = t0.elapsed().as_secs_f64();
+    if !args.quiet {
+        summary(&desc, &settings, &out, &output, wall);
+    }
+    if let Some(stats) = &args.stats {
+        write_stats(stats, &desc, &settings, &out, wall, load_seconds)?;
+    }
+    Ok(())
+}
+
+/// Fails early, before any rendering, if the output file cannot be created.
+fn check_writable(path: &Path) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if !dir.is_dir() {
+        bail!("{}: cannot write: directory {} does not exist", path.display(), dir.display());
+    }
+    let probe = dir.join(format!(".ircache-write-test-{}", std::process::id()));
+    std::fs::write(&probe, b"").with_context(|| format!("{}: cannot write to {}", path.display(), dir.display()))?;
+    let _ = std::fs::remove_file(probe);
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    if !matches!(ext.as_str(), "exr" | "hdr" | "pic" | "png") {
+        bail!("{}: unknown image format \"{ext}\" (expected .exr, .hdr, .pic or .png)", path.display());
+    }
+    Ok(())
+}
+
+fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Path, wall: f64) {
+    let rays = out.rays.total();
+    eprintln!(
+        "{}: {}×{} at {} spp ({}) in {:.2} s (render {:.2} s): {:.1} M rays, {:.2} Mrays/s -> {}",
+        desc.source.display(),
+        s.width,
+        s.height,
+        s.spp,
+        desc.integrator.kind,
+        wall,
+        out.seconds,
+        rays as f64 * 1e-6,
+        rays as f64 * 1e-6 / out.seconds.max(1e-9),
+        output.display()
+    );
+    if out.invalid_samples > 0 {
+        eprintln!("warning: {} samples were NaN, infinite or negative and were dropped", out.invalid_samples);
+    }
+}
+
+fn write_stats(
+    path: &Path,
+    desc: &SceneDesc,
+    s: &RenderSettings,
+    out: &RenderOutput,
+    wall: f64,
+    load_seconds: f64,
+) -> Result<()> {
+    let json = serde_json::json!({
+        "scene": desc.source.display().to_string(),
+        "integrator": desc.integrator.kind,
+        "max_depth": desc.integrator.max_depth,
+        "wall_seconds": wall,
+        "load_seconds": load_seconds,
+        "render_seconds": out.seconds,
+        "rays": out.rays.total(),
+        "camera_rays": out.rays.camera,
+        "bounce_rays": out.rays.bounce,
+        "shadow_rays": out.rays.shadow,
+        "mrays_per_second": out.rays.total() as f64 * 1e-6 / out.seconds.max(1e-9),
+        "width": s.width,
+        "height": s.height,
+        "spp": s.spp,
+        "seed": s.seed,
+        "threads": if s.threads == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { s.threads },
+        "invalid_samples": out.invalid_samples,
+    });
+    std::fs::write(path, serde_json::to_string_pretty(&json)? + "\n")
+        .with_context(|| format!("{}: cannot write statistics", path.display()))
+}

@@ -1,0 +1,99 @@
+//! Direct illumination (Mitsuba 3's `direct`): at the first surface, `emitter_samples` light
+//! samples and `bsdf_samples` BSDF samples combined with the power heuristic, weighted by their
+//! sample counts; emitters seen directly are added as they are.
+
+use super::{mis_weight, RayCounts};
+use crate::scene::Scene;
+use ircache_math::{Ray, Rgb, Rng};
+
+/// Parameters of the direct-illumination integrator.
+#[derive(Clone, Debug)]
+pub struct DirectIntegrator {
+    /// Light samples per shading point.
+    pub emitter_samples: u32,
+    /// BSDF samples per shading point.
+    pub bsdf_samples: u32,
+    /// Hide emitters seen directly.
+    pub hide_emitters: bool,
+}
+
+impl DirectIntegrator {
+    /// Radiance along `ray`.
+    pub fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, rays: &mut RayCounts) -> Rgb {
+        rays.camera += 1;
+        let Some(it) = scene.intersect(ray) else {
+            return if self.hide_emitters { Rgb::ZERO } else { scene.lights.environment_radiance(ray.d) };
+        };
+        let wo = -ray.d;
+        let shape = &scene.shapes[it.shape as usize];
+        let mut l = Rgb::ZERO;
+        if let (Some(light), false) = (shape.area_light, self.hide_emitters) {
+            l += scene.lights.area_radiance(light, it.frame.n, wo);
+        }
+        let bsdf = scene.materials[shape.material].at(it.uv);
+        let wo_local = it.frame.to_local(wo);
+        let (ne, nb) = (self.emitter_samples as f32, self.bsdf_samples as f32);
+
+        if bsdf.has_smooth() && !scene.lights.is_empty() {
+            for _ in 0..self.emitter_samples {
+                let u_sel = rng.next_f32();
+                let u = rng.next_2d();
+                let Some(ls) = scene.lights.sample(it.p, u_sel, u) else { continue };
+                let wi_local = it.frame.to_local(ls.wi);
+                let f = bsdf.eval(wo_local, wi_local);
+                if f.is_black() || ls.pdf <= 0.0 {
+                    continue;
+                }
+                rays.shadow += 1;
+                if scene.accel.occluded(&scene.shadow_ray(&it, ls.wi, ls.distance)) {
+                    continue;
+                }
+                let w = if ls.is_delta {
+                    1.0 / ne
+                } else {
+                    mis_weight(ne * ls.pdf, nb * bsdf.pdf(wo_local, wi_local)) / ne
+                };
+                l += f * ls.radiance * (w / ls.pdf);
+            }
+        }
+
+        for _ in 0..self.bsdf_samples {
+            let u_lobe = rng.next_f32();
+            let u = rng.next_2d();
+            let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else { continue };
+            let wi = it.frame.from_local(bs.wi);
+            let next = scene.spawn_ray(&it, wi);
+            rays.bounce += 1;
+            match scene.accel.intersect(&next) {
+                None => {
+                    if scene.lights.has_environment() {
+                        let le = scene.lights.environment_radiance(wi);
+                        let w = if bs.delta {
+                            1.0 / nb
+                        } else {
+                            mis_weight(nb * bs.pdf, ne * scene.lights.pdf_environment(wi)) / nb
+                        };
+                        l += bs.weight * le * w;
+                    }
+                }
+                Some(hit) => {
+                    let hit_it = scene.interaction(&next, &hit);
+                    if let Some(light) = scene.shapes[hit_it.shape as usize].area_light {
+                        let le = scene.lights.area_radiance(light, hit_it.frame.n, -wi);
+                        if le.is_black() {
+                            continue;
+                        }
+                        let w = if bs.delta {
+                            1.0 / nb
+                        } else {
+                            let pdf_l = scene.lights.pdf_area(light, hit_it.prim, it.p, hit_it.p, hit_it.frame.n);
+                            mis_weight(nb * bs.pdf, ne * pdf_l) / nb
+                        };
+                        l += bs.weight * le * w;
+                    }
+                }
+            }
+        }
+        l
+    }
+}

@@ -1,0 +1,93 @@
+//! Integrators: estimators of the radiance arriving along a camera ray.
+//!
+//! A closed set dispatched by `match` (no virtual call per sample). Each takes the scene, a ray and
+//! the pixel's random stream, and counts the rays it traces.
+
+pub mod direct;
+pub mod path;
+
+use crate::scene::Scene;
+use ircache_math::{Ray, Rgb, Rng};
+use ircache_scene::IntegratorDesc;
+
+/// Rays traced, by kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    /// Camera rays.
+    pub camera: u64,
+    /// Closest-hit rays after the first hit (BSDF-sampled continuations).
+    pub bounce: u64,
+    /// Shadow (occlusion) rays.
+    pub shadow: u64,
+}
+
+impl RayCounts {
+    /// All rays.
+    #[must_use]
+    pub fn total(&self) -> u64 {
+        self.camera + self.bounce + self.shadow
+    }
+    /// Adds another count.
+    pub fn add(&mut self, o: &RayCounts) {
+        self.camera += o.camera;
+        self.bounce += o.bounce;
+        self.shadow += o.shadow;
+    }
+}
+
+/// An integrator with its parameters.
+#[derive(Clone, Debug)]
+pub enum Integrator {
+    /// Direct illumination only (Mitsuba's `direct`).
+    Direct(direct::DirectIntegrator),
+    /// Unidirectional path tracing with MIS and Russian roulette (Mitsuba's `path`).
+    Path(path::PathIntegrator),
+}
+
+/// The integrator names this renderer knows.
+pub const INTEGRATOR_NAMES: &[&str] = &["path", "direct"];
+
+impl Integrator {
+    /// Builds the integrator named in `desc`.
+    pub fn from_desc(desc: &IntegratorDesc) -> Result<Integrator, String> {
+        match desc.kind.as_str() {
+            "path" => Ok(Integrator::Path(path::PathIntegrator {
+                max_depth: desc.max_depth,
+                rr_depth: desc.rr_depth,
+                hide_emitters: desc.hide_emitters,
+            })),
+            "direct" => Ok(Integrator::Direct(direct::DirectIntegrator {
+                emitter_samples: desc.emitter_samples.max(1),
+                bsdf_samples: desc.bsdf_samples,
+                hide_emitters: desc.hide_emitters,
+            })),
+            other => Err(format!(
+                "unknown integrator \"{other}\" (known: {})",
+                INTEGRATOR_NAMES.join(", ")
+            )),
+        }
+    }
+
+    /// Radiance arriving along the camera ray `ray`.
+    #[inline]
+    pub fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, rays: &mut RayCounts) -> Rgb {
+        match self {
+            Integrator::Direct(d) => d.li(scene, ray, rng, rays),
+            Integrator::Path(p) => p.li(scene, ray, rng, rays),
+        }
+    }
+}
+
+/// Power heuristic with β = 2 (Veach 1997), as Mitsuba 3's `mis_weight`.
+#[inline]
+#[must_use]
+pub fn mis_weight(pdf_a: f32, pdf_b: f32) -> f32 {
+    let (a, b) = (pdf_a * pdf_a, pdf_b * pdf_b);
+    if a + b > 0.0 && a.is_finite() {
+        a / (a + b)
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}

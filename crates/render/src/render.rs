@@ -1,0 +1,127 @@
+//! The tile loop: all cores render 16×16-pixel tiles; every pixel draws its random numbers from
+//! its own stream keyed by (seed, pixel index), so the image is the same bit for bit for a given
+//! seed whatever the thread count or the order in which tiles finish.
+
+use crate::film::Filter;
+use crate::integrators::{Integrator, RayCounts};
+use crate::scene::Scene;
+use ircache_image::Image;
+use ircache_math::{Rgb, Rng, Vec2};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+/// Edge length of a tile in pixels.
+pub const TILE: usize = 16;
+
+/// What to render.
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    /// Image width.
+    pub width: usize,
+    /// Image height.
+    pub height: usize,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seed of all random streams.
+    pub seed: u64,
+    /// Worker threads (0: all cores).
+    pub threads: usize,
+    /// Pixel filter.
+    pub filter: Filter,
+}
+
+/// A finished render.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// The image.
+    pub image: Image,
+    /// Rays traced.
+    pub rays: RayCounts,
+    /// Samples dropped because the integrator returned a non-finite or negative value.
+    pub invalid_samples: u64,
+    /// Wall-clock seconds of the render loop.
+    pub seconds: f64,
+}
+
+/// Renders the image. `progress` is called (from worker threads) with the number of pixels done
+/// so far, after each tile.
+pub fn render(
+    scene: &Scene,
+    integrator: &Integrator,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RenderOutput, rayon::ThreadPoolBuildError> {
+    let (w, h) = (settings.width, settings.height);
+    let tiles_x = w.div_ceil(TILE);
+    let tiles_y = h.div_ceil(TILE);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(settings.threads).build()?;
+    let done = AtomicU64::new(0);
+    let start = Instant::now();
+    let results: Vec<(Vec<Rgb>, RayCounts, u64)> = pool.install(|| {
+        (0..tiles_x * tiles_y)
+            .into_par_iter()
+            .map(|tile| {
+                let (tx, ty) = (tile % tiles_x, tile / tiles_x);
+                let (x0, y0) = (tx * TILE, ty * TILE);
+                let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+                let mut pixels = Vec::with_capacity((x1 - x0) * (y1 - y0));
+                let mut rays = RayCounts::default();
+                let mut invalid = 0u64;
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        let (c, bad) = render_pixel(scene, integrator, settings, x, y, &mut rays);
+                        invalid += bad;
+                        pixels.push(c);
+                    }
+                }
+                let n = done.fetch_add(pixels.len() as u64, Ordering::Relaxed) + pixels.len() as u64;
+                progress(n);
+                (pixels, rays, invalid)
+            })
+            .collect()
+    });
+    let mut image = Image::new(w, h);
+    let mut rays = RayCounts::default();
+    let mut invalid_samples = 0;
+    for (tile, (pixels, r, bad)) in results.into_iter().enumerate() {
+        let (tx, ty) = (tile % tiles_x, tile / tiles_x);
+        let (x0, y0) = (tx * TILE, ty * TILE);
+        let x1 = (x0 + TILE).min(w);
+        for (i, c) in pixels.into_iter().enumerate() {
+            let (x, y) = (x0 + i % (x1 - x0), y0 + i / (x1 - x0));
+            image.set(x, y, c);
+        }
+        rays.add(&r);
+        invalid_samples += bad;
+    }
+    Ok(RenderOutput { image, rays, invalid_samples, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// One pixel: the mean of `spp` filter-importance-sampled estimates. Returns the value and the
+/// number of samples dropped as invalid (NaN, infinite or negative), as Mitsuba does.
+fn render_pixel(
+    scene: &Scene,
+    integrator: &Integrator,
+    settings: &RenderSettings,
+    x: usize,
+    y: usize,
+    rays: &mut RayCounts,
+) -> (Rgb, u64) {
+    let mut rng = Rng::keyed(settings.seed, &[(y * settings.width + x) as u64]);
+    let mut sum = Rgb::ZERO;
+    let mut invalid = 0;
+    let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
+    for _ in 0..settings.spp {
+        let offset = settings.filter.sample(rng.next_2d());
+        let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
+        let ray = scene.camera.generate_ray(film);
+        let l = integrator.li(scene, &ray, &mut rng, rays);
+        if l.is_valid_radiance() {
+            sum += l;
+        } else {
+            invalid += 1;
+        }
+    }
+    (sum / settings.spp.max(1) as f32, invalid)
+}

@@ -1,0 +1,222 @@
+//! The render-time scene: the Embree acceleration structure, one material per shape, the lights,
+//! the camera, and the surface interaction (hit point, normals, texture coordinates) recovered
+//! from an Embree hit.
+//!
+//! Shape `i` of the description is Embree geometry `i`, so a hit's geometry id indexes
+//! [`Scene::shapes`] directly.
+
+use crate::bsdf::Material;
+use crate::camera::Camera;
+use crate::lights::LightSet;
+use ircache_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use ircache_scene::{Geometry, SceneDesc, TriangleMesh};
+
+/// Errors building a scene for rendering.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// Embree refused the geometry.
+    #[error("ray tracing core: {0}")]
+    Embree(#[from] ircache_embree::EmbreeError),
+    /// The scene has no geometry.
+    #[error("{}: the scene has no shapes", .0.display())]
+    EmptyScene(std::path::PathBuf),
+    /// A parameter has a value the renderer cannot use.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// Geometry kept for shading after the acceleration structure is built.
+#[derive(Clone, Debug)]
+pub enum ShapeGeometry {
+    /// A triangle mesh.
+    Mesh(TriangleMesh),
+    /// An analytic sphere.
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius.
+        radius: f32,
+        /// Normals point inwards.
+        flip_normals: bool,
+    },
+}
+
+/// One shape at render time.
+#[derive(Clone, Debug)]
+pub struct Shape {
+    /// Its geometry.
+    pub geometry: ShapeGeometry,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    /// Its area light in [`Scene::lights`], if it emits.
+    pub area_light: Option<u32>,
+}
+
+/// A ray–surface intersection.
+#[derive(Clone, Copy, Debug)]
+pub struct Interaction {
+    /// Hit point.
+    pub p: Vec3,
+    /// Unit geometric normal (triangle winding, or outward for spheres unless flipped).
+    pub ng: Vec3,
+    /// Shading frame around the unit shading normal.
+    pub frame: Frame,
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// Shape index.
+    pub shape: u32,
+    /// Triangle (or sphere) index within the shape.
+    pub prim: u32,
+    /// Ray distance.
+    pub t: f32,
+}
+
+/// The scene as the integrators see it.
+pub struct Scene {
+    /// Embree scene.
+    pub accel: ircache_embree::Scene,
+    /// Shapes, indexed by Embree geometry id.
+    pub shapes: Vec<Shape>,
+    /// Materials, one per shape.
+    pub materials: Vec<Material>,
+    /// All emitters.
+    pub lights: LightSet,
+    /// The camera.
+    pub camera: Camera,
+    /// Largest coordinate magnitude: the scale for ray-origin offsets.
+    pub scale: f32,
+    /// Centre of the bounding sphere.
+    pub center: Vec3,
+    /// Radius of the bounding sphere.
+    pub radius: f32,
+    /// Total triangle count.
+    pub triangles: usize,
+}
+
+impl Scene {
+    /// Builds the render-time scene from a description.
+    pub fn build(desc: &SceneDesc) -> Result<Scene, RenderError> {
+        if desc.shapes.is_empty() {
+            return Err(RenderError::EmptyScene(desc.source.clone()));
+        }
+        let device = ircache_embree::Device::new()?;
+        let mut builder = ircache_embree::SceneBuilder::new(&device)?;
+        let mut shapes = Vec::with_capacity(desc.shapes.len());
+        let mut materials = Vec::with_capacity(desc.shapes.len());
+        let mut triangles = 0;
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for (i, s) in desc.shapes.iter().enumerate() {
+            let geometry = match &s.geometry {
+                Geometry::Mesh(m) => {
+                    let id = builder.add_triangle_mesh(&m.positions, &m.indices)?;
+                    debug_assert_eq!(id as usize, i);
+                    triangles += m.indices.len();
+                    for &p in &m.positions {
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                    ShapeGeometry::Mesh(m.clone())
+                }
+                &Geometry::Sphere { center, radius, flip_normals } => {
+                    let id = builder.add_spheres(&[(center, radius)])?;
+                    debug_assert_eq!(id as usize, i);
+                    lo = lo.min(center - Vec3::splat(radius));
+                    hi = hi.max(center + Vec3::splat(radius));
+                    ShapeGeometry::Sphere { center, radius, flip_normals }
+                }
+            };
+            materials.push(Material::from_desc(&s.bsdf));
+            shapes.push(Shape { geometry, material: i, area_light: None });
+        }
+        let accel = builder.build()?;
+        let center = 0.5 * (lo + hi);
+        let radius = (0.5 * (hi - lo).length()).max(f32::MIN_POSITIVE);
+        let lights = LightSet::new(desc, center, radius);
+        for (i, shape) in shapes.iter_mut().enumerate() {
+            shape.area_light = lights.area_light_of_shape(i);
+        }
+        let camera = Camera::new(&desc.sensor, desc.sensor.film.width, desc.sensor.film.height);
+        let scale = lo.abs().max(hi.abs()).max_element().max(f32::MIN_POSITIVE);
+        Ok(Scene { accel, shapes, materials, lights, camera, scale, center, radius, triangles })
+    }
+
+    /// The closest surface along `ray`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
+        let hit = self.accel.intersect(ray)?;
+        Some(self.interaction(ray, &hit))
+    }
+
+    /// Builds the surface interaction of an Embree hit.
+    pub fn interaction(&self, ray: &Ray, hit: &ircache_embree::Hit) -> Interaction {
+        let shape = &self.shapes[hit.geom_id as usize];
+        match &shape.geometry {
+            ShapeGeometry::Mesh(m) => {
+                let [i0, i1, i2] = m.indices[hit.prim_id as usize].map(|i| i as usize);
+                let (b1, b2) = (hit.u, hit.v);
+                let b0 = 1.0 - b1 - b2;
+                let (p0, p1, p2) = (m.positions[i0], m.positions[i1], m.positions[i2]);
+                let p = b0 * p0 + b1 * p1 + b2 * p2;
+                let ng = (p1 - p0).cross(p2 - p0).normalize_or(hit.ng.normalize_or(Vec3::Z));
+                let ns = match &m.normals {
+                    Some(n) => (b0 * n[i0] + b1 * n[i1] + b2 * n[i2]).normalize_or(ng),
+                    None => ng,
+                };
+                let uv = match &m.uvs {
+                    Some(t) => b0 * t[i0] + b1 * t[i1] + b2 * t[i2],
+                    None => Vec2::new(b1, b2),
+                };
+                let dpdu = p1 - p0;
+                Interaction {
+                    p,
+                    ng,
+                    frame: Frame::from_normal_tangent(ns, dpdu),
+                    uv,
+                    shape: hit.geom_id,
+                    prim: hit.prim_id,
+                    t: hit.t,
+                }
+            }
+            &ShapeGeometry::Sphere { center, radius, flip_normals } => {
+                let p_raw = ray.at(hit.t);
+                let local = (p_raw - center).normalize_or(Vec3::Z);
+                // Re-project onto the sphere: the analytic hit is more accurate than o + t d.
+                let p = center + local * radius;
+                let n = if flip_normals { -local } else { local };
+                let phi = local.z.atan2(local.x);
+                let phi = if phi < 0.0 { phi + 2.0 * ircache_math::PI } else { phi };
+                let uv = Vec2::new(phi / (2.0 * ircache_math::PI), local.y.clamp(-1.0, 1.0).acos() / ircache_math::PI);
+                Interaction {
+                    p,
+                    ng: n,
+                    frame: Frame::from_z(n),
+                    uv,
+                    shape: hit.geom_id,
+                    prim: hit.prim_id,
+                    t: hit.t,
+                }
+            }
+        }
+    }
+
+    /// A ray leaving surface point `it` along `d`, offset against self-intersection.
+    #[inline]
+    #[must_use]
+    pub fn spawn_ray(&self, it: &Interaction, d: Vec3) -> Ray {
+        Ray::new(offset_ray_origin(it.p, it.ng, d, self.scale), d)
+    }
+
+    /// A shadow ray from `it` towards unit direction `wi` for a light at `distance` (may be
+    /// infinite), shortened relatively so that it does not reach the light's own surface.
+    #[inline]
+    #[must_use]
+    pub fn shadow_ray(&self, it: &Interaction, wi: Vec3, distance: f32) -> Ray {
+        let o = offset_ray_origin(it.p, it.ng, wi, self.scale);
+        let t_max = if distance.is_finite() {
+            (it.p + wi * distance - o).length() * (1.0 - ircache_math::ray::SHADOW_EPSILON)
+        } else {
+            f32::INFINITY
+        };
+        Ray { o, d: wi, t_min: 0.0, t_max }
+    }
+}
