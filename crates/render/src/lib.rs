@@ -9,4 +9,5 @@
 
 pub mod bsdf;
 pub mod lights;
+pub mod testing;
 pub mod texture;
