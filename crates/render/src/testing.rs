@@ -182,8 +182,8 @@ impl ChiSquareTest {
             let (za, zb) = (z0 + i as f64 * dz, z0 + (i + 1) as f64 * dz);
             for j in 0..self.phi_bins {
                 let (pa, pb) = (j as f64 * dphi, (j + 1) as f64 * dphi);
-                let inner = |z: f64| adaptive_simpson(&|phi| f(z, phi), pa, pb, tol / dz, 14);
-                out.push(adaptive_simpson(&inner, za, zb, tol, 14).max(0.0));
+                let inner = |z: f64| adaptive_simpson(&|phi| f(z, phi), pa, pb, tol / dz, 12);
+                out.push(adaptive_simpson(&inner, za, zb, tol, 12).max(0.0));
             }
         }
         out
@@ -380,7 +380,7 @@ impl ChiSquareReport {
                 self.pdf_mismatches, self.worst_pdf_mismatch
             ));
         }
-        if !(self.p_value >= level) {
+        if self.p_value.is_nan() || self.p_value < level {
             return Some(format!(
                 "χ² = {:.2} with {} dof: p = {:.3e} < {:.3e}",
                 self.chi2, self.dof, self.p_value, level
@@ -541,6 +541,8 @@ pub fn adaptive_simpson(f: &impl Fn(f64) -> f64, a: f64, b: f64, tol: f64, max_d
 
 /// Levels of refinement always done before the error estimate may stop the recursion.
 const MIN_LEVELS: u32 = 2;
+/// Relative accuracy at which a sub-interval is accepted.
+const REL_TOL: f64 = 1e-6;
 
 fn simpson_rec(
     f: &impl Fn(f64) -> f64,
@@ -557,7 +559,10 @@ fn simpson_rec(
     let left = (m - a) / 6.0 * (fa + 4.0 * flm + fm);
     let right = (b - m) / 6.0 * (fm + 4.0 * frm + fb);
     let delta = left + right - whole;
-    if level >= max_depth || (level >= MIN_LEVELS && delta.abs() <= 15.0 * tol) {
+    // Absolute target, or a relative one (the integrand is typically evaluated in `f32`, whose
+    // round-off would otherwise keep the recursion going to `max_depth`).
+    let converged = delta.abs() <= 15.0 * tol || delta.abs() <= REL_TOL * (left + right).abs();
+    if level >= max_depth || (level >= MIN_LEVELS && converged) {
         return left + right + delta / 15.0;
     }
     simpson_rec(

@@ -1,1 +1,478 @@
-//! (being written)
+//! Materials (BSDFs) with Mitsuba 3's models, parameters and conventions.
+//!
+//! A [`Material`] is compiled once per scene from a [`BsdfDesc`]; at a shading point,
+//! [`Material::at`] looks its textures up and returns a small, allocation-free [`Bsdf`] that can be
+//! evaluated and sampled.
+//!
+//! Conventions (as Mitsuba 3, `src/bsdfs/*.cpp`):
+//! - all directions are in the local shading frame, normal = +z, both pointing away from the
+//!   surface: `wo` towards the viewer (Mitsuba's `si.wi`), `wi` towards the light (Mitsuba's `wo`);
+//! - [`Bsdf::eval`] returns `f(wo, wi) · |cos θ_i|`, zero for delta lobes;
+//! - one-sided models (diffuse, plastic, roughplastic, conductor, roughconductor, the OBJ Phong
+//!   material) are black unless both `wo.z > 0` and `wi.z > 0`; `twosided` mirrors both directions
+//!   to the upper hemisphere when `wo.z < 0` and uses its `back` model there if one was given;
+//!   dielectric and thin dielectric act on both sides;
+//! - [`Bsdf::sample`] returns `weight = eval / pdf` for smooth lobes and, for delta lobes, the
+//!   delta's weight with `pdf` the probability of having chosen that lobe;
+//! - transmission through a dielectric scales radiance by `(η_i/η_t)²` (radiance transport).
+//!
+//! Models, one file each: [`diffuse`], [`plastic`], [`roughplastic`], [`conductor`],
+//! [`roughconductor`], [`dielectric`], [`thindielectric`], [`phong`]; shared: [`microfacet`]
+//! (Beckmann and GGX, Walter et al. 2007; visible normals, Heitz 2018) and [`fresnel`].
+
+pub mod conductor;
+pub mod dielectric;
+pub mod diffuse;
+pub mod fresnel;
+pub mod microfacet;
+pub mod phong;
+pub mod plastic;
+pub mod roughconductor;
+pub mod roughplastic;
+pub mod thindielectric;
+
+use crate::texture::Texture;
+use ircache_math::{Rgb, Vec2, Vec3};
+use ircache_scene::BsdfDesc;
+
+pub use conductor::Conductor;
+pub use dielectric::Dielectric;
+pub use diffuse::Diffuse;
+pub use microfacet::Microfacet;
+pub use phong::Phong;
+pub use plastic::Plastic;
+pub use roughconductor::RoughConductor;
+pub use roughplastic::{RoughPlastic, RoughPlasticTables};
+pub use thindielectric::ThinDielectric;
+
+/// A sampled direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    /// The sampled direction towards the light, local frame, unit length.
+    pub wi: Vec3,
+    /// Solid-angle density of `wi` for smooth lobes (equal to [`Bsdf::pdf`]); for a delta lobe,
+    /// the probability of having chosen it.
+    pub pdf: f32,
+    /// `eval / pdf` for smooth lobes; the delta lobe's throughput divided by its probability.
+    pub weight: Rgb,
+    /// True when `wi` was produced by a Dirac delta lobe (no MIS, no next-event estimation).
+    pub delta: bool,
+    /// Relative index of refraction `η_t/η_i` crossed by the sample (1 for reflection).
+    pub eta: f32,
+}
+
+/// One BSDF model evaluated at a surface point (textures already looked up).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lobe {
+    /// Lambertian.
+    Diffuse(Diffuse),
+    /// Smooth plastic.
+    Plastic(Plastic),
+    /// Rough plastic.
+    RoughPlastic(RoughPlastic),
+    /// Smooth conductor.
+    Conductor(Conductor),
+    /// Rough conductor.
+    RoughConductor(RoughConductor),
+    /// Smooth dielectric.
+    Dielectric(Dielectric),
+    /// Thin dielectric.
+    ThinDielectric(ThinDielectric),
+    /// OBJ diffuse + normalised Phong.
+    Phong(Phong),
+}
+
+impl Lobe {
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self {
+            Lobe::Diffuse(b) => b.eval(wo, wi),
+            Lobe::Plastic(b) => b.eval(wo, wi),
+            Lobe::RoughPlastic(b) => b.eval(wo, wi),
+            Lobe::RoughConductor(b) => b.eval(wo, wi),
+            Lobe::Phong(b) => b.eval(wo, wi),
+            Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => Rgb::ZERO,
+        }
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Lobe::Diffuse(b) => b.pdf(wo, wi),
+            Lobe::Plastic(b) => b.pdf(wo, wi),
+            Lobe::RoughPlastic(b) => b.pdf(wo, wi),
+            Lobe::RoughConductor(b) => b.pdf(wo, wi),
+            Lobe::Phong(b) => b.pdf(wo, wi),
+            Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => 0.0,
+        }
+    }
+
+    fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            Lobe::Diffuse(b) => b.sample(wo, u),
+            Lobe::Plastic(b) => b.sample(wo, u_lobe, u),
+            Lobe::RoughPlastic(b) => b.sample(wo, u_lobe, u),
+            Lobe::Conductor(b) => b.sample(wo),
+            Lobe::RoughConductor(b) => b.sample(wo, u),
+            Lobe::Dielectric(b) => b.sample(wo, u_lobe),
+            Lobe::ThinDielectric(b) => b.sample(wo, u_lobe),
+            Lobe::Phong(b) => b.sample(wo, u_lobe, u),
+        }
+    }
+
+    fn has_smooth(&self) -> bool {
+        !matches!(
+            self,
+            Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_)
+        )
+    }
+
+    fn diffuse_reflectance(&self) -> Rgb {
+        match self {
+            Lobe::Diffuse(b) => b.reflectance,
+            Lobe::Plastic(b) => b.diffuse_reflectance,
+            Lobe::RoughPlastic(b) => b.diffuse_reflectance,
+            Lobe::Phong(b) => b.diffuse,
+            _ => Rgb::ZERO,
+        }
+    }
+}
+
+/// A BSDF at one surface point: small, `Copy`, no allocation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bsdf {
+    /// A model used as it is (one-sided models are black from below).
+    Single(Lobe),
+    /// Mitsuba's `twosided`: `front` for `wo.z > 0`; for `wo.z < 0`, `back` evaluated with both
+    /// directions mirrored through the surface.
+    TwoSided {
+        /// Model seen from the front.
+        front: Lobe,
+        /// Model seen from the back (the front one when only one was given).
+        back: Lobe,
+    },
+}
+
+fn flip(w: Vec3) -> Vec3 {
+    Vec3::new(w.x, w.y, -w.z)
+}
+
+impl Bsdf {
+    /// `f(wo, wi) · |cos θ_i|` in the local frame; zero for delta lobes.
+    #[must_use]
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self {
+            Bsdf::Single(l) => l.eval(wo, wi),
+            Bsdf::TwoSided { front, back } => {
+                if wo.z > 0.0 {
+                    front.eval(wo, wi)
+                } else if wo.z < 0.0 {
+                    back.eval(flip(wo), flip(wi))
+                } else {
+                    Rgb::ZERO
+                }
+            }
+        }
+    }
+
+    /// Solid-angle density with which [`Self::sample`] produces `wi` through its smooth lobes.
+    #[must_use]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Bsdf::Single(l) => l.pdf(wo, wi),
+            Bsdf::TwoSided { front, back } => {
+                if wo.z > 0.0 {
+                    front.pdf(wo, wi)
+                } else if wo.z < 0.0 {
+                    back.pdf(flip(wo), flip(wi))
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
+    /// Samples `wi` given `wo`: `u_lobe` chooses among lobes, `u` samples the chosen one. `None`
+    /// when no direction could be produced (wrong side, below the horizon, zero density).
+    #[must_use]
+    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            Bsdf::Single(l) => l.sample(wo, u_lobe, u),
+            Bsdf::TwoSided { front, back } => {
+                if wo.z > 0.0 {
+                    front.sample(wo, u_lobe, u)
+                } else if wo.z < 0.0 {
+                    back.sample(flip(wo), u_lobe, u).map(|mut s| {
+                        s.wi = flip(s.wi);
+                        s
+                    })
+                } else {
+                    None
+                }
+            }
+        }
+    }
+
+    /// True when the BSDF has a non-delta component (next-event estimation is worthwhile).
+    #[must_use]
+    pub fn has_smooth(&self) -> bool {
+        match self {
+            Bsdf::Single(l) => l.has_smooth(),
+            Bsdf::TwoSided { front, back } => front.has_smooth() || back.has_smooth(),
+        }
+    }
+
+    /// True when the BSDF is purely Lambertian (on both sides, for `twosided`).
+    #[must_use]
+    pub fn is_diffuse_only(&self) -> bool {
+        match self {
+            Bsdf::Single(l) => matches!(l, Lobe::Diffuse(_)),
+            Bsdf::TwoSided { front, back } => {
+                matches!(front, Lobe::Diffuse(_)) && matches!(back, Lobe::Diffuse(_))
+            }
+        }
+    }
+
+    /// Albedo of the Lambertian part (the base of plastics, `K_d` of OBJ materials, zero for
+    /// purely specular models; the front model's for `twosided`).
+    #[must_use]
+    pub fn diffuse_reflectance(&self) -> Rgb {
+        match self {
+            Bsdf::Single(l) | Bsdf::TwoSided { front: l, .. } => l.diffuse_reflectance(),
+        }
+    }
+}
+
+/// A model with its textures, before lookup.
+#[derive(Clone, Debug)]
+enum Compiled {
+    Diffuse {
+        reflectance: Texture,
+    },
+    Plastic {
+        diffuse: Texture,
+        proto: Plastic,
+    },
+    RoughPlastic {
+        diffuse: Texture,
+        proto: RoughPlastic,
+    },
+    Phong {
+        diffuse: Texture,
+        proto: Phong,
+    },
+    Fixed(Lobe),
+}
+
+impl Compiled {
+    fn new(desc: &BsdfDesc) -> Compiled {
+        match desc {
+            BsdfDesc::Diffuse { reflectance } => Compiled::Diffuse {
+                reflectance: Texture::from_desc(reflectance),
+            },
+            // Nested twosided: the inner front model (Mitsuba does not nest them either).
+            BsdfDesc::TwoSided { front, .. } => Compiled::new(front),
+            BsdfDesc::Plastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => {
+                let diffuse = Texture::from_desc(diffuse_reflectance);
+                let eta = int_ior / ext_ior;
+                let proto = Plastic {
+                    diffuse_reflectance: Rgb::ZERO,
+                    specular_reflectance: *specular_reflectance,
+                    eta,
+                    fdr_int: fresnel::fresnel_diffuse_reflectance(1.0 / eta),
+                    specular_sampling_weight: sampling_weight(
+                        specular_reflectance.mean(),
+                        diffuse.mean_scalar(),
+                    ),
+                    nonlinear: *nonlinear,
+                };
+                Compiled::Plastic { diffuse, proto }
+            }
+            BsdfDesc::RoughPlastic {
+                distribution,
+                alpha,
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => {
+                let diffuse = Texture::from_desc(diffuse_reflectance);
+                let eta = int_ior / ext_ior;
+                let distr = Microfacet::new(*distribution, *alpha, *alpha);
+                let proto = RoughPlastic {
+                    distr,
+                    diffuse_reflectance: Rgb::ZERO,
+                    specular_reflectance: *specular_reflectance,
+                    eta,
+                    specular_sampling_weight: sampling_weight(
+                        specular_reflectance.mean(),
+                        diffuse.mean_scalar(),
+                    ),
+                    nonlinear: *nonlinear,
+                    tables: RoughPlasticTables::interned(&distr, eta),
+                };
+                Compiled::RoughPlastic { diffuse, proto }
+            }
+            BsdfDesc::Conductor {
+                eta,
+                k,
+                specular_reflectance,
+            } => Compiled::Fixed(Lobe::Conductor(Conductor {
+                eta: *eta,
+                k: *k,
+                specular_reflectance: *specular_reflectance,
+            })),
+            BsdfDesc::RoughConductor {
+                distribution,
+                alpha_u,
+                alpha_v,
+                eta,
+                k,
+                specular_reflectance,
+            } => Compiled::Fixed(Lobe::RoughConductor(RoughConductor {
+                distr: Microfacet::new(*distribution, *alpha_u, *alpha_v),
+                eta: *eta,
+                k: *k,
+                specular_reflectance: *specular_reflectance,
+            })),
+            BsdfDesc::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Compiled::Fixed(Lobe::Dielectric(Dielectric {
+                eta: int_ior / ext_ior,
+                specular_reflectance: *specular_reflectance,
+                specular_transmittance: *specular_transmittance,
+            })),
+            BsdfDesc::ThinDielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Compiled::Fixed(Lobe::ThinDielectric(ThinDielectric {
+                eta: int_ior / ext_ior,
+                specular_reflectance: *specular_reflectance,
+                specular_transmittance: *specular_transmittance,
+            })),
+            BsdfDesc::ObjPhong {
+                diffuse,
+                specular,
+                exponent,
+            } => Compiled::Phong {
+                diffuse: Texture::from_desc(diffuse),
+                proto: Phong {
+                    diffuse: Rgb::ZERO,
+                    specular: *specular,
+                    exponent: exponent.max(0.0),
+                },
+            },
+        }
+    }
+
+    fn at(&self, uv: Vec2) -> Lobe {
+        match self {
+            Compiled::Diffuse { reflectance } => Lobe::Diffuse(Diffuse {
+                reflectance: reflectance.eval(uv),
+            }),
+            Compiled::Plastic { diffuse, proto } => Lobe::Plastic(Plastic {
+                diffuse_reflectance: diffuse.eval(uv),
+                ..*proto
+            }),
+            Compiled::RoughPlastic { diffuse, proto } => Lobe::RoughPlastic(RoughPlastic {
+                diffuse_reflectance: diffuse.eval(uv),
+                ..*proto
+            }),
+            Compiled::Phong { diffuse, proto } => Lobe::Phong(Phong {
+                diffuse: diffuse.eval(uv),
+                ..*proto
+            }),
+            Compiled::Fixed(l) => *l,
+        }
+    }
+
+    fn mean_diffuse(&self) -> Rgb {
+        match self {
+            Compiled::Diffuse { reflectance: t }
+            | Compiled::Plastic { diffuse: t, .. }
+            | Compiled::RoughPlastic { diffuse: t, .. }
+            | Compiled::Phong { diffuse: t, .. } => t.mean(),
+            Compiled::Fixed(_) => Rgb::ZERO,
+        }
+    }
+}
+
+/// Mitsuba's specular sampling weight `s̄ / (d̄ + s̄)`.
+fn sampling_weight(s_mean: f32, d_mean: f32) -> f32 {
+    let (s, d) = (s_mean.max(0.0), d_mean.max(0.0));
+    if s + d > 0.0 {
+        s / (s + d)
+    } else {
+        0.5
+    }
+}
+
+/// A material compiled from a [`BsdfDesc`] at scene load (textures built, tables precomputed).
+#[derive(Clone, Debug)]
+pub struct Material {
+    front: Compiled,
+    /// `Some` for `twosided` (the back model, or a copy of the front one).
+    back: Option<Compiled>,
+}
+
+impl Material {
+    /// Compiles a description.
+    #[must_use]
+    pub fn from_desc(desc: &BsdfDesc) -> Material {
+        match desc {
+            BsdfDesc::TwoSided { front, back } => {
+                let f = Compiled::new(front);
+                let b = match back {
+                    Some(b) => Compiled::new(b),
+                    None => f.clone(),
+                };
+                Material {
+                    front: f,
+                    back: Some(b),
+                }
+            }
+            d => Material {
+                front: Compiled::new(d),
+                back: None,
+            },
+        }
+    }
+
+    /// The BSDF at texture coordinates `uv`.
+    #[must_use]
+    pub fn at(&self, uv: Vec2) -> Bsdf {
+        match &self.back {
+            None => Bsdf::Single(self.front.at(uv)),
+            Some(b) => Bsdf::TwoSided {
+                front: self.front.at(uv),
+                back: b.at(uv),
+            },
+        }
+    }
+
+    /// True for Mitsuba's `twosided` wrapper.
+    #[must_use]
+    pub fn is_two_sided(&self) -> bool {
+        self.back.is_some()
+    }
+
+    /// Average albedo of the Lambertian part over the textures (front model; zero if none), for
+    /// caches that need a texture-independent estimate.
+    #[must_use]
+    pub fn mean_diffuse_reflectance(&self) -> Rgb {
+        self.front.mean_diffuse()
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,667 @@
+//! Tests of the BSDFs: χ² goodness of fit of every smooth sampler, consistency of sample weights
+//! and densities, delta-lobe probabilities, energy conservation, reciprocity, and the `twosided`
+//! convention.
+
+use super::*;
+use crate::testing::{ChiSquareTest, Domain};
+use ircache_math::{Rng, PI};
+use ircache_scene::{MicrofacetDistribution, TextureDesc};
+use std::sync::Arc;
+
+/// Upper bound on the number of χ² tests in this module (for the Šidák correction).
+const CHI2_TESTS: usize = 80;
+const ALPHA: f64 = 0.01;
+
+fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
+    let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
+    Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
+}
+
+fn c(v: f32) -> TextureDesc {
+    TextureDesc::Constant(Rgb::splat(v))
+}
+
+fn mat(desc: BsdfDesc) -> Bsdf {
+    Material::from_desc(&desc).at(Vec2::new(0.3, 0.6))
+}
+
+fn diffuse(rho: f32) -> BsdfDesc {
+    BsdfDesc::Diffuse {
+        reflectance: c(rho),
+    }
+}
+
+fn rough_conductor(kind: MicrofacetDistribution, au: f32, av: f32) -> BsdfDesc {
+    // Gold-like complex index.
+    BsdfDesc::RoughConductor {
+        distribution: kind,
+        alpha_u: au,
+        alpha_v: av,
+        eta: Rgb::new(0.143, 0.374, 1.442),
+        k: Rgb::new(3.983, 2.385, 1.603),
+        specular_reflectance: Rgb::ONE,
+    }
+}
+
+fn mirror_rough_conductor(kind: MicrofacetDistribution, a: f32) -> BsdfDesc {
+    BsdfDesc::RoughConductor {
+        distribution: kind,
+        alpha_u: a,
+        alpha_v: a,
+        eta: Rgb::ZERO,
+        k: Rgb::ONE,
+        specular_reflectance: Rgb::ONE,
+    }
+}
+
+fn rough_plastic(kind: MicrofacetDistribution, alpha: f32, rho: f32, nonlinear: bool) -> BsdfDesc {
+    BsdfDesc::RoughPlastic {
+        distribution: kind,
+        alpha,
+        diffuse_reflectance: c(rho),
+        specular_reflectance: Rgb::ONE,
+        int_ior: 1.49,
+        ext_ior: 1.000_277,
+        nonlinear,
+    }
+}
+
+fn plastic(rho: f32, nonlinear: bool) -> BsdfDesc {
+    BsdfDesc::Plastic {
+        diffuse_reflectance: c(rho),
+        specular_reflectance: Rgb::ONE,
+        int_ior: 1.49,
+        ext_ior: 1.000_277,
+        nonlinear,
+    }
+}
+
+fn phong(kd: f32, ks: f32, n: f32) -> BsdfDesc {
+    BsdfDesc::ObjPhong {
+        diffuse: c(kd),
+        specular: Rgb::splat(ks),
+        exponent: n,
+    }
+}
+
+fn dielectric(int_ior: f32) -> BsdfDesc {
+    BsdfDesc::Dielectric {
+        int_ior,
+        ext_ior: 1.0,
+        specular_reflectance: Rgb::ONE,
+        specular_transmittance: Rgb::ONE,
+    }
+}
+
+fn thin_dielectric(int_ior: f32) -> BsdfDesc {
+    BsdfDesc::ThinDielectric {
+        int_ior,
+        ext_ior: 1.0,
+        specular_reflectance: Rgb::ONE,
+        specular_transmittance: Rgb::ONE,
+    }
+}
+
+fn conductor(eta: f32, k: f32) -> BsdfDesc {
+    BsdfDesc::Conductor {
+        eta: Rgb::splat(eta),
+        k: Rgb::splat(k),
+        specular_reflectance: Rgb::ONE,
+    }
+}
+
+const KINDS: [MicrofacetDistribution; 2] = [
+    MicrofacetDistribution::Beckmann,
+    MicrofacetDistribution::Ggx,
+];
+
+/// Every model, with a label, for the generic checks.
+fn all_models() -> Vec<(String, BsdfDesc)> {
+    let mut v = vec![
+        ("diffuse".to_string(), diffuse(0.8)),
+        ("plastic".into(), plastic(0.9, false)),
+        ("plastic nonlinear".into(), plastic(0.9, true)),
+        ("conductor".into(), conductor(0.2, 3.0)),
+        ("conductor mirror".into(), conductor(0.0, 1.0)),
+        ("dielectric".into(), dielectric(1.5)),
+        ("thindielectric".into(), thin_dielectric(1.5)),
+        ("phong n=1".into(), phong(0.3, 0.7, 1.0)),
+        ("phong n=30".into(), phong(0.5, 0.5, 30.0)),
+        ("phong n=500".into(), phong(0.0, 1.0, 500.0)),
+    ];
+    for kind in KINDS {
+        for a in [0.05, 0.3, 1.0] {
+            v.push((
+                format!("roughconductor {kind:?} α={a}"),
+                mirror_rough_conductor(kind, a),
+            ));
+            v.push((
+                format!("roughplastic {kind:?} α={a}"),
+                rough_plastic(kind, a, 0.9, false),
+            ));
+        }
+        v.push((
+            format!("roughplastic nonlinear {kind:?}"),
+            rough_plastic(kind, 0.2, 0.95, true),
+        ));
+        v.push((
+            format!("roughconductor aniso {kind:?}"),
+            rough_conductor(kind, 0.05, 0.5),
+        ));
+    }
+    v.push((
+        "twosided diffuse/roughconductor".into(),
+        BsdfDesc::TwoSided {
+            front: Arc::new(diffuse(0.5)),
+            back: Some(Arc::new(mirror_rough_conductor(
+                MicrofacetDistribution::Ggx,
+                0.2,
+            ))),
+        },
+    ));
+    v
+}
+
+fn run_chi2(bsdf: &Bsdf, wo: Vec3, domain: Domain, label: &str) {
+    let test = match domain {
+        Domain::Hemisphere => ChiSquareTest::hemisphere(),
+        Domain::Sphere => ChiSquareTest::sphere(),
+    };
+    let report = test.run(
+        |u, u_lobe| {
+            let s = bsdf.sample(wo, u_lobe, u)?;
+            if s.delta {
+                return None;
+            }
+            Some((s.wi, s.pdf))
+        },
+        |wi| bsdf.pdf(wo, wi),
+    );
+    report.assert_ok(ALPHA, CHI2_TESTS, label);
+}
+
+const WO_ANGLES: [(f32, f32); 4] = [(0.0, 0.0), (30.0, 70.0), (60.0, 200.0), (85.0, 300.0)];
+
+#[test]
+fn chi2_diffuse_and_plastic() {
+    run_chi2(
+        &mat(diffuse(0.5)),
+        dir(40.0, 10.0),
+        Domain::Hemisphere,
+        "diffuse",
+    );
+    // The plastic's diffuse part: its pdf integrates to 1 − P(specular), the rest are "None".
+    for (t, p) in [(10.0, 0.0), (80.0, 120.0)] {
+        run_chi2(
+            &mat(plastic(0.5, false)),
+            dir(t, p),
+            Domain::Hemisphere,
+            &format!("plastic θo={t}"),
+        );
+    }
+}
+
+#[test]
+fn chi2_roughconductor_isotropic() {
+    for kind in KINDS {
+        for a in [0.1, 0.4, 1.0] {
+            for (t, p) in WO_ANGLES {
+                let label = format!("roughconductor {kind:?} α={a} θo={t}");
+                run_chi2(
+                    &mat(rough_conductor(kind, a, a)),
+                    dir(t, p),
+                    Domain::Hemisphere,
+                    &label,
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn chi2_roughconductor_anisotropic() {
+    for kind in KINDS {
+        for (au, av) in [(0.1, 0.5), (0.7, 0.2)] {
+            for (t, p) in WO_ANGLES {
+                let label = format!("roughconductor {kind:?} α=({au},{av}) θo={t}");
+                run_chi2(
+                    &mat(rough_conductor(kind, au, av)),
+                    dir(t, p),
+                    Domain::Hemisphere,
+                    &label,
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn chi2_roughplastic() {
+    for kind in KINDS {
+        for a in [0.1, 0.5] {
+            for (t, p) in [(20.0, 30.0), (75.0, 250.0)] {
+                let label = format!("roughplastic {kind:?} α={a} θo={t}");
+                run_chi2(
+                    &mat(rough_plastic(kind, a, 0.5, false)),
+                    dir(t, p),
+                    Domain::Hemisphere,
+                    &label,
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn chi2_phong_and_twosided() {
+    for (kd, ks, n) in [(0.5, 0.5, 1.0), (0.2, 0.8, 20.0), (0.1, 0.6, 150.0)] {
+        for (t, p) in [(0.0, 0.0), (50.0, 100.0)] {
+            let label = format!("phong kd={kd} ks={ks} n={n} θo={t}");
+            run_chi2(
+                &mat(phong(kd, ks, n)),
+                dir(t, p),
+                Domain::Hemisphere,
+                &label,
+            );
+        }
+    }
+    // Back side of a twosided rough conductor: samples land in the lower hemisphere.
+    let b = mat(BsdfDesc::TwoSided {
+        front: Arc::new(diffuse(0.5)),
+        back: Some(Arc::new(rough_conductor(
+            MicrofacetDistribution::Ggx,
+            0.3,
+            0.3,
+        ))),
+    });
+    run_chi2(&b, -dir(30.0, 40.0), Domain::Sphere, "twosided back");
+    run_chi2(&b, dir(30.0, 40.0), Domain::Sphere, "twosided front");
+}
+
+/// For every smooth sample: `pdf == pdf(wo, wi)`, `weight == eval / pdf`, unit direction,
+/// `eval` finite and non-negative.
+#[test]
+fn sample_weights_match_eval_over_pdf() {
+    let mut rng = Rng::new(11, 12);
+    for (label, desc) in all_models() {
+        let b = mat(desc);
+        for k in 0..40 {
+            let mut wo = ircache_math::sampling::square_to_uniform_sphere(rng.next_2d());
+            if k % 4 == 0 {
+                wo.z = wo.z.abs();
+            }
+            for _ in 0..500 {
+                let Some(s) = b.sample(wo, rng.next_f32(), rng.next_2d()) else {
+                    continue;
+                };
+                assert!(
+                    (s.wi.length() - 1.0).abs() < 1e-4,
+                    "{label}: |wi| = {}",
+                    s.wi.length()
+                );
+                assert!(
+                    s.weight.is_valid_radiance() && s.pdf > 0.0 && s.pdf.is_finite(),
+                    "{label}: {s:?}"
+                );
+                if s.delta {
+                    assert!(s.pdf <= 1.0 + 1e-6, "{label}");
+                    continue;
+                }
+                let pdf = b.pdf(wo, s.wi);
+                let f = b.eval(wo, s.wi);
+                assert!(f.is_valid_radiance(), "{label}");
+                assert!(
+                    (pdf - s.pdf).abs() <= 1e-4 * pdf.max(s.pdf),
+                    "{label}: pdf {} vs {pdf}",
+                    s.pdf
+                );
+                let expect = f / pdf;
+                for ch in 0..3 {
+                    let (a, e) = (s.weight[ch], expect[ch]);
+                    assert!(
+                        (a - e).abs() <= 1e-3 * e.abs().max(1e-3),
+                        "{label}: weight {a} vs eval/pdf {e}, wo {wo}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// Monte Carlo albedo `∫ eval dωi` (by the sample weights) is at most 1 (+3σ) for unit-scale
+/// materials, from many directions.
+#[test]
+fn energy_conservation() {
+    let mut rng = Rng::new(21, 22);
+    let n = 100_000;
+    for (label, desc) in all_models() {
+        let b = mat(desc);
+        for theta in [0.0f32, 20.0, 45.0, 70.0, 85.0, 89.5, 120.0, 170.0] {
+            let wo = dir(theta, 37.0);
+            let mut sum = [0.0f64; 3];
+            let mut sum2 = [0.0f64; 3];
+            for _ in 0..n {
+                let Some(s) = b.sample(wo, rng.next_f32(), rng.next_2d()) else {
+                    continue;
+                };
+                // Undo the 1/η² radiance scaling of refraction: energy, not radiance, is conserved.
+                let w = if s.eta != 1.0 {
+                    s.weight * (s.eta * s.eta)
+                } else {
+                    s.weight
+                };
+                for ch in 0..3 {
+                    sum[ch] += f64::from(w[ch]);
+                    sum2[ch] += f64::from(w[ch]) * f64::from(w[ch]);
+                }
+            }
+            for ch in 0..3 {
+                let mean = sum[ch] / n as f64;
+                let var = (sum2[ch] / n as f64 - mean * mean).max(0.0);
+                let sigma = (var / n as f64).sqrt();
+                assert!(
+                    mean <= 1.0 + 3.0 * sigma + 1e-4,
+                    "{label} θo={theta}: albedo {mean} ± {sigma}"
+                );
+            }
+        }
+    }
+}
+
+/// Estimate of the albedo with its standard error, channel 0.
+fn albedo(b: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
+    let mut rng = Rng::new(seed, 1);
+    let (mut s, mut s2) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        if let Some(x) = b.sample(wo, rng.next_f32(), rng.next_2d()) {
+            let w = f64::from(x.weight.r);
+            s += w;
+            s2 += w * w;
+        }
+    }
+    let m = s / n as f64;
+    (m, ((s2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
+}
+
+#[test]
+fn white_furnace_checks() {
+    // Diffuse: every weight is exactly ρ, and ∫ eval = ρ by quadrature too.
+    let b = mat(diffuse(0.7));
+    let (m, s) = albedo(&b, dir(50.0, 0.0), 10_000, 1);
+    assert!((m - 0.7).abs() < 1e-6 && s < 1e-6);
+    // Perfect mirror conductor: weight 1.
+    let b = mat(conductor(0.0, 1.0));
+    let (m, _) = albedo(&b, dir(80.0, 0.0), 1000, 2);
+    assert!((m - 1.0).abs() < 1e-6);
+    // Very large k: also a mirror.
+    let b = mat(conductor(1.0, 1e4));
+    let (m, _) = albedo(&b, dir(60.0, 0.0), 1000, 3);
+    assert!((m - 1.0).abs() < 1e-3, "{m}");
+    // Rough mirrors: nearly lossless when smooth, lossy (but ≤ 1) when very rough.
+    for kind in KINDS {
+        let (m, s) = albedo(
+            &mat(mirror_rough_conductor(kind, 0.05)),
+            dir(30.0, 0.0),
+            100_000,
+            4,
+        );
+        assert!(m > 0.99 && m <= 1.0 + 3.0 * s, "{kind:?} α=0.05: {m}");
+        let (m, s) = albedo(
+            &mat(mirror_rough_conductor(kind, 1.0)),
+            dir(60.0, 0.0),
+            100_000,
+            5,
+        );
+        assert!(
+            m < 0.97 && m > 0.3 && m <= 1.0 + 3.0 * s,
+            "{kind:?} α=1: {m}"
+        );
+    }
+    // Smooth dielectric: the delta lobes' probabilities sum to 1 and their weights are the unit
+    // scales, times (η_i/η_t)² for refraction.
+    for theta in [0.0f32, 40.0, 80.0, 140.0, 175.0] {
+        let b = mat(dielectric(1.5));
+        let wo = dir(theta, 20.0);
+        let r = fresnel::fresnel_dielectric(wo.z, 1.5);
+        let refl = b.sample(wo, 0.0, Vec2::ZERO).unwrap();
+        assert!(refl.delta && (refl.pdf - r.r).abs() < 1e-6 && refl.weight == Rgb::ONE);
+        if r.r < 1.0 {
+            let tr = b.sample(wo, 0.999_999, Vec2::ZERO).unwrap();
+            assert!((refl.pdf + tr.pdf - 1.0).abs() < 1e-6);
+            assert!(
+                (tr.weight.r - r.eta_ti * r.eta_ti).abs() < 1e-5
+                    && (tr.eta - r.eta_it).abs() < 1e-6
+            );
+            // Snell's law and opposite side.
+            let sin_o = (1.0 - wo.z * wo.z).sqrt();
+            let sin_i = (1.0 - tr.wi.z * tr.wi.z).sqrt();
+            assert!((sin_i - sin_o * r.eta_ti).abs() < 1e-5 && tr.wi.z * wo.z < 0.0);
+            // Reversibility: refracting back gives −wo's mirror... i.e. the original direction.
+            let back = b.sample(tr.wi, 0.999_999, Vec2::ZERO).unwrap();
+            assert!((back.wi - wo).length() < 1e-4, "{} vs {wo}", back.wi);
+            assert!((back.weight.r * tr.weight.r - 1.0).abs() < 1e-4);
+        }
+    }
+}
+
+/// Delta-lobe choice frequencies match the analytic probabilities (within 4.5σ).
+#[test]
+fn delta_sampling_probabilities() {
+    let n = 200_000;
+    let check = |b: &Bsdf, wo: Vec3, expected: f64, label: &str| {
+        let mut rng = Rng::new(31, 32);
+        let mut hits = 0usize;
+        for _ in 0..n {
+            if let Some(s) = b.sample(wo, rng.next_f32(), rng.next_2d()) {
+                if s.delta && s.wi.z * wo.z > 0.0 {
+                    hits += 1;
+                }
+            }
+        }
+        let f = hits as f64 / n as f64;
+        let sigma = (expected * (1.0 - expected) / n as f64).sqrt().max(1e-9);
+        assert!(
+            (f - expected).abs() <= 4.5 * sigma + 1e-6,
+            "{label}: {f} vs {expected}"
+        );
+    };
+    for theta in [0.0f32, 45.0, 75.0, 89.0] {
+        let wo = dir(theta, 10.0);
+        // Dielectric: P(reflection) = R.
+        let r = fresnel::fresnel_dielectric(wo.z, 1.5).r;
+        check(&mat(dielectric(1.5)), wo, f64::from(r), "dielectric");
+        let r_in = fresnel::fresnel_dielectric(-wo.z, 1.5).r;
+        check(
+            &mat(dielectric(1.5)),
+            -wo,
+            f64::from(r_in),
+            "dielectric inside",
+        );
+        // Thin dielectric: P = 2R/(1+R).
+        check(
+            &mat(thin_dielectric(1.5)),
+            wo,
+            f64::from(2.0 * r / (1.0 + r)),
+            "thin",
+        );
+        // Plastic: P(spec) = F·w_s / (F·w_s + (1−F)(1−w_s)), w_s = 1/(1 + ρ̄).
+        let rho = 0.6;
+        let f = fresnel::fresnel_dielectric(wo.z, 1.49 / 1.000_277).r;
+        let ws = 1.0 / (1.0 + rho);
+        let p = f * ws / (f * ws + (1.0 - f) * (1.0 - ws));
+        check(&mat(plastic(rho, false)), wo, f64::from(p), "plastic");
+        // Conductor: always the delta, weight F.
+        let b = mat(conductor(0.2, 3.0));
+        let s = b.sample(wo, 0.5, Vec2::splat(0.5)).unwrap();
+        let fc = fresnel::fresnel_conductor_1(wo.z, 0.2, 3.0);
+        assert!(s.delta && s.pdf == 1.0 && (s.weight.g - fc).abs() < 1e-6);
+        assert!((s.wi - fresnel::reflect(wo)).length() < 1e-6);
+    }
+    // Thin dielectric transmission goes straight through.
+    let wo = dir(50.0, 10.0);
+    let s = mat(thin_dielectric(1.5))
+        .sample(wo, 0.999, Vec2::ZERO)
+        .unwrap();
+    assert!((s.wi + wo).length() < 1e-6 && s.eta == 1.0);
+}
+
+/// `eval(wo, wi)/|cos θi| = eval(wi, wo)/|cos θo|` for the reflection models.
+#[test]
+fn reciprocity() {
+    let mut rng = Rng::new(41, 42);
+    for (label, desc) in all_models() {
+        let b = mat(desc);
+        if !b.has_smooth() {
+            continue;
+        }
+        for _ in 0..2000 {
+            let wo = ircache_math::sampling::square_to_uniform_hemisphere(rng.next_2d());
+            let wi = ircache_math::sampling::square_to_uniform_hemisphere(rng.next_2d());
+            if wo.z < 1e-3 || wi.z < 1e-3 {
+                continue;
+            }
+            let a = b.eval(wo, wi) / wi.z;
+            let c = b.eval(wi, wo) / wo.z;
+            for ch in 0..3 {
+                // Rough plastic's transmittance table is interpolated linearly: exact symmetry.
+                assert!(
+                    (a[ch] - c[ch]).abs() <= 2e-4 * a[ch].max(c[ch]) + 1e-7,
+                    "{label}: {a:?} vs {c:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn one_sided_and_two_sided_conventions() {
+    let up = dir(30.0, 0.0);
+    let down = -dir(40.0, 90.0);
+    for (label, desc) in all_models() {
+        let b = mat(desc.clone());
+        if matches!(
+            desc,
+            BsdfDesc::Dielectric { .. }
+                | BsdfDesc::ThinDielectric { .. }
+                | BsdfDesc::TwoSided { .. }
+        ) {
+            continue;
+        }
+        // One-sided: black from below, and no transmission.
+        assert!(
+            b.eval(down, up).is_black() && b.eval(up, down).is_black(),
+            "{label}"
+        );
+        assert!(b.sample(down, 0.3, Vec2::splat(0.4)).is_none(), "{label}");
+        assert_eq!(b.pdf(down, up), 0.0);
+        // Twosided: the back mirrors the front.
+        let t = mat(BsdfDesc::TwoSided {
+            front: Arc::new(desc),
+            back: None,
+        });
+        let w1 = dir(20.0, 50.0);
+        let w2 = dir(60.0, 250.0);
+        let flip = |w: Vec3| Vec3::new(w.x, w.y, -w.z);
+        assert_eq!(t.eval(flip(w1), flip(w2)), b.eval(w1, w2), "{label}");
+        assert_eq!(t.pdf(flip(w1), flip(w2)), b.pdf(w1, w2), "{label}");
+        assert!(t.eval(flip(w1), w2).is_black(), "{label}");
+        if let Some(s) = t.sample(flip(w1), 0.3, Vec2::new(0.2, 0.7)) {
+            assert!(s.wi.z < 0.0, "{label}");
+        }
+    }
+    // Different back model.
+    let t = mat(BsdfDesc::TwoSided {
+        front: Arc::new(diffuse(0.2)),
+        back: Some(Arc::new(diffuse(0.6))),
+    });
+    let (w1, w2) = (dir(20.0, 0.0), dir(30.0, 0.0));
+    assert!((t.eval(w1, w2).r - 0.2 * w2.z / PI).abs() < 1e-6);
+    assert!((t.eval(-w1, -w2).r - 0.6 * w2.z / PI).abs() < 1e-6);
+    assert!(t.is_diffuse_only() && (t.diffuse_reflectance().r - 0.2).abs() < 1e-7);
+    assert!(Material::from_desc(&BsdfDesc::TwoSided {
+        front: Arc::new(diffuse(0.2)),
+        back: None
+    })
+    .is_two_sided());
+}
+
+#[test]
+fn classification() {
+    assert!(mat(diffuse(0.5)).is_diffuse_only());
+    assert!(!mat(plastic(0.5, false)).is_diffuse_only());
+    assert!(mat(plastic(0.5, false)).has_smooth());
+    assert!(!mat(conductor(0.0, 1.0)).has_smooth());
+    assert!(!mat(dielectric(1.5)).has_smooth());
+    assert!(!mat(thin_dielectric(1.5)).has_smooth());
+    assert!((mat(plastic(0.4, false)).diffuse_reflectance().g - 0.4).abs() < 1e-7);
+    assert!((mat(phong(0.3, 0.5, 10.0)).diffuse_reflectance().g - 0.3).abs() < 1e-7);
+    assert!(mat(conductor(0.0, 1.0)).diffuse_reflectance().is_black());
+    // Diffuse eval against the formula.
+    let b = mat(diffuse(0.5));
+    let (wo, wi) = (dir(10.0, 0.0), dir(60.0, 90.0));
+    assert!((b.eval(wo, wi).r - 0.5 * wi.z / PI).abs() < 1e-7);
+}
+
+/// Rough plastic with α → 0 approaches the smooth plastic's diffuse part, and its Lambertian base
+/// is textured.
+#[test]
+fn roughplastic_matches_plastic_when_smooth_and_uses_textures() {
+    let rough = mat(rough_plastic(
+        MicrofacetDistribution::Ggx,
+        0.001,
+        0.5,
+        false,
+    ));
+    let smooth = mat(plastic(0.5, false));
+    let (wo, wi) = (dir(30.0, 0.0), dir(50.0, 120.0));
+    let (a, b) = (rough.eval(wo, wi).r, smooth.eval(wo, wi).r);
+    // Within the difference between the tabulated internal reflectance and the F_dr fit.
+    assert!((a - b).abs() < 0.05 * b, "{a} vs {b}");
+    // A bitmap-textured base.
+    let mut img = ircache_image::Image::new(2, 1);
+    img.set(0, 0, Rgb::splat(0.1));
+    img.set(1, 0, Rgb::splat(0.9));
+    let tex = TextureDesc::Bitmap(Arc::new(ircache_scene::BitmapDesc {
+        path: "t.png".into(),
+        image: Arc::new(img),
+        filter: ircache_scene::TextureFilter::Nearest,
+        wrap: ircache_scene::WrapMode::Repeat,
+        to_uv: ircache_math::Mat3::IDENTITY,
+    }));
+    let m = Material::from_desc(&BsdfDesc::Diffuse { reflectance: tex });
+    assert!((m.at(Vec2::new(0.25, 0.5)).diffuse_reflectance().r - 0.1).abs() < 1e-7);
+    assert!((m.at(Vec2::new(0.75, 0.5)).diffuse_reflectance().r - 0.9).abs() < 1e-7);
+    assert!((m.mean_diffuse_reflectance().r - 0.5).abs() < 1e-6);
+}
+
+/// The χ² test has power: a 10 % error in the claimed roughness, or the wrong distribution, is
+/// detected.
+#[test]
+fn chi2_detects_wrong_densities() {
+    let wo = dir(40.0, 30.0);
+    let sampler = mat(rough_conductor(MicrofacetDistribution::Ggx, 0.3, 0.3));
+    let claimed = mat(rough_conductor(MicrofacetDistribution::Ggx, 0.33, 0.33));
+    let report = ChiSquareTest::hemisphere().run(
+        |u, l| sampler.sample(wo, l, u).map(|s| (s.wi, 0.0)),
+        |wi| claimed.pdf(wo, wi),
+    );
+    assert!(!report.passes(ALPHA, CHI2_TESTS), "{}", report.table());
+    // Beckmann samples judged against GGX densities.
+    let sampler = mat(rough_conductor(MicrofacetDistribution::Beckmann, 0.3, 0.3));
+    let report = ChiSquareTest::hemisphere().run(
+        |u, l| sampler.sample(wo, l, u).map(|s| (s.wi, 0.0)),
+        |wi| claimed.pdf(wo, wi),
+    );
+    assert!(!report.passes(ALPHA, CHI2_TESTS));
+}
+
+#[test]
+fn roughplastic_tables_are_quick_to_build() {
+    let t0 = std::time::Instant::now();
+    for kind in KINDS {
+        let _ = Material::from_desc(&rough_plastic(kind, 0.3, 0.5, false));
+    }
+    // Generous bound (optimised test profile): scenes build one table per rough plastic.
+    assert!(t0.elapsed().as_secs_f32() < 5.0, "{:?}", t0.elapsed());
+    eprintln!("two rough plastic tables: {:?}", t0.elapsed());
+}
