@@ -54,19 +54,27 @@ pub fn find_shared(explicit: Option<&Path>) -> Result<PathBuf> {
             }
         }
         if !dir.pop() {
-            bail!("cannot find the shared folder with scenes/ (set IRCACHE_SHARED or pass --shared)");
+            bail!(
+                "cannot find the shared folder with scenes/ (set IRCACHE_SHARED or pass --shared)"
+            );
         }
     }
 }
 
 fn pool(threads: usize) -> Result<rayon::ThreadPool> {
-    Ok(rayon::ThreadPoolBuilder::new().num_threads(threads).build()?)
+    Ok(rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?)
 }
 
 /// Runs `ircache bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
     let shared = find_shared(args.shared.as_deref())?;
-    println!("ircache bench on {} ({} cores)", std::env::consts::ARCH, std::thread::available_parallelism()?.get());
+    println!(
+        "ircache bench on {} ({} cores)",
+        std::env::consts::ARCH,
+        std::thread::available_parallelism()?.get()
+    );
     if args.only == "all" || args.only == "rays" {
         rays(&shared, args)?;
     }
@@ -100,7 +108,12 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     let (w, h) = (640usize, 480usize);
     // Camera rays, one per pixel centre.
     let camera: Vec<Ray> = (0..w * h)
-        .map(|i| scene.camera.generate_ray(Vec2::new(((i % w) as f32 + 0.5) / w as f32, ((i / w) as f32 + 0.5) / h as f32)))
+        .map(|i| {
+            scene.camera.generate_ray(Vec2::new(
+                ((i % w) as f32 + 0.5) / w as f32,
+                ((i / w) as f32 + 0.5) / h as f32,
+            ))
+        })
         .collect();
     let hits: Vec<Interaction> = camera.iter().filter_map(|r| scene.intersect(r)).collect();
     // Cosine-hemisphere gather rays from the first hits (the same rays for every measurement).
@@ -108,7 +121,11 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     let mut hemisphere = Vec::with_capacity(hits.len() * k);
     for (i, it) in hits.iter().enumerate() {
         let mut rng = Rng::keyed(1, &[i as u64]);
-        let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 { -it.ng } else { it.ng };
+        let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 {
+            -it.ng
+        } else {
+            it.ng
+        };
         let frame = Frame::from_z(n);
         for _ in 0..k {
             let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
@@ -117,7 +134,10 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     }
     // Shadow rays towards a fixed direction (the sun's reverse) from the first hits.
     let sun = ircache_math::Vec3::new(0.328889, 0.939682, 0.0939682).normalize();
-    let shadow: Vec<Ray> = hits.iter().map(|it| scene.shadow_ray(it, sun, f32::INFINITY)).collect();
+    let shadow: Vec<Ray> = hits
+        .iter()
+        .map(|it| scene.shadow_ray(it, sun, f32::INFINITY))
+        .collect();
     println!(
         "\nSponza ({} triangles): {} camera rays, {} hemisphere rays ({} per hit), {} shadow rays",
         scene.triangles,
@@ -126,18 +146,33 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
         k,
         shadow.len()
     );
-    println!("{:<44} {:>10} {:>10} {:>8}", "Mrays/s", "1 thread", "2 threads", "2t/1t");
+    println!(
+        "{:<44} {:>10} {:>10} {:>8}",
+        "Mrays/s", "1 thread", "2 threads", "2t/1t"
+    );
     let chunk = 1024;
     let row = |name: &str, f: &(dyn Fn(&[Ray]) -> usize + Sync), rays: &[Ray]| -> Result<()> {
         let mut r = [0.0; 2];
         for (j, t) in [1usize, 2].iter().enumerate() {
             let p = pool(*t)?;
-            r[j] = measure(rays.len(), || p.install(|| rays.par_chunks(chunk).map(f).sum()));
+            r[j] = measure(rays.len(), || {
+                p.install(|| rays.par_chunks(chunk).map(f).sum())
+            });
         }
-        println!("{:<44} {:>10.2} {:>10.2} {:>8.2}", name, r[0], r[1], r[1] / r[0]);
+        println!(
+            "{:<44} {:>10.2} {:>10.2} {:>8.2}",
+            name,
+            r[0],
+            r[1],
+            r[1] / r[0]
+        );
         Ok(())
     };
-    let raw_intersect = |rs: &[Ray]| rs.iter().filter(|r| scene.accel.intersect(r).is_some()).count();
+    let raw_intersect = |rs: &[Ray]| {
+        rs.iter()
+            .filter(|r| scene.accel.intersect(r).is_some())
+            .count()
+    };
     let raw_occluded = |rs: &[Ray]| rs.iter().filter(|r| scene.accel.occluded(r)).count();
     let packets = |rs: &[Ray]| {
         let mut hits = [None; 16];
@@ -149,21 +184,37 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
         n
     };
     row("camera rays, Embree rtcIntersect1", &raw_intersect, &camera)?;
-    row("camera rays, Embree rtcIntersect16 packets", &packets, &camera)?;
-    row("hemisphere rays, Embree rtcIntersect1 (raw)", &raw_intersect, &hemisphere)?;
+    row(
+        "camera rays, Embree rtcIntersect16 packets",
+        &packets,
+        &camera,
+    )?;
+    row(
+        "hemisphere rays, Embree rtcIntersect1 (raw)",
+        &raw_intersect,
+        &hemisphere,
+    )?;
     row("shadow rays, Embree rtcOccluded1", &raw_occluded, &shadow)?;
     // The renderer's own gather loop over the same origins and directions.
     let renderer_loop = |rs: &[Ray]| {
         // Rays come in groups of k from one hit: regenerate them as the renderer would.
         rs.iter().filter(|r| scene.intersect(r).is_some()).count()
     };
-    row("hemisphere rays, renderer (hit + interaction)", &renderer_loop, &hemisphere)?;
+    row(
+        "hemisphere rays, renderer (hit + interaction)",
+        &renderer_loop,
+        &hemisphere,
+    )?;
     let p1 = pool(1)?;
     let gather = |hits: &[Interaction]| -> usize {
         let mut count = 0;
         for (i, it) in hits.iter().enumerate() {
             let mut rng = Rng::keyed(1, &[i as u64]);
-            let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 { -it.ng } else { it.ng };
+            let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 {
+                -it.ng
+            } else {
+                it.ng
+            };
             let frame = Frame::from_z(n);
             for _ in 0..k {
                 let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
@@ -177,12 +228,17 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     let mut r = [0.0; 2];
     for (j, t) in [1usize, 2].iter().enumerate() {
         let p = pool(*t)?;
-        r[j] = measure(hits.len() * k, || p.install(|| hits.par_chunks(chunk / k).map(gather).sum()));
+        r[j] = measure(hits.len() * k, || {
+            p.install(|| hits.par_chunks(chunk / k).map(gather).sum())
+        });
     }
     drop(p1);
     println!(
         "{:<44} {:>10.2} {:>10.2} {:>8.2}",
-        "hemisphere gather, renderer (sample+spawn+hit)", r[0], r[1], r[1] / r[0]
+        "hemisphere gather, renderer (sample+spawn+hit)",
+        r[0],
+        r[1],
+        r[1] / r[0]
     );
     Ok(())
 }
@@ -193,7 +249,10 @@ fn path(shared: &Path, args: &BenchArgs) -> Result<()> {
     let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
     let scene = Scene::build(&desc)?;
     let integrator = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
-    println!("\nPath tracing, Cornell box {}×{}, max_depth 3, {} spp", desc.sensor.film.width, desc.sensor.film.height, args.spp);
+    println!(
+        "\nPath tracing, Cornell box {}×{}, max_depth 3, {} spp",
+        desc.sensor.film.width, desc.sensor.film.height, args.spp
+    );
     let mut ours = 0.0;
     for threads in [1usize, 2] {
         let settings = RenderSettings {
@@ -247,8 +306,19 @@ print(time.time() - t)
         .output()
         .context("running python3")?;
     if !out.status.success() {
-        bail!("{}", String::from_utf8_lossy(&out.stderr).lines().last().unwrap_or("python3 failed"));
+        bail!(
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+                .lines()
+                .last()
+                .unwrap_or("python3 failed")
+        );
     }
     let s = String::from_utf8_lossy(&out.stdout);
-    s.trim().lines().last().unwrap_or("").parse::<f64>().context("parsing Mitsuba's time")
+    s.trim()
+        .lines()
+        .last()
+        .unwrap_or("")
+        .parse::<f64>()
+        .context("parsing Mitsuba's time")
 }

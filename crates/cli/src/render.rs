@@ -76,11 +76,16 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
     let v: Vec<f32> = s
         .split(|c: char| c == ',' || c.is_whitespace())
         .filter(|t| !t.is_empty())
-        .map(|t| t.parse::<f32>().map_err(|_| format!("expected three numbers x,y,z, found \"{s}\"")))
+        .map(|t| {
+            t.parse::<f32>()
+                .map_err(|_| format!("expected three numbers x,y,z, found \"{s}\""))
+        })
         .collect::<Result<_, _>>()?;
     match v[..] {
         [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(Vec3::new(x, y, z)),
-        _ => Err(format!("expected three finite numbers x,y,z, found \"{s}\"")),
+        _ => Err(format!(
+            "expected three finite numbers x,y,z, found \"{s}\""
+        )),
     }
 }
 
@@ -89,7 +94,9 @@ pub fn parse_defines(defines: &[String]) -> Result<Vec<(String, String)>> {
     defines
         .iter()
         .map(|d| match d.split_once('=') {
-            Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.trim().to_string())),
+            Some((k, v)) if !k.trim().is_empty() => {
+                Ok((k.trim().to_string(), v.trim().to_string()))
+            }
             _ => bail!("-D {d}: expected NAME=VALUE"),
         })
         .collect()
@@ -109,7 +116,7 @@ pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
     };
     let mut desc = match &args.scene {
         Some(path) => ircache_scene::load_scene(path, &defines, &obj_camera)?,
-        None => ircache_scene::mitsuba::load_str(BUILTIN_CORNELL_BOX, Path::new("<built-in cornell-box.xml>"), &defines)?,
+        None => load_builtin(&defines)?,
     };
     if let Some(w) = args.width {
         desc.sensor.film.width = w;
@@ -118,7 +125,11 @@ pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
         desc.sensor.film.height = h;
     }
     if desc.sensor.film.width == 0 || desc.sensor.film.height == 0 {
-        bail!("image size {}×{} is empty", desc.sensor.film.width, desc.sensor.film.height);
+        bail!(
+            "image size {}×{} is empty",
+            desc.sensor.film.width,
+            desc.sensor.film.height
+        );
     }
     if let Some(spp) = args.spp {
         desc.sensor.spp = spp;
@@ -135,6 +146,19 @@ pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
     Ok(desc)
 }
 
+/// Loads the built-in Cornell box. It references no other file, so it is written to a private
+/// temporary file and read by the ordinary XML loader.
+fn load_builtin(defines: &[(String, String)]) -> Result<SceneDesc> {
+    let dir = std::env::temp_dir().join(format!("ircache-builtin-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let path = dir.join("cornell-box.xml");
+    std::fs::write(&path, BUILTIN_CORNELL_BOX)
+        .with_context(|| format!("writing {}", path.display()))?;
+    let result = ircache_scene::mitsuba::load(&path, defines);
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(result?)
+}
+
 fn default_output(args: &RenderArgs) -> PathBuf {
     let stem = args
         .scene
@@ -143,7 +167,11 @@ fn default_output(args: &RenderArgs) -> PathBuf {
             // `scene.xml` in a folder is better named after the folder.
             let s = p.file_stem()?.to_string_lossy().into_owned();
             if s == "scene" {
-                p.canonicalize().ok()?.parent()?.file_name().map(|n| n.to_string_lossy().into_owned())
+                p.canonicalize()
+                    .ok()?
+                    .parent()?
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
             } else {
                 Some(s)
             }
@@ -173,8 +201,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let bar = if show {
         let b = ProgressBar::new((settings.width * settings.height) as u64);
         b.set_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% ETA {eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
         b
     } else {
@@ -200,14 +230,26 @@ fn check_writable(path: &Path) -> Result<()> {
         _ => PathBuf::from("."),
     };
     if !dir.is_dir() {
-        bail!("{}: cannot write: directory {} does not exist", path.display(), dir.display());
+        bail!(
+            "{}: cannot write: directory {} does not exist",
+            path.display(),
+            dir.display()
+        );
     }
     let probe = dir.join(format!(".ircache-write-test-{}", std::process::id()));
-    std::fs::write(&probe, b"").with_context(|| format!("{}: cannot write to {}", path.display(), dir.display()))?;
+    std::fs::write(&probe, b"")
+        .with_context(|| format!("{}: cannot write to {}", path.display(), dir.display()))?;
     let _ = std::fs::remove_file(probe);
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     if !matches!(ext.as_str(), "exr" | "hdr" | "pic" | "png") {
-        bail!("{}: unknown image format \"{ext}\" (expected .exr, .hdr, .pic or .png)", path.display());
+        bail!(
+            "{}: unknown image format \"{ext}\" (expected .exr, .hdr, .pic or .png)",
+            path.display()
+        );
     }
     Ok(())
 }
@@ -228,7 +270,10 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
         output.display()
     );
     if out.invalid_samples > 0 {
-        eprintln!("warning: {} samples were NaN, infinite or negative and were dropped", out.invalid_samples);
+        eprintln!(
+            "warning: {} samples were NaN, infinite or negative and were dropped",
+            out.invalid_samples
+        );
     }
 }
 

@@ -67,7 +67,12 @@ impl Camera {
         .normalize();
         let d = self.to_world.transform_vector3(d_cam).normalize();
         let inv_z = 1.0 / d_cam.z;
-        Ray { o: self.origin, d, t_min: self.near_clip * inv_z, t_max: self.far_clip * inv_z }
+        Ray {
+            o: self.origin,
+            d,
+            t_min: self.near_clip * inv_z,
+            t_max: self.far_clip * inv_z,
+        }
     }
 
     /// Film position of a world-space point, or `None` when it lies behind the camera.
@@ -96,7 +101,11 @@ mod tests {
             fov_axis: axis,
             near_clip: 0.01,
             far_clip: 1e4,
-            film: FilmDesc { width: 200, height: 100, filter: FilterDesc::Box },
+            film: FilmDesc {
+                width: 200,
+                height: 100,
+                filter: FilterDesc::Box,
+            },
             spp: 1,
             sampler: "independent".into(),
         }

@@ -35,7 +35,9 @@ impl Filter {
     pub fn sample(&self, u: Vec2) -> Vec2 {
         match *self {
             Filter::Box => u - Vec2::splat(0.5),
-            Filter::Tent(r) => Vec2::new(sampling::sample_tent(u.x, r), sampling::sample_tent(u.y, r)),
+            Filter::Tent(r) => {
+                Vec2::new(sampling::sample_tent(u.x, r), sampling::sample_tent(u.y, r))
+            }
             Filter::Gaussian(s) => Vec2::new(
                 sampling::sample_truncated_gaussian(u.x, s, 4.0 * s),
                 sampling::sample_truncated_gaussian(u.y, s, 4.0 * s),
@@ -50,12 +52,19 @@ mod tests {
 
     #[test]
     fn offsets_stay_within_the_filter_radius_and_are_centred() {
-        for (f, r) in [(Filter::Box, 0.5), (Filter::Tent(1.0), 1.0), (Filter::Gaussian(0.5), 2.0)] {
+        for (f, r) in [
+            (Filter::Box, 0.5),
+            (Filter::Tent(1.0), 1.0),
+            (Filter::Gaussian(0.5), 2.0),
+        ] {
             let mut mean = Vec2::ZERO;
             let n = 64;
             for i in 0..n {
                 for j in 0..n {
-                    let o = f.sample(Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32));
+                    let o = f.sample(Vec2::new(
+                        (i as f32 + 0.5) / n as f32,
+                        (j as f32 + 0.5) / n as f32,
+                    ));
                     assert!(o.x.abs() <= r && o.y.abs() <= r, "{f:?} {o}");
                     mean += o;
                 }

@@ -1,13 +1,18 @@
 //! The renderer: from a [`ircache_scene::SceneDesc`] to an image.
 //!
 //! - [`scene`]: the render-time scene: Embree geometry, materials and lights, surface interactions.
-//! - [`camera`], [`film`], [`sampler`]: primary rays, pixel filters, per-pixel random streams.
+//! - [`camera`], [`film`]: primary rays and pixel filters.
 //! - [`texture`], [`bsdf`]: materials with importance sampling (Mitsuba 3's models).
 //! - [`lights`]: emitters with importance sampling, for next-event estimation and MIS.
 //! - [`integrators`]: `direct` and `path` (the unbiased reference).
 //! - [`render`]: the parallel, deterministic tile loop.
 
 pub mod bsdf;
+pub mod camera;
+pub mod film;
+pub mod integrators;
 pub mod lights;
+pub mod render;
+pub mod scene;
 pub mod testing;
 pub mod texture;

@@ -55,7 +55,9 @@ pub fn render(
     let (w, h) = (settings.width, settings.height);
     let tiles_x = w.div_ceil(TILE);
     let tiles_y = h.div_ceil(TILE);
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(settings.threads).build()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(settings.threads)
+        .build()?;
     let done = AtomicU64::new(0);
     let start = Instant::now();
     let results: Vec<(Vec<Rgb>, RayCounts, u64)> = pool.install(|| {
@@ -75,7 +77,8 @@ pub fn render(
                         pixels.push(c);
                     }
                 }
-                let n = done.fetch_add(pixels.len() as u64, Ordering::Relaxed) + pixels.len() as u64;
+                let n =
+                    done.fetch_add(pixels.len() as u64, Ordering::Relaxed) + pixels.len() as u64;
                 progress(n);
                 (pixels, rays, invalid)
             })
@@ -95,7 +98,12 @@ pub fn render(
         rays.add(&r);
         invalid_samples += bad;
     }
-    Ok(RenderOutput { image, rays, invalid_samples, seconds: start.elapsed().as_secs_f64() })
+    Ok(RenderOutput {
+        image,
+        rays,
+        invalid_samples,
+        seconds: start.elapsed().as_secs_f64(),
+    })
 }
 
 /// One pixel: the mean of `spp` filter-importance-sampled estimates. Returns the value and the

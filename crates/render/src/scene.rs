@@ -117,16 +117,28 @@ impl Scene {
                     }
                     ShapeGeometry::Mesh(m.clone())
                 }
-                &Geometry::Sphere { center, radius, flip_normals } => {
+                &Geometry::Sphere {
+                    center,
+                    radius,
+                    flip_normals,
+                } => {
                     let id = builder.add_spheres(&[(center, radius)])?;
                     debug_assert_eq!(id as usize, i);
                     lo = lo.min(center - Vec3::splat(radius));
                     hi = hi.max(center + Vec3::splat(radius));
-                    ShapeGeometry::Sphere { center, radius, flip_normals }
+                    ShapeGeometry::Sphere {
+                        center,
+                        radius,
+                        flip_normals,
+                    }
                 }
             };
             materials.push(Material::from_desc(&s.bsdf));
-            shapes.push(Shape { geometry, material: i, area_light: None });
+            shapes.push(Shape {
+                geometry,
+                material: i,
+                area_light: None,
+            });
         }
         let accel = builder.build()?;
         let center = 0.5 * (lo + hi);
@@ -135,9 +147,23 @@ impl Scene {
         for (i, shape) in shapes.iter_mut().enumerate() {
             shape.area_light = lights.area_light_of_shape(i);
         }
-        let camera = Camera::new(&desc.sensor, desc.sensor.film.width, desc.sensor.film.height);
+        let camera = Camera::new(
+            &desc.sensor,
+            desc.sensor.film.width,
+            desc.sensor.film.height,
+        );
         let scale = lo.abs().max(hi.abs()).max_element().max(f32::MIN_POSITIVE);
-        Ok(Scene { accel, shapes, materials, lights, camera, scale, center, radius, triangles })
+        Ok(Scene {
+            accel,
+            shapes,
+            materials,
+            lights,
+            camera,
+            scale,
+            center,
+            radius,
+            triangles,
+        })
     }
 
     /// The closest surface along `ray`.
@@ -157,7 +183,9 @@ impl Scene {
                 let b0 = 1.0 - b1 - b2;
                 let (p0, p1, p2) = (m.positions[i0], m.positions[i1], m.positions[i2]);
                 let p = b0 * p0 + b1 * p1 + b2 * p2;
-                let ng = (p1 - p0).cross(p2 - p0).normalize_or(hit.ng.normalize_or(Vec3::Z));
+                let ng = (p1 - p0)
+                    .cross(p2 - p0)
+                    .normalize_or(hit.ng.normalize_or(Vec3::Z));
                 let ns = match &m.normals {
                     Some(n) => (b0 * n[i0] + b1 * n[i1] + b2 * n[i2]).normalize_or(ng),
                     None => ng,
@@ -177,15 +205,26 @@ impl Scene {
                     t: hit.t,
                 }
             }
-            &ShapeGeometry::Sphere { center, radius, flip_normals } => {
+            &ShapeGeometry::Sphere {
+                center,
+                radius,
+                flip_normals,
+            } => {
                 let p_raw = ray.at(hit.t);
                 let local = (p_raw - center).normalize_or(Vec3::Z);
                 // Re-project onto the sphere: the analytic hit is more accurate than o + t d.
                 let p = center + local * radius;
                 let n = if flip_normals { -local } else { local };
                 let phi = local.z.atan2(local.x);
-                let phi = if phi < 0.0 { phi + 2.0 * ircache_math::PI } else { phi };
-                let uv = Vec2::new(phi / (2.0 * ircache_math::PI), local.y.clamp(-1.0, 1.0).acos() / ircache_math::PI);
+                let phi = if phi < 0.0 {
+                    phi + 2.0 * ircache_math::PI
+                } else {
+                    phi
+                };
+                let uv = Vec2::new(
+                    phi / (2.0 * ircache_math::PI),
+                    local.y.clamp(-1.0, 1.0).acos() / ircache_math::PI,
+                );
                 Interaction {
                     p,
                     ng: n,
@@ -206,6 +245,14 @@ impl Scene {
         Ray::new(offset_ray_origin(it.p, it.ng, d, self.scale), d)
     }
 
+    /// The point from which lights are sampled at `it`: the hit point moved off the surface (by
+    /// the same scale-free offset as spawned rays) to the side that `wo` points to.
+    #[inline]
+    #[must_use]
+    pub fn reference_point(&self, it: &Interaction, wo: Vec3) -> Vec3 {
+        offset_ray_origin(it.p, it.ng, wo, self.scale)
+    }
+
     /// A shadow ray from `it` towards unit direction `wi` for a light at `distance` (may be
     /// infinite), shortened relatively so that it does not reach the light's own surface.
     #[inline]
@@ -217,6 +264,11 @@ impl Scene {
         } else {
             f32::INFINITY
         };
-        Ray { o, d: wi, t_min: 0.0, t_max }
+        Ray {
+            o,
+            d: wi,
+            t_min: 0.0,
+            t_max,
+        }
     }
 }

@@ -22,7 +22,11 @@ impl DirectIntegrator {
     pub fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, rays: &mut RayCounts) -> Rgb {
         rays.camera += 1;
         let Some(it) = scene.intersect(ray) else {
-            return if self.hide_emitters { Rgb::ZERO } else { scene.lights.environment_radiance(ray.d) };
+            return if self.hide_emitters {
+                Rgb::ZERO
+            } else {
+                scene.lights.environment_radiance(ray.d)
+            };
         };
         let wo = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
@@ -33,19 +37,25 @@ impl DirectIntegrator {
         let bsdf = scene.materials[shape.material].at(it.uv);
         let wo_local = it.frame.to_local(wo);
         let (ne, nb) = (self.emitter_samples as f32, self.bsdf_samples as f32);
+        let p_ref = scene.reference_point(&it, wo);
 
         if bsdf.has_smooth() && !scene.lights.is_empty() {
             for _ in 0..self.emitter_samples {
                 let u_sel = rng.next_f32();
                 let u = rng.next_2d();
-                let Some(ls) = scene.lights.sample(it.p, u_sel, u) else { continue };
+                let Some(ls) = scene.lights.sample(p_ref, u_sel, u) else {
+                    continue;
+                };
                 let wi_local = it.frame.to_local(ls.wi);
                 let f = bsdf.eval(wo_local, wi_local);
                 if f.is_black() || ls.pdf <= 0.0 {
                     continue;
                 }
                 rays.shadow += 1;
-                if scene.accel.occluded(&scene.shadow_ray(&it, ls.wi, ls.distance)) {
+                if scene
+                    .accel
+                    .occluded(&scene.shadow_ray(&it, ls.wi, ls.distance))
+                {
                     continue;
                 }
                 let w = if ls.is_delta {
@@ -60,7 +70,9 @@ impl DirectIntegrator {
         for _ in 0..self.bsdf_samples {
             let u_lobe = rng.next_f32();
             let u = rng.next_2d();
-            let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else { continue };
+            let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
+                continue;
+            };
             let wi = it.frame.from_local(bs.wi);
             let next = scene.spawn_ray(&it, wi);
             rays.bounce += 1;
@@ -86,7 +98,13 @@ impl DirectIntegrator {
                         let w = if bs.delta {
                             1.0 / nb
                         } else {
-                            let pdf_l = scene.lights.pdf_area(light, hit_it.prim, it.p, hit_it.p, hit_it.frame.n);
+                            let pdf_l = scene.lights.pdf_area(
+                                light,
+                                hit_it.prim,
+                                p_ref,
+                                hit_it.p,
+                                hit_it.frame.n,
+                            );
                             mis_weight(nb * bs.pdf, ne * pdf_l) / nb
                         };
                         l += bs.weight * le * w;

@@ -21,7 +21,11 @@ pub struct PathIntegrator {
 impl PathIntegrator {
     /// Radiance along `ray`.
     pub fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, rays: &mut RayCounts) -> Rgb {
-        let max_depth = if self.max_depth < 0 { u32::MAX } else { self.max_depth as u32 };
+        let max_depth = if self.max_depth < 0 {
+            u32::MAX
+        } else {
+            self.max_depth as u32
+        };
         if max_depth == 0 {
             return Rgb::ZERO;
         }
@@ -41,7 +45,11 @@ impl PathIntegrator {
             let Some(it) = hit else {
                 if scene.lights.has_environment() && !(depth == 0 && self.hide_emitters) {
                     let le = scene.lights.environment_radiance(ray.d);
-                    let w = if prev_delta { 1.0 } else { mis_weight(prev_pdf, scene.lights.pdf_environment(ray.d)) };
+                    let w = if prev_delta {
+                        1.0
+                    } else {
+                        mis_weight(prev_pdf, scene.lights.pdf_environment(ray.d))
+                    };
                     l += beta * le * w;
                 }
                 break;
@@ -55,7 +63,12 @@ impl PathIntegrator {
                         let w = if prev_delta {
                             1.0
                         } else {
-                            mis_weight(prev_pdf, scene.lights.pdf_area(light, it.prim, prev_p, it.p, it.frame.n))
+                            mis_weight(
+                                prev_pdf,
+                                scene
+                                    .lights
+                                    .pdf_area(light, it.prim, prev_p, it.p, it.frame.n),
+                            )
                         };
                         l += beta * le * w;
                     }
@@ -67,17 +80,26 @@ impl PathIntegrator {
             let bsdf = scene.materials[shape.material].at(it.uv);
             let wo_local = it.frame.to_local(wo);
 
-            // Emitter sampling.
+            // Emitter sampling, from the hit point moved off the surface to the viewer's side: a
+            // point exactly on an emitting sphere would be neither inside nor outside it.
+            let p_ref = scene.reference_point(&it, wo);
             if bsdf.has_smooth() && !scene.lights.is_empty() {
                 let u_sel = rng.next_f32();
                 let u = rng.next_2d();
-                if let Some(ls) = scene.lights.sample(it.p, u_sel, u) {
+                if let Some(ls) = scene.lights.sample(p_ref, u_sel, u) {
                     let wi_local = it.frame.to_local(ls.wi);
                     let f = bsdf.eval(wo_local, wi_local);
                     if !f.is_black() && ls.pdf > 0.0 {
                         rays.shadow += 1;
-                        if !scene.accel.occluded(&scene.shadow_ray(&it, ls.wi, ls.distance)) {
-                            let w = if ls.is_delta { 1.0 } else { mis_weight(ls.pdf, bsdf.pdf(wo_local, wi_local)) };
+                        if !scene
+                            .accel
+                            .occluded(&scene.shadow_ray(&it, ls.wi, ls.distance))
+                        {
+                            let w = if ls.is_delta {
+                                1.0
+                            } else {
+                                mis_weight(ls.pdf, bsdf.pdf(wo_local, wi_local))
+                            };
                             l += beta * f * ls.radiance * (w / ls.pdf);
                         }
                     }
@@ -91,7 +113,9 @@ impl PathIntegrator {
             // BSDF sampling.
             let u_lobe = rng.next_f32();
             let u = rng.next_2d();
-            let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else { break };
+            let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
+                break;
+            };
             let wi = it.frame.from_local(bs.wi);
             // Reject samples whose geometric and shading hemispheres disagree (light leaks).
             if (wi.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
@@ -99,7 +123,7 @@ impl PathIntegrator {
             }
             beta *= bs.weight;
             eta *= bs.eta;
-            prev_p = it.p;
+            prev_p = p_ref;
             prev_pdf = bs.pdf;
             prev_delta = bs.delta;
             ray = scene.spawn_ray(&it, wi);

@@ -1,0 +1,110 @@
+//! Agreement with the Mitsuba 3 path-traced references in `shared/references/` (README there
+//! defines relMSE_trim). The default run checks the Cornell box at 64 spp and Sponza at 16 spp
+//! against the error Mitsuba's own path tracer reaches at that spp (its relMSE_trim falls as
+//! 2.8e-5 + 0.114/spp on the Cornell box and 1e-3 + 4.0/spp on Sponza), with 30 % headroom for
+//! noise; the issue's full figures (256 spp) run with `--ignored`.
+
+use ircache_image::compare::compare;
+use ircache_render::film::Filter;
+use ircache_render::integrators::Integrator;
+use ircache_render::render::{render, RenderSettings};
+use ircache_render::scene::Scene;
+use ircache_scene::obj_scene::ObjCamera;
+use std::path::PathBuf;
+
+fn shared() -> PathBuf {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared");
+    assert!(
+        p.join("references").is_dir(),
+        "the shared folder with references/ must sit beside the checkout: {}",
+        p.display()
+    );
+    p
+}
+
+/// Renders `scene` with max_depth 3 at `spp` and returns (relMSE_trim, luminance ratio).
+fn against_reference(scene: &str, reference: &str, spp: u32) -> (f64, f64) {
+    let root = shared();
+    let defines = vec![("max_depth".to_string(), "3".to_string())];
+    let desc = ircache_scene::load_scene(&root.join(scene), &defines, &ObjCamera::default())
+        .expect("scene loads");
+    let built = Scene::build(&desc).expect("scene builds");
+    let integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
+    let settings = RenderSettings {
+        width: desc.sensor.film.width as usize,
+        height: desc.sensor.film.height as usize,
+        spp,
+        seed: 11,
+        threads: 0,
+        filter: Filter::from_desc(&desc.sensor.film.filter),
+    };
+    let out = render(&built, &integrator, &settings, &|_| {}).expect("render");
+    let reference = ircache_image::read_image(&root.join(reference)).expect("reference reads");
+    let m = compare(&out.image, &reference).expect("same size");
+    eprintln!(
+        "{scene} at {spp} spp: relMSE_trim {:.3e}, lum ratio {:.4}",
+        m.rel_mse_trim, m.lum_ratio
+    );
+    assert_eq!(m.nonfinite_a, 0);
+    (m.rel_mse_trim, m.lum_ratio)
+}
+
+#[test]
+fn cornell_box_matches_mitsuba_at_64_spp() {
+    let (e, lum) = against_reference(
+        "scenes/cornell-box/scene.xml",
+        "references/cornell-box-d3.exr",
+        64,
+    );
+    let mitsuba = 2.8e-5 + 0.114 / 64.0;
+    assert!(
+        e < 1.3 * mitsuba,
+        "relMSE_trim {e:.3e} vs Mitsuba's {mitsuba:.3e}"
+    );
+    assert!((lum - 1.0).abs() < 0.01, "mean luminance ratio {lum}");
+}
+
+#[test]
+fn sponza_matches_mitsuba_at_16_spp() {
+    let (e, lum) = against_reference(
+        "scenes/sponza-sun/scene.xml",
+        "references/sponza-sun-d3.exr",
+        16,
+    );
+    let mitsuba = 1e-3 + 4.0 / 16.0;
+    assert!(
+        e < 1.3 * mitsuba,
+        "relMSE_trim {e:.3e} vs Mitsuba's {mitsuba:.3e}"
+    );
+    assert!((lum - 1.0).abs() < 0.02, "mean luminance ratio {lum}");
+}
+
+#[test]
+#[ignore = "long: 256 spp, run with --ignored"]
+fn cornell_box_256_spp_meets_the_issue_target() {
+    let (e, lum) = against_reference(
+        "scenes/cornell-box/scene.xml",
+        "references/cornell-box-d3.exr",
+        256,
+    );
+    assert!(
+        e <= 1e-3,
+        "relMSE_trim {e:.3e} (target 1e-3, Mitsuba 4.8e-4)"
+    );
+    assert!((lum - 1.0).abs() < 0.01, "mean luminance ratio {lum}");
+}
+
+#[test]
+#[ignore = "long: 256 spp, run with --ignored"]
+fn sponza_256_spp_meets_the_issue_target() {
+    let (e, lum) = against_reference(
+        "scenes/sponza-sun/scene.xml",
+        "references/sponza-sun-d3.exr",
+        256,
+    );
+    assert!(
+        e <= 0.04,
+        "relMSE_trim {e:.3e} (target 0.04, Mitsuba 0.017)"
+    );
+    assert!((lum - 1.0).abs() < 0.01, "mean luminance ratio {lum}");
+}

@@ -1,0 +1,115 @@
+//! Helpers shared by the render crate's integration tests: tiny scenes built in code.
+
+#![allow(dead_code)]
+
+use ircache_math::{Mat4, Rgb, Vec3};
+use ircache_render::film::Filter;
+use ircache_render::integrators::Integrator;
+use ircache_render::render::{render, RenderOutput, RenderSettings};
+use ircache_render::scene::Scene;
+use ircache_scene::*;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// A location for shapes made in code.
+pub fn here() -> SourceLocation {
+    SourceLocation {
+        file: Arc::new(PathBuf::from("<test>")),
+        line: 1,
+        column: 1,
+    }
+}
+
+/// A camera at `eye` looking at `target` (Mitsuba's lookat), square film.
+pub fn sensor(eye: Vec3, target: Vec3, fov: f32, size: u32, spp: u32) -> SensorDesc {
+    let dir = (target - eye).normalize();
+    let up = if dir.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    let left = up.cross(dir).normalize();
+    let new_up = dir.cross(left);
+    let to_world = Mat4::from_cols(
+        left.extend(0.0),
+        new_up.extend(0.0),
+        dir.extend(0.0),
+        eye.extend(1.0),
+    );
+    SensorDesc {
+        to_world,
+        fov_degrees: fov,
+        fov_axis: FovAxis::X,
+        near_clip: 1e-4,
+        far_clip: 1e6,
+        film: FilmDesc {
+            width: size,
+            height: size,
+            filter: FilterDesc::Box,
+        },
+        spp,
+        sampler: "independent".into(),
+    }
+}
+
+/// A diffuse BSDF of albedo `rho`.
+pub fn diffuse(rho: Rgb) -> Arc<BsdfDesc> {
+    Arc::new(BsdfDesc::Diffuse {
+        reflectance: TextureDesc::Constant(rho),
+    })
+}
+
+/// A scene from shapes and emitters with the given integrator.
+pub fn scene(
+    sensor: SensorDesc,
+    integrator: IntegratorDesc,
+    shapes: Vec<ShapeDesc>,
+    emitters: Vec<EmitterDesc>,
+) -> SceneDesc {
+    SceneDesc {
+        source: PathBuf::from("<test>"),
+        sensor,
+        integrator,
+        shapes,
+        emitters,
+    }
+}
+
+/// A path integrator description.
+pub fn path(max_depth: i32) -> IntegratorDesc {
+    IntegratorDesc {
+        kind: "path".into(),
+        max_depth,
+        ..IntegratorDesc::default()
+    }
+}
+
+/// Renders a description with `threads` threads and seed `seed`.
+pub fn render_desc(desc: &SceneDesc, threads: usize, seed: u64) -> RenderOutput {
+    let scene = Scene::build(desc).expect("scene builds");
+    let integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
+    let settings = RenderSettings {
+        width: desc.sensor.film.width as usize,
+        height: desc.sensor.film.height as usize,
+        spp: desc.sensor.spp,
+        seed,
+        threads,
+        filter: Filter::from_desc(&desc.sensor.film.filter),
+    };
+    render(&scene, &integrator, &settings, &|_| {}).expect("render")
+}
+
+/// Mean and standard error of the mean of each channel over the image's pixels.
+pub fn mean_and_error(img: &ircache_image::Image) -> (Rgb, Rgb) {
+    let n = img.pixels.len() as f64;
+    let mut s = [0.0f64; 3];
+    let mut s2 = [0.0f64; 3];
+    for p in &img.pixels {
+        for c in 0..3 {
+            s[c] += p[c] as f64;
+            s2[c] += (p[c] as f64).powi(2);
+        }
+    }
+    let m = s.map(|v| v / n);
+    let e = [0, 1, 2].map(|c| ((s2[c] / n - m[c] * m[c]).max(0.0) / n).sqrt());
+    (
+        Rgb::new(m[0] as f32, m[1] as f32, m[2] as f32),
+        Rgb::new(e[0] as f32, e[1] as f32, e[2] as f32),
+    )
+}
