@@ -1,0 +1,217 @@
+//! Shapes: `obj`, `ply`, `rectangle`, `cube`, `disk`, `sphere`, brought to world space.
+//!
+//! Conventions (Mitsuba 3): positions are transformed by `to_world`, normals by its inverse
+//! transpose. Mitsuba's `rectangle` and `disk` are analytic with normal `to_world · n`; their
+//! tessellations here wind around that normal even under a mirroring `to_world`. The `cube`, `obj`
+//! and `ply` are meshes in Mitsuba too and keep their winding (and per-vertex normals) as given.
+//! `flip_normals` reverses the winding and negates the normals; `face_normals` drops per-vertex
+//! normals. The OBJ `flip_tex_coords` default (true) flips v as Mitsuba does. A shape has one BSDF
+//! (default: diffuse 0.5) and at most one `area` emitter.
+
+use super::bsdf::build_bsdf;
+use super::emitter::build_area;
+use super::props::Plugin;
+use super::{expect_tag, Ctx};
+use crate::desc::{Geometry, ShapeDesc, TriangleMesh};
+use crate::error::SceneError;
+use crate::shapes;
+use ircache_math::{Mat3, Mat4, Vec2, Vec3};
+use std::path::Path;
+use std::rc::Rc;
+
+const SHAPES: &[&str] = &["obj", "ply", "rectangle", "cube", "disk", "sphere"];
+
+/// Builds a shape with its BSDF and optional area emitter.
+pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneError> {
+    p.expect_type(SHAPES)?;
+    let to_world = p
+        .transform_opt("to_world")?
+        .map_or(Mat4::IDENTITY, |(m, _)| m);
+    let flip = p.boolean("flip_normals", false)?;
+    let geometry = match p.ty.as_str() {
+        "sphere" => sphere(p, to_world, flip)?,
+        "rectangle" | "disk" => {
+            let mut mesh = if p.ty == "rectangle" {
+                shapes::rectangle()
+            } else {
+                shapes::disk(shapes::DISK_SEGMENTS)
+            };
+            if !shapes::transform_mesh(&mut mesh, &to_world) {
+                return Err(p.error("to_world is singular (it collapses the shape to zero area)"));
+            }
+            if Mat3::from_mat4(to_world).determinant() < 0.0 {
+                shapes::reverse_winding(&mut mesh);
+            }
+            finish_analytic(p, mesh, flip)?
+        }
+        "cube" => {
+            let mut mesh = shapes::cube();
+            if !shapes::transform_mesh(&mut mesh, &to_world) {
+                return Err(p.error("to_world is singular (it collapses the shape to zero volume)"));
+            }
+            if p.boolean("face_normals", false)? {
+                mesh.normals = None;
+            }
+            finish_analytic(p, mesh, flip)?
+        }
+        _ => {
+            // obj, ply
+            let (name, prop) = p
+                .string_opt("filename")?
+                .ok_or_else(|| p.error("missing \"filename\""))?;
+            let path = ctx.resolve_file(name, prop)?;
+            let loc = prop.loc.clone();
+            let face_normals = p.boolean("face_normals", false)?;
+            let mut mesh = if p.ty == "obj" {
+                let flip_tex = p.boolean("flip_tex_coords", true)?;
+                let mut m = read_obj_mesh(&path).map_err(|e| attach_location(e, &loc, &path))?;
+                // The reader gives Mitsuba's default (u, 1 − v); undo it when asked not to flip.
+                if !flip_tex {
+                    if let Some(uvs) = &mut m.uvs {
+                        for uv in uvs {
+                            *uv = Vec2::new(uv.x, 1.0 - uv.y);
+                        }
+                    }
+                }
+                m
+            } else {
+                read_ply_mesh(&path).map_err(|e| attach_location(e, &loc, &path))?
+            };
+            if mesh.indices.is_empty() {
+                return Err(SceneError::Referenced {
+                    location: loc,
+                    path,
+                    message: "the mesh has no triangles".into(),
+                });
+            }
+            if !shapes::transform_mesh(&mut mesh, &to_world) {
+                return Err(p.error("to_world is singular"));
+            }
+            if face_normals {
+                mesh.normals = None;
+            }
+            if flip {
+                shapes::flip_mesh(&mut mesh);
+            }
+            Geometry::Mesh(mesh)
+        }
+    };
+
+    let mut bsdf = None;
+    let mut emitter = None;
+    for (obj, prop) in p.objects(&ctx.ids)? {
+        match obj.tag.as_str() {
+            "bsdf" => {
+                if bsdf.is_some() {
+                    return Err(SceneError::at(
+                        prop.loc.clone(),
+                        "a shape can have only one BSDF",
+                    ));
+                }
+                bsdf = Some(build_bsdf(ctx, &obj)?);
+            }
+            "emitter" => {
+                if emitter.is_some() {
+                    return Err(SceneError::at(
+                        prop.loc.clone(),
+                        "a shape can have only one emitter",
+                    ));
+                }
+                emitter = Some(build_area(&obj)?);
+            }
+            _ => expect_tag(&obj, prop, "bsdf or emitter")?,
+        }
+    }
+    p.check_unused()?;
+    Ok(ShapeDesc {
+        id: p.id.clone(),
+        geometry,
+        bsdf: bsdf.unwrap_or_else(|| ctx.default_bsdf.clone()),
+        emitter,
+        location: p.loc.clone(),
+    })
+}
+
+fn finish_analytic(p: &Plugin, mut mesh: TriangleMesh, flip: bool) -> Result<Geometry, SceneError> {
+    if let Some(t) = shapes::find_degenerate_triangle(&mesh) {
+        return Err(p.error(format!(
+            "to_world makes triangle {t} degenerate (zero area)"
+        )));
+    }
+    if flip {
+        shapes::flip_mesh(&mut mesh);
+    }
+    Ok(Geometry::Mesh(mesh))
+}
+
+fn sphere(p: &Plugin, to_world: Mat4, flip: bool) -> Result<Geometry, SceneError> {
+    let center = p.vector_opt("center")?.map_or(Vec3::ZERO, |(v, _)| v);
+    let radius = match p.float_opt("radius")? {
+        None => 1.0,
+        Some((r, _)) if r > 0.0 && r.is_finite() => r,
+        Some((r, prop)) => {
+            return Err(SceneError::at(
+                prop.loc.clone(),
+                format!("radius {r} must be positive"),
+            ))
+        }
+    };
+    let lin = Mat3::from_mat4(to_world);
+    let (cx, cy, cz) = (
+        lin.x_axis.length(),
+        lin.y_axis.length(),
+        lin.z_axis.length(),
+    );
+    let s = (cx + cy + cz) / 3.0;
+    let tol = 1e-4 * s;
+    let orthogonal = lin.x_axis.dot(lin.y_axis).abs() <= tol * s
+        && lin.y_axis.dot(lin.z_axis).abs() <= tol * s
+        && lin.x_axis.dot(lin.z_axis).abs() <= tol * s;
+    if !(s > 0.0 && s.is_finite())
+        || (cx - s).abs() > tol
+        || (cy - s).abs() > tol
+        || (cz - s).abs() > tol
+        || !orthogonal
+    {
+        return Err(p.error("to_world must be a rotation, translation and uniform scale (a sphere cannot be scaled non-uniformly or sheared)"));
+    }
+    let center = to_world.transform_point3(center);
+    let radius = radius * s;
+    if !center.is_finite() {
+        return Err(p.error("sphere center is not finite"));
+    }
+    Ok(Geometry::Sphere {
+        center,
+        radius,
+        flip_normals: flip,
+    })
+}
+
+/// Puts a location on a mesh reader's error when it has none.
+fn attach_location(e: SceneError, loc: &crate::error::SourceLocation, path: &Path) -> SceneError {
+    match e {
+        SceneError::Io { path: _, source } => SceneError::Referenced {
+            location: loc.clone(),
+            path: path.to_path_buf(),
+            message: source.to_string(),
+        },
+        SceneError::UnknownFormat { path: p } => SceneError::Referenced {
+            location: loc.clone(),
+            path: p,
+            message: "unknown mesh format".into(),
+        },
+        other => other,
+    }
+}
+
+/// Reads an OBJ file as Mitsuba's `obj` shape sees it: every group of the file in one mesh
+/// (materials ignored; the shape's BSDF applies), texture coordinates already `(u, 1 − v)`.
+fn read_obj_mesh(path: &Path) -> Result<TriangleMesh, SceneError> {
+    let data = crate::mesh::obj::read_obj(path)?;
+    Ok(crate::mesh::obj::obj_to_mesh(&data))
+}
+
+/// Reads a PLY file.
+fn read_ply_mesh(path: &Path) -> Result<TriangleMesh, SceneError> {
+    crate::mesh::ply::read_ply(path)
+}

@@ -1,0 +1,332 @@
+//! Plugins, defaults and transforms of the Mitsuba 3 XML loader on small hand-written scenes.
+
+use ircache_math::{Mat4, Rgb, Vec3, Vec4};
+use ircache_scene::shapes::{mesh_area, triangle_normal};
+use ircache_scene::{
+    mitsuba, BsdfDesc, EmitterDesc, FilterDesc, FovAxis, Geometry, MicrofacetDistribution,
+    ParamValue, SceneDesc, TextureDesc,
+};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+static COUNTER: AtomicUsize = AtomicUsize::new(0);
+
+fn load(body: &str) -> SceneDesc {
+    load_full(&format!(
+        "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/></sensor>\n{body}\n</scene>\n"
+    ))
+}
+
+fn load_full(text: &str) -> SceneDesc {
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!(
+        "ircache-mitsuba-plugins-{}-{n}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, text).unwrap();
+    mitsuba::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn close(a: Mat4, b: Mat4) -> bool {
+    a.to_cols_array()
+        .iter()
+        .zip(b.to_cols_array())
+        .all(|(x, y)| (x - y).abs() < 1e-5)
+}
+
+fn spot_to_world(transform: &str) -> Mat4 {
+    let s = load(&format!(
+        "<emitter type=\"spot\"><transform name=\"to_world\">{transform}</transform></emitter>\n<shape type=\"cube\"/>"
+    ));
+    match &s.emitters[0] {
+        EmitterDesc::Spot { to_world, .. } => *to_world,
+        e => panic!("{e:?}"),
+    }
+}
+
+#[test]
+fn transform_composition() {
+    // Each later operation multiplies from the left: translate, then rotate 90° about +y.
+    let m = spot_to_world("<translate x=\"1\"/><rotate y=\"1\" angle=\"90\"/>");
+    // R_y(90°) · T(1,0,0): the translated origin (1,0,0) rotates to (0,0,−1).
+    let expected = Mat4::from_cols(
+        Vec4::new(0.0, 0.0, -1.0, 0.0),
+        Vec4::new(0.0, 1.0, 0.0, 0.0),
+        Vec4::new(1.0, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, -1.0, 1.0),
+    );
+    assert!(close(m, expected), "{m:?}");
+    // scale (uniform via one value), then translate via value, then a row-major matrix.
+    let m = spot_to_world(
+        "<scale value=\"2\"/><translate value=\"1, 2, 3\"/><matrix value=\"0 -1 0 0  1 0 0 0  0 0 1 5  0 0 0 1\"/>",
+    );
+    // M · T · S with M = rotate z by 90° then +5 z: p ↦ M(2p + (1,2,3)).
+    let expected = Mat4::from_cols(
+        Vec4::new(0.0, 2.0, 0.0, 0.0),
+        Vec4::new(-2.0, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, 2.0, 0.0),
+        Vec4::new(-2.0, 1.0, 8.0, 1.0),
+    );
+    assert!(close(m, expected), "{m:?}");
+    // Non-uniform scale with x/y/z attributes (missing ones 1), rotation about an unnormalised axis.
+    let m = spot_to_world("<scale x=\"2\" z=\"3\"/><rotate value=\"0 0 5\" angle=\"180\"/>");
+    let expected = Mat4::from_cols(
+        Vec4::new(-2.0, 0.0, 0.0, 0.0),
+        Vec4::new(0.0, -1.0, 0.0, 0.0),
+        Vec4::new(0.0, 0.0, 3.0, 0.0),
+        Vec4::W,
+    );
+    assert!(close(m, expected), "{m:?}");
+}
+
+#[test]
+fn lookat_matches_mitsuba() {
+    let s = load_full(
+        "<scene version=\"3.0.0\"><sensor type=\"perspective\"><transform name=\"to_world\">\
+         <lookat origin=\"1, 2, 3\" target=\"4, 2, 7\" up=\"0, 1, 0\"/></transform></sensor>\
+         <shape type=\"cube\"/></scene>",
+    );
+    let (o, t, up) = (Vec3::new(1., 2., 3.), Vec3::new(4., 2., 7.), Vec3::Y);
+    let dir = (t - o).normalize();
+    let left = up.cross(dir).normalize();
+    let new_up = dir.cross(left);
+    let expected = Mat4::from_cols(
+        left.extend(0.),
+        new_up.extend(0.),
+        dir.extend(0.),
+        o.extend(1.),
+    );
+    assert!(close(s.sensor.to_world, expected));
+    assert!((dir - Vec3::new(0.6, 0.0, 0.8)).length() < 1e-6);
+    assert!((left - Vec3::new(0.8, 0.0, -0.6)).length() < 1e-6);
+    // Defaults: focal length 50 mm (diagonal fov), 768×576, Gaussian filter, 4 spp independent.
+    assert_eq!(s.sensor.fov_axis, FovAxis::Diagonal);
+    assert!(
+        (s.sensor.fov_degrees - 46.7930).abs() < 1e-3,
+        "{}",
+        s.sensor.fov_degrees
+    );
+    assert_eq!((s.sensor.film.width, s.sensor.film.height), (768, 576));
+    assert_eq!(s.sensor.film.filter, FilterDesc::Gaussian { stddev: 0.5 });
+    assert_eq!(
+        (s.sensor.spp, s.sensor.sampler.as_str()),
+        (4, "independent")
+    );
+    // No integrator: Mitsuba's default path tracer.
+    assert_eq!(
+        (s.integrator.kind.as_str(), s.integrator.max_depth),
+        ("path", -1)
+    );
+}
+
+#[test]
+fn bsdf_defaults() {
+    let s = load(
+        "<shape type=\"cube\"/>\
+         <shape type=\"cube\"><bsdf type=\"plastic\"/></shape>\
+         <shape type=\"cube\"><bsdf type=\"roughplastic\"><string name=\"distribution\" value=\"ggx\"/></bsdf></shape>\
+         <shape type=\"cube\"><bsdf type=\"conductor\"/></shape>\
+         <shape type=\"cube\"><bsdf type=\"roughconductor\"><string name=\"material\" value=\"Au\"/>\
+           <float name=\"alpha_u\" value=\"0.2\"/><float name=\"alpha_v\" value=\"0.3\"/></bsdf></shape>\
+         <shape type=\"cube\"><bsdf type=\"dielectric\"><string name=\"int_ior\" value=\"water\"/></bsdf></shape>\
+         <shape type=\"cube\"><bsdf type=\"thindielectric\"><float name=\"int_ior\" value=\"1.6\"/>\
+           <string name=\"ext_ior\" value=\"acrylic glass\"/></bsdf></shape>\
+         <shape type=\"cube\"><bsdf type=\"twosided\"><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\">\
+           <float name=\"reflectance\" value=\"0.25\"/></bsdf></bsdf></shape>",
+    );
+    let b: Vec<&BsdfDesc> = s.shapes.iter().map(|sh| &*sh.bsdf).collect();
+    assert!(
+        matches!(b[0], BsdfDesc::Diffuse { reflectance: TextureDesc::Constant(c) } if *c == Rgb::splat(0.5))
+    );
+    assert!(
+        matches!(b[1], BsdfDesc::Plastic { int_ior, ext_ior, nonlinear: false, .. }
+        if *int_ior == 1.49 && *ext_ior == 1.000277)
+    );
+    assert!(
+        matches!(b[2], BsdfDesc::RoughPlastic { distribution: MicrofacetDistribution::Ggx, alpha, .. } if *alpha == 0.1)
+    );
+    assert!(
+        matches!(b[3], BsdfDesc::Conductor { eta, k, specular_reflectance }
+        if *eta == Rgb::splat(0.0) && *k == Rgb::splat(1.0) && *specular_reflectance == Rgb::ONE)
+    );
+    let BsdfDesc::RoughConductor {
+        distribution,
+        alpha_u,
+        alpha_v,
+        eta,
+        ..
+    } = b[4]
+    else {
+        panic!()
+    };
+    assert_eq!(
+        (*distribution, *alpha_u, *alpha_v),
+        (MicrofacetDistribution::Beckmann, 0.2, 0.3)
+    );
+    assert!((eta.r - 0.143119).abs() < 1e-5);
+    assert!(
+        matches!(b[5], BsdfDesc::Dielectric { int_ior, ext_ior, .. } if *int_ior == 1.333 && *ext_ior == 1.000277)
+    );
+    assert!(
+        matches!(b[6], BsdfDesc::ThinDielectric { int_ior, ext_ior, .. } if *int_ior == 1.6 && *ext_ior == 1.49)
+    );
+    let BsdfDesc::TwoSided {
+        back: Some(back), ..
+    } = b[7]
+    else {
+        panic!()
+    };
+    assert!(
+        matches!(&**back, BsdfDesc::Diffuse { reflectance: TextureDesc::Constant(c) } if *c == Rgb::splat(0.25))
+    );
+}
+
+#[test]
+fn shared_bsdf_by_reference() {
+    let s = load(
+        "<shape type=\"cube\"><ref id=\"m\"/></shape><bsdf type=\"diffuse\" id=\"m\"/>\
+         <shape type=\"disk\"><ref name=\"bsdf\" id=\"m\"/></shape><alias id=\"m\" as=\"n\"/>\
+         <shape type=\"rectangle\"><ref id=\"n\"/></shape>",
+    );
+    assert!(std::sync::Arc::ptr_eq(&s.shapes[0].bsdf, &s.shapes[1].bsdf));
+    assert!(std::sync::Arc::ptr_eq(&s.shapes[0].bsdf, &s.shapes[2].bsdf));
+}
+
+#[test]
+fn emitters() {
+    let s = load(
+        "<emitter type=\"point\"><point name=\"position\" x=\"1\" y=\"2\" z=\"3\"/><rgb name=\"intensity\" value=\"5\"/></emitter>\
+         <emitter type=\"point\"><transform name=\"to_world\"><translate x=\"4\"/></transform></emitter>\
+         <emitter type=\"spot\"><float name=\"cutoff_angle\" value=\"40\"/></emitter>\
+         <emitter type=\"directional\"><transform name=\"to_world\"><rotate x=\"1\" angle=\"90\"/></transform></emitter>\
+         <emitter type=\"constant\"><rgb name=\"radiance\" value=\"0.1 0.2 0.3\"/></emitter>\
+         <shape type=\"sphere\"><emitter type=\"area\"/></shape>",
+    );
+    assert!(
+        matches!(s.emitters[0], EmitterDesc::Point { position, intensity }
+        if position == Vec3::new(1., 2., 3.) && intensity == Rgb::splat(5.0))
+    );
+    assert!(
+        matches!(s.emitters[1], EmitterDesc::Point { position, intensity }
+        if position == Vec3::new(4., 0., 0.) && intensity == Rgb::ONE)
+    );
+    assert!(
+        matches!(s.emitters[2], EmitterDesc::Spot { cutoff_angle, beam_width, .. }
+        if cutoff_angle == 40.0 && beam_width == 30.0)
+    );
+    let EmitterDesc::Directional {
+        direction,
+        irradiance,
+    } = s.emitters[3]
+    else {
+        panic!()
+    };
+    assert!(
+        (direction - Vec3::new(0., -1., 0.)).length() < 1e-6,
+        "{direction}"
+    );
+    assert_eq!(irradiance, Rgb::ONE);
+    assert!(
+        matches!(s.emitters[4], EmitterDesc::Constant { radiance } if radiance == Rgb::new(0.1, 0.2, 0.3))
+    );
+    assert_eq!(s.shapes[0].emitter, Some(Rgb::ONE));
+}
+
+#[test]
+fn analytic_shapes_in_world_space() {
+    let s = load(
+        "<shape type=\"disk\"><transform name=\"to_world\"><scale x=\"2\" y=\"3\"/><rotate x=\"1\" angle=\"-90\"/>\
+         </transform></shape>\
+         <shape type=\"rectangle\"><boolean name=\"flip_normals\" value=\"true\"/></shape>\
+         <shape type=\"rectangle\"><transform name=\"to_world\"><scale x=\"-1\"/></transform></shape>\
+         <shape type=\"cube\"><boolean name=\"face_normals\" value=\"true\"/>\
+           <transform name=\"to_world\"><scale value=\"0.5\"/><translate y=\"1\"/></transform></shape>\
+         <shape type=\"sphere\"><point name=\"center\" value=\"1 0 0\"/><float name=\"radius\" value=\"2\"/>\
+           <transform name=\"to_world\"><scale value=\"3\"/><rotate z=\"1\" angle=\"90\"/></transform></shape>",
+    );
+    let mesh = |i: usize| match &s.shapes[i].geometry {
+        Geometry::Mesh(m) => m.clone(),
+        _ => panic!(),
+    };
+    // Ellipse of semi-axes 2 and 3 (exact area 6π), rotated to face +y.
+    let disk = mesh(0);
+    assert!((mesh_area(&disk) - 6.0 * std::f64::consts::PI).abs() < 1e-4);
+    assert!((triangle_normal(&disk, 7) - Vec3::Y).length() < 1e-5);
+    // flip_normals: the rectangle faces −z.
+    assert!((triangle_normal(&mesh(1), 0) + Vec3::Z).length() < 1e-6);
+    // A mirroring to_world keeps Mitsuba's analytic normal to_world⁻ᵀ·z = +z.
+    assert!((triangle_normal(&mesh(2), 0) - Vec3::Z).length() < 1e-6);
+    let cube = mesh(3);
+    assert!(cube.normals.is_none());
+    assert!((mesh_area(&cube) - 6.0).abs() < 1e-6);
+    assert!(cube
+        .positions
+        .iter()
+        .all(|p| p.y >= 0.5 - 1e-6 && p.y <= 1.5 + 1e-6));
+    // Sphere: centre and radius through the uniform scale and rotation.
+    let Geometry::Sphere { center, radius, .. } = s.shapes[4].geometry else {
+        panic!()
+    };
+    assert!((center - Vec3::new(0., 3., 0.)).length() < 1e-5, "{center}");
+    assert!((radius - 6.0).abs() < 1e-5);
+}
+
+#[test]
+fn integrators() {
+    let s = load(
+        "<integrator type=\"direct\"><integer name=\"shading_samples\" value=\"4\"/>\
+         <integer name=\"bsdf_samples\" value=\"2\"/><boolean name=\"hide_emitters\" value=\"true\"/></integrator>\
+         <shape type=\"cube\"/>",
+    );
+    assert_eq!(s.integrator.kind, "direct");
+    assert_eq!(
+        (s.integrator.emitter_samples, s.integrator.bsdf_samples),
+        (4, 2)
+    );
+    assert!(s.integrator.hide_emitters);
+    let s = load(
+        "<integrator type=\"irrcache\"><integer name=\"max_depth\" value=\"4\"/>\
+         <float name=\"error\" value=\"0.2\"/>\n<string name=\"mode\" value=\"fast\"/></integrator>\
+         <shape type=\"cube\"/>",
+    );
+    assert_eq!(
+        (s.integrator.kind.as_str(), s.integrator.max_depth),
+        ("irrcache", 4)
+    );
+    assert_eq!(s.integrator.extra.len(), 2);
+    assert_eq!(s.integrator.extra[0].0, "error");
+    assert_eq!(s.integrator.extra[0].1, ParamValue::Float(0.2));
+    assert_eq!(s.integrator.extra[1].1, ParamValue::String("fast".into()));
+    assert_eq!(
+        (s.integrator.extra[1].2.line, s.integrator.extra[1].2.column),
+        (4, 1)
+    );
+}
+
+#[test]
+fn textured_sponza() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/scenes/sponza-sun/scene-textured.xml");
+    let s = mitsuba::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.shapes.len(), 20);
+    let mut textured = 0;
+    for sh in &s.shapes {
+        let BsdfDesc::TwoSided { front, .. } = &*sh.bsdf else {
+            panic!()
+        };
+        if let BsdfDesc::Diffuse {
+            reflectance: TextureDesc::Bitmap(b),
+        } = &**front
+        {
+            textured += 1;
+            assert!(b.image.width > 0 && b.image.height > 0);
+            let Geometry::Mesh(m) = &sh.geometry else {
+                panic!()
+            };
+            assert!(m.uvs.is_some(), "{:?}", sh.id);
+        }
+    }
+    assert_eq!(textured, 19);
+}
