@@ -1,1 +1,338 @@
-//! (being written)
+//! Emitters with importance sampling, for next-event estimation and multiple importance sampling,
+//! with Mitsuba 3's conventions.
+//!
+//! One file per kind: [`area`] (emitting triangle meshes), [`sphere`] (emitting analytic spheres),
+//! [`point`], [`spot`], [`directional`], [`environment`] (`constant` and `envmap`). [`LightSet`]
+//! gathers them, selects one per sample and converts every density to solid angle at the
+//! reference point, including the selection probability.
+//!
+//! Conventions (Mitsuba 3):
+//! - Area emitters are one-sided: they emit on the side of the shading normal only
+//!   ([`LightSet::area_radiance`]); a sphere with `flip_normals` emits inwards.
+//! - Light selection is uniform over all emitters (each emitting shape is one emitter, as is each
+//!   point, spot, directional, constant and envmap emitter), like Mitsuba 3's default
+//!   `Scene::sample_emitter`: probability `1/N`.
+//! - All environment emitters (normally at most one) are treated as a single environment: a sample
+//!   drawn from any of them reports the *total* environment radiance along its direction and the
+//!   mixture density [`LightSet::pdf_environment`], which is exactly what a BSDF-sampled escaping
+//!   ray sees, so MIS weights agree on both sides.
+//! - Samples that cannot contribute (back side of a one-sided emitter, outside a spot's cone,
+//!   black environment direction, degenerate geometry) are reported as `None` rather than as a
+//!   zero-radiance sample, so no shadow ray is wasted on them.
+//!
+//! Per-sample methods do not allocate.
+
+pub mod area;
+pub mod directional;
+pub mod environment;
+pub mod point;
+pub mod sphere;
+pub mod spot;
+
+use area::MeshLight;
+use directional::DirectionalLight;
+use environment::{ConstantLight, EnvmapLight};
+use ircache_math::{Rgb, Vec2, Vec3};
+use ircache_scene::{EmitterDesc, Geometry, SceneDesc};
+use point::PointLight;
+use sphere::SphereLight;
+use spot::SpotLight;
+
+/// Converts an area density to a solid-angle density at a reference point (PBRT 3rd ed. eq. 5.6):
+/// `p_ω = p_A · d² / |cos θ_light|`, infinite when the emitter is seen edge-on.
+#[inline]
+#[must_use]
+pub fn solid_angle_pdf(pdf_area: f32, dist2: f32, cos_light: f32) -> f32 {
+    pdf_area * dist2 / cos_light.abs()
+}
+
+/// True for a finite, strictly positive value (false for NaN).
+#[inline]
+#[must_use]
+pub fn is_positive_finite(x: f32) -> bool {
+    x > 0.0 && x.is_finite()
+}
+
+/// A light sample for next-event estimation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// Unit world direction from the reference point towards the light.
+    pub wi: Vec3,
+    /// Distance to the sampled point on the light; `f32::INFINITY` for distant lights.
+    pub distance: f32,
+    /// Arriving radiance for area and environment lights, `I/d²` (times the spot falloff) for
+    /// point and spot lights, irradiance for directional lights; *not* divided by `pdf`.
+    pub radiance: Rgb,
+    /// Solid-angle density including the light selection probability; for delta lights, the
+    /// selection probability alone.
+    pub pdf: f32,
+    /// Point, spot or directional light (no MIS with BSDF sampling possible).
+    pub is_delta: bool,
+    /// Index of the light in the set.
+    pub light: u32,
+}
+
+/// One emitter.
+#[derive(Clone, Debug)]
+enum Light {
+    Mesh(MeshLight),
+    Sphere(SphereLight),
+    Point(PointLight),
+    Spot(SpotLight),
+    Directional(DirectionalLight),
+    Constant(ConstantLight),
+    Envmap(EnvmapLight),
+}
+
+/// All emitters of a scene, with uniform light selection.
+#[derive(Clone, Debug)]
+pub struct LightSet {
+    lights: Vec<Light>,
+    /// For each shape of the description, its area light.
+    shape_light: Vec<Option<u32>>,
+    /// Indices of the constant and envmap lights.
+    env_lights: Vec<u32>,
+    /// Selection probability of each light, `1/N`.
+    select_prob: f32,
+    scene_center: Vec3,
+    scene_radius: f32,
+}
+
+impl LightSet {
+    /// Builds the lights of `desc`: one area light per emitting shape (in shape order), then the
+    /// other emitters in description order. `scene_center` and `scene_radius` describe the scene's
+    /// bounding sphere (kept for distant lights, see [`LightSet::scene_bounds`]). Emitting shapes
+    /// without area and directional lights without a direction are skipped.
+    #[must_use]
+    pub fn new(desc: &SceneDesc, scene_center: Vec3, scene_radius: f32) -> LightSet {
+        let mut lights = Vec::new();
+        let mut shape_light = vec![None; desc.shapes.len()];
+        for (i, shape) in desc.shapes.iter().enumerate() {
+            let Some(radiance) = shape.emitter else {
+                continue;
+            };
+            let light = match &shape.geometry {
+                Geometry::Mesh(mesh) => MeshLight::new(mesh, radiance).map(Light::Mesh),
+                &Geometry::Sphere {
+                    center,
+                    radius,
+                    flip_normals,
+                } => SphereLight::new(center, radius, flip_normals, radiance).map(Light::Sphere),
+            };
+            if let Some(light) = light {
+                shape_light[i] = Some(lights.len() as u32);
+                lights.push(light);
+            }
+        }
+        let mut env_lights = Vec::new();
+        for e in &desc.emitters {
+            let light = match e {
+                &EmitterDesc::Point {
+                    position,
+                    intensity,
+                } => Some(Light::Point(PointLight {
+                    position,
+                    intensity,
+                })),
+                &EmitterDesc::Spot {
+                    to_world,
+                    intensity,
+                    cutoff_angle,
+                    beam_width,
+                } => Some(Light::Spot(SpotLight::new(
+                    to_world,
+                    intensity,
+                    cutoff_angle,
+                    beam_width,
+                ))),
+                &EmitterDesc::Directional {
+                    direction,
+                    irradiance,
+                } => DirectionalLight::new(direction, irradiance).map(Light::Directional),
+                &EmitterDesc::Constant { radiance } => {
+                    Some(Light::Constant(ConstantLight { radiance }))
+                }
+                EmitterDesc::Envmap {
+                    image,
+                    to_world,
+                    scale,
+                    ..
+                } => EnvmapLight::new(image, *to_world, *scale).map(Light::Envmap),
+            };
+            if let Some(light) = light {
+                if matches!(light, Light::Constant(_) | Light::Envmap(_)) {
+                    env_lights.push(lights.len() as u32);
+                }
+                lights.push(light);
+            }
+        }
+        let select_prob = if lights.is_empty() {
+            0.0
+        } else {
+            1.0 / lights.len() as f32
+        };
+        LightSet {
+            lights,
+            shape_light,
+            env_lights,
+            select_prob,
+            scene_center,
+            scene_radius,
+        }
+    }
+
+    /// True when the scene has no emitter.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.lights.is_empty()
+    }
+
+    /// Number of emitters.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.lights.len()
+    }
+
+    /// The scene's bounding sphere `(centre, radius)` given at construction.
+    #[must_use]
+    pub fn scene_bounds(&self) -> (Vec3, f32) {
+        (self.scene_center, self.scene_radius)
+    }
+
+    /// Next-event estimation from the reference point `p`: selects a light uniformly with
+    /// `u_select` and samples it with `u`. `None` when the sample cannot contribute (see the module
+    /// documentation) or the set is empty.
+    #[inline]
+    #[must_use]
+    pub fn sample(&self, p: Vec3, u_select: f32, u: Vec2) -> Option<LightSample> {
+        let n = self.lights.len();
+        if n == 0 {
+            return None;
+        }
+        let idx = ((u_select * n as f32) as usize).min(n - 1);
+        let sel = self.select_prob;
+        let light = idx as u32;
+        let area = |(wi, distance, radiance, pdf): (Vec3, f32, Rgb, f32)| LightSample {
+            wi,
+            distance,
+            radiance,
+            pdf: pdf * sel,
+            is_delta: false,
+            light,
+        };
+        let delta = |(wi, distance, radiance): (Vec3, f32, Rgb)| LightSample {
+            wi,
+            distance,
+            radiance,
+            pdf: sel,
+            is_delta: true,
+            light,
+        };
+        match &self.lights[idx] {
+            Light::Mesh(m) => m.sample(p, u).map(area),
+            Light::Sphere(s) => s.sample(p, u).map(area),
+            Light::Point(l) => l.sample(p).map(delta),
+            Light::Spot(l) => l.sample(p).map(delta),
+            Light::Directional(l) => {
+                (!l.irradiance.is_black()).then(|| delta((l.wi, f32::INFINITY, l.irradiance)))
+            }
+            Light::Constant(c) => self.environment_sample(c.sample(u), light),
+            Light::Envmap(e) => self.environment_sample(e.sample(u)?, light),
+        }
+    }
+
+    /// A sample of the environment along `wi` with the total radiance and mixture density.
+    #[inline]
+    fn environment_sample(&self, wi: Vec3, light: u32) -> Option<LightSample> {
+        let pdf = self.pdf_environment(wi);
+        let radiance = self.environment_radiance(wi);
+        if !is_positive_finite(pdf) || radiance.is_black() {
+            return None;
+        }
+        Some(LightSample {
+            wi,
+            distance: f32::INFINITY,
+            radiance,
+            pdf,
+            is_delta: false,
+            light,
+        })
+    }
+
+    /// Area light id of shape `shape` (index into `desc.shapes`), if that shape emits.
+    #[must_use]
+    pub fn area_light_of_shape(&self, shape: usize) -> Option<u32> {
+        self.shape_light.get(shape).copied().flatten()
+    }
+
+    /// Radiance leaving a point of area light `light` with shading normal `n_shading` towards the
+    /// world direction `wo`: the emitter's radiance when `n_shading · wo > 0`, zero on the back side
+    /// (one-sided, as Mitsuba's `area` emitter) and for ids that are not area lights.
+    #[inline]
+    #[must_use]
+    pub fn area_radiance(&self, light: u32, n_shading: Vec3, wo: Vec3) -> Rgb {
+        let radiance = match self.lights.get(light as usize) {
+            Some(Light::Mesh(m)) => m.radiance(),
+            Some(Light::Sphere(s)) => s.radiance(),
+            _ => return Rgb::ZERO,
+        };
+        if n_shading.dot(wo) > 0.0 {
+            radiance
+        } else {
+            Rgb::ZERO
+        }
+    }
+
+    /// Solid-angle density (including selection) with which [`LightSet::sample`] from `p` produces
+    /// the point `p_light` on area light `light`, triangle `prim` (ignored for spheres). Meshes use
+    /// the triangle's geometric normal for the Jacobian (`n_light` only if `prim` is invalid);
+    /// spheres use their analytic normal. Zero for ids that are not area lights.
+    #[inline]
+    #[must_use]
+    pub fn pdf_area(&self, light: u32, prim: u32, p: Vec3, p_light: Vec3, n_light: Vec3) -> f32 {
+        let pdf = match self.lights.get(light as usize) {
+            Some(Light::Mesh(m)) => m.pdf(prim, p, p_light, n_light),
+            Some(Light::Sphere(s)) => s.pdf(p, p_light),
+            _ => return 0.0,
+        };
+        pdf * self.select_prob
+    }
+
+    /// Radiance from the environment (sum of the constant and envmap emitters) along the escaping
+    /// ray direction `dir` (world; from the scene towards the environment).
+    #[inline]
+    #[must_use]
+    pub fn environment_radiance(&self, dir: Vec3) -> Rgb {
+        let mut l = Rgb::ZERO;
+        for &i in &self.env_lights {
+            match &self.lights[i as usize] {
+                Light::Constant(c) => l += c.radiance,
+                Light::Envmap(e) => l += e.eval(dir),
+                _ => {}
+            }
+        }
+        l
+    }
+
+    /// Solid-angle density (including selection) with which [`LightSet::sample`] produces the
+    /// environment direction `dir`: `Σ_env (1/N) p_env(dir)`.
+    #[inline]
+    #[must_use]
+    pub fn pdf_environment(&self, dir: Vec3) -> f32 {
+        let mut pdf = 0.0;
+        for &i in &self.env_lights {
+            match &self.lights[i as usize] {
+                Light::Constant(c) => pdf += c.pdf(),
+                Light::Envmap(e) => pdf += e.pdf(dir),
+                _ => {}
+            }
+        }
+        pdf * self.select_prob
+    }
+
+    /// True when the scene has a constant or envmap emitter.
+    #[must_use]
+    pub fn has_environment(&self) -> bool {
+        !self.env_lights.is_empty()
+    }
+}

@@ -1,0 +1,148 @@
+//! Area lights on analytic spheres (Mitsuba 3's `area` emitter on a `sphere` shape).
+//!
+//! The emitting side follows the shading normal: outward, or inward with `flip_normals` (a sphere
+//! lighting its interior). Sampling follows Mitsuba 3's `Sphere::sample_direction`:
+//!
+//! - reference point **outside** (`|p − c| > r`): a direction uniform in the cone subtended by the
+//!   sphere, `cos θ_max = √(1 − r²/d_c²)`, density `1 / (2π (1 − cos θ_max))` (PBRT 3rd ed.
+//!   §14.2.2). `1 − cos θ_max` is evaluated as `sin²θ_max / (1 + cos θ_max)` so that small, distant
+//!   spheres keep their precision. The point on the sphere is the first intersection of the
+//!   sampled ray, `t = d_c cos θ − √(r² − d_c² sin²θ)`.
+//! - reference point **inside**: a point uniform by area (density `1/(4πr²)`), converted to solid
+//!   angle with `d² / |cos θ_light|`.
+
+use super::{is_positive_finite, solid_angle_pdf};
+use ircache_math::sampling::square_to_uniform_sphere;
+use ircache_math::{Frame, Rgb, Vec2, Vec3, PI};
+
+/// An emitting sphere.
+#[derive(Clone, Copy, Debug)]
+pub struct SphereLight {
+    center: Vec3,
+    radius: f32,
+    flip_normals: bool,
+    radiance: Rgb,
+}
+
+impl SphereLight {
+    /// A sphere light; `None` for a non-positive or non-finite radius.
+    #[must_use]
+    pub fn new(
+        center: Vec3,
+        radius: f32,
+        flip_normals: bool,
+        radiance: Rgb,
+    ) -> Option<SphereLight> {
+        (radius > 0.0 && radius.is_finite()).then_some(SphereLight {
+            center,
+            radius,
+            flip_normals,
+            radiance,
+        })
+    }
+
+    /// Emitted radiance on the emitting side.
+    #[must_use]
+    pub fn radiance(&self) -> Rgb {
+        self.radiance
+    }
+
+    /// `(sin²θ_max, 1 − cos θ_max)` of the cone subtended from a point at squared distance
+    /// `dc2 > r²` from the centre.
+    #[inline]
+    fn cone(&self, dc2: f32) -> (f32, f32) {
+        let sin2_max = (self.radius * self.radius / dc2).min(1.0);
+        let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+        (sin2_max, sin2_max / (1.0 + cos_max))
+    }
+
+    #[inline]
+    fn is_outside(&self, dc2: f32) -> bool {
+        dc2 > self.radius * self.radius
+    }
+
+    /// The shading normal (emitting side) at the point with outward unit normal `outward`.
+    #[inline]
+    fn shading_normal(&self, outward: Vec3) -> Vec3 {
+        if self.flip_normals {
+            -outward
+        } else {
+            outward
+        }
+    }
+
+    /// Samples a direction from `p_ref` towards the sphere: `(wi, distance, radiance, solid-angle
+    /// pdf)`, or `None` when the sampled point does not emit towards `p_ref`.
+    #[inline]
+    #[must_use]
+    pub fn sample(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb, f32)> {
+        let to_c = self.center - p_ref;
+        let dc2 = to_c.length_squared();
+        let (wi, dist, outward, pdf) = if self.is_outside(dc2) {
+            let dc = dc2.sqrt();
+            let (sin2_max, one_minus_cos_max) = self.cone(dc2);
+            // Uniform in the cone: 1 − cos θ = u·(1 − cos θ_max).
+            let omc = u.x * one_minus_cos_max;
+            let cos_t = 1.0 - omc;
+            let sin2_t = (omc * (2.0 - omc)).min(sin2_max);
+            let sin_t = sin2_t.sqrt();
+            let phi = 2.0 * PI * u.y;
+            let frame = Frame::from_z(to_c / dc);
+            let wi = frame
+                .from_local(Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t))
+                .normalize();
+            let t = dc * cos_t - (self.radius * self.radius - dc2 * sin2_t).max(0.0).sqrt();
+            let p_light = p_ref + wi * t;
+            let outward = (p_light - self.center).normalize_or(-wi);
+            (wi, t, outward, 1.0 / (2.0 * PI * one_minus_cos_max))
+        } else {
+            let outward = square_to_uniform_sphere(u);
+            let p_light = self.center + outward * self.radius;
+            let d = p_light - p_ref;
+            let dist2 = d.length_squared();
+            let dist = dist2.sqrt();
+            if !is_positive_finite(dist) {
+                return None;
+            }
+            let wi = d / dist;
+            let pdf = solid_angle_pdf(
+                1.0 / (4.0 * PI * self.radius * self.radius),
+                dist2,
+                outward.dot(wi),
+            );
+            (wi, dist, outward, pdf)
+        };
+        if self.shading_normal(outward).dot(-wi) <= 0.0 || !is_positive_finite(pdf) {
+            return None;
+        }
+        Some((wi, dist, self.radiance, pdf))
+    }
+
+    /// Solid-angle density (without light selection) with which [`SphereLight::sample`] from
+    /// `p_ref` produces the point `p_light` on the sphere.
+    #[inline]
+    #[must_use]
+    pub fn pdf(&self, p_ref: Vec3, p_light: Vec3) -> f32 {
+        let dc2 = (self.center - p_ref).length_squared();
+        let pdf = if self.is_outside(dc2) {
+            1.0 / (2.0 * PI * self.cone(dc2).1)
+        } else {
+            let d = p_light - p_ref;
+            let dist2 = d.length_squared();
+            if !is_positive_finite(dist2) {
+                return 0.0;
+            }
+            let outward = (p_light - self.center).normalize_or(Vec3::Z);
+            solid_angle_pdf(
+                1.0 / (4.0 * PI * self.radius * self.radius),
+                dist2,
+                outward.dot(d / dist2.sqrt()),
+            )
+        };
+        if pdf.is_finite() {
+            pdf
+        } else {
+            0.0
+        }
+    }
+}

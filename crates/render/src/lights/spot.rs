@@ -1,0 +1,87 @@
+//! Spot lights (Mitsuba 3's `spot`): a point light at the origin of `to_world` emitting along its
+//! local +z, with intensity `I · falloff(θ) / d²`.
+//!
+//! The falloff is Mitsuba 3's `falloff_curve` (src/emitters/spot.cpp), *linear in angle*:
+//!
+//! ```text
+//! falloff(θ) = 1                                       if cos θ ≥ cos(beam_width)
+//!            = (cutoff_angle − θ) / (cutoff_angle − beam_width)   if cos(cutoff) < cos θ < cos(beam)
+//!            = 0                                       if cos θ ≤ cos(cutoff_angle)
+//! ```
+//!
+//! with θ the angle between the emitted direction (light → receiver, in the light's local frame,
+//! normalised) and +z. Angles are given in degrees in the scene description.
+
+use super::is_positive_finite;
+use ircache_math::{Mat3, Mat4, Rgb, Vec3};
+
+/// A spot light.
+#[derive(Clone, Copy, Debug)]
+pub struct SpotLight {
+    position: Vec3,
+    /// World → light-local linear map (inverse of `to_world`'s linear part).
+    world_to_local: Mat3,
+    intensity: Rgb,
+    cutoff: f32,
+    cos_cutoff: f32,
+    beam: f32,
+    cos_beam: f32,
+}
+
+impl SpotLight {
+    /// A spot light from Mitsuba's parameters (angles in degrees).
+    #[must_use]
+    pub fn new(
+        to_world: Mat4,
+        intensity: Rgb,
+        cutoff_angle_deg: f32,
+        beam_width_deg: f32,
+    ) -> SpotLight {
+        let cutoff = cutoff_angle_deg.to_radians();
+        // Mitsuba asserts beam_width ≤ cutoff_angle; clamp instead.
+        let beam = beam_width_deg.to_radians().min(cutoff);
+        SpotLight {
+            position: to_world.transform_point3(Vec3::ZERO),
+            world_to_local: Mat3::from_mat4(to_world).inverse(),
+            intensity,
+            cutoff,
+            cos_cutoff: cutoff.cos(),
+            beam,
+            cos_beam: beam.cos(),
+        }
+    }
+
+    /// Mitsuba 3's `falloff_curve` for the light-local direction `local` (need not be unit).
+    #[inline]
+    #[must_use]
+    pub fn falloff(&self, local: Vec3) -> f32 {
+        let cos_t = local.normalize_or_zero().z;
+        if cos_t <= self.cos_cutoff {
+            0.0
+        } else if cos_t >= self.cos_beam {
+            1.0
+        } else {
+            ((self.cutoff - cos_t.clamp(-1.0, 1.0).acos()) / (self.cutoff - self.beam))
+                .clamp(0.0, 1.0)
+        }
+    }
+
+    /// The direction from `p_ref` towards the light: `(wi, distance, I·falloff/d²)`; `None` outside
+    /// the cone or at the light's position.
+    #[inline]
+    #[must_use]
+    pub fn sample(&self, p_ref: Vec3) -> Option<(Vec3, f32, Rgb)> {
+        let d = self.position - p_ref;
+        let dist2 = d.length_squared();
+        if !is_positive_finite(dist2) {
+            return None;
+        }
+        let dist = dist2.sqrt();
+        let wi = d / dist;
+        let falloff = self.falloff(self.world_to_local * -wi);
+        if falloff <= 0.0 {
+            return None;
+        }
+        Some((wi, dist, self.intensity * (falloff / dist2)))
+    }
+}
