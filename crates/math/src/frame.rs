@@ -32,11 +32,18 @@ impl Frame {
     pub fn from_normal_tangent(n: Vec3, s: Vec3) -> Frame {
         let s = s - n * n.dot(s);
         let len = s.length();
-        if !(len > 1e-6 * s.abs().max_element().max(f32::MIN_POSITIVE)) || !len.is_finite() {
+        if len.is_nan()
+            || len <= 1e-6 * s.abs().max_element().max(f32::MIN_POSITIVE)
+            || len.is_infinite()
+        {
             return Frame::from_z(n);
         }
         let s = s / len;
-        Frame { s, t: n.cross(s), n }
+        Frame {
+            s,
+            t: n.cross(s),
+            n,
+        }
     }
 
     /// World direction → local coordinates.
@@ -68,7 +75,9 @@ mod tests {
             let f = Frame::from_z(n);
             assert!((f.s.length() - 1.0).abs() < 1e-5);
             assert!((f.t.length() - 1.0).abs() < 1e-5);
-            assert!(f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5);
+            assert!(
+                f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5
+            );
             assert!((f.s.cross(f.t) - n).length() < 1e-5, "right-handed");
             let v = Vec3::new(0.2, 0.7, -0.4);
             assert!((f.from_local(f.to_local(v)) - v).length() < 1e-5);

@@ -25,7 +25,12 @@ impl Ray {
     /// An unbounded ray from `o` along `d`.
     #[must_use]
     pub fn new(o: Vec3, d: Vec3) -> Ray {
-        Ray { o, d, t_min: 0.0, t_max: f32::INFINITY }
+        Ray {
+            o,
+            d,
+            t_min: 0.0,
+            t_max: f32::INFINITY,
+        }
     }
     /// The point at distance `t`.
     #[must_use]
@@ -53,9 +58,21 @@ pub fn offset_ray_origin(p: Vec3, ng: Vec3, w: Vec3, scene_scale: f32) -> Vec3 {
     };
     let p_i = Vec3::new(step(p.x, of_i.x), step(p.y, of_i.y), step(p.z, of_i.z));
     Vec3::new(
-        if p.x.abs() < origin { p.x + float_scale * n.x } else { p_i.x },
-        if p.y.abs() < origin { p.y + float_scale * n.y } else { p_i.y },
-        if p.z.abs() < origin { p.z + float_scale * n.z } else { p_i.z },
+        if p.x.abs() < origin {
+            p.x + float_scale * n.x
+        } else {
+            p_i.x
+        },
+        if p.y.abs() < origin {
+            p.y + float_scale * n.y
+        } else {
+            p_i.y
+        },
+        if p.z.abs() < origin {
+            p.z + float_scale * n.z
+        } else {
+            p_i.z
+        },
     )
 }
 

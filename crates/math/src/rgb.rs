@@ -16,9 +16,17 @@ pub struct Rgb {
 
 impl Rgb {
     /// Black.
-    pub const ZERO: Rgb = Rgb { r: 0.0, g: 0.0, b: 0.0 };
+    pub const ZERO: Rgb = Rgb {
+        r: 0.0,
+        g: 0.0,
+        b: 0.0,
+    };
     /// White (1, 1, 1).
-    pub const ONE: Rgb = Rgb { r: 1.0, g: 1.0, b: 1.0 };
+    pub const ONE: Rgb = Rgb {
+        r: 1.0,
+        g: 1.0,
+        b: 1.0,
+    };
 
     /// A colour from its three channels.
     #[must_use]
@@ -33,7 +41,11 @@ impl Rgb {
     /// From an array `[r, g, b]`.
     #[must_use]
     pub const fn from_array(a: [f32; 3]) -> Self {
-        Rgb { r: a[0], g: a[1], b: a[2] }
+        Rgb {
+            r: a[0],
+            g: a[1],
+            b: a[2],
+        }
     }
     /// As an array `[r, g, b]`.
     #[must_use]

@@ -23,7 +23,10 @@ impl Rng {
     /// A generator for stream `stream` of seed `seed`.
     #[must_use]
     pub fn new(seed: u64, stream: u64) -> Rng {
-        let mut r = Rng { state: 0, inc: (mix64(stream ^ 0x5851_F42D_4C95_7F2D) << 1) | 1 };
+        let mut r = Rng {
+            state: 0,
+            inc: (mix64(stream ^ 0x5851_F42D_4C95_7F2D) << 1) | 1,
+        };
         r.next_u32();
         r.state = r.state.wrapping_add(mix64(seed));
         r.next_u32();
@@ -78,9 +81,15 @@ mod tests {
 
     #[test]
     fn same_key_same_sequence_different_key_different_sequence() {
-        let a: Vec<u32> = (0..8).scan(Rng::keyed(7, &[1, 2]), |r, _| Some(r.next_u32())).collect();
-        let b: Vec<u32> = (0..8).scan(Rng::keyed(7, &[1, 2]), |r, _| Some(r.next_u32())).collect();
-        let c: Vec<u32> = (0..8).scan(Rng::keyed(7, &[2, 1]), |r, _| Some(r.next_u32())).collect();
+        let a: Vec<u32> = (0..8)
+            .scan(Rng::keyed(7, &[1, 2]), |r, _| Some(r.next_u32()))
+            .collect();
+        let b: Vec<u32> = (0..8)
+            .scan(Rng::keyed(7, &[1, 2]), |r, _| Some(r.next_u32()))
+            .collect();
+        let c: Vec<u32> = (0..8)
+            .scan(Rng::keyed(7, &[2, 1]), |r, _| Some(r.next_u32()))
+            .collect();
         assert_eq!(a, b);
         assert_ne!(a, c);
     }

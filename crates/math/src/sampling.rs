@@ -174,8 +174,12 @@ pub fn normal_quantile(p: f64) -> f64 {
         4.374_664_141_464_968,
         2.938_163_982_698_783,
     ];
-    const D: [f64; 4] =
-        [7.784_695_709_041_462e-3, 3.224_671_290_700_398e-1, 2.445_134_137_142_996, 3.754_408_661_907_416];
+    const D: [f64; 4] = [
+        7.784_695_709_041_462e-3,
+        3.224_671_290_700_398e-1,
+        2.445_134_137_142_996,
+        3.754_408_661_907_416,
+    ];
     let p = p.clamp(1e-300, 1.0 - 1e-16);
     let pl = 0.02425;
     if p < pl {
@@ -213,7 +217,8 @@ pub fn erfc(x: f64) -> f64 {
                         + t * (-0.186_288_06
                             + t * (0.278_868_07
                                 + t * (-1.135_203_98
-                                    + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
             .exp();
     if x >= 0.0 {
         r
@@ -267,7 +272,11 @@ impl Distribution1D {
         if let Some(last) = cdf.last_mut() {
             *last = 1.0;
         }
-        Distribution1D { func: func.to_vec(), cdf, integral }
+        Distribution1D {
+            func: func.to_vec(),
+            cdf,
+            integral,
+        }
     }
 
     /// Number of bins.
@@ -293,9 +302,17 @@ impl Distribution1D {
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
         let n = self.len();
         // Last index with cdf[i] <= u.
-        let i = self.cdf.partition_point(|&c| c <= u).saturating_sub(1).min(n - 1);
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .saturating_sub(1)
+            .min(n - 1);
         let p = self.pmf(i);
-        let ur = if p > 0.0 { ((u - self.cdf[i]) / p).clamp(0.0, 1.0 - f32::EPSILON) } else { 0.5 };
+        let ur = if p > 0.0 {
+            ((u - self.cdf[i]) / p).clamp(0.0, 1.0 - f32::EPSILON)
+        } else {
+            0.5
+        };
         (i, p, ur)
     }
 }
@@ -341,7 +358,13 @@ mod tests {
         for (b, &c) in h.iter().enumerate() {
             let x0 = -1.0 + 2.0 * b as f32 / bins as f32;
             let x1 = x0 + 2.0 / bins as f32;
-            let f = |x: f32| if x < 0.0 { 0.5 * (1.0 + x).powi(2) } else { 1.0 - 0.5 * (1.0 - x).powi(2) };
+            let f = |x: f32| {
+                if x < 0.0 {
+                    0.5 * (1.0 + x).powi(2)
+                } else {
+                    1.0 - 0.5 * (1.0 - x).powi(2)
+                }
+            };
             let expect = (f(x1) - f(x0)) * n as f32;
             assert!((c as f32 - expect).abs() < 2.0, "bin {b}: {c} vs {expect}");
         }

@@ -245,14 +245,6 @@ impl Scene {
         Ray::new(offset_ray_origin(it.p, it.ng, d, self.scale), d)
     }
 
-    /// The point from which lights are sampled at `it`: the hit point moved off the surface (by
-    /// the same scale-free offset as spawned rays) to the side that `wo` points to.
-    #[inline]
-    #[must_use]
-    pub fn reference_point(&self, it: &Interaction, wo: Vec3) -> Vec3 {
-        offset_ray_origin(it.p, it.ng, wo, self.scale)
-    }
-
     /// A shadow ray from `it` towards unit direction `wi` for a light at `distance` (may be
     /// infinite), shortened relatively so that it does not reach the light's own surface.
     #[inline]

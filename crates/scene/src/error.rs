@@ -61,6 +61,9 @@ pub enum SceneError {
 impl SceneError {
     /// An error at a place.
     pub fn at(location: SourceLocation, message: impl Into<String>) -> SceneError {
-        SceneError::At { location, message: message.into() }
+        SceneError::At {
+            location,
+            message: message.into(),
+        }
     }
 }

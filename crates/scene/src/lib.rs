@@ -25,9 +25,16 @@ pub fn load_scene(
     defines: &[(String, String)],
     obj_camera: &obj_scene::ObjCamera,
 ) -> Result<SceneDesc, SceneError> {
-    match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+    match path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .as_deref()
+    {
         Some("xml") => mitsuba::load(path, defines),
         Some("obj") => obj_scene::load(path, obj_camera),
-        _ => Err(SceneError::UnknownFormat { path: path.to_path_buf() }),
+        _ => Err(SceneError::UnknownFormat {
+            path: path.to_path_buf(),
+        }),
     }
 }

@@ -37,7 +37,7 @@ impl DirectIntegrator {
         let bsdf = scene.materials[shape.material].at(it.uv);
         let wo_local = it.frame.to_local(wo);
         let (ne, nb) = (self.emitter_samples as f32, self.bsdf_samples as f32);
-        let p_ref = scene.reference_point(&it, wo);
+        let p_ref = it.p;
 
         if bsdf.has_smooth() && !scene.lights.is_empty() {
             for _ in 0..self.emitter_samples {

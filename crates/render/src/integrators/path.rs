@@ -80,9 +80,8 @@ impl PathIntegrator {
             let bsdf = scene.materials[shape.material].at(it.uv);
             let wo_local = it.frame.to_local(wo);
 
-            // Emitter sampling, from the hit point moved off the surface to the viewer's side: a
-            // point exactly on an emitting sphere would be neither inside nor outside it.
-            let p_ref = scene.reference_point(&it, wo);
+            // Emitter sampling.
+            let p_ref = it.p;
             if bsdf.has_smooth() && !scene.lights.is_empty() {
                 let u_sel = rng.next_f32();
                 let u = rng.next_2d();

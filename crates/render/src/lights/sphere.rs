@@ -58,7 +58,14 @@ impl SphereLight {
 
     #[inline]
     fn is_outside(&self, dc2: f32) -> bool {
-        dc2 > self.radius * self.radius
+        // A reference point on the sphere itself (a hit on it, up to rounding) counts as being on
+        // the emitting side: inside for an inward-facing sphere. The tolerance is relative.
+        let r2 = self.radius * self.radius;
+        if self.flip_normals {
+            dc2 > r2 * (1.0 + 1e-4)
+        } else {
+            dc2 > r2
+        }
     }
 
     /// The shading normal (emitting side) at the point with outward unit normal `outward`.
