@@ -6,7 +6,7 @@ use crate::film::Filter;
 use crate::integrators::{Integrator, RayCounts};
 use crate::scene::Scene;
 use ircache_image::Image;
-use ircache_math::{Rgb, Rng, Vec2};
+use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
@@ -120,16 +120,28 @@ fn render_pixel(
     let mut sum = Rgb::ZERO;
     let mut invalid = 0;
     let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
-    for _ in 0..settings.spp {
-        let offset = settings.filter.sample(rng.next_2d());
-        let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
-        let ray = scene.camera.generate_ray(film);
-        let l = integrator.li(scene, &ray, &mut rng, rays);
-        if l.is_valid_radiance() {
-            sum += l;
-        } else {
-            invalid += 1;
+    // Camera rays of one pixel are nearly parallel: trace them in 16-wide packets.
+    let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
+    let mut hits = [None; 16];
+    let mut done = 0;
+    while done < settings.spp {
+        let n = (settings.spp - done).min(16) as usize;
+        for ray in &mut camera[..n] {
+            let offset = settings.filter.sample(rng.next_2d());
+            let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
+            *ray = scene.camera.generate_ray(film);
         }
+        scene.accel.intersect16(&camera[..n], &mut hits[..n]);
+        rays.camera += n as u64;
+        for (ray, hit) in camera[..n].iter().zip(&hits[..n]) {
+            let l = integrator.li(scene, ray, hit.as_ref(), &mut rng, rays);
+            if l.is_valid_radiance() {
+                sum += l;
+            } else {
+                invalid += 1;
+            }
+        }
+        done += n as u32;
     }
     (sum / settings.spp.max(1) as f32, invalid)
 }

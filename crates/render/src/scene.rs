@@ -91,6 +91,9 @@ pub struct Scene {
     pub radius: f32,
     /// Total triangle count.
     pub triangles: usize,
+    /// Some emitter can be found by a ray (an area light or an environment); when false, a path's
+    /// last segment, which could only pick up emission, need not be traced.
+    pub has_hittable_emitters: bool,
 }
 
 impl Scene {
@@ -153,7 +156,10 @@ impl Scene {
             desc.sensor.film.height,
         );
         let scale = lo.abs().max(hi.abs()).max_element().max(f32::MIN_POSITIVE);
+        let has_hittable_emitters =
+            lights.has_environment() || shapes.iter().any(|s| s.area_light.is_some());
         Ok(Scene {
+            has_hittable_emitters,
             accel,
             shapes,
             materials,

@@ -4,6 +4,7 @@
 
 use super::{mis_weight, RayCounts};
 use crate::scene::Scene;
+use ircache_embree::Hit;
 use ircache_math::{Ray, Rgb, Rng};
 
 /// Parameters of the direct-illumination integrator.
@@ -18,10 +19,16 @@ pub struct DirectIntegrator {
 }
 
 impl DirectIntegrator {
-    /// Radiance along `ray`.
-    pub fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, rays: &mut RayCounts) -> Rgb {
-        rays.camera += 1;
-        let Some(it) = scene.intersect(ray) else {
+    /// Radiance along the camera ray `ray`, whose closest hit `first_hit` the caller traced.
+    pub fn li(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        first_hit: Option<&Hit>,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Rgb {
+        let Some(it) = first_hit.map(|h| scene.interaction(ray, h)) else {
             return if self.hide_emitters {
                 Rgb::ZERO
             } else {

@@ -7,6 +7,7 @@ pub mod direct;
 pub mod path;
 
 use crate::scene::Scene;
+use ircache_embree::Hit;
 use ircache_math::{Ray, Rgb, Rng};
 use ircache_scene::IntegratorDesc;
 
@@ -68,13 +69,28 @@ impl Integrator {
         }
     }
 
-    /// Radiance arriving along the camera ray `ray`.
+    /// Radiance arriving along the camera ray `ray`, whose closest hit `first_hit` the caller
+    /// traced (camera rays go to Embree in coherent packets; see [`crate::render`]).
     #[inline]
-    pub fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, rays: &mut RayCounts) -> Rgb {
+    pub fn li(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        first_hit: Option<&Hit>,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Rgb {
         match self {
-            Integrator::Direct(d) => d.li(scene, ray, rng, rays),
-            Integrator::Path(p) => p.li(scene, ray, rng, rays),
+            Integrator::Direct(d) => d.li(scene, ray, first_hit, rng, rays),
+            Integrator::Path(p) => p.li(scene, ray, first_hit, rng, rays),
         }
+    }
+
+    /// Radiance arriving along `ray`, tracing its first hit too.
+    pub fn li_ray(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, rays: &mut RayCounts) -> Rgb {
+        rays.camera += 1;
+        let hit = scene.accel.intersect(ray);
+        self.li(scene, ray, hit.as_ref(), rng, rays)
     }
 }
 

@@ -5,6 +5,7 @@
 
 use super::{mis_weight, RayCounts};
 use crate::scene::Scene;
+use ircache_embree::Hit;
 use ircache_math::{Ray, Rgb, Rng};
 
 /// Parameters of the path tracer.
@@ -19,8 +20,15 @@ pub struct PathIntegrator {
 }
 
 impl PathIntegrator {
-    /// Radiance along `ray`.
-    pub fn li(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, rays: &mut RayCounts) -> Rgb {
+    /// Radiance along the camera ray `ray`, whose closest hit `first_hit` the caller traced.
+    pub fn li(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        first_hit: Option<&Hit>,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Rgb {
         let max_depth = if self.max_depth < 0 {
             u32::MAX
         } else {
@@ -38,9 +46,12 @@ impl PathIntegrator {
         let mut prev_p = ray.o;
         let mut prev_pdf = 1.0f32;
         let mut prev_delta = true;
-        rays.camera += 1;
         loop {
-            let hit = scene.intersect(&ray);
+            let hit = if depth == 0 {
+                first_hit.map(|h| scene.interaction(&ray, h))
+            } else {
+                scene.intersect(&ray)
+            };
             // Emission found by the BSDF-sampled ray.
             let Some(it) = hit else {
                 if scene.lights.has_environment() && !(depth == 0 && self.hide_emitters) {
@@ -125,6 +136,11 @@ impl PathIntegrator {
             prev_p = p_ref;
             prev_pdf = bs.pdf;
             prev_delta = bs.delta;
+            // The next vertex would only add emission found by this ray: skip it when nothing
+            // emissive can be hit (e.g. a sun-lit scene without sky).
+            if depth + 2 >= max_depth && !scene.has_hittable_emitters {
+                break;
+            }
             ray = scene.spawn_ray(&it, wi);
             rays.bounce += 1;
 
