@@ -205,8 +205,9 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
         &renderer_loop,
         &hemisphere,
     )?;
-    let p1 = pool(1)?;
-    let gather = |hits: &[Interaction]| -> usize {
+    // The renderer's own gather loop: sample a cosine direction, spawn an offset ray, trace it;
+    // then the same with the surface interaction built at each hit.
+    let gather = |hits: &[Interaction], interaction: bool| -> usize {
         let mut count = 0;
         for (i, it) in hits.iter().enumerate() {
             let mut rng = Rng::keyed(1, &[i as u64]);
@@ -218,40 +219,61 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
             let frame = Frame::from_z(n);
             for _ in 0..k {
                 let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
-                if scene.intersect(&scene.spawn_ray(it, d)).is_some() {
-                    count += 1;
-                }
+                let ray = scene.spawn_ray(it, d);
+                let hit = if interaction {
+                    scene.intersect(&ray).is_some()
+                } else {
+                    scene.accel.intersect(&ray).is_some()
+                };
+                count += usize::from(hit);
             }
         }
         count
     };
-    let mut r = [0.0; 2];
-    for (j, t) in [1usize, 2].iter().enumerate() {
-        let p = pool(*t)?;
-        r[j] = measure(hits.len() * k, || {
-            p.install(|| hits.par_chunks(chunk / k).map(gather).sum())
-        });
+    for (name, interaction) in [
+        ("hemisphere gather, renderer (sample+spawn+trace)", false),
+        ("  ... and build the surface interaction", true),
+    ] {
+        let mut r = [0.0; 2];
+        for (j, t) in [1usize, 2].iter().enumerate() {
+            let p = pool(*t)?;
+            r[j] = measure(hits.len() * k, || {
+                p.install(|| {
+                    hits.par_chunks(chunk / k)
+                        .map(|h| gather(h, interaction))
+                        .sum()
+                })
+            });
+        }
+        println!(
+            "{:<44} {:>10.2} {:>10.2} {:>8.2}",
+            name,
+            r[0],
+            r[1],
+            r[1] / r[0]
+        );
     }
-    drop(p1);
-    println!(
-        "{:<44} {:>10.2} {:>10.2} {:>8.2}",
-        "hemisphere gather, renderer (sample+spawn+hit)",
-        r[0],
-        r[1],
-        r[1] / r[0]
-    );
     Ok(())
 }
 
 fn path(shared: &Path, args: &BenchArgs) -> Result<()> {
-    let scene_path = shared.join("scenes/cornell-box/scene.xml");
+    for scene in ["cornell-box", "sponza-sun"] {
+        path_scene(&shared.join(format!("scenes/{scene}/scene.xml")), args)?;
+    }
+    Ok(())
+}
+
+fn path_scene(scene_path: &Path, args: &BenchArgs) -> Result<()> {
     let defines = vec![("max_depth".to_string(), "3".to_string())];
-    let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
+    let desc = ircache_scene::load_scene(scene_path, &defines, &ObjCamera::default())?;
     let scene = Scene::build(&desc)?;
     let integrator = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
     println!(
-        "\nPath tracing, Cornell box {}×{}, max_depth 3, {} spp",
-        desc.sensor.film.width, desc.sensor.film.height, args.spp
+        "\nPath tracing, {} {}×{}, max_depth 3, {} spp",
+        scene_path.display(),
+        desc.sensor.film.width,
+        desc.sensor.film.height,
+        args.spp
     );
     let mut ours = 0.0;
     for threads in [1usize, 2] {
@@ -275,7 +297,7 @@ fn path(shared: &Path, args: &BenchArgs) -> Result<()> {
     if args.no_mitsuba {
         return Ok(());
     }
-    match mitsuba_time(&scene_path, args.spp) {
+    match mitsuba_time(scene_path, args.spp) {
         Ok(t) => println!(
             "  Mitsuba 3 llvm_ad_rgb, 2 threads: {t:.2} s ({:.4} s per spp); ircache / Mitsuba time = {:.2}",
             t / args.spp as f64,
@@ -284,6 +306,15 @@ fn path(shared: &Path, args: &BenchArgs) -> Result<()> {
         Err(e) => println!("  Mitsuba 3 not measured: {e:#}"),
     }
     Ok(())
+}
+
+/// Mitsuba's LLVM variants need libLLVM; Debian's packages put it here.
+fn llvm_path() -> Option<String> {
+    ["19", "18", "17", "16", "15", "14"]
+        .iter()
+        .map(|v| format!("/usr/lib/x86_64-linux-gnu/libLLVM-{v}.so"))
+        .find(|p| Path::new(p).exists())
+        .or_else(|| std::env::var("DRJIT_LIBLLVM_PATH").ok())
 }
 
 /// Times Mitsuba 3's render of the same scene (kernels compiled by a warm-up run first).
@@ -302,7 +333,7 @@ print(time.time() - t)
     let out = std::process::Command::new("python3")
         .arg("-c")
         .arg(script)
-        .env("DRJIT_NUM_THREADS", "2")
+        .envs(llvm_path().map(|p| ("DRJIT_LIBLLVM_PATH", p)))
         .output()
         .context("running python3")?;
     if !out.status.success() {
