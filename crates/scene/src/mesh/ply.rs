@@ -690,7 +690,14 @@ fn read_body(
                     normals.push((n / len).as_vec3());
                 }
                 if let Some([ui, vi]) = layout.uv {
-                    uvs.push(Vec2::new(values[ui] as f32, values[vi] as f32));
+                    let uv = Vec2::new(values[ui] as f32, values[vi] as f32);
+                    if !uv.is_finite() {
+                        return Err(body_err(
+                            body.here(),
+                            format!("vertex {index}: non-finite texture coordinates {uv:?}"),
+                        ));
+                    }
+                    uvs.push(uv);
                 }
             } else if face_prop.is_some() {
                 // Vertices may come after faces; positions are looked up at the end.
@@ -711,13 +718,15 @@ fn read_body(
         for &v in polygon {
             match positions.get(v as usize) {
                 Some(&p) => points.push(p),
-                None => return Err(SceneError::at(
-                    vertex_el.location.clone(),
-                    format!(
+                None => {
+                    return Err(SceneError::at(
+                        vertex_el.location.clone(),
+                        format!(
                         "face {face_index}: vertex index {v} out of range (file has {} vertices)",
                         positions.len()
                     ),
-                )),
+                    ))
+                }
             }
         }
         for t in triangulate_polygon(&points) {
