@@ -120,17 +120,7 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     let k = args.hemisphere_rays;
     let mut hemisphere = Vec::with_capacity(hits.len() * k);
     for (i, it) in hits.iter().enumerate() {
-        let mut rng = Rng::keyed(1, &[i as u64]);
-        let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 {
-            -it.ng
-        } else {
-            it.ng
-        };
-        let frame = Frame::from_z(n);
-        for _ in 0..k {
-            let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
-            hemisphere.push(scene.spawn_ray(it, d));
-        }
+        gather_rays(&scene, it, i, k, |r| hemisphere.push(r));
     }
     // Shadow rays towards a fixed direction (the sun's reverse) from the first hits.
     let sun = ircache_math::Vec3::new(0.328889, 0.939682, 0.0939682).normalize();
@@ -207,26 +197,18 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     )?;
     // The renderer's own gather loop: sample a cosine direction, spawn an offset ray, trace it;
     // then the same with the surface interaction built at each hit.
-    let gather = |hits: &[Interaction], interaction: bool| -> usize {
+    let per_chunk = chunk / k;
+    let gather = |(c, hits): (usize, &[Interaction]), interaction: bool| -> usize {
         let mut count = 0;
         for (i, it) in hits.iter().enumerate() {
-            let mut rng = Rng::keyed(1, &[i as u64]);
-            let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 {
-                -it.ng
-            } else {
-                it.ng
-            };
-            let frame = Frame::from_z(n);
-            for _ in 0..k {
-                let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
-                let ray = scene.spawn_ray(it, d);
+            gather_rays(&scene, it, c * per_chunk + i, k, |ray| {
                 let hit = if interaction {
                     scene.intersect(&ray).is_some()
                 } else {
                     scene.accel.intersect(&ray).is_some()
                 };
                 count += usize::from(hit);
-            }
+            });
         }
         count
     };
@@ -239,7 +221,8 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
             let p = pool(*t)?;
             r[j] = measure(hits.len() * k, || {
                 p.install(|| {
-                    hits.par_chunks(chunk / k)
+                    hits.par_chunks(per_chunk)
+                        .enumerate()
                         .map(|h| gather(h, interaction))
                         .sum()
                 })
@@ -254,6 +237,22 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The `k` cosine-weighted gather rays of first hit number `index`, on the camera's side of the
+/// surface, always the same for the same index.
+fn gather_rays(scene: &Scene, it: &Interaction, index: usize, k: usize, mut f: impl FnMut(Ray)) {
+    let mut rng = Rng::keyed(1, &[index as u64]);
+    let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 {
+        -it.ng
+    } else {
+        it.ng
+    };
+    let frame = Frame::from_z(n);
+    for _ in 0..k {
+        let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
+        f(scene.spawn_ray(it, d));
+    }
 }
 
 fn path(shared: &Path, args: &BenchArgs) -> Result<()> {
