@@ -11,12 +11,32 @@ pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, (PI / 4.0) * (o.y / o.x))
+    // Both angles stay within ±π/4 of an axis, where short polynomials give sin and cos to
+    // float precision (cheaper than libm's range-reducing sincos in the gather loop).
+    if o.x.abs() > o.y.abs() {
+        let (s, c) = sin_cos_quarter((PI / 4.0) * (o.y / o.x));
+        Vec2::new(o.x * c, o.x * s)
     } else {
-        (o.y, PI / 2.0 - (PI / 4.0) * (o.x / o.y))
-    };
-    Vec2::new(r * theta.cos(), r * theta.sin())
+        // θ = π/2 − φ: cos θ = sin φ, sin θ = cos φ.
+        let (s, c) = sin_cos_quarter((PI / 4.0) * (o.x / o.y));
+        Vec2::new(o.y * s, o.y * c)
+    }
+}
+
+/// `(sin x, cos x)` for |x| ≤ π/4 by Taylor polynomials (truncation error below 2e-9).
+#[inline]
+#[must_use]
+pub fn sin_cos_quarter(x: f32) -> (f32, f32) {
+    let x2 = x * x;
+    let s = x
+        * (1.0
+            + x2 * (-1.0 / 6.0
+                + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362_880.0)))));
+    let c = 1.0
+        + x2 * (-0.5
+            + x2 * (1.0 / 24.0
+                + x2 * (-1.0 / 720.0 + x2 * (1.0 / 40320.0 + x2 * (-1.0 / 3_628_800.0)))));
+    (s, c)
 }
 
 /// Inverse of [`square_to_disk_concentric`].
@@ -329,6 +349,17 @@ mod tests {
                 let back = disk_concentric_to_square(square_to_disk_concentric(u));
                 assert!((back - u).length() < 1e-4, "{u} -> {back}");
             }
+        }
+    }
+
+    #[test]
+    fn quarter_sin_cos_matches_libm() {
+        for i in -1000..=1000 {
+            let x = (PI / 4.0) * (i as f32 / 1000.0);
+            let (s, c) = sin_cos_quarter(x);
+            let (sd, cd) = (x as f64).sin_cos();
+            assert!((s as f64 - sd).abs() < 2e-7, "sin {x}: {s} vs {sd}");
+            assert!((c as f64 - cd).abs() < 2e-7, "cos {x}: {c} vs {cd}");
         }
     }
 
