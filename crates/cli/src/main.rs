@@ -4,10 +4,13 @@
 //!   box when none is given) to OpenEXR, Radiance HDR or PNG.
 //! - `ircache compare A B` prints relMSE, relMSE_trim, RMSE and the mean-luminance ratio of A
 //!   against the reference B (the measures of `shared/tools/relmse.py`).
+//! - `ircache irradiance SCENE` prints irradiance at points (by the cache or by brute force).
 //! - `ircache bench` measures ray throughput and rendering speed.
 
 mod bench;
+mod cache_args;
 mod compare;
+mod irradiance;
 mod render;
 
 use clap::{Parser, Subcommand};
@@ -27,15 +30,20 @@ enum Command {
     Render(render::RenderArgs),
     /// Compare an image against a reference.
     Compare(compare::CompareArgs),
+    /// Irradiance at points read as lines "x y z nx ny nz" (Radiance's rtrace -I).
+    Irradiance(irradiance::IrradianceArgs),
     /// Measure ray throughput and rendering speed (prints figures).
     Bench(bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::parse_from(cache_args::rewrite_radiance_options(
+        std::env::args().collect(),
+    ));
     let result = match cli.command {
         Command::Render(a) => render::run(&a),
         Command::Compare(a) => compare::run(&a),
+        Command::Irradiance(a) => irradiance::run(&a),
         Command::Bench(a) => bench::run(&a),
     };
     match result {

@@ -1,5 +1,6 @@
 //! `ircache render`: load, render, write, report.
 
+use crate::cache_args::CacheArgs;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -70,6 +71,14 @@ pub struct RenderArgs {
     /// OBJ scenes: vertical field of view in degrees.
     #[arg(long)]
     pub fov: Option<f32>,
+    /// Extra images (ic integrator): `irradiance` (interpolated indirect irradiance, written to
+    /// NAME-irradiance.exr) and `records` (level-0 record positions as red dots over the image,
+    /// NAME-records.exr). Repeat or separate with commas.
+    #[arg(long, value_delimiter = ',')]
+    pub aov: Vec<String>,
+    /// Irradiance cache settings.
+    #[command(flatten)]
+    pub cache: CacheArgs,
 }
 
 fn parse_vec3(s: &str) -> Result<Vec3, String> {
@@ -186,7 +195,24 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let output = args.output.clone().unwrap_or_else(|| default_output(args));
     check_writable(&output)?;
     let desc = load(args)?;
-    let integrator = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
+    let mut integrator = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
+    match &mut integrator {
+        Integrator::Ic(ic) => args.cache.apply(&mut ic.params)?,
+        _ if args.cache.any() => bail!(
+            "irradiance cache options apply to the ic integrator only (this scene uses \"{}\"; \
+             add --integrator ic)",
+            desc.integrator.kind
+        ),
+        _ => {}
+    }
+    for aov in &args.aov {
+        if !matches!(aov.as_str(), "irradiance" | "records") {
+            bail!("--aov {aov}: expected irradiance or records");
+        }
+        if !matches!(integrator, Integrator::Ic(_)) {
+            bail!("--aov {aov} needs the ic integrator");
+        }
+    }
     let scene = Scene::build(&desc).context("building the scene")?;
     let load_seconds = t0.elapsed().as_secs_f64();
     let settings = RenderSettings {
@@ -213,6 +239,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let out = render(&scene, &integrator, &settings, &|n| bar.set_position(n))?;
     bar.finish_and_clear();
     ircache_image::write_image(&output, &out.image, args.exposure)?;
+    if let Some(report) = &out.cache {
+        write_aovs(args, &scene, report, &out.image, &settings, &output)?;
+    }
     let wall = t0.elapsed().as_secs_f64();
     if !args.quiet {
         summary(&desc, &settings, &out, &output, wall);
@@ -269,6 +298,22 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
         rays as f64 * 1e-6 / out.seconds.max(1e-9),
         output.display()
     );
+    if let Some(c) = &out.cache {
+        let st = &c.stats;
+        eprintln!(
+            "irradiance cache: {} records (per bounce level: {:?}), {} computed, {} dropped as \
+             duplicates within a batch, {:.1} M gather rays; pre-pass {:.2} s, pixel pass {:.2} s; \
+             {} samples outside every record",
+            st.records(),
+            st.records_per_level,
+            st.records_computed,
+            st.records_dropped,
+            st.gather_rays as f64 * 1e-6,
+            st.gather_seconds,
+            c.pixel_seconds,
+            c.uncached_samples
+        );
+    }
     if out.invalid_samples > 0 {
         eprintln!(
             "warning: {} samples were NaN, infinite or negative and were dropped",
@@ -285,7 +330,7 @@ fn write_stats(
     wall: f64,
     load_seconds: f64,
 ) -> Result<()> {
-    let json = serde_json::json!({
+    let mut json = serde_json::json!({
         "scene": desc.source.display().to_string(),
         "integrator": desc.integrator.kind,
         "max_depth": desc.integrator.max_depth,
@@ -304,6 +349,56 @@ fn write_stats(
         "threads": if s.threads == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { s.threads },
         "invalid_samples": out.invalid_samples,
     });
+    if let Some(c) = &out.cache {
+        let st = &c.stats;
+        let p = &c.cache.params;
+        let extra = serde_json::json!({
+            "records": st.records(),
+            "records_per_level": st.records_per_level,
+            "records_computed": st.records_computed,
+            "records_dropped": st.records_dropped,
+            "gather_rays": out.rays.gather,
+            "prepass_gather_rays": st.gather_rays,
+            "gather_seconds": st.gather_seconds,
+            "pixel_seconds": c.pixel_seconds,
+            "uncached_samples": c.uncached_samples,
+            "accuracy": p.accuracy,
+            "divisions": p.divisions,
+            "resolution": p.resolution,
+            "bounces": p.bounces,
+            "gradients": p.gradients.name(),
+        });
+        if let (Some(a), Some(b)) = (json.as_object_mut(), extra.as_object()) {
+            a.extend(b.clone());
+        }
+    }
     std::fs::write(path, serde_json::to_string_pretty(&json)? + "\n")
         .with_context(|| format!("{}: cannot write statistics", path.display()))
+}
+
+/// Writes the images `--aov` asked for next to `output`.
+fn write_aovs(
+    args: &RenderArgs,
+    scene: &Scene,
+    report: &ircache_render::render::CacheReport,
+    image: &ircache_image::Image,
+    settings: &RenderSettings,
+    output: &Path,
+) -> Result<()> {
+    use ircache_render::irradiance_cache::aov;
+    for kind in &args.aov {
+        let img = match kind.as_str() {
+            "irradiance" => {
+                aov::irradiance_image(scene, &report.cache, settings.width, settings.height)
+            }
+            _ => aov::record_overlay(scene, &report.cache, image),
+        };
+        let stem = output
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let path = output.with_file_name(format!("{stem}-{kind}.exr"));
+        ircache_image::write_image(&path, &img, 0.0)?;
+    }
+    Ok(())
 }

@@ -5,12 +5,14 @@
 //! - [`texture`], [`bsdf`]: materials with importance sampling (Mitsuba 3's models).
 //! - [`lights`]: emitters with importance sampling, for next-event estimation and MIS.
 //! - [`integrators`]: `direct` and `path` (the unbiased reference).
+//! - [`irradiance_cache`]: Ward's irradiance cache with gradients (the `ic` integrator's records).
 //! - [`render`]: the parallel, deterministic tile loop.
 
 pub mod bsdf;
 pub mod camera;
 pub mod film;
 pub mod integrators;
+pub mod irradiance_cache;
 pub mod lights;
 pub mod render;
 pub mod scene;

@@ -4,11 +4,14 @@
 
 use crate::film::Filter;
 use crate::integrators::{Integrator, RayCounts};
+use crate::irradiance_cache::build::fill_for_image;
+use crate::irradiance_cache::{CacheStats, IrradianceCache};
 use crate::scene::Scene;
 use ircache_image::Image;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Edge length of a tile in pixels.
@@ -40,8 +43,23 @@ pub struct RenderOutput {
     pub rays: RayCounts,
     /// Samples dropped because the integrator returned a non-finite or negative value.
     pub invalid_samples: u64,
-    /// Wall-clock seconds of the render loop.
+    /// Wall-clock seconds of the render loop (cache pre-pass included).
     pub seconds: f64,
+    /// What the irradiance cache pre-pass did (`ic` integrator only).
+    pub cache: Option<CacheReport>,
+}
+
+/// The irradiance cache after a render.
+#[derive(Clone, Debug)]
+pub struct CacheReport {
+    /// The filled cache.
+    pub cache: Arc<IrradianceCache>,
+    /// Pre-pass figures.
+    pub stats: CacheStats,
+    /// Pixel samples that no record reached (each gathered a record of its own).
+    pub uncached_samples: u64,
+    /// Seconds of the pixel pass (interpolation, direct light).
+    pub pixel_seconds: f64,
 }
 
 /// Renders the image. `progress` is called (from worker threads) with the number of pixels done
@@ -60,6 +78,27 @@ pub fn render(
         .build()?;
     let done = AtomicU64::new(0);
     let start = Instant::now();
+    // The irradiance cache is filled by its own parallel pre-pass before any pixel.
+    let prepared;
+    let mut cache_stats = None;
+    let integrator = match integrator {
+        Integrator::Ic(ic) if ic.cache.is_none() => {
+            let mut cache = IrradianceCache::new(scene, &ic.params);
+            let stats = if ic.params.bounces > 0 {
+                pool.install(|| fill_for_image(scene, &mut cache, w, h, settings.seed))
+            } else {
+                CacheStats::default()
+            };
+            let mut ic = ic.clone();
+            ic.cache = Some(Arc::new(cache));
+            ic.seed = settings.seed;
+            cache_stats = Some(stats);
+            prepared = Integrator::Ic(ic);
+            &prepared
+        }
+        other => other,
+    };
+    let pixel_start = Instant::now();
     let results: Vec<(Vec<Rgb>, RayCounts, u64)> = pool.install(|| {
         (0..tiles_x * tiles_y)
             .into_par_iter()
@@ -98,11 +137,26 @@ pub fn render(
         rays.add(&r);
         invalid_samples += bad;
     }
+    let pixel_seconds = pixel_start.elapsed().as_secs_f64();
+    let cache = match (integrator, cache_stats) {
+        (Integrator::Ic(ic), Some(stats)) => {
+            rays.gather += stats.gather_rays;
+            rays.shadow += stats.shadow_rays;
+            Some(CacheReport {
+                cache: ic.cache.clone().expect("filled above"),
+                stats,
+                uncached_samples: ic.uncached_samples.load(Ordering::Relaxed),
+                pixel_seconds,
+            })
+        }
+        _ => None,
+    };
     Ok(RenderOutput {
         image,
         rays,
         invalid_samples,
         seconds: start.elapsed().as_secs_f64(),
+        cache,
     })
 }
 

@@ -231,6 +231,23 @@ impl Bsdf {
         }
     }
 
+    /// Albedo of the Lambertian part seen from `wo` (local frame): the back model's for
+    /// `twosided` seen from below, zero for one-sided models seen from below.
+    #[must_use]
+    pub fn diffuse_reflectance_towards(&self, wo: Vec3) -> Rgb {
+        match self {
+            Bsdf::Single(l) if wo.z > 0.0 => l.diffuse_reflectance(),
+            Bsdf::Single(_) => Rgb::ZERO,
+            Bsdf::TwoSided { front, back } => {
+                if wo.z >= 0.0 {
+                    front.diffuse_reflectance()
+                } else {
+                    back.diffuse_reflectance()
+                }
+            }
+        }
+    }
+
     /// Albedo of the Lambertian part (the base of plastics, `K_d` of OBJ materials, zero for
     /// purely specular models; the front model's for `twosided`).
     #[must_use]

@@ -4,6 +4,7 @@
 //! the pixel's random stream, and counts the rays it traces.
 
 pub mod direct;
+pub mod ic;
 pub mod path;
 
 use crate::scene::Scene;
@@ -20,19 +21,22 @@ pub struct RayCounts {
     pub bounce: u64,
     /// Shadow (occlusion) rays.
     pub shadow: u64,
+    /// Hemisphere gather rays of irradiance cache records made while rendering.
+    pub gather: u64,
 }
 
 impl RayCounts {
     /// All rays.
     #[must_use]
     pub fn total(&self) -> u64 {
-        self.camera + self.bounce + self.shadow
+        self.camera + self.bounce + self.shadow + self.gather
     }
     /// Adds another count.
     pub fn add(&mut self, o: &RayCounts) {
         self.camera += o.camera;
         self.bounce += o.bounce;
         self.shadow += o.shadow;
+        self.gather += o.gather;
     }
 }
 
@@ -43,10 +47,12 @@ pub enum Integrator {
     Direct(direct::DirectIntegrator),
     /// Unidirectional path tracing with MIS and Russian roulette (Mitsuba's `path`).
     Path(path::PathIntegrator),
+    /// Direct light per sample, diffuse indirect light from the irradiance cache.
+    Ic(ic::IcIntegrator),
 }
 
 /// The integrator names this renderer knows.
-pub const INTEGRATOR_NAMES: &[&str] = &["path", "direct"];
+pub const INTEGRATOR_NAMES: &[&str] = &["path", "direct", "ic (irrcache)"];
 
 impl Integrator {
     /// Builds the integrator named in `desc`.
@@ -62,6 +68,7 @@ impl Integrator {
                 bsdf_samples: desc.bsdf_samples,
                 hide_emitters: desc.hide_emitters,
             })),
+            "ic" | "irrcache" => Ok(Integrator::Ic(ic::IcIntegrator::from_desc(desc)?)),
             other => Err(format!(
                 "unknown integrator \"{other}\" (known: {})",
                 INTEGRATOR_NAMES.join(", ")
@@ -83,6 +90,7 @@ impl Integrator {
         match self {
             Integrator::Direct(d) => d.li(scene, ray, first_hit, rng, rays),
             Integrator::Path(p) => p.li(scene, ray, first_hit, rng, rays),
+            Integrator::Ic(c) => c.li(scene, ray, first_hit, rng, rays),
         }
     }
 

@@ -1,0 +1,96 @@
+//! Irradiance cache options shared by `render` and `irradiance`, under users' names and
+//! Radiance's (`-aa`, `-ad`, `-ar`, `-ab`, `-av r g b`, rewritten to long options before
+//! parsing).
+
+use anyhow::{bail, Result};
+use clap::Args;
+use ircache_render::irradiance_cache::IcParams;
+
+/// Irradiance cache settings from the command line.
+#[derive(Args, Debug, Clone, Default)]
+pub struct CacheArgs {
+    /// Irradiance cache accuracy a (Radiance -aa): a record serves where its error ε ≤ a.
+    #[arg(long, visible_alias = "aa", help_heading = "Irradiance cache")]
+    pub accuracy: Option<String>,
+    /// Hemisphere divisions per record (Radiance -ad).
+    #[arg(long, visible_alias = "ad", help_heading = "Irradiance cache")]
+    pub divisions: Option<String>,
+    /// Resolution (Radiance -ar): smallest record radius = scene size / resolution; 0: none.
+    #[arg(long, visible_alias = "ar", help_heading = "Irradiance cache")]
+    pub resolution: Option<String>,
+    /// Indirect bounces (Radiance -ab); equals path tracing with max_depth N + 2.
+    #[arg(long, visible_alias = "ab", help_heading = "Irradiance cache")]
+    pub bounces: Option<String>,
+    /// Radiance beyond the last bounce, "v" or "r,g,b" (Radiance -av r g b).
+    #[arg(
+        long = "ambient-value",
+        visible_alias = "av",
+        help_heading = "Irradiance cache"
+    )]
+    pub ambient_value: Option<String>,
+    /// Gradients used in interpolation: none, rotation, full.
+    #[arg(long, help_heading = "Irradiance cache")]
+    pub gradients: Option<String>,
+    /// Translational gradient formula: ward-heckbert (000 eq. 3.48) or krivanek (3.47).
+    #[arg(long = "gradient-formula", help_heading = "Irradiance cache")]
+    pub gradient_formula: Option<String>,
+}
+
+impl CacheArgs {
+    fn pairs(&self) -> Vec<(&'static str, &String)> {
+        [
+            ("accuracy", &self.accuracy),
+            ("divisions", &self.divisions),
+            ("resolution", &self.resolution),
+            ("bounces", &self.bounces),
+            ("ambient_value", &self.ambient_value),
+            ("gradients", &self.gradients),
+            ("gradient_formula", &self.gradient_formula),
+        ]
+        .into_iter()
+        .filter_map(|(n, v)| v.as_ref().map(|v| (n, v)))
+        .collect()
+    }
+
+    /// True when any option was given.
+    #[must_use]
+    pub fn any(&self) -> bool {
+        !self.pairs().is_empty()
+    }
+
+    /// Applies the options given to `params`.
+    pub fn apply(&self, params: &mut IcParams) -> Result<()> {
+        for (name, value) in self.pairs() {
+            if let Err(e) = params.set(name, value) {
+                bail!("--{}: {e}", name.replace('_', "-"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Rewrites Radiance-style options (`-aa 0.1`, `-av 0.1 0.1 0.1`) into the long forms clap
+/// parses.
+#[must_use]
+pub fn rewrite_radiance_options(args: Vec<String>) -> Vec<String> {
+    let mut out = Vec::with_capacity(args.len());
+    let mut i = 0;
+    while i < args.len() {
+        let a = &args[i];
+        match a.as_str() {
+            "-aa" | "-ad" | "-ar" | "-ab" => out.push(format!("-{a}")),
+            "-av" => {
+                out.push("--av".into());
+                let three: Vec<&String> = args.iter().skip(i + 1).take(3).collect();
+                if three.len() == 3 && three.iter().all(|v| v.parse::<f32>().is_ok()) {
+                    out.push(format!("{},{},{}", three[0], three[1], three[2]));
+                    i += 4;
+                    continue;
+                }
+            }
+            _ => out.push(a.clone()),
+        }
+        i += 1;
+    }
+    out
+}

@@ -1,0 +1,202 @@
+//! `ircache irradiance SCENE`: irradiance at points, like Radiance's `rtrace -I`.
+//!
+//! Input: lines `x y z nx ny nz` (file or standard input; blank lines and `#` comments are
+//! skipped). Output, one line per point: irradiance `R G B` in W/m² (or with `--lux` the
+//! illuminance 179 · (0.265 R + 0.670 G + 0.065 B) lm/m²); with `--gradients`, then the
+//! world-space translational gradient of the indirect part (x y z for R, then G, then B: 9
+//! numbers) and its rotational gradient (9 numbers).
+
+use crate::cache_args::CacheArgs;
+use crate::render::{parse_defines, BUILTIN_CORNELL_BOX};
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use ircache_math::Vec3;
+use ircache_render::irradiance_cache::points::{irradiance_at_points, PointMethod};
+use ircache_render::irradiance_cache::IcParams;
+use ircache_render::scene::Scene;
+use ircache_scene::obj_scene::ObjCamera;
+use std::io::{BufRead, Write};
+use std::path::PathBuf;
+
+/// Arguments of `ircache irradiance`.
+#[derive(Args, Debug, Clone)]
+pub struct IrradianceArgs {
+    /// Scene file (Mitsuba 3 XML or OBJ). Default: the built-in Cornell box.
+    pub scene: Option<PathBuf>,
+    /// Points file (default: standard input).
+    #[arg(long, short = 'i')]
+    pub input: Option<PathBuf>,
+    /// Set a scene parameter (`-D name=value`).
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    pub define: Vec<String>,
+    /// ic (the irradiance cache, default) or path (brute force: one gather of --samples rays).
+    #[arg(long, default_value = "ic")]
+    pub integrator: String,
+    /// Hemisphere samples per point for --integrator path.
+    #[arg(long, default_value_t = 4096)]
+    pub samples: usize,
+    /// Light samples per point for the direct part.
+    #[arg(long, default_value_t = 256)]
+    pub direct_samples: u32,
+    /// Print only the indirect part (what the cache holds).
+    #[arg(long)]
+    pub indirect_only: bool,
+    /// Print illuminance (lux, 179 lm/W) instead of RGB irradiance.
+    #[arg(long)]
+    pub lux: bool,
+    /// Append the translational and rotational gradients of the indirect part (18 numbers).
+    #[arg(long)]
+    pub gradients: bool,
+    /// Gradients used by the cache's interpolation: none, rotation, full.
+    #[arg(long = "gradient-mode")]
+    pub gradient_mode: Option<String>,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, short = 't')]
+    pub threads: Option<usize>,
+    /// Irradiance cache accuracy (Radiance -aa).
+    #[arg(long, visible_alias = "aa")]
+    pub accuracy: Option<String>,
+    /// Hemisphere divisions per record (Radiance -ad).
+    #[arg(long, visible_alias = "ad")]
+    pub divisions: Option<String>,
+    /// Resolution (Radiance -ar).
+    #[arg(long, visible_alias = "ar")]
+    pub resolution: Option<String>,
+    /// Indirect bounces (Radiance -ab, default 1).
+    #[arg(long, visible_alias = "ab")]
+    pub bounces: Option<String>,
+    /// Radiance beyond the last bounce (Radiance -av).
+    #[arg(long = "ambient-value", visible_alias = "av")]
+    pub ambient_value: Option<String>,
+}
+
+fn parse_points(text: &str, name: &str) -> Result<Vec<(Vec3, Vec3)>> {
+    let mut points = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let v: Vec<f32> = line
+            .split_whitespace()
+            .map(|t| t.parse::<f32>().ok().filter(|x| x.is_finite()))
+            .collect::<Option<Vec<_>>>()
+            .filter(|v| v.len() == 6)
+            .with_context(|| {
+                format!(
+                    "{name}:{}: expected six finite numbers \"x y z nx ny nz\", found \"{line}\"",
+                    i + 1
+                )
+            })?;
+        let n = Vec3::new(v[3], v[4], v[5]);
+        let len = n.length();
+        if len.is_nan() || len <= 0.0 || len.is_infinite() {
+            bail!(
+                "{name}:{}: the normal ({} {} {}) has no direction",
+                i + 1,
+                v[3],
+                v[4],
+                v[5]
+            );
+        }
+        points.push((Vec3::new(v[0], v[1], v[2]), n.normalize()));
+    }
+    Ok(points)
+}
+
+/// Runs `ircache irradiance`.
+pub fn run(args: &IrradianceArgs) -> Result<()> {
+    let method = match args.integrator.as_str() {
+        "ic" | "irrcache" => PointMethod::Cache,
+        "path" => {
+            if args.samples < 4 {
+                bail!("--samples must be at least 4");
+            }
+            PointMethod::BruteForce {
+                samples: args.samples,
+            }
+        }
+        other => bail!("--integrator {other}: expected ic or path"),
+    };
+    let (text, name) = match &args.input {
+        Some(p) => (
+            std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?,
+            p.display().to_string(),
+        ),
+        None => {
+            let mut s = String::new();
+            for line in std::io::stdin().lock().lines() {
+                s.push_str(&line.context("reading standard input")?);
+                s.push('\n');
+            }
+            (s, "<stdin>".to_string())
+        }
+    };
+    let queries = parse_points(&text, &name)?;
+    let defines = parse_defines(&args.define)?;
+    let desc = match &args.scene {
+        Some(p) => ircache_scene::load_scene(p, &defines, &ObjCamera::default())?,
+        None => {
+            let dir = std::env::temp_dir().join(format!("ircache-irr-{}", std::process::id()));
+            std::fs::create_dir_all(&dir)?;
+            let path = dir.join("cornell-box.xml");
+            std::fs::write(&path, BUILTIN_CORNELL_BOX)?;
+            let r = ircache_scene::mitsuba::load(&path, &defines);
+            let _ = std::fs::remove_dir_all(&dir);
+            r?
+        }
+    };
+    let scene = Scene::build(&desc).context("building the scene")?;
+    let mut params = IcParams::default();
+    let cache_args = CacheArgs {
+        accuracy: args.accuracy.clone(),
+        divisions: args.divisions.clone(),
+        resolution: args.resolution.clone(),
+        bounces: args.bounces.clone(),
+        ambient_value: args.ambient_value.clone(),
+        gradients: args.gradient_mode.clone(),
+        gradient_formula: None,
+    };
+    cache_args.apply(&mut params)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()?;
+    let direct_samples = if args.indirect_only {
+        0
+    } else {
+        args.direct_samples.max(1)
+    };
+    let (results, stats) = pool.install(|| {
+        irradiance_at_points(&scene, &params, &queries, method, direct_samples, args.seed)
+    });
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    for r in &results {
+        let e = r.direct + r.indirect;
+        let mut line = if args.lux {
+            format!("{:e}", 179.0 * (0.265 * e.r + 0.670 * e.g + 0.065 * e.b))
+        } else {
+            format!("{:e} {:e} {:e}", e.r, e.g, e.b)
+        };
+        if args.gradients {
+            for g in r.grad_t.iter().chain(&r.grad_r) {
+                line.push_str(&format!(" {:e} {:e} {:e}", g.x, g.y, g.z));
+            }
+        }
+        writeln!(out, "{line}")?;
+    }
+    out.flush()?;
+    if let Some(st) = stats {
+        eprintln!(
+            "irradiance cache: {} records for {} points ({} computed, {:.1} M gather rays, {:.2} s)",
+            st.records(),
+            queries.len(),
+            st.records_computed,
+            st.gather_rays as f64 * 1e-6,
+            st.gather_seconds
+        );
+    }
+    Ok(())
+}

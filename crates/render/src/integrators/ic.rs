@@ -1,0 +1,230 @@
+//! The irradiance-cache integrator (`ic`, `<integrator type="irrcache">`): per pixel sample,
+//! emission, direct light (light and BSDF sampling combined by MIS) and specular reflection and
+//! refraction are computed as a path tracer would; the diffuse indirect light at the first
+//! non-specular surface is ρ/π times the irradiance interpolated from the level-0 cache
+//! (000 eq. 3.15). The cache is filled before the pixels are rendered (see
+//! [`crate::irradiance_cache::build`]).
+//!
+//! Glossy interreflection (the non-Lambertian part of indirect light) is not in the cache and is
+//! left out; the scenes this targets are diffuse.
+
+use super::{mis_weight, RayCounts};
+use crate::irradiance_cache::gather::{mix, Deeper, Gatherer, ShadingPoint, WorkState};
+use crate::irradiance_cache::{IcParams, IrradianceCache};
+use crate::scene::Scene;
+use ircache_embree::Hit;
+use ircache_math::{Ray, Rgb, Rng, INV_PI};
+use ircache_scene::{IntegratorDesc, ParamValue};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+
+/// The `ic` integrator with its cache (filled by the renderer before the pixel pass).
+#[derive(Clone, Debug)]
+pub struct IcIntegrator {
+    /// Cache settings.
+    pub params: IcParams,
+    /// Hide emitters seen directly.
+    pub hide_emitters: bool,
+    /// The filled cache; `None` until the pre-pass has run.
+    pub cache: Option<Arc<IrradianceCache>>,
+    /// Seed of the records made during the pixel pass.
+    pub seed: u64,
+    /// Pixel samples no record reached even at twice the accuracy (a record was gathered for
+    /// them alone and not kept).
+    pub uncached_samples: Arc<AtomicU64>,
+}
+
+impl IcIntegrator {
+    /// Builds the integrator from a scene's `<integrator type="irrcache">` (or any integrator
+    /// description whose type was overridden to `ic`): `max_depth` N gives N − 2 bounces unless
+    /// `bounces` is given; further parameters are [`IcParams::set`]'s names.
+    pub fn from_desc(desc: &IntegratorDesc) -> Result<IcIntegrator, String> {
+        let mut params = IcParams::default();
+        if desc.max_depth >= 0 {
+            params.bounces = (desc.max_depth - 2).max(0) as u32;
+        }
+        for (name, value, loc) in &desc.extra {
+            let text = match value {
+                ParamValue::Integer(v) => v.to_string(),
+                ParamValue::Float(v) => v.to_string(),
+                ParamValue::Boolean(v) => v.to_string(),
+                ParamValue::String(v) => v.clone(),
+                ParamValue::Rgb(c) => format!("{} {} {}", c.r, c.g, c.b),
+            };
+            params.set(name, &text).map_err(|e| format!("{loc}: {e}"))?;
+        }
+        Ok(IcIntegrator {
+            params,
+            hide_emitters: desc.hide_emitters,
+            cache: None,
+            seed: 0,
+            uncached_samples: Arc::new(AtomicU64::new(0)),
+        })
+    }
+
+    /// Radiance along the camera ray `ray`, whose closest hit `first_hit` the caller traced.
+    pub fn li(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        first_hit: Option<&Hit>,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Rgb {
+        let mut l = Rgb::ZERO;
+        let mut beta = Rgb::ONE;
+        let mut ray = *ray;
+        for depth in 0..8u32 {
+            let hit = if depth == 0 {
+                first_hit.map(|h| scene.interaction(&ray, h))
+            } else {
+                rays.bounce += 1;
+                scene.intersect(&ray)
+            };
+            let visible = !(depth == 0 && self.hide_emitters);
+            let Some(it) = hit else {
+                if visible {
+                    l += beta * scene.lights.environment_radiance(ray.d);
+                }
+                break;
+            };
+            let wo = -ray.d;
+            let shape = &scene.shapes[it.shape as usize];
+            if let (Some(light), true) = (shape.area_light, visible) {
+                l += beta * scene.lights.area_radiance(light, it.frame.n, wo);
+            }
+            let bsdf = scene.materials[shape.material].at(it.uv);
+            let wo_local = it.frame.to_local(wo);
+            if !bsdf.has_smooth() {
+                // Specular: follow the sampled lobe (deterministic chains stay sharp).
+                let (u_lobe, u) = (rng.next_f32(), rng.next_2d());
+                let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
+                    break;
+                };
+                beta *= bs.weight;
+                if beta.is_black() {
+                    break;
+                }
+                ray = scene.spawn_ray(&it, it.frame.from_local(bs.wi));
+                continue;
+            }
+            l += beta * self.direct(scene, &it, &bsdf, wo_local, rng, rays);
+            let albedo = bsdf.diffuse_reflectance_towards(wo_local);
+            if !albedo.is_black() {
+                let e = if self.params.bounces == 0 {
+                    self.params.ambient_value * std::f32::consts::PI
+                } else {
+                    self.indirect_irradiance(scene, &ShadingPoint::facing(it, wo), rng, rays)
+                };
+                l += beta * albedo * e * INV_PI;
+            }
+            break;
+        }
+        l
+    }
+
+    /// Direct light at a smooth surface: one light sample, plus one BSDF sample where the BSDF
+    /// is not purely Lambertian, combined by the power heuristic.
+    fn direct(
+        &self,
+        scene: &Scene,
+        it: &crate::scene::Interaction,
+        bsdf: &crate::bsdf::Bsdf,
+        wo_local: ircache_math::Vec3,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Rgb {
+        let mut l = Rgb::ZERO;
+        let use_bsdf = !bsdf.is_diffuse_only();
+        let (u_sel, u) = (rng.next_f32(), rng.next_2d());
+        if let Some(ls) = scene.lights.sample(it.p, u_sel, u) {
+            let wi_local = it.frame.to_local(ls.wi);
+            let f = bsdf.eval(wo_local, wi_local);
+            if !f.is_black() && ls.pdf > 0.0 {
+                rays.shadow += 1;
+                if !scene
+                    .accel
+                    .occluded(&scene.shadow_ray(it, ls.wi, ls.distance))
+                {
+                    let w = if ls.is_delta || !use_bsdf {
+                        1.0
+                    } else {
+                        mis_weight(ls.pdf, bsdf.pdf(wo_local, wi_local))
+                    };
+                    l += f * ls.radiance * (w / ls.pdf);
+                }
+            }
+        }
+        if use_bsdf {
+            let (u_lobe, u) = (rng.next_f32(), rng.next_2d());
+            if let Some(bs) = bsdf.sample(wo_local, u_lobe, u) {
+                if !bs.delta {
+                    let wi = it.frame.from_local(bs.wi);
+                    let next = scene.spawn_ray(it, wi);
+                    rays.bounce += 1;
+                    match scene.intersect(&next) {
+                        None if scene.lights.has_environment() => {
+                            let w = mis_weight(bs.pdf, scene.lights.pdf_environment(wi));
+                            l += bs.weight * scene.lights.environment_radiance(wi) * w;
+                        }
+                        None => {}
+                        Some(h) => {
+                            if let Some(light) = scene.shapes[h.shape as usize].area_light {
+                                let le = scene.lights.area_radiance(light, h.frame.n, -wi);
+                                if !le.is_black() {
+                                    let pdf_l =
+                                        scene.lights.pdf_area(light, h.prim, it.p, h.p, h.frame.n);
+                                    l += bs.weight * le * mis_weight(bs.pdf, pdf_l);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        l
+    }
+
+    /// Level-0 indirect irradiance at `sp`: interpolated at the accuracy `a`; else from records
+    /// up to 2a away (pixel samples off the pre-pass's pixel centres); else from a record
+    /// gathered for this sample alone.
+    fn indirect_irradiance(
+        &self,
+        scene: &Scene,
+        sp: &ShadingPoint,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Rgb {
+        let fresh;
+        let cache = match &self.cache {
+            Some(c) => c.as_ref(),
+            None => {
+                fresh = IrradianceCache::new(scene, &self.params);
+                &fresh
+            }
+        };
+        let store = &cache.levels[0];
+        let a = self.params.accuracy;
+        for max_error in [a, 2.0 * a] {
+            if let Some(i) = store.interpolate(sp.it.p, sp.n, max_error, self.params.gradients) {
+                return i.e;
+            }
+        }
+        self.uncached_samples.fetch_add(1, Ordering::Relaxed);
+        let g = Gatherer {
+            scene,
+            cache,
+            seed: self.seed,
+            deeper: Deeper::Cache,
+        };
+        let mut st = WorkState::new(cache.levels.len());
+        let key = mix(
+            0x0070_6978_656c,
+            u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()),
+        );
+        let rec = g.record_at(&mut st, sp, 0, key);
+        rays.gather += st.counts.gather_rays;
+        rays.shadow += st.counts.shadow_rays;
+        rec.e
+    }
+}

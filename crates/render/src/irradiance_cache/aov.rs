@@ -1,0 +1,80 @@
+//! Seeing the cache: the interpolated indirect irradiance per pixel, and the record positions
+//! drawn as dots over an image (as in 004's first figure).
+
+use super::build::first_diffuse_point;
+use super::gather::IrradianceCache;
+use crate::scene::Scene;
+use ircache_image::Image;
+use ircache_math::{Rgb, Vec2};
+use rayon::prelude::*;
+
+/// The level-0 indirect irradiance interpolated at each pixel centre's first diffuse surface
+/// (black where there is none or no record reaches within twice the accuracy).
+#[must_use]
+pub fn irradiance_image(
+    scene: &Scene,
+    cache: &IrradianceCache,
+    width: usize,
+    height: usize,
+) -> Image {
+    let a = cache.params.accuracy;
+    let pixels: Vec<Rgb> = (0..width * height)
+        .into_par_iter()
+        .map(|i| {
+            let film = Vec2::new(
+                ((i % width) as f32 + 0.5) / width as f32,
+                ((i / width) as f32 + 0.5) / height as f32,
+            );
+            let ray = scene.camera.generate_ray(film);
+            first_diffuse_point(scene, &ray)
+                .and_then(|sp| {
+                    [a, 2.0 * a].into_iter().find_map(|m| {
+                        cache.levels[0].interpolate(sp.it.p, sp.n, m, cache.params.gradients)
+                    })
+                })
+                .map_or(Rgb::ZERO, |i| i.e)
+        })
+        .collect();
+    let mut image = Image::new(width, height);
+    for (i, c) in pixels.into_iter().enumerate() {
+        image.set(i % width, i / width, c);
+    }
+    image
+}
+
+/// `image` with a dot at every level-0 record visible from the camera: red, one pixel plus its
+/// four neighbours, bright enough to show at any exposure.
+#[must_use]
+pub fn record_overlay(scene: &Scene, cache: &IrradianceCache, image: &Image) -> Image {
+    let (w, h) = (image.width, image.height);
+    let mut out = image.clone();
+    let peak = (0..w * h)
+        .map(|i| image.get(i % w, i / w).max_channel())
+        .fold(0.0f32, f32::max)
+        .max(1.0);
+    let dot = Rgb::new(peak, 0.0, 0.0);
+    for rec in cache.levels[0].records() {
+        let Some(film) = scene.camera.project(rec.p) else {
+            continue;
+        };
+        // Only records on the surface the camera sees.
+        let to = rec.p - scene.camera.origin;
+        let dist = to.length();
+        let ray = ircache_math::Ray::new(scene.camera.origin, to / dist);
+        let visible = scene
+            .accel
+            .intersect(&ray)
+            .is_none_or(|hit| (hit.t - dist).abs() <= 1e-3 * dist);
+        if !visible {
+            continue;
+        }
+        let (x, y) = ((film.x * w as f32) as i64, (film.y * h as f32) as i64);
+        for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)] {
+            let (px, py) = (x + dx, y + dy);
+            if px >= 0 && py >= 0 && (px as usize) < w && (py as usize) < h {
+                out.set(px as usize, py as usize, dot);
+            }
+        }
+    }
+    out
+}

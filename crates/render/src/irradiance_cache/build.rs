@@ -1,0 +1,185 @@
+//! Filling the cache in parallel and deterministically.
+//!
+//! Record positions are decided in a fixed order by a coarse-to-fine pre-pass: the image is
+//! visited on grids of pixel centres with strides 32, 16, ..., 1; each stride is split into
+//! phases whose points are at least two strides apart. A phase is one batch: every point it holds
+//! is checked against the cache as it stood before the batch, the uncovered ones gather their
+//! records in parallel (deeper levels go to private overlays), and then the new records are
+//! inserted one after the other in pixel order, each dropped if a record inserted before it in
+//! the same batch already covers it. Nothing is locked on the hot path (the cache is read-only
+//! during a batch), tiles do not exist here so no border duplicates, and the result depends only
+//! on the seed.
+
+use super::gather::{mix, GatherCounts, Gatherer, IrradianceCache, ShadingPoint, WorkState};
+use super::record::Record;
+use crate::scene::Scene;
+use ircache_math::{Ray, Vec2};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// What filling the cache did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CacheStats {
+    /// Records in each level's store at the end.
+    pub records_per_level: Vec<usize>,
+    /// Records gathered (including dropped ones).
+    pub records_computed: u64,
+    /// Records gathered but dropped because an earlier record of the same batch covered them.
+    pub records_dropped: u64,
+    /// Gather (hemisphere) rays traced.
+    pub gather_rays: u64,
+    /// Shadow rays traced for surfaces that gather rays found.
+    pub shadow_rays: u64,
+    /// Seconds spent filling the cache.
+    pub gather_seconds: f64,
+    /// Batches run.
+    pub batches: u32,
+}
+
+impl CacheStats {
+    /// Records in the cache.
+    #[must_use]
+    pub fn records(&self) -> usize {
+        self.records_per_level.iter().sum()
+    }
+}
+
+/// Follows the camera ray through mirrors and glass to the first surface with a smooth BSDF
+/// component and a diffuse part (where the cache is used).
+#[must_use]
+pub fn first_diffuse_point(scene: &Scene, ray: &Ray) -> Option<ShadingPoint> {
+    let mut ray = *ray;
+    for _ in 0..8 {
+        let it = scene.intersect(&ray)?;
+        let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+        let wo = -ray.d;
+        if bsdf.has_smooth() {
+            let wo_local = it.frame.to_local(wo);
+            return (!bsdf.diffuse_reflectance_towards(wo_local).is_black())
+                .then(|| ShadingPoint::facing(it, wo));
+        }
+        // Deterministic continuation through the specular surface: its first lobe.
+        let bs = bsdf.sample(it.frame.to_local(wo), 0.0, Vec2::splat(0.5))?;
+        ray = scene.spawn_ray(&it, it.frame.from_local(bs.wi));
+    }
+    None
+}
+
+/// Runs one batch: `points[i] = (key, point)`. Returns the counters.
+pub fn run_batch(
+    scene: &Scene,
+    cache: &mut IrradianceCache,
+    seed: u64,
+    points: &[(u64, ShadingPoint)],
+    stats: &mut CacheStats,
+) {
+    let results: Vec<Option<(Record, WorkState)>> = {
+        let g = Gatherer {
+            scene,
+            cache,
+            seed,
+            deeper: super::gather::Deeper::Cache,
+        };
+        points
+            .par_iter()
+            .map(|(key, sp)| {
+                if cache.levels[0].covers(sp.it.p, sp.n) {
+                    return None;
+                }
+                let mut st = WorkState::new(cache.levels.len());
+                let rec = g.record_at(&mut st, sp, 0, *key);
+                Some((rec, st))
+            })
+            .collect()
+    };
+    let mut counts = GatherCounts::default();
+    for (rec, st) in results.into_iter().flatten() {
+        counts.add(&st.counts);
+        // Deeper records first: they were made for the level-0 record's gather.
+        for r in st.new_records.into_iter().chain(std::iter::once(rec)) {
+            let store = &mut cache.levels[r.level as usize];
+            if store.covers(r.p, r.n) {
+                stats.records_dropped += 1;
+            } else {
+                store.insert(r);
+            }
+        }
+    }
+    stats.records_computed += counts.records;
+    stats.gather_rays += counts.gather_rays;
+    stats.shadow_rays += counts.shadow_rays;
+    stats.batches += 1;
+}
+
+/// Fills `cache` for a `width`×`height` view of `scene` (run inside the caller's thread pool).
+pub fn fill_for_image(
+    scene: &Scene,
+    cache: &mut IrradianceCache,
+    width: usize,
+    height: usize,
+    seed: u64,
+) -> CacheStats {
+    let start = Instant::now();
+    let mut stats = CacheStats::default();
+    let coarsest = 32usize;
+    let mut stride = coarsest;
+    let inv = Vec2::new(1.0 / width as f32, 1.0 / height as f32);
+    while stride >= 1 {
+        // Phases: (x/stride mod 2, y/stride mod 2); (0, 0) belongs to the coarser grid except
+        // on the coarsest.
+        let phases: &[(usize, usize)] = if stride == coarsest {
+            &[(0, 0)]
+        } else {
+            &[(1, 1), (1, 0), (0, 1)]
+        };
+        for &(px, py) in phases {
+            let pixels: Vec<(usize, usize)> = (0..height)
+                .step_by(stride)
+                .flat_map(|y| (0..width).step_by(stride).map(move |x| (x, y)))
+                .filter(|&(x, y)| {
+                    stride == coarsest || ((x / stride) % 2 == px && (y / stride) % 2 == py)
+                })
+                .collect();
+            let points: Vec<(u64, ShadingPoint)> = pixels
+                .par_iter()
+                .filter_map(|&(x, y)| {
+                    let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) * inv;
+                    let ray = scene.camera.generate_ray(film);
+                    first_diffuse_point(scene, &ray)
+                        .map(|sp| (mix(0x0070_7265_7061_7373, (y * width + x) as u64), sp))
+                })
+                .collect();
+            run_batch(scene, cache, seed, &points, &mut stats);
+        }
+        stride /= 2;
+    }
+    stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
+    stats.gather_seconds = start.elapsed().as_secs_f64();
+    stats
+}
+
+/// Fills `cache` for a list of query points, coarse to fine over their order (every 64th
+/// point first, then every 32nd, ...), so that nearby points share records.
+pub fn fill_for_points(
+    scene: &Scene,
+    cache: &mut IrradianceCache,
+    points: &[ShadingPoint],
+    seed: u64,
+) -> CacheStats {
+    let start = Instant::now();
+    let mut stats = CacheStats::default();
+    let mut stride = 64usize;
+    while stride >= 1 {
+        let batch: Vec<(u64, ShadingPoint)> = points
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| i % stride == 0 && (stride == 64 || i % (2 * stride) != 0))
+            .map(|(i, sp)| (mix(0x706f_696e_7473, i as u64), *sp))
+            .collect();
+        run_batch(scene, cache, seed, &batch, &mut stats);
+        stride /= 2;
+    }
+    stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
+    stats.gather_seconds = start.elapsed().as_secs_f64();
+    stats
+}

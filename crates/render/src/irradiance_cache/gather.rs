@@ -1,0 +1,370 @@
+//! Computing records: the stratified hemisphere gather (000 eqs. 3.4–3.5) from a surface point,
+//! shading what each gather ray finds, and turning the samples into a record with its radius
+//! limits (003 items 3–4) and gradients.
+//!
+//! A gather ray that hits an emitter gets no emission (the direct term samples lights), nor does
+//! one that escapes to an environment; every surface it finds is shaded with one light sample
+//! plus, below the last bounce, the next level's cached irradiance (004's per-bounce caches), or
+//! at the last bounce the ambient value. Records needed at deeper levels during a batch go to a
+//! private overlay of the work item, so the batch's result does not depend on thread timing.
+
+use super::hemisphere::{to_world, HemisphereSamples, Stratification};
+use super::params::{IcParams, TranslationalFormula};
+use super::record::Record;
+use super::store::RecordStore;
+use crate::scene::{Interaction, Scene};
+use ircache_math::{sampling, Frame, Ray, Rgb, Rng, Vec3, INV_PI};
+
+/// The records of every bounce level, and the settings they were made with.
+#[derive(Clone, Debug)]
+pub struct IrradianceCache {
+    /// Settings.
+    pub params: IcParams,
+    /// One store per bounce level.
+    pub levels: Vec<RecordStore>,
+    /// Smallest record radius.
+    pub r_min: f32,
+    /// Largest record radius.
+    pub r_max: f32,
+}
+
+impl IrradianceCache {
+    /// An empty cache for `scene`.
+    #[must_use]
+    pub fn new(scene: &Scene, params: &IcParams) -> IrradianceCache {
+        let size = scene_size(scene);
+        let (r_min, r_max) = params.radius_limits(size);
+        let base = if r_min > 0.0 {
+            params.accuracy * r_min
+        } else {
+            size * 1e-4
+        };
+        IrradianceCache {
+            params: params.clone(),
+            levels: (0..params.bounces.max(1))
+                .map(|_| RecordStore::new(base, params.accuracy))
+                .collect(),
+            r_min,
+            r_max,
+        }
+    }
+
+    /// An empty store shaped like this cache's stores.
+    #[must_use]
+    pub fn empty_store(&self) -> RecordStore {
+        let base = if self.r_min > 0.0 {
+            self.params.accuracy * self.r_min
+        } else {
+            self.r_max * 2e-4
+        };
+        RecordStore::new(base, self.params.accuracy)
+    }
+}
+
+/// The scene size used for record spacing: the largest extent of the bounding box (Radiance's
+/// octree cube).
+#[must_use]
+pub fn scene_size(scene: &Scene) -> f32 {
+    // The bounding sphere's diameter over √3 is the cube edge of a cubic box; good enough and
+    // scale-free.
+    (2.0 * scene.radius / 3f32.sqrt()).max(f32::MIN_POSITIVE)
+}
+
+/// Counters of one work item or pass.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct GatherCounts {
+    /// Hemisphere rays traced.
+    pub gather_rays: u64,
+    /// Shadow rays traced for the surfaces gather rays found.
+    pub shadow_rays: u64,
+    /// Records computed.
+    pub records: u64,
+}
+
+impl GatherCounts {
+    /// Adds another count.
+    pub fn add(&mut self, o: &GatherCounts) {
+        self.gather_rays += o.gather_rays;
+        self.shadow_rays += o.shadow_rays;
+        self.records += o.records;
+    }
+}
+
+/// Private state of one work item: records it made at deeper levels (visible to itself only
+/// until the batch is merged), in the order they were made.
+#[derive(Debug)]
+pub struct WorkState {
+    overlay: Vec<Option<RecordStore>>,
+    /// Records made, in order.
+    pub new_records: Vec<Record>,
+    /// Counters.
+    pub counts: GatherCounts,
+}
+
+impl WorkState {
+    /// An empty state for a cache with `levels` levels.
+    #[must_use]
+    pub fn new(levels: usize) -> WorkState {
+        WorkState {
+            overlay: vec![None; levels],
+            new_records: Vec::new(),
+            counts: GatherCounts::default(),
+        }
+    }
+}
+
+/// How the surfaces found by gather rays get their own indirect light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Deeper {
+    /// From the next level's cache (the irradiance cache proper).
+    Cache,
+    /// By path tracing one cosine-sampled ray per level (brute force, for validation).
+    PathTraced,
+}
+
+/// Computes records and shades gather rays for one cache.
+pub struct Gatherer<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The cache (read-only during a batch).
+    pub cache: &'a IrradianceCache,
+    /// Seed of all random streams.
+    pub seed: u64,
+    /// Where deeper indirect light comes from.
+    pub deeper: Deeper,
+}
+
+/// A surface point with the normal of the side being shaded.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingPoint {
+    /// The interaction (for spawning rays).
+    pub it: Interaction,
+    /// Shading normal turned towards the viewer.
+    pub n: Vec3,
+}
+
+impl ShadingPoint {
+    /// The interaction seen from direction `wo` (unit, pointing away from the surface).
+    #[must_use]
+    pub fn facing(it: Interaction, wo: Vec3) -> ShadingPoint {
+        let n = if it.frame.n.dot(wo) < 0.0 {
+            -it.frame.n
+        } else {
+            it.frame.n
+        };
+        ShadingPoint { it, n }
+    }
+}
+
+const GATHER_SALT: u64 = 0x6761_7468_6572;
+
+impl Gatherer<'_> {
+    /// Gathers the hemisphere above `sp` with `strata`, shading the hits for `level`.
+    pub fn gather(
+        &self,
+        st: &mut WorkState,
+        sp: &ShadingPoint,
+        strata: Stratification,
+        level: u32,
+        key: u64,
+    ) -> (HemisphereSamples, Frame) {
+        let mut rng = Rng::keyed(self.seed, &[GATHER_SALT, key, u64::from(level)]);
+        let frame = Frame::from_z(sp.n);
+        let ng = if sp.it.ng.dot(sp.n) < 0.0 {
+            -sp.it.ng
+        } else {
+            sp.it.ng
+        };
+        let mut h = HemisphereSamples::new(strata);
+        let mut i = 0;
+        for j in 0..strata.polar {
+            for k in 0..strata.azimuthal {
+                let d = frame.from_local(strata.direction(j, k, rng.next_2d()));
+                let child_key = mix(key, i as u64);
+                i += 1;
+                if d.dot(ng) <= 0.0 {
+                    continue; // below the geometric surface: nothing arrives
+                }
+                let ray = self.scene.spawn_ray(&sp.it, d);
+                st.counts.gather_rays += 1;
+                if let Some(hit) = self.scene.intersect(&ray) {
+                    let idx = j * strata.azimuthal + k;
+                    h.distance[idx] = hit.t;
+                    h.radiance[idx] = self.outgoing(st, &ray, &hit, level, child_key, &mut rng, 0);
+                }
+            }
+        }
+        (h, frame)
+    }
+
+    /// A record at `sp` for bounce `level`: gather, then limit the radius.
+    pub fn record_at(&self, st: &mut WorkState, sp: &ShadingPoint, level: u32, key: u64) -> Record {
+        let params = &self.cache.params;
+        let strata = Stratification::from_divisions(params.divisions);
+        let (h, frame) = self.gather(st, sp, strata, level, key);
+        st.counts.records += 1;
+        let e = h.irradiance();
+        let grad_t_local = match params.formula {
+            TranslationalFormula::WardHeckbert => h.translational_gradient_ward_heckbert(),
+            TranslationalFormula::Krivanek => h.translational_gradient_krivanek(),
+        };
+        let mut grad_t = to_world(&grad_t_local, frame.s, frame.t);
+        let grad_r = to_world(&h.rotational_gradient(), frame.s, frame.t);
+        let mut r = h.harmonic_mean_distance().min(self.cache.r_max);
+        // Gradient limit (003 item 4): the gradient may not predict a change larger than E
+        // itself within the radius; at the minimum spacing the gradient is reduced instead.
+        let mut limit = f32::INFINITY;
+        for c in 0..3 {
+            let g = grad_t[c].length();
+            if g > 0.0 && e[c] > 0.0 {
+                limit = limit.min(e[c] / g);
+            } else if g > 0.0 {
+                grad_t[c] = Vec3::ZERO;
+            }
+        }
+        r = r.min(limit);
+        if r < self.cache.r_min {
+            r = self.cache.r_min;
+            if limit < r {
+                let f = limit / r;
+                grad_t = grad_t.map(|g| g * f);
+            }
+        }
+        Record {
+            p: sp.it.p,
+            n: sp.n,
+            e,
+            r: r.max(f32::MIN_POSITIVE),
+            grad_t,
+            grad_r,
+            level: level as u8,
+        }
+    }
+
+    /// Indirect irradiance at `sp` for bounce `level`: interpolated from the cache and this work
+    /// item's own records, or from a new record made here.
+    pub fn irradiance(&self, st: &mut WorkState, sp: &ShadingPoint, level: u32, key: u64) -> Rgb {
+        let lvl = level as usize;
+        let params = &self.cache.params;
+        let (mut sum, mut wsum) = (Rgb::ZERO, 0.0f32);
+        let mut found = false;
+        for store in [Some(&self.cache.levels[lvl]), st.overlay[lvl].as_ref()]
+            .into_iter()
+            .flatten()
+        {
+            if let Some(i) = store.interpolate(sp.it.p, sp.n, params.accuracy, params.gradients) {
+                sum += i.e * i.weight_sum;
+                wsum += i.weight_sum;
+                found = true;
+            }
+        }
+        if found {
+            return sum / wsum;
+        }
+        let rec = self.record_at(st, sp, level, key);
+        let store = st.overlay[lvl].get_or_insert_with(|| self.cache.empty_store());
+        store.insert(rec);
+        st.new_records.push(rec);
+        rec.e
+    }
+
+    /// Radiance leaving the surface `hit` towards the gather ray's origin, emission excluded.
+    #[allow(clippy::too_many_arguments)]
+    fn outgoing(
+        &self,
+        st: &mut WorkState,
+        ray: &Ray,
+        hit: &Interaction,
+        level: u32,
+        key: u64,
+        rng: &mut Rng,
+        specular_chain: u32,
+    ) -> Rgb {
+        let scene = self.scene;
+        let wo = -ray.d;
+        let shape = &scene.shapes[hit.shape as usize];
+        let bsdf = scene.materials[shape.material].at(hit.uv);
+        let wo_local = hit.frame.to_local(wo);
+        if !bsdf.has_smooth() {
+            // A mirror or glass: follow it (what it shows, emitters included, is not sampled by
+            // the record's direct term).
+            if specular_chain >= 8 {
+                return Rgb::ZERO;
+            }
+            let (u_lobe, u) = (rng.next_f32(), rng.next_2d());
+            let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
+                return Rgb::ZERO;
+            };
+            let wi = hit.frame.from_local(bs.wi);
+            let next = scene.spawn_ray(hit, wi);
+            st.counts.gather_rays += 1;
+            return match scene.intersect(&next) {
+                None => bs.weight * scene.lights.environment_radiance(wi),
+                Some(h2) => {
+                    let mut l = Rgb::ZERO;
+                    if let Some(light) = scene.shapes[h2.shape as usize].area_light {
+                        l += scene.lights.area_radiance(light, h2.frame.n, -wi);
+                    }
+                    l += self.outgoing(st, &next, &h2, level, key, rng, specular_chain + 1);
+                    bs.weight * l
+                }
+            };
+        }
+        let mut l = Rgb::ZERO;
+        // Direct light: one light sample.
+        let (u_sel, u) = (rng.next_f32(), rng.next_2d());
+        if let Some(ls) = scene.lights.sample(hit.p, u_sel, u) {
+            if ls.pdf > 0.0 {
+                let f = bsdf.eval(wo_local, hit.frame.to_local(ls.wi));
+                if !f.is_black() {
+                    st.counts.shadow_rays += 1;
+                    if !scene
+                        .accel
+                        .occluded(&scene.shadow_ray(hit, ls.wi, ls.distance))
+                    {
+                        l += f * ls.radiance / ls.pdf;
+                    }
+                }
+            }
+        }
+        // Indirect light.
+        let albedo = bsdf.diffuse_reflectance_towards(wo_local);
+        if albedo.is_black() {
+            return l;
+        }
+        let params = &self.cache.params;
+        if level + 1 < params.bounces {
+            let sp = ShadingPoint::facing(*hit, wo);
+            match self.deeper {
+                Deeper::Cache => {
+                    l += albedo * self.irradiance(st, &sp, level + 1, key) * INV_PI;
+                }
+                Deeper::PathTraced => {
+                    // ρ/π · E with E ≈ π L(ω), ω cosine-distributed.
+                    let frame = Frame::from_z(sp.n);
+                    let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
+                    if d.dot(hit.ng) * sp.n.dot(hit.ng) > 0.0 {
+                        let next = scene.spawn_ray(hit, d);
+                        st.counts.gather_rays += 1;
+                        if let Some(h2) = scene.intersect(&next) {
+                            l += albedo * self.outgoing(st, &next, &h2, level + 1, key, rng, 0);
+                        }
+                    }
+                }
+            }
+        } else {
+            l += albedo * params.ambient_value;
+        }
+        l
+    }
+}
+
+/// Mixes a key with an index (splitmix64 finaliser).
+#[inline]
+#[must_use]
+pub fn mix(key: u64, i: u64) -> u64 {
+    let mut z = key ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}

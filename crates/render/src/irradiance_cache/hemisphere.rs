@@ -1,0 +1,322 @@
+//! The stratified cosine-weighted hemisphere gather of one record and what is computed from it:
+//! irradiance (000 eq. 3.4), harmonic mean distance (3.8), rotational gradient (3.29) and the
+//! occlusion-aware translational gradient in both formulations, 3.47 (Křivánek et al. as
+//! corrected by Jarosz) and 3.48 (Ward–Heckbert), which 000 §3.6.3 proves equal.
+//!
+//! Cells: `M` polar rings (j) × `N` azimuthal sectors (k) of equal projected solid angle,
+//! sin²θ ∈ [j/M, (j+1)/M), φ ∈ [2πk/N, 2π(k+1)/N) (3.5). By default N ≈ πM (ERRATA 1).
+//! Gradients are returned in the local frame (x, y tangent, z the normal) with the conventions of
+//! 3.15: E(x, n) ≈ E + (n_i × n)·∇_r E + (x − x_i)·∇_t E (absolute gradients, ERRATA 5).
+
+use ircache_math::{Rgb, Vec2, Vec3};
+use std::f64::consts::PI;
+
+/// The hemisphere's division into cells.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Stratification {
+    /// Polar divisions M.
+    pub polar: usize,
+    /// Azimuthal divisions N.
+    pub azimuthal: usize,
+}
+
+impl Stratification {
+    /// About `divisions` cells with azimuthal ≈ π × polar (Radiance's `-ad`).
+    #[must_use]
+    pub fn from_divisions(divisions: usize) -> Stratification {
+        let d = divisions.max(4) as f64;
+        let polar = (d / PI).sqrt().round().max(1.0) as usize;
+        let azimuthal = (d / polar as f64).round().max(3.0) as usize;
+        Stratification { polar, azimuthal }
+    }
+
+    /// Number of cells.
+    #[must_use]
+    pub fn cells(&self) -> usize {
+        self.polar * self.azimuthal
+    }
+
+    /// The local direction of the sample in cell (j, k) at jitter `u` (3.5).
+    #[inline]
+    #[must_use]
+    pub fn direction(&self, j: usize, k: usize, u: Vec2) -> Vec3 {
+        let s2 = ((j as f32 + u.x) / self.polar as f32).min(1.0);
+        let sin_t = s2.sqrt();
+        let cos_t = (1.0 - s2).max(0.0).sqrt();
+        let phi = 2.0 * std::f32::consts::PI * (k as f32 + u.y) / self.azimuthal as f32;
+        let (sp, cp) = phi.sin_cos();
+        Vec3::new(cp * sin_t, sp * sin_t, cos_t)
+    }
+}
+
+/// The radiance and hit distance found in each cell, `[j * N + k]`. A ray that escaped has
+/// distance `f32::INFINITY`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HemisphereSamples {
+    /// The division into cells.
+    pub strata: Stratification,
+    /// Incoming radiance per cell.
+    pub radiance: Vec<Rgb>,
+    /// Distance to the surface seen per cell.
+    pub distance: Vec<f32>,
+}
+
+/// Per-channel gradients in the local frame (z components are zero).
+pub type LocalGradient = [Vec3; 3];
+
+impl HemisphereSamples {
+    /// Empty samples for `strata`.
+    #[must_use]
+    pub fn new(strata: Stratification) -> HemisphereSamples {
+        HemisphereSamples {
+            strata,
+            radiance: vec![Rgb::ZERO; strata.cells()],
+            distance: vec![f32::INFINITY; strata.cells()],
+        }
+    }
+
+    #[inline]
+    fn l(&self, j: usize, k: usize) -> [f64; 3] {
+        let c = self.radiance[j * self.strata.azimuthal + k];
+        [c.r as f64, c.g as f64, c.b as f64]
+    }
+
+    #[inline]
+    fn r(&self, j: usize, k: usize) -> f64 {
+        self.distance[j * self.strata.azimuthal + k] as f64
+    }
+
+    /// Irradiance, π/(MN) Σ L (3.4).
+    #[must_use]
+    pub fn irradiance(&self) -> Rgb {
+        let mut s = [0.0f64; 3];
+        for c in &self.radiance {
+            s[0] += c.r as f64;
+            s[1] += c.g as f64;
+            s[2] += c.b as f64;
+        }
+        let f = PI / self.strata.cells() as f64;
+        Rgb::new((s[0] * f) as f32, (s[1] * f) as f32, (s[2] * f) as f32)
+    }
+
+    /// Harmonic mean distance MN / Σ 1/r (3.8); infinite when every ray escaped.
+    #[must_use]
+    pub fn harmonic_mean_distance(&self) -> f32 {
+        let inv: f64 = self
+            .distance
+            .iter()
+            .map(|&r| {
+                if r.is_finite() && r > 0.0 {
+                    1.0 / r as f64
+                } else {
+                    0.0
+                }
+            })
+            .sum();
+        if inv > 0.0 {
+            (self.strata.cells() as f64 / inv) as f32
+        } else {
+            f32::INFINITY
+        }
+    }
+
+    /// Rotational gradient (3.29) with the tangent taken at each cell's centre, signed so that
+    /// E(n) ≈ E + (n_i × n)·∇_r E.
+    #[must_use]
+    pub fn rotational_gradient(&self) -> LocalGradient {
+        let (m, n) = (self.strata.polar, self.strata.azimuthal);
+        let mut g = [[0.0f64; 2]; 3];
+        for k in 0..n {
+            let phi = 2.0 * PI * (k as f64 + 0.5) / n as f64;
+            let v = [-phi.sin(), phi.cos()];
+            let mut sum = [0.0f64; 3];
+            for j in 0..m {
+                let s2 = (j as f64 + 0.5) / m as f64;
+                let tan = (s2 / (1.0 - s2)).sqrt();
+                let l = self.l(j, k);
+                for c in 0..3 {
+                    sum[c] += l[c] * tan;
+                }
+            }
+            for c in 0..3 {
+                g[c][0] += v[0] * sum[c];
+                g[c][1] += v[1] * sum[c];
+            }
+        }
+        let f = PI / (m * n) as f64;
+        g.map(|gc| Vec3::new((gc[0] * f) as f32, (gc[1] * f) as f32, 0.0))
+    }
+
+    /// Translational gradient, Křivánek et al.'s formulation corrected (000 eq. 3.47 with
+    /// ERRATA 2–4): polar walls weighted by the cosine at the wall, azimuthal walls by the
+    /// cosine at the cell's mid angle, each wall moving with the closer of its two cells.
+    #[must_use]
+    pub fn translational_gradient_krivanek(&self) -> LocalGradient {
+        let (m, n) = (self.strata.polar, self.strata.azimuthal);
+        let walls = PolarWalls::new(m);
+        let dphi = 2.0 * PI / n as f64;
+        let mut g = [[0.0f64; 2]; 3];
+        for k in 0..n {
+            let phi_c = (k as f64 + 0.5) * dphi;
+            let u = [phi_c.cos(), phi_c.sin()];
+            let phi_w = k as f64 * dphi;
+            let v = [-phi_w.sin(), phi_w.cos()];
+            let km = (k + n - 1) % n;
+            let (mut su, mut sv) = ([0.0f64; 3], [0.0f64; 3]);
+            for j in 0..m {
+                let l = self.l(j, k);
+                if j > 0 {
+                    // Polar wall between rings j−1 and j at θ_{j−} (3.42, ERRATA 3).
+                    let (s, c) = (walls.sin[j], walls.cos[j]);
+                    let w = dphi * s * c * c / self.r(j, k).min(self.r(j - 1, k));
+                    let lp = self.l(j - 1, k);
+                    for ch in 0..3 {
+                        su[ch] += w * (l[ch] - lp[ch]);
+                    }
+                }
+                // Azimuthal wall between sectors k−1 and k (3.46, ERRATA 2 and 4).
+                let theta_c = 0.5 * (walls.theta[j] + walls.theta[j + 1]);
+                let w = (walls.cos[j] - walls.cos[j + 1]) * theta_c.cos()
+                    / (theta_c.sin() * self.r(j, k).min(self.r(j, km)));
+                let lm = self.l(j, km);
+                for ch in 0..3 {
+                    sv[ch] += w * (l[ch] - lm[ch]);
+                }
+            }
+            for ch in 0..3 {
+                g[ch][0] += u[0] * su[ch] + v[0] * sv[ch];
+                g[ch][1] += u[1] * su[ch] + v[1] * sv[ch];
+            }
+        }
+        g.map(|gc| Vec3::new(gc[0] as f32, gc[1] as f32, 0.0))
+    }
+
+    /// Translational gradient in Ward and Heckbert's original form (000 eq. 3.48): the motion of
+    /// the projected cell boundaries.
+    #[must_use]
+    pub fn translational_gradient_ward_heckbert(&self) -> LocalGradient {
+        let (m, n) = (self.strata.polar, self.strata.azimuthal);
+        let walls = PolarWalls::new(m);
+        let dphi = 2.0 * PI / n as f64;
+        let mut g = [[0.0f64; 2]; 3];
+        for k in 0..n {
+            let phi_c = (k as f64 + 0.5) * dphi;
+            let u = [phi_c.cos(), phi_c.sin()];
+            let phi_w = k as f64 * dphi;
+            let v = [-phi_w.sin(), phi_w.cos()];
+            let km = (k + n - 1) % n;
+            let (mut su, mut sv) = ([0.0f64; 3], [0.0f64; 3]);
+            for j in 0..m {
+                let l = self.l(j, k);
+                if j > 0 {
+                    let (s, c) = (walls.sin[j], walls.cos[j]);
+                    let w = s * c * c / self.r(j, k).min(self.r(j - 1, k));
+                    let lp = self.l(j - 1, k);
+                    for ch in 0..3 {
+                        su[ch] += w * (l[ch] - lp[ch]);
+                    }
+                }
+                let w = (walls.sin[j + 1] - walls.sin[j]) / self.r(j, k).min(self.r(j, km));
+                let lm = self.l(j, km);
+                for ch in 0..3 {
+                    sv[ch] += w * (l[ch] - lm[ch]);
+                }
+            }
+            for ch in 0..3 {
+                g[ch][0] += u[0] * dphi * su[ch] + v[0] * sv[ch];
+                g[ch][1] += u[1] * dphi * su[ch] + v[1] * sv[ch];
+            }
+        }
+        g.map(|gc| Vec3::new(gc[0] as f32, gc[1] as f32, 0.0))
+    }
+}
+
+/// Angles of the polar cell boundaries: sin²θ_j = j/M for j = 0..=M.
+struct PolarWalls {
+    theta: Vec<f64>,
+    sin: Vec<f64>,
+    cos: Vec<f64>,
+}
+
+impl PolarWalls {
+    fn new(m: usize) -> PolarWalls {
+        let sin: Vec<f64> = (0..=m).map(|j| (j as f64 / m as f64).sqrt()).collect();
+        let cos: Vec<f64> = (0..=m)
+            .map(|j| (1.0 - j as f64 / m as f64).max(0.0).sqrt())
+            .collect();
+        let theta = sin.iter().zip(&cos).map(|(s, c)| s.atan2(*c)).collect();
+        PolarWalls { theta, sin, cos }
+    }
+}
+
+/// A local-frame gradient expressed in world space with tangents `s` and `t`.
+#[must_use]
+pub fn to_world(g: &LocalGradient, s: Vec3, t: Vec3) -> [Vec3; 3] {
+    g.map(|v| s * v.x + t * v.y)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ircache_math::Rng;
+
+    fn random_samples(strata: Stratification, seed: u64) -> HemisphereSamples {
+        let mut rng = Rng::keyed(seed, &[]);
+        let mut h = HemisphereSamples::new(strata);
+        for i in 0..strata.cells() {
+            h.radiance[i] = Rgb::new(rng.next_f32(), 2.0 * rng.next_f32(), 0.5 * rng.next_f32());
+            h.distance[i] = if rng.next_f32() < 0.1 {
+                f32::INFINITY
+            } else {
+                0.01 + 10.0 * rng.next_f32()
+            };
+        }
+        h
+    }
+
+    #[test]
+    fn divisions_give_azimuthal_about_pi_times_polar() {
+        let s = Stratification::from_divisions(1024);
+        assert_eq!((s.polar, s.azimuthal), (18, 57));
+        let s = Stratification::from_divisions(512);
+        assert!((s.azimuthal as f64 / s.polar as f64 - PI).abs() < 0.5);
+    }
+
+    #[test]
+    fn krivanek_equals_ward_heckbert() {
+        // 000 §3.6.3: eqs. 3.47 and 3.48 are analytically equal.
+        for (d, seed) in [(64, 1), (512, 2), (1024, 3), (4096, 4)] {
+            let h = random_samples(Stratification::from_divisions(d), seed);
+            let a = h.translational_gradient_krivanek();
+            let b = h.translational_gradient_ward_heckbert();
+            for c in 0..3 {
+                let scale = a[c].length().max(b[c].length());
+                assert!(scale > 0.0);
+                assert!(
+                    (a[c] - b[c]).length() <= 1e-6 * scale,
+                    "{d} divisions, channel {c}: {} vs {}",
+                    a[c],
+                    b[c]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn uniform_radiance_has_no_gradient() {
+        let strata = Stratification::from_divisions(512);
+        let mut h = HemisphereSamples::new(strata);
+        h.radiance.fill(Rgb::splat(2.0));
+        h.distance.fill(3.0);
+        let e = h.irradiance();
+        assert!((e.r - 2.0 * std::f32::consts::PI).abs() < 1e-5);
+        assert!((h.harmonic_mean_distance() - 3.0).abs() < 1e-5);
+        for g in h
+            .rotational_gradient()
+            .iter()
+            .chain(&h.translational_gradient_krivanek())
+        {
+            assert!(g.length() < 1e-5, "{g}");
+        }
+    }
+}

@@ -1,0 +1,147 @@
+//! Parameters of the irradiance cache, named for users, with Radiance's names accepted too
+//! (`-aa`, `-ad`, `-ar`, `-ab`, `-av`).
+
+use super::record::GradientMode;
+use ircache_math::Rgb;
+
+/// Which translational-gradient formula records use (they are equal, 000 §3.6.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum TranslationalFormula {
+    /// Ward and Heckbert's projected-boundary form (000 eq. 3.48).
+    #[default]
+    WardHeckbert,
+    /// Křivánek et al.'s unprojected form, corrected (000 eq. 3.47).
+    Krivanek,
+}
+
+/// Irradiance cache settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IcParams {
+    /// Accuracy `a` (`-aa`): a record serves where its split-sphere error ε ≤ a.
+    pub accuracy: f32,
+    /// Hemisphere divisions per record (`-ad`), split as polar × azimuthal ≈ π × polar.
+    pub divisions: usize,
+    /// Resolution (`-ar`): the smallest record radius is the scene size / resolution (the
+    /// smallest spacing that times `a`), the largest 64× that; 0 means no minimum.
+    pub resolution: f32,
+    /// Indirect bounces (`-ab`): one cache per bounce level; equals path tracing with
+    /// `max_depth` = bounces + 2.
+    pub bounces: u32,
+    /// Radiance assumed beyond the last bounce (`-av`).
+    pub ambient_value: Rgb,
+    /// Gradients used in interpolation.
+    pub gradients: GradientMode,
+    /// Translational gradient formula.
+    pub formula: TranslationalFormula,
+}
+
+impl Default for IcParams {
+    fn default() -> Self {
+        IcParams {
+            accuracy: 0.15,
+            divisions: 1024,
+            resolution: 256.0,
+            bounces: 1,
+            ambient_value: Rgb::ZERO,
+            gradients: GradientMode::Full,
+            formula: TranslationalFormula::WardHeckbert,
+        }
+    }
+}
+
+impl IcParams {
+    /// Sets a parameter by its user name or Radiance name; `value` is the text given.
+    pub fn set(&mut self, name: &str, value: &str) -> Result<(), String> {
+        let float = |v: &str| -> Result<f32, String> {
+            v.trim()
+                .parse::<f32>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| format!("{name}: expected a number, found \"{v}\""))
+        };
+        match name {
+            "accuracy" | "aa" => {
+                let a = float(value)?;
+                if !(a > 0.0 && a <= 2.0) {
+                    return Err(format!("{name}: expected 0 < accuracy ≤ 2, found {a}"));
+                }
+                self.accuracy = a;
+            }
+            "divisions" | "ad" => {
+                let d = value.trim().parse::<usize>().map_err(|_| {
+                    format!("{name}: expected a whole number of divisions, found \"{value}\"")
+                })?;
+                if !(4..=1_000_000).contains(&d) {
+                    return Err(format!(
+                        "{name}: expected 4 to 1000000 divisions, found {d}"
+                    ));
+                }
+                self.divisions = d;
+            }
+            "resolution" | "ar" => {
+                let r = float(value)?;
+                if r < 0.0 {
+                    return Err(format!("{name}: expected a resolution ≥ 0, found {r}"));
+                }
+                self.resolution = r;
+            }
+            "bounces" | "ab" => {
+                self.bounces = value
+                    .trim()
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|b| *b <= 64)
+                    .ok_or_else(|| {
+                        format!("{name}: expected 0 to 64 bounces, found \"{value}\"")
+                    })?;
+            }
+            "ambient_value" | "ambient-value" | "av" => {
+                let parts: Vec<&str> = value
+                    .split(|c: char| c == ',' || c.is_whitespace())
+                    .filter(|t| !t.is_empty())
+                    .collect();
+                let v = match parts[..] {
+                    [x] => Rgb::splat(float(x)?),
+                    [r, g, b] => Rgb::new(float(r)?, float(g)?, float(b)?),
+                    _ => {
+                        return Err(format!(
+                            "{name}: expected one value or three (r g b), found \"{value}\""
+                        ))
+                    }
+                };
+                if !v.is_valid_radiance() {
+                    return Err(format!(
+                        "{name}: expected a radiance ≥ 0, found \"{value}\""
+                    ));
+                }
+                self.ambient_value = v;
+            }
+            "gradients" => self.gradients = GradientMode::parse(value.trim())?,
+            "gradient_formula" | "gradient-formula" => {
+                self.formula = match value.trim() {
+                    "ward-heckbert" | "3.48" => TranslationalFormula::WardHeckbert,
+                    "krivanek" | "3.47" => TranslationalFormula::Krivanek,
+                    v => {
+                        return Err(format!(
+                            "{name}: expected ward-heckbert or krivanek, found \"{v}\""
+                        ))
+                    }
+                }
+            }
+            _ => return Err(format!("unknown irradiance cache parameter \"{name}\"")),
+        }
+        Ok(())
+    }
+
+    /// The smallest and largest record radius R for a scene of size `scene_size` (Radiance's
+    /// octree cube size): R_min = size / resolution, R_max = 64 R_min (003 items 3–4).
+    #[must_use]
+    pub fn radius_limits(&self, scene_size: f32) -> (f32, f32) {
+        if self.resolution > 0.0 {
+            let r_min = scene_size / self.resolution;
+            (r_min, 64.0 * r_min)
+        } else {
+            (0.0, scene_size * 0.5)
+        }
+    }
+}

@@ -1,0 +1,197 @@
+//! Irradiance at given points and normals (what Radiance users run `rtrace -I` for): by the
+//! cache (records placed coarse to fine over the points, then interpolated) or by brute force
+//! (one stratified gather of many samples per point, deeper bounces path-traced), with the
+//! indirect part's gradients either way.
+
+use super::build::{fill_for_points, CacheStats};
+use super::gather::{mix, Deeper, Gatherer, IrradianceCache, ShadingPoint, WorkState};
+use super::hemisphere::{to_world, Stratification};
+use super::params::{IcParams, TranslationalFormula};
+use super::record::{split_sphere_error, weight};
+use crate::scene::{Interaction, Scene};
+use ircache_math::{Frame, Rgb, Rng, Vec2, Vec3};
+use rayon::prelude::*;
+
+/// How irradiance at points is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PointMethod {
+    /// Records and interpolation.
+    Cache,
+    /// One gather of `samples` stratified rays per point.
+    BruteForce {
+        /// Hemisphere samples per point.
+        samples: usize,
+    },
+}
+
+/// Irradiance at one point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointIrradiance {
+    /// Direct irradiance from the light sources (zero when only the indirect part was asked).
+    pub direct: Rgb,
+    /// Indirect irradiance (what the cache holds).
+    pub indirect: Rgb,
+    /// World-space translational gradient of the indirect part, per channel.
+    pub grad_t: [Vec3; 3],
+    /// World-space rotational gradient of the indirect part, per channel.
+    pub grad_r: [Vec3; 3],
+}
+
+/// A query point as a surface interaction that rays can leave from.
+#[must_use]
+pub fn query_point(p: Vec3, n: Vec3) -> ShadingPoint {
+    let n = n.normalize();
+    ShadingPoint {
+        it: Interaction {
+            p,
+            ng: n,
+            frame: Frame::from_z(n),
+            uv: Vec2::ZERO,
+            shape: u32::MAX,
+            prim: 0,
+            t: 0.0,
+        },
+        n,
+    }
+}
+
+/// Direct irradiance at `sp` from `samples` light samples.
+fn direct_irradiance(scene: &Scene, sp: &ShadingPoint, samples: u32, rng: &mut Rng) -> Rgb {
+    let mut e = Rgb::ZERO;
+    for _ in 0..samples {
+        let (u_sel, u) = (rng.next_f32(), rng.next_2d());
+        let Some(ls) = scene.lights.sample(sp.it.p, u_sel, u) else {
+            continue;
+        };
+        let cos = sp.n.dot(ls.wi);
+        if cos <= 0.0 || ls.pdf <= 0.0 {
+            continue;
+        }
+        if !scene
+            .accel
+            .occluded(&scene.shadow_ray(&sp.it, ls.wi, ls.distance))
+        {
+            e += ls.radiance * (cos / ls.pdf);
+        }
+    }
+    e / samples.max(1) as f32
+}
+
+/// Irradiance at each `(p, n)`; `direct_samples` = 0 leaves the direct part out.
+pub fn irradiance_at_points(
+    scene: &Scene,
+    params: &IcParams,
+    queries: &[(Vec3, Vec3)],
+    method: PointMethod,
+    direct_samples: u32,
+    seed: u64,
+) -> (Vec<PointIrradiance>, Option<CacheStats>) {
+    let points: Vec<ShadingPoint> = queries.iter().map(|&(p, n)| query_point(p, n)).collect();
+    let mut cache = IrradianceCache::new(scene, params);
+    let stats = match method {
+        PointMethod::Cache if params.bounces > 0 => {
+            Some(fill_for_points(scene, &mut cache, &points, seed))
+        }
+        _ => None,
+    };
+    let results = points
+        .par_iter()
+        .enumerate()
+        .map(|(i, sp)| {
+            let mut rng = Rng::keyed(seed, &[0x6469_7265_6374, i as u64]);
+            let direct = if direct_samples > 0 {
+                direct_irradiance(scene, sp, direct_samples, &mut rng)
+            } else {
+                Rgb::ZERO
+            };
+            let (indirect, grad_t, grad_r) = if params.bounces == 0 {
+                (
+                    params.ambient_value * std::f32::consts::PI,
+                    [Vec3::ZERO; 3],
+                    [Vec3::ZERO; 3],
+                )
+            } else {
+                match method {
+                    PointMethod::Cache => interpolate_with_gradients(&cache, sp),
+                    PointMethod::BruteForce { samples } => {
+                        brute_force(scene, &cache, sp, samples, mix(seed, i as u64))
+                    }
+                }
+            };
+            PointIrradiance {
+                direct,
+                indirect,
+                grad_t,
+                grad_r,
+            }
+        })
+        .collect();
+    (results, stats)
+}
+
+/// Weighted mean of the records' extrapolated values and of their gradients.
+fn interpolate_with_gradients(
+    cache: &IrradianceCache,
+    sp: &ShadingPoint,
+) -> (Rgb, [Vec3; 3], [Vec3; 3]) {
+    let store = &cache.levels[0];
+    let a = cache.params.accuracy;
+    for max_error in [a, 2.0 * a, f32::INFINITY] {
+        let (mut e, mut gt, mut gr, mut wsum) =
+            (Rgb::ZERO, [Vec3::ZERO; 3], [Vec3::ZERO; 3], 0.0f32);
+        let mut visit = |id: u32| {
+            let rec = &store.records()[id as usize];
+            if let Some(err) = split_sphere_error(rec, sp.it.p, sp.n) {
+                if err <= max_error {
+                    let w = weight(err, a);
+                    e += super::record::extrapolate(rec, sp.it.p, sp.n, cache.params.gradients) * w;
+                    for c in 0..3 {
+                        gt[c] += rec.grad_t[c] * w;
+                        gr[c] += rec.grad_r[c] * w;
+                    }
+                    wsum += w;
+                }
+            }
+        };
+        if max_error.is_finite() {
+            store.for_each_near(sp.it.p, &mut visit);
+        } else {
+            (0..store.len() as u32).for_each(&mut visit);
+        }
+        if wsum > 0.0 {
+            return (
+                (e / wsum).max(Rgb::ZERO),
+                gt.map(|g| g / wsum),
+                gr.map(|g| g / wsum),
+            );
+        }
+    }
+    (Rgb::ZERO, [Vec3::ZERO; 3], [Vec3::ZERO; 3])
+}
+
+/// One gather of `samples` rays, deeper bounces path-traced.
+fn brute_force(
+    scene: &Scene,
+    cache: &IrradianceCache,
+    sp: &ShadingPoint,
+    samples: usize,
+    key: u64,
+) -> (Rgb, [Vec3; 3], [Vec3; 3]) {
+    let g = Gatherer {
+        scene,
+        cache,
+        seed: key,
+        deeper: Deeper::PathTraced,
+    };
+    let mut st = WorkState::new(cache.levels.len());
+    let (h, frame) = g.gather(&mut st, sp, Stratification::from_divisions(samples), 0, key);
+    let gt = match cache.params.formula {
+        TranslationalFormula::WardHeckbert => h.translational_gradient_ward_heckbert(),
+        TranslationalFormula::Krivanek => h.translational_gradient_krivanek(),
+    };
+    (
+        h.irradiance(),
+        to_world(&gt, frame.s, frame.t),
+        to_world(&h.rotational_gradient(), frame.s, frame.t),
+    )
+}
