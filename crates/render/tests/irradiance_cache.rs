@@ -1,0 +1,376 @@
+//! The irradiance cache against analytic results: an ambient-value furnace (every record density
+//! returns the exact irradiance), gradients against central finite differences of the exact
+//! irradiance in a box with an opening and a black occluder near the query point (Lambert's
+//! polygon form factor gives it in closed form), records against the exact value at their
+//! positions, record count against accuracy, determinism and finiteness.
+
+mod common;
+use common::*;
+use ircache_math::{Rgb, Vec3};
+use ircache_render::integrators::Integrator;
+use ircache_render::irradiance_cache::points::{irradiance_at_points, PointMethod};
+use ircache_render::irradiance_cache::IcParams;
+use ircache_render::scene::Scene;
+use ircache_scene::*;
+use std::f32::consts::PI;
+
+/// A quad from four corners in order, as two triangles, two-sided diffuse of albedo `rho`.
+fn quad(c: [Vec3; 4], rho: f32) -> ShapeDesc {
+    ShapeDesc {
+        id: None,
+        geometry: Geometry::Mesh(TriangleMesh {
+            positions: c.to_vec(),
+            normals: None,
+            uvs: None,
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+        }),
+        bsdf: std::sync::Arc::new(BsdfDesc::TwoSided {
+            front: diffuse(Rgb::splat(rho)),
+            back: None,
+        }),
+        emitter: None,
+        location: here(),
+    }
+}
+
+fn v(x: f32, y: f32, z: f32) -> Vec3 {
+    Vec3::new(x, y, z)
+}
+
+/// Hole in the ceiling (z = 1) of the unit box, and the black occluder, as polygons.
+const HOLE: [[f32; 2]; 2] = [[0.55, 0.75], [0.4, 0.6]];
+const OCCLUDER: [[f32; 2]; 2] = [[0.05, 0.2], [0.4, 0.6]];
+const OCCLUDER_Z: f32 = 0.2;
+
+fn rect_z(xr: [f32; 2], yr: [f32; 2], z: f32) -> [Vec3; 4] {
+    [
+        v(xr[0], yr[0], z),
+        v(xr[1], yr[0], z),
+        v(xr[1], yr[1], z),
+        v(xr[0], yr[1], z),
+    ]
+}
+
+/// The unit box (walls of albedo `rho`), with the hole and occluder when `open`, scaled by
+/// `scale` (the cache must not care about units).
+fn box_scene(rho: f32, open: bool, scale: f32, ic: IntegratorDesc, size: u32) -> SceneDesc {
+    let mut shapes = vec![
+        quad(rect_z([0.0, 1.0], [0.0, 1.0], 0.0), rho),
+        quad(
+            [v(0., 0., 0.), v(1., 0., 0.), v(1., 0., 1.), v(0., 0., 1.)],
+            rho,
+        ),
+        quad(
+            [v(0., 1., 0.), v(1., 1., 0.), v(1., 1., 1.), v(0., 1., 1.)],
+            rho,
+        ),
+        quad(
+            [v(0., 0., 0.), v(0., 1., 0.), v(0., 1., 1.), v(0., 0., 1.)],
+            rho,
+        ),
+        quad(
+            [v(1., 0., 0.), v(1., 1., 0.), v(1., 1., 1.), v(1., 0., 1.)],
+            rho,
+        ),
+    ];
+    if open {
+        let [xr, yr] = HOLE;
+        // Ceiling around the hole, in four pieces.
+        shapes.push(quad(rect_z([0.0, xr[0]], [0.0, 1.0], 1.0), rho));
+        shapes.push(quad(rect_z([xr[1], 1.0], [0.0, 1.0], 1.0), rho));
+        shapes.push(quad(rect_z(xr, [0.0, yr[0]], 1.0), rho));
+        shapes.push(quad(rect_z(xr, [yr[1], 1.0], 1.0), rho));
+        let [ox, oy] = OCCLUDER;
+        shapes.push(quad(rect_z(ox, oy, OCCLUDER_Z), 0.0));
+    } else {
+        shapes.push(quad(rect_z([0.0, 1.0], [0.0, 1.0], 1.0), rho));
+    }
+    for s in &mut shapes {
+        if let Geometry::Mesh(m) = &mut s.geometry {
+            for p in &mut m.positions {
+                *p *= scale;
+            }
+        }
+    }
+    scene(
+        sensor(
+            v(0.5, 0.05, 0.5) * scale,
+            v(0.5, 0.9, 0.3) * scale,
+            80.0,
+            size,
+            1,
+        ),
+        ic,
+        shapes,
+        vec![],
+    )
+}
+
+fn ic_desc(params: &[(&str, &str)]) -> IntegratorDesc {
+    IntegratorDesc {
+        kind: "ic".into(),
+        max_depth: -1,
+        extra: params
+            .iter()
+            .map(|(k, v)| (k.to_string(), ParamValue::String(v.to_string()), here()))
+            .collect(),
+        ..IntegratorDesc::default()
+    }
+}
+
+/// Lambert's form factor from a differential area at `x` with normal `n` to a polygon above
+/// its tangent plane: (1/2π) |Σ_i β_i n·Γ_i|.
+fn form_factor(x: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
+    let mut s = 0.0f64;
+    for i in 0..poly.len() {
+        let a = (poly[i] - x).normalize().as_dvec3();
+        let b = (poly[(i + 1) % poly.len()] - x).normalize().as_dvec3();
+        let beta = a.dot(b).clamp(-1.0, 1.0).acos();
+        s += beta * n.as_dvec3().dot(a.cross(b).normalize());
+    }
+    (s.abs() / (2.0 * std::f64::consts::PI)) as f32
+}
+
+/// Exact indirect irradiance on the open box's floor (walls radiate ρ·av = 1, hole and occluder
+/// nothing).
+fn exact(x: Vec3, n: Vec3) -> f32 {
+    let [hx, hy] = HOLE;
+    let [ox, oy] = OCCLUDER;
+    PI * (1.0
+        - form_factor(x, n, &rect_z(hx, hy, 1.0))
+        - form_factor(x, n, &rect_z(ox, oy, OCCLUDER_Z)))
+}
+
+fn params(list: &[(&str, &str)]) -> IcParams {
+    let mut p = IcParams::default();
+    for (k, val) in list {
+        p.set(k, val).unwrap();
+    }
+    p
+}
+
+#[test]
+fn furnace_any_record_density_is_exact() {
+    // Closed box of albedo ρ lit only by the ambient value: every gather sample sees ρ·av, so
+    // E = π ρ av at level 0 for one bounce and π ρ² av for two, at any accuracy.
+    let rho = 0.7;
+    let desc = box_scene(rho, false, 3.0, ic_desc(&[]), 8);
+    let scene = Scene::build(&desc).unwrap();
+    let queries: Vec<(Vec3, Vec3)> = (0..200)
+        .map(|i| {
+            let t = i as f32 / 200.0;
+            (
+                v(0.1 + 0.8 * t, 0.5 + 0.3 * (7.0 * t).sin(), 0.0) * 3.0,
+                Vec3::Z,
+            )
+        })
+        .collect();
+    for bounces in ["1", "2"] {
+        for a in ["0.05", "0.2", "0.6", "1.5"] {
+            let p = params(&[
+                ("accuracy", a),
+                ("bounces", bounces),
+                ("ambient_value", "0.25"),
+                ("divisions", "64"),
+            ]);
+            let (res, stats) = irradiance_at_points(&scene, &p, &queries, PointMethod::Cache, 0, 1);
+            let expect = PI * 0.25 * rho.powi(bounces.parse().unwrap());
+            assert!(stats.unwrap().records() > 0);
+            for r in &res {
+                for c in 0..3 {
+                    assert!(
+                        (r.indirect[c] - expect).abs() <= 1e-5 * expect,
+                        "a {a}, bounces {bounces}: {} vs {expect}",
+                        r.indirect[c]
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn furnace_render_is_exact() {
+    // The rendered closed box: ρ/π · E = ρ² av at every pixel, whatever the scale.
+    let rho = 0.6;
+    for scale in [1e-3, 1.0, 1e3] {
+        let desc = box_scene(
+            rho,
+            false,
+            scale,
+            ic_desc(&[
+                ("ambient_value", "0.5"),
+                ("bounces", "1"),
+                ("divisions", "64"),
+            ]),
+            24,
+        );
+        let out = render_desc(&desc, 2, 3);
+        let expect = rho * rho * 0.5;
+        for p in &out.image.pixels {
+            assert!(
+                (p.g - expect).abs() <= 1e-5 * expect,
+                "scale {scale}: {p:?}"
+            );
+        }
+        assert!(out.cache.unwrap().stats.records() > 0);
+    }
+}
+
+/// Mean of `n` brute-force gathers (gradients of the indirect part) at (x, n).
+fn mean_gradients(scene: &Scene, x: Vec3, n: Vec3, seeds: u64) -> (f32, Vec3, Vec3) {
+    let p = params(&[("ambient_value", "1"), ("bounces", "1")]);
+    let (mut e, mut gt, mut gr) = (0.0, Vec3::ZERO, Vec3::ZERO);
+    for seed in 0..seeds {
+        let (r, _) = irradiance_at_points(
+            scene,
+            &p,
+            &[(x, n)],
+            PointMethod::BruteForce { samples: 65536 },
+            0,
+            seed,
+        );
+        e += r[0].indirect.g;
+        gt += r[0].grad_t[1];
+        gr += r[0].grad_r[1];
+    }
+    let k = seeds as f32;
+    (e / k, gt / k, gr / k)
+}
+
+#[test]
+fn gradients_match_finite_differences_with_occluders() {
+    let desc = box_scene(1.0, true, 1.0, ic_desc(&[]), 8);
+    let scene = Scene::build(&desc).unwrap();
+    for x in [v(0.3, 0.5, 0.0), v(0.35, 0.35, 0.0), v(0.6, 0.3, 0.0)] {
+        let n = Vec3::Z;
+        let (e, gt, gr) = mean_gradients(&scene, x, n, 8);
+        // The gather converges to the closed form.
+        let e_exact = exact(x, n);
+        assert!((e - e_exact).abs() < 0.005 * e_exact, "E {e} vs {e_exact}");
+        // Translational: central differences of the exact irradiance along x and y.
+        let h = 1e-3;
+        let fd_t = v(
+            (exact(x + v(h, 0., 0.), n) - exact(x - v(h, 0., 0.), n)) / (2.0 * h),
+            (exact(x + v(0., h, 0.), n) - exact(x - v(0., h, 0.), n)) / (2.0 * h),
+            0.0,
+        );
+        assert!(
+            (gt - fd_t).length() <= 0.05 * fd_t.length(),
+            "translational gradient at {x}: {gt} vs finite differences {fd_t}"
+        );
+        // Rotational: turn the normal about x and y; (n_i × n)·∇_r E = δ a·∇_r E.
+        let d = 1e-3f32;
+        let rot = |axis: Vec3, ang: f32| -> Vec3 { (n + axis.cross(n) * ang.tan()).normalize() };
+        let fd_r = v(
+            (exact(x, rot(Vec3::X, d)) - exact(x, rot(Vec3::X, -d))) / (2.0 * d),
+            (exact(x, rot(Vec3::Y, d)) - exact(x, rot(Vec3::Y, -d))) / (2.0 * d),
+            0.0,
+        );
+        assert!(
+            (gr - fd_r).length() <= 0.05 * fd_r.length(),
+            "rotational gradient at {x}: {gr} vs finite differences {fd_r}"
+        );
+    }
+}
+
+#[test]
+fn records_match_the_exact_irradiance_at_their_positions() {
+    let desc = box_scene(
+        1.0,
+        true,
+        1.0,
+        ic_desc(&[
+            ("ambient_value", "1"),
+            ("bounces", "1"),
+            ("accuracy", "0.2"),
+        ]),
+        48,
+    );
+    let scene = Scene::build(&desc).unwrap();
+    let integrator = Integrator::from_desc(&desc.integrator).unwrap();
+    let out = ircache_render::render::render(
+        &scene,
+        &integrator,
+        &ircache_render::render::RenderSettings {
+            width: 48,
+            height: 48,
+            spp: 1,
+            seed: 5,
+            threads: 2,
+            filter: ircache_render::film::Filter::Box,
+        },
+        &|_| {},
+    )
+    .unwrap();
+    let cache = out.cache.unwrap().cache;
+    let mut checked = 0;
+    for rec in cache.levels[0].records() {
+        // Floor records (the exact form holds there).
+        if rec.p.z.abs() < 1e-4 && rec.n.z > 0.999 {
+            let e = exact(rec.p, rec.n);
+            assert!(
+                (rec.e.g - e).abs() < 0.03 * e,
+                "record at {}: {} vs exact {e}",
+                rec.p,
+                rec.e.g
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 10, "only {checked} floor records");
+}
+
+#[test]
+fn records_grow_as_accuracy_falls() {
+    let count = |a: &str| {
+        let desc = box_scene(
+            0.8,
+            true,
+            1.0,
+            ic_desc(&[
+                ("ambient_value", "1"),
+                ("accuracy", a),
+                ("divisions", "128"),
+                ("resolution", "32"),
+            ]),
+            96,
+        );
+        render_desc(&desc, 2, 1).cache.unwrap().stats.records() as f64
+    };
+    let (n4, n2, n1) = (count("0.4"), count("0.2"), count("0.1"));
+    // Roughly 1/a²: about 4× per halving of a.
+    for (hi, lo) in [(n2, n4), (n1, n2)] {
+        let ratio = hi / lo;
+        assert!((2.5..6.5).contains(&ratio), "{n4} {n2} {n1}: ratio {ratio}");
+    }
+}
+
+#[test]
+fn cache_render_is_deterministic_and_finite() {
+    let desc = box_scene(
+        0.8,
+        true,
+        1.0,
+        ic_desc(&[
+            ("ambient_value", "1"),
+            ("bounces", "2"),
+            ("divisions", "64"),
+        ]),
+        40,
+    );
+    let a = render_desc(&desc, 2, 9);
+    let b = render_desc(&desc, 2, 9);
+    let c = render_desc(&desc, 1, 9);
+    assert_eq!(a.image.pixels, b.image.pixels);
+    assert_eq!(
+        a.image.pixels, c.image.pixels,
+        "thread count changed the image"
+    );
+    assert!(a.image.pixels.iter().all(|p| p.is_valid_radiance()));
+    let d = render_desc(&desc, 2, 10);
+    assert_ne!(a.image.pixels, d.image.pixels, "the seed changed nothing");
+    let st = a.cache.unwrap().stats;
+    assert_eq!(st.records_per_level.len(), 2);
+    assert!(st.records_per_level[1] > 0);
+}
