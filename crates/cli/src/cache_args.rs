@@ -28,6 +28,9 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub ambient_value: Option<String>,
+    /// Light samples per pixel sample for the direct term.
+    #[arg(long = "direct-samples", help_heading = "Irradiance cache")]
+    pub direct_samples: Option<String>,
     /// Gradients used in interpolation: none, rotation, full.
     #[arg(long, help_heading = "Irradiance cache")]
     pub gradients: Option<String>,
@@ -45,6 +48,7 @@ impl CacheArgs {
             ("bounces", &self.bounces),
             ("ambient_value", &self.ambient_value),
             ("gradients", &self.gradients),
+            ("direct_samples", &self.direct_samples),
             ("gradient_formula", &self.gradient_formula),
         ]
         .into_iter()

@@ -159,6 +159,7 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         ambient_value: args.ambient_value.clone(),
         gradients: args.gradient_mode.clone(),
         gradient_formula: None,
+        direct_samples: None,
     };
     cache_args.apply(&mut params)?;
     let pool = rayon::ThreadPoolBuilder::new()

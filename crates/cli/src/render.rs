@@ -301,13 +301,13 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
     if let Some(c) = &out.cache {
         let st = &c.stats;
         eprintln!(
-            "irradiance cache: {} records (per bounce level: {:?}), {} computed, {} dropped as \
-             duplicates within a batch, {:.1} M gather rays; pre-pass {:.2} s, pixel pass {:.2} s; \
+            "irradiance cache: {} records (per bounce level: {:?}), {} computed ({} overlapping another of their batch), \
+             {:.1} M gather rays; pre-pass {:.2} s, pixel pass {:.2} s; \
              {} samples outside every record",
             st.records(),
             st.records_per_level,
             st.records_computed,
-            st.records_dropped,
+            st.records_overlapping,
             st.gather_rays as f64 * 1e-6,
             st.gather_seconds,
             c.pixel_seconds,
@@ -356,7 +356,7 @@ fn write_stats(
             "records": st.records(),
             "records_per_level": st.records_per_level,
             "records_computed": st.records_computed,
-            "records_dropped": st.records_dropped,
+            "records_overlapping": st.records_overlapping,
             "gather_rays": out.rays.gather,
             "prepass_gather_rays": st.gather_rays,
             "gather_seconds": st.gather_seconds,

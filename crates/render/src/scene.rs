@@ -50,6 +50,9 @@ pub struct Shape {
     pub material: usize,
     /// Its area light in [`Scene::lights`], if it emits.
     pub area_light: Option<u32>,
+    /// A flat-shaded mesh whose material has no image texture and ignores tangents: its
+    /// interactions need no vertex data (position from the ray, normal from Embree).
+    pub flat: bool,
 }
 
 /// A ray–surface intersection.
@@ -136,11 +139,16 @@ impl Scene {
                     }
                 }
             };
-            materials.push(Material::from_desc(&s.bsdf));
+            let material = Material::from_desc(&s.bsdf);
+            let flat = matches!(&geometry, ShapeGeometry::Mesh(m) if m.normals.is_none())
+                && material.is_tangent_free()
+                && !material.is_textured();
+            materials.push(material);
             shapes.push(Shape {
                 geometry,
                 material: i,
                 area_light: None,
+                flat,
             });
         }
         let accel = builder.build()?;
@@ -183,6 +191,19 @@ impl Scene {
     pub fn interaction(&self, ray: &Ray, hit: &ircache_embree::Hit) -> Interaction {
         let shape = &self.shapes[hit.geom_id as usize];
         match &shape.geometry {
+            ShapeGeometry::Mesh(_) if shape.flat => {
+                // Embree's Ng is (p1 − p0) × (p2 − p0), the same winding as below.
+                let ng = hit.ng.normalize_or(Vec3::Z);
+                Interaction {
+                    p: ray.at(hit.t),
+                    ng,
+                    frame: Frame::from_z(ng),
+                    uv: Vec2::new(hit.u, hit.v),
+                    shape: hit.geom_id,
+                    prim: hit.prim_id,
+                    t: hit.t,
+                }
+            }
             ShapeGeometry::Mesh(m) => {
                 let [i0, i1, i2] = m.indices[hit.prim_id as usize].map(|i| i as usize);
                 let (b1, b2) = (hit.u, hit.v);

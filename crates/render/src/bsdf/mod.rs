@@ -477,6 +477,36 @@ impl Material {
         }
     }
 
+    /// True when every model of the material is isotropic about the normal, so the shading
+    /// frame's tangent does not matter.
+    #[must_use]
+    pub fn is_tangent_free(&self) -> bool {
+        let free = |c: &Compiled| {
+            matches!(
+                c,
+                Compiled::Diffuse { .. }
+                    | Compiled::Plastic { .. }
+                    | Compiled::RoughPlastic { .. }
+                    | Compiled::Phong { .. }
+            )
+        };
+        free(&self.front) && self.back.as_ref().is_none_or(free)
+    }
+
+    /// True when some model of the material reads an image texture (it needs texture
+    /// coordinates).
+    #[must_use]
+    pub fn is_textured(&self) -> bool {
+        let textured = |c: &Compiled| match c {
+            Compiled::Diffuse { reflectance: t }
+            | Compiled::Plastic { diffuse: t, .. }
+            | Compiled::RoughPlastic { diffuse: t, .. }
+            | Compiled::Phong { diffuse: t, .. } => !matches!(t, Texture::Constant(_)),
+            Compiled::Fixed(_) => false,
+        };
+        textured(&self.front) || self.back.as_ref().is_some_and(textured)
+    }
+
     /// True for Mitsuba's `twosided` wrapper.
     #[must_use]
     pub fn is_two_sided(&self) -> bool {

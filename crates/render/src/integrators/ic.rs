@@ -10,6 +10,7 @@
 
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::gather::{mix, Deeper, Gatherer, ShadingPoint, WorkState};
+use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::{IcParams, IrradianceCache};
 use crate::scene::Scene;
 use ircache_embree::Hit;
@@ -123,8 +124,10 @@ impl IcIntegrator {
         l
     }
 
-    /// Direct light at a smooth surface: one light sample, plus one BSDF sample where the BSDF
-    /// is not purely Lambertian, combined by the power heuristic.
+    /// Direct light at a smooth surface: `direct_samples` light samples (jittered over a grid
+    /// when their number is a square), plus one BSDF sample where the BSDF is not purely
+    /// Lambertian, combined by the power heuristic with the sample counts (Veach's balance of
+    /// `ne` and `nb` samples).
     fn direct(
         &self,
         scene: &Scene,
@@ -136,24 +139,43 @@ impl IcIntegrator {
     ) -> Rgb {
         let mut l = Rgb::ZERO;
         let use_bsdf = !bsdf.is_diffuse_only();
-        let (u_sel, u) = (rng.next_f32(), rng.next_2d());
-        if let Some(ls) = scene.lights.sample(it.p, u_sel, u) {
+        // With one delta light every sample is the same: one is enough.
+        let ne = if scene.lights.all_delta() && scene.lights.len() == 1 {
+            1
+        } else {
+            self.params.direct_samples.max(1)
+        };
+        let side = (ne as f32).sqrt() as u32;
+        let grid = side * side == ne;
+        let (fe, fb) = (ne as f32, 1.0f32);
+        for i in 0..ne {
+            let u_sel = rng.next_f32();
+            let mut u = rng.next_2d();
+            if grid && ne > 1 {
+                u = (ircache_math::Vec2::new((i % side) as f32, (i / side) as f32) + u)
+                    / side as f32;
+            }
+            let Some(ls) = scene.lights.sample(it.p, u_sel, u) else {
+                continue;
+            };
             let wi_local = it.frame.to_local(ls.wi);
             let f = bsdf.eval(wo_local, wi_local);
-            if !f.is_black() && ls.pdf > 0.0 {
-                rays.shadow += 1;
-                if !scene
-                    .accel
-                    .occluded(&scene.shadow_ray(it, ls.wi, ls.distance))
-                {
-                    let w = if ls.is_delta || !use_bsdf {
-                        1.0
-                    } else {
-                        mis_weight(ls.pdf, bsdf.pdf(wo_local, wi_local))
-                    };
-                    l += f * ls.radiance * (w / ls.pdf);
-                }
+            if f.is_black() || ls.pdf <= 0.0 {
+                continue;
             }
+            rays.shadow += 1;
+            if scene
+                .accel
+                .occluded(&scene.shadow_ray(it, ls.wi, ls.distance))
+            {
+                continue;
+            }
+            let w = if ls.is_delta || !use_bsdf {
+                1.0
+            } else {
+                mis_weight(fe * ls.pdf, fb * bsdf.pdf(wo_local, wi_local))
+            };
+            l += f * ls.radiance * (w / (fe * ls.pdf));
         }
         if use_bsdf {
             let (u_lobe, u) = (rng.next_f32(), rng.next_2d());
@@ -164,7 +186,7 @@ impl IcIntegrator {
                     rays.bounce += 1;
                     match scene.intersect(&next) {
                         None if scene.lights.has_environment() => {
-                            let w = mis_weight(bs.pdf, scene.lights.pdf_environment(wi));
+                            let w = mis_weight(fb * bs.pdf, fe * scene.lights.pdf_environment(wi));
                             l += bs.weight * scene.lights.environment_radiance(wi) * w;
                         }
                         None => {}
@@ -174,7 +196,7 @@ impl IcIntegrator {
                                 if !le.is_black() {
                                     let pdf_l =
                                         scene.lights.pdf_area(light, h.prim, it.p, h.p, h.frame.n);
-                                    l += bs.weight * le * mis_weight(bs.pdf, pdf_l);
+                                    l += bs.weight * le * mis_weight(fb * bs.pdf, fe * pdf_l);
                                 }
                             }
                         }
@@ -186,7 +208,7 @@ impl IcIntegrator {
     }
 
     /// Level-0 indirect irradiance at `sp`: interpolated at the accuracy `a`; else from records
-    /// up to 2a away (pixel samples off the pre-pass's pixel centres); else from a record
+    /// up to 4a away (pixel samples off the pre-pass's pixel centres); else from a record
     /// gathered for this sample alone.
     fn indirect_irradiance(
         &self,
@@ -205,7 +227,7 @@ impl IcIntegrator {
         };
         let store = &cache.levels[0];
         let a = self.params.accuracy;
-        for max_error in [a, 2.0 * a] {
+        for max_error in [a, 2.0 * a, 4.0 * a] {
             if let Some(i) = store.interpolate(sp.it.p, sp.n, max_error, self.params.gradients) {
                 return i.e;
             }
@@ -222,7 +244,9 @@ impl IcIntegrator {
             0x0070_6978_656c,
             u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()),
         );
-        let rec = g.record_at(&mut st, sp, 0, key);
+        // It serves this sample alone (thin or newly seen geometry): a quarter of the divisions.
+        let strata = Stratification::from_divisions((self.params.divisions / 4).max(16));
+        let rec = g.record_with(&mut st, sp, 0, key, strata);
         rays.gather += st.counts.gather_rays;
         rays.shadow += st.counts.shadow_rays;
         rec.e

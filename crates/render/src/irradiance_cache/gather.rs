@@ -199,8 +199,20 @@ impl Gatherer<'_> {
 
     /// A record at `sp` for bounce `level`: gather, then limit the radius.
     pub fn record_at(&self, st: &mut WorkState, sp: &ShadingPoint, level: u32, key: u64) -> Record {
+        let strata = Stratification::from_divisions(self.cache.params.divisions);
+        self.record_with(st, sp, level, key, strata)
+    }
+
+    /// A record gathered with `strata` instead of the cache's divisions.
+    pub fn record_with(
+        &self,
+        st: &mut WorkState,
+        sp: &ShadingPoint,
+        level: u32,
+        key: u64,
+        strata: Stratification,
+    ) -> Record {
         let params = &self.cache.params;
-        let strata = Stratification::from_divisions(params.divisions);
         let (h, frame) = self.gather(st, sp, strata, level, key);
         st.counts.records += 1;
         let e = h.irradiance();

@@ -33,18 +33,22 @@ pub struct IcParams {
     pub gradients: GradientMode,
     /// Translational gradient formula.
     pub formula: TranslationalFormula,
+    /// Light samples per pixel sample for the direct term (stratified over the light when a
+    /// square number): shadow rays are cheaper than pixel samples.
+    pub direct_samples: u32,
 }
 
 impl Default for IcParams {
     fn default() -> Self {
         IcParams {
-            accuracy: 0.15,
+            accuracy: 0.2,
             divisions: 1024,
-            resolution: 256.0,
+            resolution: 128.0,
             bounces: 1,
             ambient_value: Rgb::ZERO,
             gradients: GradientMode::Full,
             formula: TranslationalFormula::WardHeckbert,
+            direct_samples: 4,
         }
     }
 }
@@ -115,6 +119,16 @@ impl IcParams {
                     ));
                 }
                 self.ambient_value = v;
+            }
+            "direct_samples" | "direct-samples" => {
+                self.direct_samples = value
+                    .trim()
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|n| (1..=4096).contains(n))
+                    .ok_or_else(|| {
+                        format!("{name}: expected 1 to 4096 light samples, found \"{value}\"")
+                    })?;
             }
             "gradients" => self.gradients = GradientMode::parse(value.trim())?,
             "gradient_formula" | "gradient-formula" => {

@@ -335,4 +335,13 @@ impl LightSet {
     pub fn has_environment(&self) -> bool {
         !self.env_lights.is_empty()
     }
+
+    /// True when every light is a point, spot or directional light (a light sample is then the
+    /// same whatever the random numbers, up to the choice of light).
+    #[must_use]
+    pub fn all_delta(&self) -> bool {
+        self.lights
+            .iter()
+            .all(|l| matches!(l, Light::Point(_) | Light::Spot(_) | Light::Directional(_)))
+    }
 }
