@@ -171,3 +171,200 @@ fn compare_reports_zero_error_for_identical_images() {
     assert_eq!(j["lum_ratio"], 1.0);
     assert!(d.join("e.png").exists());
 }
+
+#[test]
+fn ic_render_reports_the_cache_and_writes_aovs() {
+    let d = temp_dir("ic");
+    let o = ircache(
+        &[
+            "render",
+            "--integrator",
+            "ic",
+            "-ab",
+            "1",
+            "-aa",
+            "0.3",
+            "-ad",
+            "64",
+            "-av",
+            "0.01",
+            "0.01",
+            "0.01",
+            "--spp",
+            "2",
+            "--width",
+            "48",
+            "--height",
+            "48",
+            "-o",
+            "ic.exr",
+            "--stats",
+            "ic.json",
+            "--aov",
+            "irradiance,records",
+            "-q",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("ic.json")).unwrap()).unwrap();
+    let records = s["records"].as_u64().unwrap();
+    assert!(records > 10, "{s}");
+    assert!(s["records_computed"].as_u64().unwrap() >= records);
+    assert!(s["gather_rays"].as_u64().unwrap() >= records * 60);
+    assert_eq!(s["accuracy"].as_f64().unwrap(), 0.30000001192092896);
+    for f in ["ic-irradiance.exr", "ic-records.exr"] {
+        assert!(std::fs::metadata(d.join(f)).unwrap().len() > 0, "{f}");
+    }
+    // Cache options with another integrator are an error, not ignored.
+    let o = ircache(
+        &[
+            "render",
+            "--integrator",
+            "path",
+            "-aa",
+            "0.1",
+            "-o",
+            "x.exr",
+        ],
+        &d,
+    );
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("ic integrator"), "{}", stderr(&o));
+    // A bad value names the option.
+    let o = ircache(
+        &[
+            "render",
+            "--integrator",
+            "ic",
+            "--accuracy",
+            "5",
+            "-o",
+            "x.exr",
+        ],
+        &d,
+    );
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--accuracy"), "{}", stderr(&o));
+}
+
+/// Runs `ircache irradiance` on the built-in Cornell box with `points` on standard input.
+fn irradiance(args: &[&str], points: &str) -> Output {
+    use std::io::Write;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ircache"))
+        .arg("irradiance")
+        .args(args)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("runs");
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(points.as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn numbers(o: &Output) -> Vec<Vec<f64>> {
+    String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| l.split_whitespace().map(|t| t.parse().unwrap()).collect())
+        .collect()
+}
+
+#[test]
+fn irradiance_at_points_cache_agrees_with_brute_force() {
+    // Floor (y = 0), a point in mid-air and one on the red wall of the built-in Cornell box.
+    let points = "-0.5 0 0.5 0 1 0\n0.5 0 -0.5 0 1 0\n# comment\n\n0 1 0 0 1 0\n-0.99 1 0 1 0 0\n";
+    let cache = irradiance(&["--indirect-only", "--gradients"], points);
+    assert!(cache.status.success(), "{}", stderr(&cache));
+    let brute = irradiance(
+        &[
+            "--indirect-only",
+            "--integrator",
+            "path",
+            "--samples",
+            "16384",
+        ],
+        points,
+    );
+    assert!(brute.status.success(), "{}", stderr(&brute));
+    let (c, b) = (numbers(&cache), numbers(&brute));
+    assert_eq!(c.len(), 4);
+    assert!(c.iter().all(|l| l.len() == 3 + 18));
+    assert!(b.iter().all(|l| l.len() == 3));
+    for (lc, lb) in c.iter().zip(&b) {
+        for ch in 0..3 {
+            assert!(
+                (lc[ch] - lb[ch]).abs() <= 0.1 * lb[ch] + 1e-4,
+                "cache {lc:?} vs brute force {lb:?}"
+            );
+        }
+    }
+    // Total irradiance exceeds the indirect part; --lux prints one number per point.
+    let total = numbers(&irradiance(&[], points));
+    let lux = numbers(&irradiance(&["--lux"], points));
+    for ((t, i), l) in total.iter().zip(&c).zip(&lux) {
+        assert!(t[0] >= i[0]);
+        assert_eq!(l.len(), 1);
+        let expect = 179.0 * (0.265 * t[0] + 0.670 * t[1] + 0.065 * t[2]);
+        assert!((l[0] - expect).abs() <= 1e-4 * expect.max(1e-6));
+    }
+    // Bad input names the line.
+    let bad = irradiance(&[], "0 0 0 0 1 0\n1 2 3 4 5\n");
+    assert!(!bad.status.success());
+    assert!(stderr(&bad).contains("<stdin>:2"), "{}", stderr(&bad));
+    assert!(!stderr(&bad).contains("panicked"));
+}
+
+#[test]
+fn irrcache_integrator_in_xml_takes_parameters_and_refuses_unknown_ones() {
+    let d = temp_dir("irrcache-xml");
+    let scene = |params: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+  <integrator type="irrcache">
+    <integer name="max_depth" value="3"/>
+    {params}
+  </integrator>
+  <sensor type="perspective"><float name="fov" value="80"/>
+    <transform name="to_world"><lookat origin="0.5,0.05,0.5" target="0.5,0.9,0.3" up="0,0,1"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="1"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/></film>
+  </sensor>
+  <shape type="cube"><transform name="to_world"><scale value="0.5"/><translate value="0.5,0.5,0.5"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+  <emitter type="point"><point name="position" value="0.5,0.5,0.8"/><rgb name="intensity" value="1"/></emitter>
+</scene>"#
+        )
+    };
+    std::fs::write(
+        d.join("good.xml"),
+        scene(r#"<float name="accuracy" value="0.3"/><integer name="divisions" value="64"/>"#),
+    )
+    .unwrap();
+    let o = ircache(
+        &[
+            "render", "good.xml", "-o", "g.exr", "--stats", "g.json", "-q",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("g.json")).unwrap()).unwrap();
+    assert_eq!(s["divisions"], 64);
+    assert_eq!(s["bounces"], 1);
+    std::fs::write(
+        d.join("bad.xml"),
+        scene(r#"<float name="acuracy" value="0.3"/>"#),
+    )
+    .unwrap();
+    let o = ircache(&["render", "bad.xml", "-o", "b.exr"], &d);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("bad.xml:4:") && e.contains("acuracy"), "{e}");
+}
