@@ -5,6 +5,11 @@
 //!   direction, spawn an offset ray, intersect, build the surface interaction), and 16-wide packets.
 //! - Path tracing time for the Cornell box at 64 spp, next to Mitsuba 3 (`llvm_ad_rgb`) on the same
 //!   machine in the same run when `python3 -c "import mitsuba"` works.
+//! - Irradiance cache gather rays on Sponza: raw Embree on the records' stratified rays next to
+//!   the cache's own gather loop, 1 and 2 threads.
+//! - The irradiance cache (`ic`, one bounce) on the Cornell box and Sponza: time, records and
+//!   relMSE_trim against the references, with gradient variants, next to Mitsuba 3's path
+//!   tracer run at the spp its error law says reaches the same error (and checked).
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -33,7 +38,7 @@ pub struct BenchArgs {
     /// Skip the Mitsuba 3 comparison.
     #[arg(long)]
     pub no_mitsuba: bool,
-    /// Which parts: all, rays, path.
+    /// Which parts: all, rays, path, gather, ic.
     #[arg(long, default_value = "all")]
     pub only: String,
 }
@@ -80,6 +85,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "path" {
         path(&shared, args)?;
+    }
+    if args.only == "all" || args.only == "gather" {
+        gather(&shared)?;
+    }
+    if args.only == "all" || args.only == "ic" {
+        ic(&shared, args)?;
     }
     Ok(())
 }
@@ -318,14 +329,34 @@ fn llvm_path() -> Option<String> {
 
 /// Times Mitsuba 3's render of the same scene (kernels compiled by a warm-up run first).
 fn mitsuba_time(scene: &Path, spp: u32) -> Result<f64> {
+    mitsuba_render(scene, spp, None)
+}
+
+/// Renders the scene with Mitsuba 3 at `spp` (in passes of at most 64 spp with different
+/// seeds, averaged, as the references were made), writing the image to `out` if given; returns
+/// the render time (kernels compiled by a warm-up run first).
+fn mitsuba_render(scene: &Path, spp: u32, out: Option<&Path>) -> Result<f64> {
+    let save = match out {
+        Some(p) => format!("mi.Bitmap(acc).write({:?})", p.display().to_string()),
+        None => String::new(),
+    };
     let script = format!(
         r#"
 import os, time, mitsuba as mi
 mi.set_variant('llvm_ad_rgb')
+import drjit as dr
 s = mi.load_file({scene:?}, spp={spp}, max_depth=3)
-mi.render(s, spp=4); import drjit as dr; dr.eval()
-t = time.time(); img = mi.render(s, spp={spp}); dr.eval(img); dr.sync_thread()
+img = mi.render(s, spp=4); dr.eval(img); dr.sync_thread()
+left, passes, acc = {spp}, 0, None
+t = time.time()
+while left > 0:
+    n = min(64, left)
+    img = mi.render(s, spp=n, seed=passes) * (n / {spp})
+    acc = img if acc is None else acc + img
+    dr.eval(acc); dr.sync_thread()
+    left -= n; passes += 1
 print(time.time() - t)
+{save}
 "#,
         scene = scene.display().to_string()
     );
@@ -351,4 +382,231 @@ print(time.time() - t)
         .unwrap_or("")
         .parse::<f64>()
         .context("parsing Mitsuba's time")
+}
+
+/// Gather-ray throughput of the irradiance cache on Sponza.
+fn gather(shared: &Path) -> Result<()> {
+    use ircache_render::irradiance_cache::hemisphere::Stratification;
+    let scene = load(&shared.join("scenes/sponza-sun/scene.xml"), &[])?;
+    let strata = Stratification::from_divisions(1024);
+    // Record positions: first hits of a 48×36 grid of camera rays.
+    let (gw, gh) = (48usize, 36usize);
+    let points: Vec<Interaction> = (0..gw * gh)
+        .filter_map(|i| {
+            let film = Vec2::new(
+                ((i % gw) as f32 + 0.5) / gw as f32,
+                ((i / gw) as f32 + 0.5) / gh as f32,
+            );
+            scene.intersect(&scene.camera.generate_ray(film))
+        })
+        .collect();
+    let rays_of = |i: usize, it: &Interaction, f: &mut dyn FnMut(Ray)| {
+        let mut rng = Rng::keyed(7, &[i as u64]);
+        let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 {
+            -it.ng
+        } else {
+            it.ng
+        };
+        let frame = Frame::from_z(n);
+        strata.for_each_direction(
+            || rng.next_2d(),
+            |_, _, d| f(scene.spawn_ray(it, frame.from_local(d))),
+        );
+    };
+    let mut all = Vec::new();
+    for (i, it) in points.iter().enumerate() {
+        rays_of(i, it, &mut |r| all.push(r));
+    }
+    println!(
+        "\nIrradiance cache gather rays on Sponza: {} records × {} stratified rays ({} × {})",
+        points.len(),
+        strata.cells(),
+        strata.polar,
+        strata.azimuthal
+    );
+    println!(
+        "{:<52} {:>9} {:>9} {:>7}",
+        "Mrays/s", "1 thread", "2 threads", "2t/1t"
+    );
+    let per = 16usize;
+    let raw = |rs: &[Ray]| {
+        rs.iter()
+            .filter(|r| scene.accel.intersect(r).is_some())
+            .count()
+    };
+    let ours = |(c, its): (usize, &[Interaction])| {
+        let mut n = 0;
+        for (i, it) in its.iter().enumerate() {
+            rays_of(c * per + i, it, &mut |r| {
+                n += usize::from(scene.intersect(&r).is_some())
+            });
+        }
+        n
+    };
+    let mut rows = Vec::new();
+    for (name, which) in [
+        ("raw Embree rtcIntersect1 on the same rays", 0),
+        ("cache gather loop (stratify+spawn+trace+interaction)", 1),
+    ] {
+        let mut r = [0.0; 2];
+        for (j, t) in [1usize, 2].iter().enumerate() {
+            let p = pool(*t)?;
+            r[j] = measure(all.len(), || {
+                p.install(|| {
+                    if which == 0 {
+                        all.par_chunks(per * strata.cells()).map(raw).sum()
+                    } else {
+                        points.par_chunks(per).enumerate().map(ours).sum()
+                    }
+                })
+            });
+        }
+        println!(
+            "{name:<52} {:>9.2} {:>9.2} {:>7.2}",
+            r[0],
+            r[1],
+            r[1] / r[0]
+        );
+        rows.push(r);
+    }
+    println!(
+        "  gather loop / raw: {:.0} % on 1 thread, {:.0} % on 2",
+        100.0 * rows[1][0] / rows[0][0],
+        100.0 * rows[1][1] / rows[0][1]
+    );
+    Ok(())
+}
+
+/// The irradiance cache against the references, Mitsuba 3 and Radiance's published figures.
+fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
+    use ircache_render::irradiance_cache::params::{CORNELL_BOX_BENCH, SPONZA_BENCH};
+    // (scene, spp, settings, Mitsuba's error law c0 + c1/spp, Radiance high: error, seconds)
+    let cases: [(&str, u32, &[(&str, &str)], (f64, f64), (f64, f64)); 2] = [
+        (
+            "cornell-box",
+            16,
+            CORNELL_BOX_BENCH,
+            (2.8e-5, 0.114),
+            (3.7e-4, 77.6),
+        ),
+        ("sponza-sun", 8, SPONZA_BENCH, (1e-3, 4.0), (1.04e-2, 141.2)),
+    ];
+    for (name, spp, preset, law, radiance) in cases {
+        let scene_path = shared.join(format!("scenes/{name}/scene.xml"));
+        let reference =
+            ircache_image::read_image(&shared.join(format!("references/{name}-d3.exr")))?;
+        let defines = vec![("max_depth".to_string(), "3".to_string())];
+        let mut desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
+        desc.integrator.kind = "ic".into();
+        let scene = Scene::build(&desc)?;
+        let settings_text: Vec<String> = preset.iter().map(|(k, v)| format!("{k} {v}")).collect();
+        println!(
+            "\nIrradiance cache, {name} {}×{}, one bounce, {spp} spp, {}",
+            desc.sensor.film.width,
+            desc.sensor.film.height,
+            settings_text.join(", ")
+        );
+        println!(
+            "  {:<34} {:>7} {:>8} {:>9} {:>9} {:>9} {:>11}",
+            "variant", "threads", "seconds", "pre-pass", "pixels", "records", "relMSE_trim"
+        );
+        let mut best = (f64::INFINITY, 0.0);
+        let variants: [(&str, &[(&str, &str)], &[usize]); 4] = [
+            ("gradients full (3.48)", &[], &[1, 2]),
+            (
+                "gradients full (3.47)",
+                &[("gradient_formula", "krivanek")],
+                &[2],
+            ),
+            ("gradients rotation", &[("gradients", "rotation")], &[2]),
+            ("gradients none", &[("gradients", "none")], &[2]),
+        ];
+        let mut one_thread = 0.0;
+        for (label, extra, threads) in variants {
+            for &t in threads {
+                let mut integrator =
+                    Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
+                if let Integrator::Ic(ic) = &mut integrator {
+                    for (k, v) in preset.iter().chain(extra) {
+                        ic.params.set(k, v).map_err(anyhow::Error::msg)?;
+                    }
+                }
+                let settings = RenderSettings {
+                    width: desc.sensor.film.width as usize,
+                    height: desc.sensor.film.height as usize,
+                    spp,
+                    seed: 0,
+                    threads: t,
+                    filter: Filter::from_desc(&desc.sensor.film.filter),
+                };
+                let out = render(&scene, &integrator, &settings, &|_| {})?;
+                let m = ircache_image::compare::compare(&out.image, &reference)?;
+                let c = out.cache.as_ref().context("cache report")?;
+                println!(
+                    "  {label:<34} {t:>7} {:>8.2} {:>9.2} {:>9.2} {:>9} {:>11.3e}",
+                    out.seconds,
+                    c.stats.gather_seconds,
+                    c.pixel_seconds,
+                    c.stats.records(),
+                    m.rel_mse_trim
+                );
+                if t == 1 {
+                    one_thread = out.seconds;
+                }
+                if label.starts_with("gradients full (3.48)") && t == 2 {
+                    best = (m.rel_mse_trim, out.seconds);
+                    println!(
+                        "  {:<34} 2 threads / 1 thread: {:.2}×; {:.1} M gather rays, {:.1} M rays in all",
+                        "",
+                        one_thread / out.seconds,
+                        c.stats.gather_rays as f64 * 1e-6,
+                        out.rays.total() as f64 * 1e-6
+                    );
+                }
+            }
+        }
+        let (err, secs) = best;
+        println!(
+            "  Radiance 6.0a rpict \"high\" (references README, not run here): {:.1} s for {:.2e}: \
+             ircache {:.0}× faster at {}",
+            radiance.1,
+            radiance.0,
+            radiance.1 / secs,
+            if err <= radiance.0 { "lower error" } else { "HIGHER error" }
+        );
+        if args.no_mitsuba {
+            continue;
+        }
+        // Mitsuba at the spp its error law gives for our error, then checked.
+        let (c0, c1) = law;
+        if err <= c0 {
+            println!("  Mitsuba 3: error {err:.2e} is below its floor {c0:.1e}; not run");
+            continue;
+        }
+        let m_spp = (c1 / (err - c0)).ceil() as u32;
+        let tmp =
+            std::env::temp_dir().join(format!("ircache-bench-{}-{name}.exr", std::process::id()));
+        match mitsuba_render(&scene_path, m_spp, Some(&tmp)) {
+            Ok(t) => {
+                let m = ircache_image::read_image(&tmp)
+                    .map_err(anyhow::Error::from)
+                    .and_then(|img| Ok(ircache_image::compare::compare(&img, &reference)?));
+                let _ = std::fs::remove_file(&tmp);
+                let m_err = m.map(|m| m.rel_mse_trim).unwrap_or(f64::NAN);
+                // Path tracing's error above its floor falls as 1/spp: the time at which
+                // Mitsuba would reach ircache's error, from this measured point.
+                let equal = t * (m_err - c0) / (err - c0);
+                println!(
+                    "  Mitsuba 3 llvm_ad_rgb path, 2 threads, {m_spp} spp: {t:.1} s for relMSE_trim {m_err:.3e}"
+                );
+                println!(
+                    "  Mitsuba at ircache's error ({err:.3e}, error above {c0:.1e} ∝ 1/spp): {equal:.1} s; \
+                     ircache is {:.1}× faster",
+                    equal / secs
+                );
+            }
+            Err(e) => println!("  Mitsuba 3 not measured: {e:#}"),
+        }
+    }
+    Ok(())
 }

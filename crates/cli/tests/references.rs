@@ -132,20 +132,9 @@ fn sponza_256_spp_meets_the_issue_target() {
     assert!((lum - 1.0).abs() < 0.01, "mean luminance ratio {lum}");
 }
 
-/// The cache settings `ircache bench` uses on the Cornell box (spp 16).
-pub const CORNELL_IC: &[(&str, &str)] = &[
-    ("accuracy", "0.2"),
-    ("divisions", "512"),
-    ("resolution", "256"),
-    ("direct_samples", "4"),
-];
-
-/// The cache settings `ircache bench` uses on Sponza (spp 8).
-pub const SPONZA_IC: &[(&str, &str)] = &[
-    ("accuracy", "0.25"),
-    ("divisions", "1024"),
-    ("resolution", "64"),
-];
+use ircache_render::irradiance_cache::params::{
+    CORNELL_BOX_BENCH as CORNELL_IC, SPONZA_BENCH as SPONZA_IC,
+};
 
 #[test]
 fn cornell_box_irradiance_cache_reaches_radiance_high() {

@@ -102,6 +102,7 @@ pub fn render(
     let results: Vec<(Vec<Rgb>, RayCounts, u64)> = pool.install(|| {
         (0..tiles_x * tiles_y)
             .into_par_iter()
+            .with_max_len(1)
             .map(|tile| {
                 let (tx, ty) = (tile % tiles_x, tile / tiles_x);
                 let (x0, y0) = (tx * TILE, ty * TILE);

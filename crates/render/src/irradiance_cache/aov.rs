@@ -20,6 +20,7 @@ pub fn irradiance_image(
     let a = cache.params.accuracy;
     let pixels: Vec<Rgb> = (0..width * height)
         .into_par_iter()
+        .with_max_len(256)
         .map(|i| {
             let film = Vec2::new(
                 ((i % width) as f32 + 0.5) / width as f32,

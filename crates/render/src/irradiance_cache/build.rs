@@ -82,8 +82,11 @@ pub fn run_batch(
             seed,
             deeper: super::gather::Deeper::Cache,
         };
+        // Small pieces: the points that need records cluster (edges, corners), and rayon
+        // cannot steal from inside a piece a thread has started.
         points
             .par_iter()
+            .with_max_len(4)
             .map(|(key, sp)| {
                 if cache.levels[0].covers(sp.it.p, sp.n) {
                     return None;

@@ -176,22 +176,20 @@ impl Gatherer<'_> {
             sp.it.ng
         };
         let mut h = HemisphereSamples::new(strata);
-        let mut i = 0;
-        for j in 0..strata.polar {
-            for k in 0..strata.azimuthal {
-                let d = frame.from_local(strata.direction(j, k, rng.next_2d()));
-                let child_key = mix(key, i as u64);
-                i += 1;
-                if d.dot(ng) <= 0.0 {
-                    continue; // below the geometric surface: nothing arrives
-                }
-                let ray = self.scene.spawn_ray(&sp.it, d);
-                st.counts.gather_rays += 1;
-                if let Some(hit) = self.scene.intersect(&ray) {
-                    let idx = j * strata.azimuthal + k;
-                    h.distance[idx] = hit.t;
-                    h.radiance[idx] = self.outgoing(st, &ray, &hit, level, child_key, &mut rng, 0);
-                }
+        let mut dirs = Vec::with_capacity(strata.cells());
+        strata.for_each_direction(|| rng.next_2d(), |j, k, d| dirs.push((j, k, d)));
+        for (j, k, local) in dirs {
+            let d = frame.from_local(local);
+            let idx = j * strata.azimuthal + k;
+            let child_key = mix(key, idx as u64);
+            if d.dot(ng) <= 0.0 {
+                continue; // below the geometric surface: nothing arrives
+            }
+            let ray = self.scene.spawn_ray(&sp.it, d);
+            st.counts.gather_rays += 1;
+            if let Some(hit) = self.scene.intersect(&ray) {
+                h.distance[idx] = hit.t;
+                h.radiance[idx] = self.outgoing(st, &ray, &hit, level, child_key, &mut rng, 0);
             }
         }
         (h, frame)

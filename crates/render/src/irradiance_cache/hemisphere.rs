@@ -36,6 +36,37 @@ impl Stratification {
         self.polar * self.azimuthal
     }
 
+    /// Calls `f(j, k, direction)` for every cell with the jitter drawn from `next_2d` (3.5), sector
+    /// by sector: each sector's edge angle is computed once and the jitter within it (at most π/4
+    /// for N ≥ 8) by polynomials.
+    #[inline]
+    pub fn for_each_direction(
+        &self,
+        mut next_2d: impl FnMut() -> Vec2,
+        mut f: impl FnMut(usize, usize, Vec3),
+    ) {
+        let two_pi = 2.0 * std::f32::consts::PI;
+        let sector = two_pi / self.azimuthal as f32;
+        let fast = self.azimuthal >= 8;
+        let inv_m = 1.0 / self.polar as f32;
+        for k in 0..self.azimuthal {
+            let (s0, c0) = (k as f32 * sector).sin_cos();
+            for j in 0..self.polar {
+                let u = next_2d();
+                let s2 = ((j as f32 + u.x) * inv_m).min(1.0);
+                let sin_t = s2.sqrt();
+                let cos_t = (1.0 - s2).max(0.0).sqrt();
+                let (sd, cd) = if fast {
+                    ircache_math::sampling::sin_cos_quarter(u.y * sector)
+                } else {
+                    (u.y * sector).sin_cos()
+                };
+                let (sp, cp) = (s0 * cd + c0 * sd, c0 * cd - s0 * sd);
+                f(j, k, Vec3::new(cp * sin_t, sp * sin_t, cos_t));
+            }
+        }
+    }
+
     /// The local direction of the sample in cell (j, k) at jitter `u` (3.5).
     #[inline]
     #[must_use]

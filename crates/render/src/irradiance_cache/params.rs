@@ -4,6 +4,22 @@
 use super::record::GradientMode;
 use ircache_math::Rgb;
 
+/// The settings `ircache bench` times on the Cornell box (at 16 spp), and the reference test
+/// checks: they reach Radiance's "high" error there.
+pub const CORNELL_BOX_BENCH: &[(&str, &str)] = &[
+    ("accuracy", "0.2"),
+    ("divisions", "512"),
+    ("resolution", "256"),
+    ("direct_samples", "4"),
+];
+
+/// The settings `ircache bench` times on Sponza (at 8 spp).
+pub const SPONZA_BENCH: &[(&str, &str)] = &[
+    ("accuracy", "0.25"),
+    ("divisions", "1024"),
+    ("resolution", "64"),
+];
+
 /// Which translational-gradient formula records use (they are equal, 000 §3.6.3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum TranslationalFormula {

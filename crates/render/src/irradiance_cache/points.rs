@@ -96,6 +96,7 @@ pub fn irradiance_at_points(
     };
     let results = points
         .par_iter()
+        .with_max_len(4)
         .enumerate()
         .map(|(i, sp)| {
             let mut rng = Rng::keyed(seed, &[0x6469_7265_6374, i as u64]);
