@@ -477,11 +477,18 @@ fn gather(shared: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Named cache parameters.
+type Settings = &'static [(&'static str, &'static str)];
+/// (scene, spp, settings, Mitsuba's error law c0 + c1/spp, Radiance high: error, seconds).
+type IcCase = (&'static str, u32, Settings, (f64, f64), (f64, f64));
+/// (label, settings added, thread counts).
+type IcVariant = (&'static str, Settings, &'static [usize]);
+
 /// The irradiance cache against the references, Mitsuba 3 and Radiance's published figures.
 fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
     use ircache_render::irradiance_cache::params::{CORNELL_BOX_BENCH, SPONZA_BENCH};
     // (scene, spp, settings, Mitsuba's error law c0 + c1/spp, Radiance high: error, seconds)
-    let cases: [(&str, u32, &[(&str, &str)], (f64, f64), (f64, f64)); 2] = [
+    let cases: [IcCase; 2] = [
         (
             "cornell-box",
             16,
@@ -511,7 +518,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             "variant", "threads", "seconds", "pre-pass", "pixels", "records", "relMSE_trim"
         );
         let mut best = (f64::INFINITY, 0.0);
-        let variants: [(&str, &[(&str, &str)], &[usize]); 4] = [
+        let variants: [IcVariant; 4] = [
             ("gradients full (3.48)", &[], &[1, 2]),
             (
                 "gradients full (3.47)",
