@@ -3,9 +3,10 @@
 //! sample counts; emitters seen directly are added as they are.
 
 use super::{mis_weight, RayCounts};
-use crate::scene::Scene;
+use crate::bsdf::Bsdf;
+use crate::scene::{Interaction, Scene};
 use ircache_embree::Hit;
-use ircache_math::{Ray, Rgb, Rng};
+use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 
 /// Parameters of the direct-illumination integrator.
 #[derive(Clone, Debug)]
@@ -43,82 +44,114 @@ impl DirectIntegrator {
         }
         let bsdf = scene.materials[shape.material].at(it.uv);
         let wo_local = it.frame.to_local(wo);
-        let (ne, nb) = (self.emitter_samples as f32, self.bsdf_samples as f32);
-        let p_ref = it.p;
+        l + estimate_direct(
+            scene,
+            &it,
+            &bsdf,
+            wo_local,
+            self.emitter_samples,
+            self.bsdf_samples,
+            rng,
+            rays,
+        )
+    }
+}
 
-        if bsdf.has_smooth() && !scene.lights.is_empty() {
-            for _ in 0..self.emitter_samples {
-                let u_sel = rng.next_f32();
-                let u = rng.next_2d();
-                let Some(ls) = scene.lights.sample(p_ref, u_sel, u) else {
-                    continue;
-                };
-                let wi_local = it.frame.to_local(ls.wi);
-                let f = bsdf.eval(wo_local, wi_local);
-                if f.is_black() || ls.pdf <= 0.0 {
-                    continue;
-                }
-                rays.shadow += 1;
-                if scene
-                    .accel
-                    .occluded(&scene.shadow_ray(&it, ls.wi, ls.distance))
-                {
-                    continue;
-                }
-                let w = if ls.is_delta {
-                    1.0 / ne
-                } else {
-                    mis_weight(ne * ls.pdf, nb * bsdf.pdf(wo_local, wi_local)) / ne
-                };
-                l += f * ls.radiance * (w / ls.pdf);
+/// Direct light reflected at `it` towards `wo_local`: `ne` light samples (jittered over a
+/// √ne × √ne grid when ne > 1 is a square) and `nb` BSDF samples combined by the power heuristic
+/// weighted by the sample counts (Veach 1997 §9.2); emission found by BSDF samples through
+/// delta lobes counts fully.
+#[allow(clippy::too_many_arguments)]
+pub fn estimate_direct(
+    scene: &Scene,
+    it: &Interaction,
+    bsdf: &Bsdf,
+    wo_local: Vec3,
+    ne: u32,
+    nb: u32,
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> Rgb {
+    let mut l = Rgb::ZERO;
+    let (fe, fb) = (ne as f32, nb as f32);
+    let p_ref = it.p;
+    let side = (ne as f32).sqrt() as u32;
+    let grid = ne > 1 && side * side == ne;
+    if bsdf.has_smooth() && !scene.lights.is_empty() {
+        for i in 0..ne {
+            let u_sel = rng.next_f32();
+            let mut u = rng.next_2d();
+            if grid {
+                u = (Vec2::new((i % side) as f32, (i / side) as f32) + u) / side as f32;
             }
-        }
-
-        for _ in 0..self.bsdf_samples {
-            let u_lobe = rng.next_f32();
-            let u = rng.next_2d();
-            let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
+            let Some(ls) = scene.lights.sample(p_ref, u_sel, u) else {
                 continue;
             };
-            let wi = it.frame.from_local(bs.wi);
-            let next = scene.spawn_ray(&it, wi);
-            rays.bounce += 1;
-            match scene.accel.intersect(&next) {
-                None => {
-                    if scene.lights.has_environment() {
-                        let le = scene.lights.environment_radiance(wi);
-                        let w = if bs.delta {
-                            1.0 / nb
-                        } else {
-                            mis_weight(nb * bs.pdf, ne * scene.lights.pdf_environment(wi)) / nb
-                        };
-                        l += bs.weight * le * w;
-                    }
+            let wi_local = it.frame.to_local(ls.wi);
+            let f = bsdf.eval(wo_local, wi_local);
+            if f.is_black() || ls.pdf <= 0.0 {
+                continue;
+            }
+            rays.shadow += 1;
+            if scene
+                .accel
+                .occluded(&scene.shadow_ray(it, ls.wi, ls.distance))
+            {
+                continue;
+            }
+            let w = if ls.is_delta {
+                1.0 / fe
+            } else {
+                mis_weight(fe * ls.pdf, fb * bsdf.pdf(wo_local, wi_local)) / fe
+            };
+            l += f * ls.radiance * (w / ls.pdf);
+        }
+    }
+
+    for _ in 0..nb {
+        let u_lobe = rng.next_f32();
+        let u = rng.next_2d();
+        let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
+            continue;
+        };
+        let wi = it.frame.from_local(bs.wi);
+        let next = scene.spawn_ray(it, wi);
+        rays.bounce += 1;
+        match scene.accel.intersect(&next) {
+            None => {
+                if scene.lights.has_environment() {
+                    let le = scene.lights.environment_radiance(wi);
+                    let w = if bs.delta {
+                        1.0 / fb
+                    } else {
+                        mis_weight(fb * bs.pdf, fe * scene.lights.pdf_environment(wi)) / fb
+                    };
+                    l += bs.weight * le * w;
                 }
-                Some(hit) => {
-                    let hit_it = scene.interaction(&next, &hit);
-                    if let Some(light) = scene.shapes[hit_it.shape as usize].area_light {
-                        let le = scene.lights.area_radiance(light, hit_it.frame.n, -wi);
-                        if le.is_black() {
-                            continue;
-                        }
-                        let w = if bs.delta {
-                            1.0 / nb
-                        } else {
-                            let pdf_l = scene.lights.pdf_area(
-                                light,
-                                hit_it.prim,
-                                p_ref,
-                                hit_it.p,
-                                hit_it.frame.n,
-                            );
-                            mis_weight(nb * bs.pdf, ne * pdf_l) / nb
-                        };
-                        l += bs.weight * le * w;
+            }
+            Some(hit) => {
+                let hit_it = scene.interaction(&next, &hit);
+                if let Some(light) = scene.shapes[hit_it.shape as usize].area_light {
+                    let le = scene.lights.area_radiance(light, hit_it.frame.n, -wi);
+                    if le.is_black() {
+                        continue;
                     }
+                    let w = if bs.delta {
+                        1.0 / fb
+                    } else {
+                        let pdf_l = scene.lights.pdf_area(
+                            light,
+                            hit_it.prim,
+                            p_ref,
+                            hit_it.p,
+                            hit_it.frame.n,
+                        );
+                        mis_weight(fb * bs.pdf, fe * pdf_l) / fb
+                    };
+                    l += bs.weight * le * w;
                 }
             }
         }
-        l
     }
+    l
 }

@@ -8,7 +8,8 @@
 //! Glossy interreflection (the non-Lambertian part of indirect light) is not in the cache and is
 //! left out; the scenes this targets are diffuse.
 
-use super::{mis_weight, RayCounts};
+use super::direct::estimate_direct;
+use super::RayCounts;
 use crate::irradiance_cache::gather::{mix, Deeper, Gatherer, ShadingPoint, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::{IcParams, IrradianceCache};
@@ -109,7 +110,15 @@ impl IcIntegrator {
                 ray = scene.spawn_ray(&it, it.frame.from_local(bs.wi));
                 continue;
             }
-            l += beta * self.direct(scene, &it, &bsdf, wo_local, rng, rays);
+            // Direct light: light samples (one when the only light is a delta light, where
+            // all samples are alike), plus a BSDF sample where the BSDF is not Lambertian.
+            let ne = if scene.lights.all_delta() && scene.lights.len() == 1 {
+                1
+            } else {
+                self.params.direct_samples.max(1)
+            };
+            let nb = u32::from(!bsdf.is_diffuse_only());
+            l += beta * estimate_direct(scene, &it, &bsdf, wo_local, ne, nb, rng, rays);
             let albedo = bsdf.diffuse_reflectance_towards(wo_local);
             if !albedo.is_black() {
                 let e = if self.params.bounces == 0 {
@@ -120,89 +129,6 @@ impl IcIntegrator {
                 l += beta * albedo * e * INV_PI;
             }
             break;
-        }
-        l
-    }
-
-    /// Direct light at a smooth surface: `direct_samples` light samples (jittered over a grid
-    /// when their number is a square), plus one BSDF sample where the BSDF is not purely
-    /// Lambertian, combined by the power heuristic with the sample counts (Veach's balance of
-    /// `ne` and `nb` samples).
-    fn direct(
-        &self,
-        scene: &Scene,
-        it: &crate::scene::Interaction,
-        bsdf: &crate::bsdf::Bsdf,
-        wo_local: ircache_math::Vec3,
-        rng: &mut Rng,
-        rays: &mut RayCounts,
-    ) -> Rgb {
-        let mut l = Rgb::ZERO;
-        let use_bsdf = !bsdf.is_diffuse_only();
-        // With one delta light every sample is the same: one is enough.
-        let ne = if scene.lights.all_delta() && scene.lights.len() == 1 {
-            1
-        } else {
-            self.params.direct_samples.max(1)
-        };
-        let side = (ne as f32).sqrt() as u32;
-        let grid = side * side == ne;
-        let (fe, fb) = (ne as f32, 1.0f32);
-        for i in 0..ne {
-            let u_sel = rng.next_f32();
-            let mut u = rng.next_2d();
-            if grid && ne > 1 {
-                u = (ircache_math::Vec2::new((i % side) as f32, (i / side) as f32) + u)
-                    / side as f32;
-            }
-            let Some(ls) = scene.lights.sample(it.p, u_sel, u) else {
-                continue;
-            };
-            let wi_local = it.frame.to_local(ls.wi);
-            let f = bsdf.eval(wo_local, wi_local);
-            if f.is_black() || ls.pdf <= 0.0 {
-                continue;
-            }
-            rays.shadow += 1;
-            if scene
-                .accel
-                .occluded(&scene.shadow_ray(it, ls.wi, ls.distance))
-            {
-                continue;
-            }
-            let w = if ls.is_delta || !use_bsdf {
-                1.0
-            } else {
-                mis_weight(fe * ls.pdf, fb * bsdf.pdf(wo_local, wi_local))
-            };
-            l += f * ls.radiance * (w / (fe * ls.pdf));
-        }
-        if use_bsdf {
-            let (u_lobe, u) = (rng.next_f32(), rng.next_2d());
-            if let Some(bs) = bsdf.sample(wo_local, u_lobe, u) {
-                if !bs.delta {
-                    let wi = it.frame.from_local(bs.wi);
-                    let next = scene.spawn_ray(it, wi);
-                    rays.bounce += 1;
-                    match scene.intersect(&next) {
-                        None if scene.lights.has_environment() => {
-                            let w = mis_weight(fb * bs.pdf, fe * scene.lights.pdf_environment(wi));
-                            l += bs.weight * scene.lights.environment_radiance(wi) * w;
-                        }
-                        None => {}
-                        Some(h) => {
-                            if let Some(light) = scene.shapes[h.shape as usize].area_light {
-                                let le = scene.lights.area_radiance(light, h.frame.n, -wi);
-                                if !le.is_black() {
-                                    let pdf_l =
-                                        scene.lights.pdf_area(light, h.prim, it.p, h.p, h.frame.n);
-                                    l += bs.weight * le * mis_weight(fb * bs.pdf, fe * pdf_l);
-                                }
-                            }
-                        }
-                    }
-                }
-            }
         }
         l
     }
