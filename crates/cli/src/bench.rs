@@ -400,22 +400,12 @@ fn gather(shared: &Path) -> Result<()> {
             scene.intersect(&scene.camera.generate_ray(film))
         })
         .collect();
-    let rays_of = |i: usize, it: &Interaction, f: &mut dyn FnMut(Ray)| {
-        let mut rng = Rng::keyed(7, &[i as u64]);
-        let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 {
-            -it.ng
-        } else {
-            it.ng
-        };
-        let frame = Frame::from_z(n);
-        strata.for_each_direction(
-            || rng.next_2d(),
-            |_, _, d| f(scene.spawn_ray(it, frame.from_local(d))),
-        );
+    let rays_of = |i: usize, it: &Interaction, f: &mut Vec<Ray>| {
+        stratified_rays(&scene, strata, i, it, |r| f.push(r));
     };
     let mut all = Vec::new();
     for (i, it) in points.iter().enumerate() {
-        rays_of(i, it, &mut |r| all.push(r));
+        rays_of(i, it, &mut all);
     }
     println!(
         "\nIrradiance cache gather rays on Sponza: {} records × {} stratified rays ({} × {})",
@@ -437,8 +427,8 @@ fn gather(shared: &Path) -> Result<()> {
     let ours = |(c, its): (usize, &[Interaction])| {
         let mut n = 0;
         for (i, it) in its.iter().enumerate() {
-            rays_of(c * per + i, it, &mut |r| {
-                n += usize::from(scene.intersect(&r).is_some())
+            stratified_rays(&scene, strata, c * per + i, it, |r| {
+                n += usize::from(scene.intersect(&r).is_some());
             });
         }
         n
@@ -475,6 +465,28 @@ fn gather(shared: &Path) -> Result<()> {
         100.0 * rows[1][1] / rows[0][1]
     );
     Ok(())
+}
+
+/// The stratified gather rays of record number `i` at `it`, on the camera's side (the same for
+/// the same `i`).
+fn stratified_rays(
+    scene: &Scene,
+    strata: ircache_render::irradiance_cache::hemisphere::Stratification,
+    i: usize,
+    it: &Interaction,
+    mut f: impl FnMut(Ray),
+) {
+    let mut rng = Rng::keyed(7, &[i as u64]);
+    let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 {
+        -it.ng
+    } else {
+        it.ng
+    };
+    let frame = Frame::from_z(n);
+    strata.for_each_direction(
+        || rng.next_2d(),
+        |_, _, d| f(scene.spawn_ray(it, frame.from_local(d))),
+    );
 }
 
 /// Named cache parameters.
