@@ -485,7 +485,7 @@ fn stratified_rays(
     let frame = Frame::from_z(n);
     strata.for_each_direction(
         || rng.next_2d(),
-        |_, _, d| f(scene.spawn_ray(it, frame.from_local(d))),
+        |_, _, _, d| f(scene.spawn_ray(it, frame.from_local(d))),
     );
 }
 
@@ -530,7 +530,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             "variant", "threads", "seconds", "pre-pass", "pixels", "records", "relMSE_trim"
         );
         let mut best = (f64::INFINITY, 0.0);
-        let variants: [IcVariant; 4] = [
+        let variants: [IcVariant; 6] = [
             ("gradients full (3.48)", &[], &[1, 2]),
             (
                 "gradients full (3.47)",
@@ -539,6 +539,12 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             ),
             ("gradients rotation", &[("gradients", "rotation")], &[2]),
             ("gradients none", &[("gradients", "none")], &[2]),
+            ("1.5× divisions", &[("divisions", "1.5x")], &[2]),
+            (
+                "+ 0.5× divisions super-samples",
+                &[("supersamples", "0.5x")],
+                &[2],
+            ),
         ];
         let mut one_thread = 0.0;
         for (label, extra, threads) in variants {
@@ -547,7 +553,16 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
                     Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
                 if let Integrator::Ic(ic) = &mut integrator {
                     for (k, v) in preset.iter().chain(extra) {
-                        ic.params.set(k, v).map_err(anyhow::Error::msg)?;
+                        // "1.5x": relative to the preset's divisions (equal rays for the
+                        // super-sampling comparison).
+                        let v = match v.strip_suffix('x') {
+                            Some(f) => format!(
+                                "{}",
+                                (f.parse::<f64>()? * ic.params.divisions as f64).round()
+                            ),
+                            None => v.to_string(),
+                        };
+                        ic.params.set(k, &v).map_err(anyhow::Error::msg)?;
                     }
                 }
                 let settings = RenderSettings {

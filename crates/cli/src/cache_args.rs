@@ -1,5 +1,5 @@
 //! Irradiance cache options shared by `render` and `irradiance`, under users' names and
-//! Radiance's (`-aa`, `-ad`, `-ar`, `-ab`, `-av r g b`, rewritten to long options before
+//! Radiance's (`-aa`, `-ad`, `-as`, `-ar`, `-ab`, `-av r g b`, rewritten to long options before
 //! parsing).
 
 use anyhow::{bail, Result};
@@ -28,6 +28,9 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub ambient_value: Option<String>,
+    /// Adaptive super-samples per record (Radiance -as): extra rays where neighbours differ most.
+    #[arg(long, visible_alias = "as", help_heading = "Irradiance cache")]
+    pub supersamples: Option<String>,
     /// Light samples per pixel sample for the direct term.
     #[arg(long = "direct-samples", help_heading = "Irradiance cache")]
     pub direct_samples: Option<String>,
@@ -49,6 +52,7 @@ impl CacheArgs {
             ("ambient_value", &self.ambient_value),
             ("gradients", &self.gradients),
             ("direct_samples", &self.direct_samples),
+            ("supersamples", &self.supersamples),
             ("gradient_formula", &self.gradient_formula),
         ]
         .into_iter()
@@ -82,7 +86,7 @@ pub fn rewrite_radiance_options(args: Vec<String>) -> Vec<String> {
     while i < args.len() {
         let a = &args[i];
         match a.as_str() {
-            "-aa" | "-ad" | "-ar" | "-ab" => out.push(format!("-{a}")),
+            "-aa" | "-ad" | "-ar" | "-ab" | "-as" => out.push(format!("-{a}")),
             "-av" => {
                 out.push("--av".into());
                 let three: Vec<&String> = args.iter().skip(i + 1).take(3).collect();

@@ -62,6 +62,9 @@ pub struct IrradianceArgs {
     /// Hemisphere divisions per record (Radiance -ad).
     #[arg(long, visible_alias = "ad")]
     pub divisions: Option<String>,
+    /// Adaptive super-samples per record (Radiance -as).
+    #[arg(long, visible_alias = "as")]
+    pub supersamples: Option<String>,
     /// Resolution (Radiance -ar).
     #[arg(long, visible_alias = "ar")]
     pub resolution: Option<String>,
@@ -160,6 +163,7 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         gradients: args.gradient_mode.clone(),
         gradient_formula: None,
         direct_samples: None,
+        supersamples: args.supersamples.clone(),
     };
     cache_args.apply(&mut params)?;
     let pool = rayon::ThreadPoolBuilder::new()

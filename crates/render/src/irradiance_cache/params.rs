@@ -49,6 +49,9 @@ pub struct IcParams {
     pub gradients: GradientMode,
     /// Translational gradient formula.
     pub formula: TranslationalFormula,
+    /// Adaptive super-samples per record (`-as`): extra gather rays for the cells whose
+    /// neighbours differ most (003 item 2); 0: none.
+    pub supersamples: usize,
     /// Light samples per pixel sample for the direct term (stratified over the light when a
     /// square number): shadow rays are cheaper than pixel samples.
     pub direct_samples: u32,
@@ -65,6 +68,7 @@ impl Default for IcParams {
             gradients: GradientMode::Full,
             formula: TranslationalFormula::WardHeckbert,
             direct_samples: 4,
+            supersamples: 0,
         }
     }
 }
@@ -97,6 +101,16 @@ impl IcParams {
                     ));
                 }
                 self.divisions = d;
+            }
+            "supersamples" | "as" => {
+                self.supersamples = value
+                    .trim()
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|n| *n <= 1_000_000)
+                    .ok_or_else(|| {
+                        format!("{name}: expected 0 to 1000000 super-samples, found \"{value}\"")
+                    })?;
             }
             "resolution" | "ar" => {
                 let r = float(value)?;
