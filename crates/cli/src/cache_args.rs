@@ -37,6 +37,21 @@ pub struct CacheArgs {
     /// Gradients used in interpolation: none, rotation, full.
     #[arg(long, help_heading = "Irradiance cache")]
     pub gradients: Option<String>,
+    /// Persistent cache file (Radiance -af): records are read from it first and new ones appended.
+    #[arg(
+        long,
+        visible_alias = "af",
+        value_name = "FILE",
+        help_heading = "Irradiance cache"
+    )]
+    pub cache: Option<std::path::PathBuf>,
+    /// A cache file made for another scene or other settings: check (refuse it) or force (use it).
+    #[arg(
+        long = "cache-reuse",
+        value_name = "check|force",
+        help_heading = "Irradiance cache"
+    )]
+    pub cache_reuse: Option<String>,
     /// Translational gradient formula: ward-heckbert (000 eq. 3.48) or krivanek (3.47).
     #[arg(long = "gradient-formula", help_heading = "Irradiance cache")]
     pub gradient_formula: Option<String>,
@@ -63,7 +78,20 @@ impl CacheArgs {
     /// True when any option was given.
     #[must_use]
     pub fn any(&self) -> bool {
-        !self.pairs().is_empty()
+        !self.pairs().is_empty() || self.cache.is_some() || self.cache_reuse.is_some()
+    }
+
+    /// The cache file and whether a stale one may be used.
+    pub fn cache_file(&self) -> Result<(Option<std::path::PathBuf>, bool)> {
+        let force = match self.cache_reuse.as_deref() {
+            None | Some("check") => false,
+            Some("force") => true,
+            Some(o) => bail!("--cache-reuse {o}: expected check or force"),
+        };
+        if force && self.cache.is_none() {
+            bail!("--cache-reuse needs --cache FILE");
+        }
+        Ok((self.cache.clone(), force))
     }
 
     /// Applies the options given to `params`.
@@ -86,7 +114,7 @@ pub fn rewrite_radiance_options(args: Vec<String>) -> Vec<String> {
     while i < args.len() {
         let a = &args[i];
         match a.as_str() {
-            "-aa" | "-ad" | "-ar" | "-ab" | "-as" => out.push(format!("-{a}")),
+            "-aa" | "-ad" | "-ar" | "-ab" | "-as" | "-af" => out.push(format!("-{a}")),
             "-av" => {
                 out.push("--av".into());
                 let three: Vec<&String> = args.iter().skip(i + 1).take(3).collect();

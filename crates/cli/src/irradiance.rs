@@ -164,6 +164,8 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         gradient_formula: None,
         direct_samples: None,
         supersamples: args.supersamples.clone(),
+        cache: None,
+        cache_reuse: None,
     };
     cache_args.apply(&mut params)?;
     let pool = rayon::ThreadPoolBuilder::new()

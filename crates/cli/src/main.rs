@@ -5,10 +5,12 @@
 //! - `ircache compare A B` prints relMSE, relMSE_trim, RMSE and the mean-luminance ratio of A
 //!   against the reference B (the measures of `shared/tools/relmse.py`).
 //! - `ircache irradiance SCENE` prints irradiance at points (by the cache or by brute force).
+//! - `ircache cache info FILE` prints what an irradiance cache file holds.
 //! - `ircache bench` measures ray throughput and rendering speed.
 
 mod bench;
 mod cache_args;
+mod cache_info;
 mod compare;
 mod irradiance;
 mod render;
@@ -32,6 +34,9 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Irradiance at points read as lines "x y z nx ny nz" (Radiance's rtrace -I).
     Irradiance(irradiance::IrradianceArgs),
+    /// Inspect an irradiance cache file (`ircache cache info FILE`).
+    #[command(subcommand)]
+    Cache(cache_info::CacheCommand),
     /// Measure ray throughput and rendering speed (prints figures).
     Bench(bench::BenchArgs),
 }
@@ -44,6 +49,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render::run(&a),
         Command::Compare(a) => compare::run(&a),
         Command::Irradiance(a) => irradiance::run(&a),
+        Command::Cache(c) => cache_info::run(&c),
         Command::Bench(a) => bench::run(&a),
     };
     match result {

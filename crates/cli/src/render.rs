@@ -197,7 +197,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let desc = load(args)?;
     let mut integrator = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
     match &mut integrator {
-        Integrator::Ic(ic) => args.cache.apply(&mut ic.params)?,
+        Integrator::Ic(ic) => {
+            args.cache.apply(&mut ic.params)?;
+            (ic.cache_file, ic.force_reuse) = args.cache.cache_file()?;
+        }
         _ if args.cache.any() => bail!(
             "irradiance cache options apply to the ic integrator only (this scene uses \"{}\"; \
              add --integrator ic)",
@@ -357,6 +360,7 @@ fn write_stats(
             "records_per_level": st.records_per_level,
             "records_computed": st.records_computed,
             "records_overlapping": st.records_overlapping,
+            "records_loaded": st.records_loaded,
             "gather_rays": out.rays.gather,
             "prepass_gather_rays": st.gather_rays,
             "gather_seconds": st.gather_seconds,

@@ -369,3 +369,117 @@ fn irrcache_integrator_in_xml_takes_parameters_and_refuses_unknown_ones() {
     let e = stderr(&o);
     assert!(e.contains("bad.xml:4:") && e.contains("acuracy"), "{e}");
 }
+
+/// A small lit room whose camera and wall colour are scene parameters.
+fn room_xml() -> &'static str {
+    r#"<scene version="3.0.0">
+  <default name="eye" value="0.5,0.1,0.5"/>
+  <default name="wall" value="0.6"/>
+  <integrator type="irrcache"><integer name="max_depth" value="3"/></integrator>
+  <sensor type="perspective"><float name="fov" value="70"/>
+    <transform name="to_world"><lookat origin="$eye" target="0.5,0.9,0.4" up="0,0,1"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="2"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="48"/><integer name="height" value="48"/></film>
+  </sensor>
+  <shape type="cube"><transform name="to_world"><scale value="0.5"/><translate value="0.5,0.5,0.5"/></transform>
+    <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="$wall"/></bsdf></bsdf></shape>
+  <shape type="cube"><transform name="to_world"><scale value="0.1"/><translate value="0.3,0.6,0.1"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.3"/></bsdf></shape>
+  <emitter type="point"><point name="position" value="0.5,0.5,0.8"/><rgb name="intensity" value="1"/></emitter>
+</scene>"#
+}
+
+fn stats_of(d: &Path, name: &str) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(d.join(name)).unwrap()).unwrap()
+}
+
+#[test]
+fn cache_file_is_reused_across_runs_and_views_and_refused_when_stale() {
+    let d = temp_dir("cache-file");
+    std::fs::write(d.join("room.xml"), room_xml()).unwrap();
+    let render = |out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "render", "room.xml", "--cache", "room.icc", "-ad", "128", "-o", out, "--stats",
+        ];
+        let stats = format!("{out}.json");
+        args.push(&stats);
+        args.push("-q");
+        args.extend_from_slice(extra);
+        ircache(&args, &d)
+    };
+    let o = render("a.exr", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let first = stats_of(&d, "a.exr.json");
+    let made = first["records_computed"].as_u64().unwrap();
+    assert!(made > 50);
+    assert_eq!(first["records_loaded"], 0);
+    // The same view again: everything comes from the file, the same image.
+    let o = render("b.exr", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let again = stats_of(&d, "b.exr.json");
+    assert_eq!(again["records_loaded"].as_u64().unwrap(), made);
+    assert!(again["records_computed"].as_u64().unwrap() * 20 <= made);
+    assert_eq!(
+        std::fs::read(d.join("a.exr")).unwrap(),
+        std::fs::read(d.join("b.exr")).unwrap()
+    );
+    // Another view of the same room computes far fewer than it would alone.
+    let o = render("c.exr", &["-D", "eye=0.2,0.15,0.6"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let reused = stats_of(&d, "c.exr.json")["records_computed"]
+        .as_u64()
+        .unwrap();
+    let o = ircache(
+        &[
+            "render",
+            "room.xml",
+            "-ad",
+            "128",
+            "-D",
+            "eye=0.2,0.15,0.6",
+            "-o",
+            "fresh.exr",
+            "--stats",
+            "fresh.json",
+            "-q",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let alone = stats_of(&d, "fresh.json")["records_computed"]
+        .as_u64()
+        .unwrap();
+    assert!(
+        reused * 2 < alone,
+        "{reused} with the file vs {alone} alone"
+    );
+    // Other settings or another scene: refused with the reason, nothing written.
+    let o = render("x.exr", &["-aa", "0.3"]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("accuracy 0.2 (now 0.3)") && e.contains("--cache-reuse force"),
+        "{e}"
+    );
+    assert!(!d.join("x.exr").exists());
+    let o = render("y.exr", &["-D", "wall=0.7"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("another scene"), "{}", stderr(&o));
+    // Forced: used anyway.
+    let o = render("z.exr", &["-aa", "0.3", "--cache-reuse", "force"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stats_of(&d, "z.exr.json")["records_loaded"]
+            .as_u64()
+            .unwrap()
+            >= made
+    );
+    // What the file holds.
+    let o = ircache(&["cache", "info", "room.icc"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        info.contains("divisions 128") && info.contains("records"),
+        "{info}"
+    );
+}

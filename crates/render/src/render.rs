@@ -3,10 +3,12 @@
 //! seed whatever the thread count or the order in which tiles finish.
 
 use crate::film::Filter;
+use crate::integrators::ic::IcIntegrator;
 use crate::integrators::{Integrator, RayCounts};
 use crate::irradiance_cache::build::fill_for_image;
+use crate::irradiance_cache::file::{self, CacheFile, Header};
 use crate::irradiance_cache::{CacheStats, IrradianceCache};
-use crate::scene::Scene;
+use crate::scene::{RenderError, Scene};
 use ircache_image::Image;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 use rayon::prelude::*;
@@ -69,7 +71,7 @@ pub fn render(
     integrator: &Integrator,
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
-) -> Result<RenderOutput, rayon::ThreadPoolBuildError> {
+) -> Result<RenderOutput, RenderError> {
     let (w, h) = (settings.width, settings.height);
     let tiles_x = w.div_ceil(TILE);
     let tiles_y = h.div_ceil(TILE);
@@ -83,12 +85,7 @@ pub fn render(
     let mut cache_stats = None;
     let integrator = match integrator {
         Integrator::Ic(ic) if ic.cache.is_none() => {
-            let mut cache = IrradianceCache::new(scene, &ic.params);
-            let stats = if ic.params.bounces > 0 {
-                pool.install(|| fill_for_image(scene, &mut cache, w, h, settings.seed))
-            } else {
-                CacheStats::default()
-            };
+            let (cache, stats) = prepare_cache(scene, ic, settings, &pool)?;
             let mut ic = ic.clone();
             ic.cache = Some(Arc::new(cache));
             ic.seed = settings.seed;
@@ -199,4 +196,73 @@ fn render_pixel(
         done += n as u32;
     }
     (sum / settings.spp.max(1) as f32, invalid)
+}
+
+/// Fills the irradiance cache for the image: records from the cache file first (if any), then
+/// the pre-pass, whose new records are appended to the file batch by batch.
+fn prepare_cache(
+    scene: &Scene,
+    ic: &IcIntegrator,
+    settings: &RenderSettings,
+    pool: &rayon::ThreadPool,
+) -> Result<(IrradianceCache, CacheStats), RenderError> {
+    let mut cache = IrradianceCache::new(scene, &ic.params);
+    let header = Header {
+        version: file::VERSION,
+        scene_hash: scene.content_hash,
+        params: ic.params.clone(),
+    };
+    let mut loaded = 0u64;
+    let mut out = match &ic.cache_file {
+        None => None,
+        Some(path) if path.exists() => {
+            let contents = file::read(path)?;
+            if let Some(why) = contents.header.mismatch(&header) {
+                if !ic.force_reuse {
+                    return Err(file::CacheFileError::Stale {
+                        path: path.clone(),
+                        why,
+                    }
+                    .into());
+                }
+            }
+            for r in &contents.records {
+                if let Some(store) = cache.levels.get_mut(r.level as usize) {
+                    store.insert(*r);
+                    loaded += 1;
+                }
+            }
+            Some(CacheFile::append_to(path, &contents)?)
+        }
+        Some(path) => Some(CacheFile::create(path, &header)?),
+    };
+    let mut stats = if ic.params.bounces > 0 {
+        let mut failure = None;
+        let mut sink = |records: &[crate::irradiance_cache::Record]| {
+            if let (Some(f), None) = (out.as_mut(), &failure) {
+                if let Err(e) = f.append(records) {
+                    failure = Some(e);
+                }
+            }
+        };
+        let stats = pool.install(|| {
+            fill_for_image(
+                scene,
+                &mut cache,
+                settings.width,
+                settings.height,
+                settings.seed,
+                &mut sink,
+            )
+        });
+        if let Some(e) = failure {
+            return Err(e.into());
+        }
+        stats
+    } else {
+        CacheStats::default()
+    };
+    stats.records_loaded = loaded;
+    stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
+    Ok((cache, stats))
 }

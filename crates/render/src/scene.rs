@@ -23,6 +23,12 @@ pub enum RenderError {
     /// A parameter has a value the renderer cannot use.
     #[error("{0}")]
     Invalid(String),
+    /// The worker threads could not be started.
+    #[error("starting worker threads: {0}")]
+    Threads(#[from] rayon::ThreadPoolBuildError),
+    /// The irradiance cache file could not be used.
+    #[error(transparent)]
+    CacheFile(#[from] crate::irradiance_cache::file::CacheFileError),
 }
 
 /// Geometry kept for shading after the acceleration structure is built.
@@ -97,6 +103,45 @@ pub struct Scene {
     /// Some emitter can be found by a ray (an area light or an environment); when false, a path's
     /// last segment, which could only pick up emission, need not be traced.
     pub has_hittable_emitters: bool,
+    /// Content hash of what light transport depends on (geometry, materials, emitters; not the
+    /// camera, not where the files are): a cache file records it.
+    pub content_hash: u64,
+}
+
+/// FNV-1a of the scene's geometry (raw bytes), materials and emitters (their descriptions).
+fn content_hash(desc: &SceneDesc) -> u64 {
+    use crate::irradiance_cache::file::Fnv;
+    use std::fmt::Write;
+    let mut h = Fnv::default();
+    for s in &desc.shapes {
+        match &s.geometry {
+            Geometry::Mesh(m) => {
+                h.bytes(b"mesh");
+                for p in &m.positions {
+                    for c in p.to_array() {
+                        h.bytes(&c.to_le_bytes());
+                    }
+                }
+                for t in &m.indices {
+                    for i in t {
+                        h.bytes(&i.to_le_bytes());
+                    }
+                }
+                let _ = write!(
+                    h,
+                    "{:?}{:?}",
+                    m.normals.is_some(),
+                    m.uvs.as_ref().map(Vec::len)
+                );
+            }
+            g => {
+                let _ = write!(h, "{g:?}");
+            }
+        }
+        let _ = write!(h, "{:?}{:?}", s.bsdf, s.emitter);
+    }
+    let _ = write!(h, "{:?}", desc.emitters);
+    h.0
 }
 
 impl Scene {
@@ -167,6 +212,7 @@ impl Scene {
         let has_hittable_emitters =
             lights.has_environment() || shapes.iter().any(|s| s.area_light.is_some());
         Ok(Scene {
+            content_hash: content_hash(desc),
             has_hittable_emitters,
             accel,
             shapes,

@@ -34,6 +34,10 @@ pub struct IcIntegrator {
     /// Pixel samples no record reached even at twice the accuracy (a record was gathered for
     /// them alone and not kept).
     pub uncached_samples: Arc<AtomicU64>,
+    /// Persistent cache file: read before the pre-pass, new records appended batch by batch.
+    pub cache_file: Option<std::path::PathBuf>,
+    /// Use a cache file made for another scene or with other settings anyway.
+    pub force_reuse: bool,
 }
 
 impl IcIntegrator {
@@ -61,6 +65,8 @@ impl IcIntegrator {
             cache: None,
             seed: 0,
             uncached_samples: Arc::new(AtomicU64::new(0)),
+            cache_file: None,
+            force_reuse: false,
         })
     }
 

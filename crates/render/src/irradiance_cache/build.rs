@@ -36,6 +36,8 @@ pub struct CacheStats {
     pub gather_seconds: f64,
     /// Batches run.
     pub batches: u32,
+    /// Records read from a cache file before the pre-pass.
+    pub records_loaded: u64,
 }
 
 impl CacheStats {
@@ -67,13 +69,17 @@ pub fn first_diffuse_point(scene: &Scene, ray: &Ray) -> Option<ShadingPoint> {
     None
 }
 
-/// Runs one batch: `points[i] = (key, point)`. Returns the counters.
+/// Called with each batch's new records, in the order they entered the cache.
+pub type BatchSink<'a> = &'a mut dyn FnMut(&[Record]);
+
+/// Runs one batch: `points[i] = (key, point)`; hands the new records to `sink`.
 pub fn run_batch(
     scene: &Scene,
     cache: &mut IrradianceCache,
     seed: u64,
     points: &[(u64, ShadingPoint)],
     stats: &mut CacheStats,
+    sink: BatchSink,
 ) {
     let results: Vec<Option<(Record, WorkState)>> = {
         let g = Gatherer {
@@ -98,6 +104,7 @@ pub fn run_batch(
             .collect()
     };
     let mut counts = GatherCounts::default();
+    let mut added = Vec::new();
     for (rec, st) in results.into_iter().flatten() {
         counts.add(&st.counts);
         // Deeper records first: they were made for the level-0 record's gather.
@@ -107,12 +114,14 @@ pub fn run_batch(
                 stats.records_overlapping += 1;
             }
             store.insert(r);
+            added.push(r);
         }
     }
     stats.records_computed += counts.records;
     stats.gather_rays += counts.gather_rays;
     stats.shadow_rays += counts.shadow_rays;
     stats.batches += 1;
+    sink(&added);
 }
 
 /// Fills `cache` for a `width`×`height` view of `scene` (run inside the caller's thread pool).
@@ -122,6 +131,7 @@ pub fn fill_for_image(
     width: usize,
     height: usize,
     seed: u64,
+    sink: BatchSink,
 ) -> CacheStats {
     let start = Instant::now();
     let mut stats = CacheStats::default();
@@ -153,7 +163,7 @@ pub fn fill_for_image(
                         .map(|sp| (mix(0x0070_7265_7061_7373, (y * width + x) as u64), sp))
                 })
                 .collect();
-            run_batch(scene, cache, seed, &points, &mut stats);
+            run_batch(scene, cache, seed, &points, &mut stats, sink);
         }
         stride /= 2;
     }
@@ -180,7 +190,7 @@ pub fn fill_for_points(
             .filter(|(i, _)| i % stride == 0 && (stride == 64 || i % (2 * stride) != 0))
             .map(|(i, sp)| (mix(0x706f_696e_7473, i as u64), *sp))
             .collect();
-        run_batch(scene, cache, seed, &batch, &mut stats);
+        run_batch(scene, cache, seed, &batch, &mut stats, &mut |_| {});
         stride /= 2;
     }
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();

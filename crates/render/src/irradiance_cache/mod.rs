@@ -9,6 +9,7 @@
 //!   grid in the role of Radiance's octree) and interpolation.
 //! - [`params`]: accuracy, divisions, resolution, bounces, ambient value, gradients.
 //! - [`gather`]: computing a record: gather rays, shading what they hit, radius limits.
+//! - [`file`]: the persistent cache file (versioned header, checksummed records).
 //! - [`build`]: the coarse-to-fine pre-pass that fills the cache in parallel batches.
 //! - [`aov`]: the irradiance image and the record-position overlay.
 //! - [`points`]: irradiance at given points (Radiance's `rtrace -I`), by the cache or brute force.
@@ -17,6 +18,7 @@
 
 pub mod aov;
 pub mod build;
+pub mod file;
 pub mod gather;
 pub mod hemisphere;
 pub mod params;

@@ -1,0 +1,501 @@
+//! The persistent cache file (`--cache FILE`, Radiance's `-af`): a versioned binary format whose
+//! header records the scene's content hash and every parameter that changes record values, then
+//! records appended in batches, each with its own checksum, so that a file cut short by a crash
+//! opens with every record that was written completely (003 item 7's file, without its races).
+//!
+//! Layout (little-endian):
+//! - header, 64 bytes: magic `IRCACHE\0`, format version (u32), bounces (u32), scene hash (u64),
+//!   accuracy, resolution, ambient value r g b (f32 × 5), divisions, super-samples (u32 × 2),
+//!   gradient mode and formula (u8 × 2), 2 bytes zero, header checksum (u64: FNV-1a of the
+//!   bytes before it);
+//! - records, 124 bytes each: level (u8), 3 bytes zero, position, normal, irradiance (f32 × 9),
+//!   radius (f32), translational then rotational gradient (f32 × 18), checksum (u64: FNV-1a of
+//!   the 116 bytes before it).
+
+use super::params::{IcParams, TranslationalFormula};
+use super::record::{GradientMode, Record};
+use ircache_math::{Rgb, Vec3};
+use std::fs::{File, OpenOptions};
+use std::io::{Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+/// Bytes that open every cache file.
+pub const MAGIC: &[u8; 8] = b"IRCACHE\0";
+/// The format version this build reads and writes.
+pub const VERSION: u32 = 1;
+/// Header size in bytes.
+pub const HEADER_BYTES: usize = 64;
+/// Record size in bytes (payload and checksum).
+pub const RECORD_BYTES: usize = 124;
+const PAYLOAD_BYTES: usize = RECORD_BYTES - 8;
+
+/// Problems with a cache file.
+#[derive(Debug, thiserror::Error)]
+pub enum CacheFileError {
+    /// Reading or writing failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the system said.
+        source: std::io::Error,
+    },
+    /// Not a cache file, or a damaged header.
+    #[error("{path}: {why}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        why: String,
+    },
+    /// The file was made for another scene or with other settings.
+    #[error("{path}: made {why}; delete it, use another file, or pass --cache-reuse force")]
+    Stale {
+        /// The file.
+        path: PathBuf,
+        /// What differs.
+        why: String,
+    },
+}
+
+/// FNV-1a, 64 bits: a stable checksum and content hash (the same on every machine and run).
+#[derive(Clone, Copy, Debug)]
+pub struct Fnv(pub u64);
+
+impl Default for Fnv {
+    fn default() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv {
+    /// Feeds bytes.
+    pub fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 = (self.0 ^ u64::from(x)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    /// The hash of `b`.
+    #[must_use]
+    pub fn of(b: &[u8]) -> u64 {
+        let mut h = Fnv::default();
+        h.bytes(b);
+        h.0
+    }
+}
+
+impl std::fmt::Write for Fnv {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        self.bytes(s.as_bytes());
+        Ok(())
+    }
+}
+
+/// What a header holds.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Header {
+    /// Format version.
+    pub version: u32,
+    /// Content hash of the scene (geometry, materials, emitters; not the camera).
+    pub scene_hash: u64,
+    /// The settings the records were made with.
+    pub params: IcParams,
+}
+
+fn mode_code(m: GradientMode) -> u8 {
+    match m {
+        GradientMode::None => 0,
+        GradientMode::Rotation => 1,
+        GradientMode::Full => 2,
+    }
+}
+
+impl Header {
+    fn encode(&self) -> [u8; HEADER_BYTES] {
+        let p = &self.params;
+        let mut b = Vec::with_capacity(HEADER_BYTES);
+        b.extend_from_slice(MAGIC);
+        b.extend_from_slice(&self.version.to_le_bytes());
+        b.extend_from_slice(&p.bounces.to_le_bytes());
+        b.extend_from_slice(&self.scene_hash.to_le_bytes());
+        for f in [
+            p.accuracy,
+            p.resolution,
+            p.ambient_value.r,
+            p.ambient_value.g,
+            p.ambient_value.b,
+        ] {
+            b.extend_from_slice(&f.to_le_bytes());
+        }
+        b.extend_from_slice(&(p.divisions as u32).to_le_bytes());
+        b.extend_from_slice(&(p.supersamples as u32).to_le_bytes());
+        b.push(mode_code(p.gradients));
+        b.push(match p.formula {
+            TranslationalFormula::WardHeckbert => 0,
+            TranslationalFormula::Krivanek => 1,
+        });
+        b.extend_from_slice(&[0, 0]);
+        let sum = Fnv::of(&b);
+        b.extend_from_slice(&sum.to_le_bytes());
+        let mut out = [0u8; HEADER_BYTES];
+        out[..b.len()].copy_from_slice(&b);
+        out
+    }
+
+    fn decode(b: &[u8; HEADER_BYTES], path: &Path) -> Result<Header, CacheFileError> {
+        let invalid = |why: &str| CacheFileError::Invalid {
+            path: path.to_path_buf(),
+            why: why.to_string(),
+        };
+        if &b[..8] != MAGIC {
+            return Err(invalid("not an ircache cache file (bad magic bytes)"));
+        }
+        let u32_at = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap_or([0; 4]));
+        let f32_at = |i: usize| f32::from_le_bytes(b[i..i + 4].try_into().unwrap_or([0; 4]));
+        let version = u32_at(8);
+        if version != VERSION {
+            return Err(invalid(&format!(
+                "format version {version}; this ircache reads version {VERSION}"
+            )));
+        }
+        let body = 8 + 4 + 4 + 8 + 20 + 8 + 4;
+        let sum = u64::from_le_bytes(b[body..body + 8].try_into().unwrap_or([0; 8]));
+        if Fnv::of(&b[..body]) != sum {
+            return Err(invalid("damaged header (checksum mismatch)"));
+        }
+        let params = IcParams {
+            bounces: u32_at(12),
+            accuracy: f32_at(24),
+            resolution: f32_at(28),
+            ambient_value: Rgb::new(f32_at(32), f32_at(36), f32_at(40)),
+            divisions: u32_at(44) as usize,
+            supersamples: u32_at(48) as usize,
+            gradients: match b[52] {
+                0 => GradientMode::None,
+                1 => GradientMode::Rotation,
+                _ => GradientMode::Full,
+            },
+            formula: if b[53] == 1 {
+                TranslationalFormula::Krivanek
+            } else {
+                TranslationalFormula::WardHeckbert
+            },
+            ..IcParams::default()
+        };
+        Ok(Header {
+            version,
+            scene_hash: u64::from_le_bytes(b[16..24].try_into().unwrap_or([0; 8])),
+            params,
+        })
+    }
+
+    /// Why records made under `self` cannot serve `other` (`None`: they can). Settings that only
+    /// affect the pixel pass (light samples) do not matter.
+    #[must_use]
+    pub fn mismatch(&self, other: &Header) -> Option<String> {
+        if self.scene_hash != other.scene_hash {
+            return Some(format!(
+                "for another scene (content hash {:016x}, this scene {:016x})",
+                self.scene_hash, other.scene_hash
+            ));
+        }
+        let (a, b) = (&self.params, &other.params);
+        let diffs: Vec<String> = [
+            ("accuracy", a.accuracy.to_string(), b.accuracy.to_string()),
+            (
+                "divisions",
+                a.divisions.to_string(),
+                b.divisions.to_string(),
+            ),
+            (
+                "resolution",
+                a.resolution.to_string(),
+                b.resolution.to_string(),
+            ),
+            ("bounces", a.bounces.to_string(), b.bounces.to_string()),
+            (
+                "ambient value",
+                format!("{:?}", a.ambient_value.to_array()),
+                format!("{:?}", b.ambient_value.to_array()),
+            ),
+            (
+                "super-samples",
+                a.supersamples.to_string(),
+                b.supersamples.to_string(),
+            ),
+            (
+                "gradients",
+                a.gradients.name().into(),
+                b.gradients.name().into(),
+            ),
+            (
+                "gradient formula",
+                format!("{:?}", a.formula),
+                format!("{:?}", b.formula),
+            ),
+        ]
+        .into_iter()
+        .filter(|(_, x, y)| x != y)
+        .map(|(n, x, y)| format!("{n} {x} (now {y})"))
+        .collect();
+        (!diffs.is_empty()).then(|| format!("with other settings: {}", diffs.join(", ")))
+    }
+}
+
+fn encode_record(r: &Record) -> [u8; RECORD_BYTES] {
+    let mut b = [0u8; RECORD_BYTES];
+    b[0] = r.level;
+    let mut floats = Vec::with_capacity(28);
+    for v in [r.p, r.n] {
+        floats.extend_from_slice(&v.to_array());
+    }
+    floats.extend_from_slice(&r.e.to_array());
+    floats.push(r.r);
+    for g in r.grad_t.iter().chain(&r.grad_r) {
+        floats.extend_from_slice(&g.to_array());
+    }
+    for (i, f) in floats.iter().enumerate() {
+        b[4 + 4 * i..8 + 4 * i].copy_from_slice(&f.to_le_bytes());
+    }
+    let sum = Fnv::of(&b[..PAYLOAD_BYTES]);
+    b[PAYLOAD_BYTES..].copy_from_slice(&sum.to_le_bytes());
+    b
+}
+
+/// A record from its bytes; `None` when the checksum fails or a value is not finite.
+fn decode_record(b: &[u8]) -> Option<Record> {
+    if b.len() < RECORD_BYTES {
+        return None;
+    }
+    let sum = u64::from_le_bytes(b[PAYLOAD_BYTES..RECORD_BYTES].try_into().ok()?);
+    if Fnv::of(&b[..PAYLOAD_BYTES]) != sum {
+        return None;
+    }
+    let f: Vec<f32> = (0..28)
+        .map(|i| f32::from_le_bytes(b[4 + 4 * i..8 + 4 * i].try_into().unwrap_or([0; 4])))
+        .collect();
+    if f.iter().any(|x| !x.is_finite()) {
+        return None;
+    }
+    let v = |i: usize| Vec3::new(f[i], f[i + 1], f[i + 2]);
+    Some(Record {
+        level: b[0],
+        p: v(0),
+        n: v(3),
+        e: Rgb::new(f[6], f[7], f[8]),
+        r: f[9],
+        grad_t: [v(10), v(13), v(16)],
+        grad_r: [v(19), v(22), v(25)],
+    })
+}
+
+/// What reading a file found.
+#[derive(Clone, Debug)]
+pub struct Contents {
+    /// Its header.
+    pub header: Header,
+    /// Every complete, intact record, in file order.
+    pub records: Vec<Record>,
+    /// Bytes after the last intact record (a torn tail or damage), ignored.
+    pub torn_bytes: u64,
+}
+
+/// Reads a cache file.
+pub fn read(path: &Path) -> Result<Contents, CacheFileError> {
+    let io = |source| CacheFileError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut bytes = Vec::new();
+    File::open(path)
+        .and_then(|mut f| f.read_to_end(&mut bytes))
+        .map_err(io)?;
+    if bytes.len() < HEADER_BYTES {
+        return Err(CacheFileError::Invalid {
+            path: path.to_path_buf(),
+            why: format!(
+                "{} bytes: too short for the {HEADER_BYTES}-byte header of a cache file",
+                bytes.len()
+            ),
+        });
+    }
+    let header_bytes: [u8; HEADER_BYTES] =
+        bytes[..HEADER_BYTES]
+            .try_into()
+            .map_err(|_| CacheFileError::Invalid {
+                path: path.to_path_buf(),
+                why: "short header".into(),
+            })?;
+    let header = Header::decode(&header_bytes, path)?;
+    let mut records = Vec::new();
+    let mut at = HEADER_BYTES;
+    while let Some(r) = bytes.get(at..at + RECORD_BYTES).and_then(decode_record) {
+        records.push(r);
+        at += RECORD_BYTES;
+    }
+    Ok(Contents {
+        header,
+        records,
+        torn_bytes: (bytes.len() - at) as u64,
+    })
+}
+
+/// A cache file open for appending records.
+#[derive(Debug)]
+pub struct CacheFile {
+    path: PathBuf,
+    file: File,
+}
+
+impl CacheFile {
+    /// Creates (or replaces) `path` with `header` and no records.
+    pub fn create(path: &Path, header: &Header) -> Result<CacheFile, CacheFileError> {
+        let io = |source| CacheFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut file = File::create(path).map_err(io)?;
+        file.write_all(&header.encode()).map_err(io)?;
+        file.sync_data().map_err(io)?;
+        Ok(CacheFile {
+            path: path.to_path_buf(),
+            file,
+        })
+    }
+
+    /// Opens an existing file for appending after its last intact record (a torn tail is cut
+    /// off first).
+    pub fn append_to(path: &Path, contents: &Contents) -> Result<CacheFile, CacheFileError> {
+        let io = |source| CacheFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut file = OpenOptions::new().write(true).open(path).map_err(io)?;
+        let end = (HEADER_BYTES + contents.records.len() * RECORD_BYTES) as u64;
+        file.set_len(end).map_err(io)?;
+        file.seek(SeekFrom::Start(end)).map_err(io)?;
+        Ok(CacheFile {
+            path: path.to_path_buf(),
+            file,
+        })
+    }
+
+    /// Appends records and flushes them to the disk.
+    pub fn append(&mut self, records: &[Record]) -> Result<(), CacheFileError> {
+        if records.is_empty() {
+            return Ok(());
+        }
+        let mut buf = Vec::with_capacity(records.len() * RECORD_BYTES);
+        for r in records {
+            buf.extend_from_slice(&encode_record(r));
+        }
+        self.file
+            .write_all(&buf)
+            .and_then(|()| self.file.sync_data())
+            .map_err(|source| CacheFileError::Io {
+                path: self.path.clone(),
+                source,
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record(i: usize) -> Record {
+        let f = i as f32;
+        Record {
+            p: Vec3::new(f, 2.0 * f, -f),
+            n: Vec3::Z,
+            e: Rgb::new(f, 0.5, 0.25),
+            r: 1.0 + f,
+            grad_t: [Vec3::X * f, Vec3::Y, Vec3::Z],
+            grad_r: [Vec3::ONE, Vec3::X, Vec3::Y * f],
+            level: (i % 3) as u8,
+        }
+    }
+
+    fn header() -> Header {
+        Header {
+            version: VERSION,
+            scene_hash: 0x1234_5678_9abc_def0,
+            params: IcParams {
+                bounces: 3,
+                supersamples: 64,
+                ambient_value: Rgb::new(0.1, 0.2, 0.3),
+                ..IcParams::default()
+            },
+        }
+    }
+
+    fn temp(name: &str) -> PathBuf {
+        std::env::temp_dir().join(format!("ircache-file-{name}-{}", std::process::id()))
+    }
+
+    #[test]
+    fn round_trip_of_header_and_records() {
+        let path = temp("round-trip");
+        let mut f = CacheFile::create(&path, &header()).unwrap();
+        let recs: Vec<Record> = (0..10).map(record).collect();
+        f.append(&recs[..4]).unwrap();
+        f.append(&recs[4..]).unwrap();
+        drop(f);
+        let c = read(&path).unwrap();
+        assert_eq!(c.header, header());
+        assert_eq!(c.records, recs);
+        assert_eq!(c.torn_bytes, 0);
+        assert!(c.header.mismatch(&header()).is_none());
+        let mut other = header();
+        other.params.divisions = 512;
+        let why = c.header.mismatch(&other).unwrap();
+        assert!(why.contains("divisions 1024 (now 512)"), "{why}");
+        other.scene_hash ^= 1;
+        assert!(c.header.mismatch(&other).unwrap().contains("another scene"));
+        let _ = std::fs::remove_file(path);
+    }
+
+    #[test]
+    fn a_torn_last_record_leaves_every_earlier_one() {
+        let path = temp("torn");
+        let recs: Vec<Record> = (0..6).map(record).collect();
+        let mut f = CacheFile::create(&path, &header()).unwrap();
+        f.append(&recs).unwrap();
+        drop(f);
+        let full = std::fs::read(&path).unwrap();
+        let last = HEADER_BYTES + 5 * RECORD_BYTES;
+        let cut = temp("torn-cut");
+        for len in last..full.len() {
+            std::fs::write(&cut, &full[..len]).unwrap();
+            let c = read(&cut).unwrap();
+            assert_eq!(c.records, recs[..5], "cut at {len}");
+            assert_eq!(c.torn_bytes, (len - last) as u64);
+            // Appending cuts the torn tail off first.
+            let mut f = CacheFile::append_to(&cut, &c).unwrap();
+            f.append(&[record(9)]).unwrap();
+            drop(f);
+            let c = read(&cut).unwrap();
+            assert_eq!(c.records.len(), 6);
+            assert_eq!(c.records[5], record(9));
+            assert_eq!(c.torn_bytes, 0);
+        }
+        // A flipped bit in the last record: it is dropped, the others stay.
+        let mut bad = full.clone();
+        bad[last + 10] ^= 4;
+        std::fs::write(&cut, &bad).unwrap();
+        assert_eq!(read(&cut).unwrap().records, recs[..5]);
+        // Not a cache file, a short file, a damaged header: clear errors.
+        std::fs::write(&cut, b"hello").unwrap();
+        assert!(read(&cut).unwrap_err().to_string().contains("too short"));
+        let mut bad = full.clone();
+        bad[0] = b'X';
+        std::fs::write(&cut, &bad).unwrap();
+        assert!(read(&cut).unwrap_err().to_string().contains("magic"));
+        let mut bad = full;
+        bad[30] ^= 1;
+        std::fs::write(&cut, &bad).unwrap();
+        assert!(read(&cut).unwrap_err().to_string().contains("checksum"));
+        let _ = std::fs::remove_file(path);
+        let _ = std::fs::remove_file(cut);
+    }
+}
