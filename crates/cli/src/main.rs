@@ -29,7 +29,7 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Render a scene to an image.
-    Render(render::RenderArgs),
+    Render(Box<render::RenderArgs>),
     /// Compare an image against a reference.
     Compare(compare::CompareArgs),
     /// Irradiance at points read as lines "x y z nx ny nz" (Radiance's rtrace -I).
