@@ -33,7 +33,7 @@ enum Command {
     /// Compare an image against a reference.
     Compare(compare::CompareArgs),
     /// Irradiance at points read as lines "x y z nx ny nz" (Radiance's rtrace -I).
-    Irradiance(irradiance::IrradianceArgs),
+    Irradiance(Box<irradiance::IrradianceArgs>),
     /// Inspect an irradiance cache file (`ircache cache info FILE`).
     #[command(subcommand)]
     Cache(cache_info::CacheCommand),
