@@ -294,6 +294,7 @@ fn path_scene(scene_path: &Path, args: &BenchArgs) -> Result<()> {
             seed: 0,
             threads,
             filter: Filter::from_desc(&desc.sensor.film.filter),
+            band: None,
         };
         let out = render(&scene, &integrator, &settings, &|_| {})?;
         println!(
@@ -572,6 +573,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
                     seed: 0,
                     threads: t,
                     filter: Filter::from_desc(&desc.sensor.film.filter),
+                    band: None,
                 };
                 let out = render(&scene, &integrator, &settings, &|_| {})?;
                 let m = ircache_image::compare::compare(&out.image, &reference)?;

@@ -53,3 +53,45 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     }
     Ok(())
 }
+
+/// Arguments of `ircache merge`.
+#[derive(clap::Args, Debug)]
+pub struct MergeArgs {
+    /// Images to sum (the same size).
+    #[arg(required = true, num_args = 1..)]
+    pub images: Vec<std::path::PathBuf>,
+    /// The sum.
+    #[arg(short = 'o', long = "output")]
+    pub output: std::path::PathBuf,
+}
+
+/// Runs `ircache merge`: the pixelwise sum of the images.
+pub fn merge(args: &MergeArgs) -> anyhow::Result<()> {
+    use anyhow::Context;
+    let mut sum: Option<ircache_image::Image> = None;
+    for p in &args.images {
+        let img =
+            ircache_image::read_image(p).with_context(|| format!("reading {}", p.display()))?;
+        match &mut sum {
+            None => sum = Some(img),
+            Some(s) => {
+                if (s.width, s.height) != (img.width, img.height) {
+                    anyhow::bail!(
+                        "{}: {}×{}, but the first image is {}×{}",
+                        p.display(),
+                        img.width,
+                        img.height,
+                        s.width,
+                        s.height
+                    );
+                }
+                for (a, b) in s.pixels.iter_mut().zip(&img.pixels) {
+                    *a += *b;
+                }
+            }
+        }
+    }
+    let sum = sum.context("no images")?;
+    ircache_image::write_image(&args.output, &sum, 0.0)?;
+    Ok(())
+}

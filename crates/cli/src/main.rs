@@ -34,6 +34,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Irradiance at points read as lines "x y z nx ny nz" (Radiance's rtrace -I).
     Irradiance(Box<irradiance::IrradianceArgs>),
+    /// Sum images of the same size (the bands of `render --tile i/n` make the whole image).
+    Merge(compare::MergeArgs),
     /// Inspect an irradiance cache file (`ircache cache info FILE`).
     #[command(subcommand)]
     Cache(cache_info::CacheCommand),
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Command::Compare(a) => compare::run(&a),
         Command::Irradiance(a) => irradiance::run(&a),
         Command::Cache(c) => cache_info::run(&c),
+        Command::Merge(a) => compare::merge(&a),
         Command::Bench(a) => bench::run(&a),
     };
     match result {

@@ -76,9 +76,26 @@ pub struct RenderArgs {
     /// NAME-records.exr). Repeat or separate with commas.
     #[arg(long, value_delimiter = ',')]
     pub aov: Vec<String>,
+    /// Render only band i of n equal bands of rows (0-based, `--tile 2/4`), the rest black: n
+    /// processes, one per band, sharing one `--cache` file, and `ircache merge` sums their images.
+    #[arg(long, value_parser = parse_tile, value_name = "i/n")]
+    pub tile: Option<(usize, usize)>,
     /// Irradiance cache settings.
     #[command(flatten)]
     pub cache: CacheArgs,
+}
+
+fn parse_tile(s: &str) -> Result<(usize, usize), String> {
+    let err = || format!("expected i/n with 0 ≤ i < n (for example 0/4), found \"{s}\"");
+    let (i, n) = s.split_once('/').ok_or_else(err)?;
+    let (i, n) = (
+        i.trim().parse::<usize>().map_err(|_| err())?,
+        n.trim().parse::<usize>().map_err(|_| err())?,
+    );
+    if n == 0 || i >= n {
+        return Err(err());
+    }
+    Ok((i, n))
 }
 
 fn parse_vec3(s: &str) -> Result<Vec3, String> {
@@ -225,6 +242,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         seed: args.seed,
         threads: args.threads.unwrap_or(0),
         filter: Filter::from_desc(&desc.sensor.film.filter),
+        band: args.tile,
     };
     let show = !args.quiet && std::io::stderr().is_terminal();
     let bar = if show {
@@ -361,6 +379,7 @@ fn write_stats(
             "records_computed": st.records_computed,
             "records_overlapping": st.records_overlapping,
             "records_loaded": st.records_loaded,
+            "records_from_others": st.records_from_others,
             "gather_rays": out.rays.gather,
             "prepass_gather_rays": st.gather_rays,
             "gather_seconds": st.gather_seconds,

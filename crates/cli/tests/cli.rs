@@ -483,3 +483,100 @@ fn cache_file_is_reused_across_runs_and_views_and_refused_when_stale() {
         "{info}"
     );
 }
+
+#[test]
+fn four_processes_share_one_cache_file_on_disjoint_tiles() {
+    let d = temp_dir("shared-cache");
+    std::fs::write(d.join("room.xml"), room_xml()).unwrap();
+    let base = [
+        "render",
+        "room.xml",
+        "-ad",
+        "128",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--spp",
+        "4",
+        "-q",
+        "--threads",
+        "1",
+    ];
+    // Four processes at once, one band each, one cache file.
+    let children: Vec<_> = (0..4)
+        .map(|i| {
+            let tile = format!("{i}/4");
+            let (out, stats) = (format!("t{i}.exr"), format!("t{i}.json"));
+            Command::new(env!("CARGO_BIN_EXE_ircache"))
+                .args(base)
+                .args([
+                    "--tile",
+                    &tile,
+                    "--cache",
+                    "shared.icc",
+                    "-o",
+                    &out,
+                    "--stats",
+                    &stats,
+                ])
+                .current_dir(&d)
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let mut computed = 0;
+    for (i, c) in children.into_iter().enumerate() {
+        let o = c.wait_with_output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        computed += stats_of(&d, &format!("t{i}.json"))["records_computed"]
+            .as_u64()
+            .unwrap();
+    }
+    // The file holds every record, none torn or corrupt.
+    let o = ircache(&["cache", "info", "shared.icc"], &d);
+    let info = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        info.contains(&format!("records          {computed} ")),
+        "{computed}: {info}"
+    );
+    assert!(!info.contains("torn"), "{info}");
+    // One process alone.
+    let o = ircache(
+        &[&base[..], &["-o", "single.exr", "--stats", "single.json"]].concat(),
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let single = stats_of(&d, "single.json")["records_computed"]
+        .as_u64()
+        .unwrap();
+    assert!(
+        computed as f64 <= 1.3 * single as f64,
+        "{computed} records by four processes vs {single} by one"
+    );
+    // The bands sum to the single-process image.
+    let o = ircache(
+        &[
+            "merge",
+            "t0.exr",
+            "t1.exr",
+            "t2.exr",
+            "t3.exr",
+            "-o",
+            "merged.exr",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = ircache(&["compare", "merged.exr", "single.exr", "--json"], &d);
+    let m: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (e, lum) = (
+        m["relMSE_trim"].as_f64().unwrap(),
+        m["lum_ratio"].as_f64().unwrap(),
+    );
+    assert!(
+        e < 2e-3 && (lum - 1.0).abs() < 0.01,
+        "relMSE_trim {e}, lum ratio {lum}"
+    );
+}

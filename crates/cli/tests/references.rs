@@ -57,6 +57,7 @@ fn render_against_reference(
         seed: 11,
         threads: 0,
         filter: Filter::from_desc(&desc.sensor.film.filter),
+        band: None,
     };
     let out = render(&built, &integrator, &settings, &|_| {}).expect("render");
     let reference = ircache_image::read_image(&root.join(reference)).expect("reference reads");
@@ -198,6 +199,7 @@ fn small_cornell(
         seed: 3,
         threads: 0,
         filter: Filter::Box,
+        band: None,
     };
     render(&built, &integrator, &settings, &|_| {})
         .expect("render")

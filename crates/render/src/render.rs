@@ -5,7 +5,7 @@
 use crate::film::Filter;
 use crate::integrators::ic::IcIntegrator;
 use crate::integrators::{Integrator, RayCounts};
-use crate::irradiance_cache::build::fill_for_image;
+use crate::irradiance_cache::build::{fill_for_image, BatchHook};
 use crate::irradiance_cache::file::{self, CacheFile, Header};
 use crate::irradiance_cache::{CacheStats, IrradianceCache};
 use crate::scene::{RenderError, Scene};
@@ -34,6 +34,20 @@ pub struct RenderSettings {
     pub threads: usize,
     /// Pixel filter.
     pub filter: Filter,
+    /// Render only band `i` of `n` equal bands of rows (`--tile i/n`); the other pixels stay
+    /// black, so the bands of `n` processes sum to the whole image.
+    pub band: Option<(usize, usize)>,
+}
+
+impl RenderSettings {
+    /// The rows this render covers.
+    #[must_use]
+    pub fn rows(&self) -> std::ops::Range<usize> {
+        match self.band {
+            Some((i, n)) if n > 0 => (i * self.height / n)..((i + 1) * self.height / n),
+            _ => 0..self.height,
+        }
+    }
 }
 
 /// A finished render.
@@ -107,8 +121,13 @@ pub fn render(
                 let mut pixels = Vec::with_capacity((x1 - x0) * (y1 - y0));
                 let mut rays = RayCounts::default();
                 let mut invalid = 0u64;
+                let rows = settings.rows();
                 for y in y0..y1 {
                     for x in x0..x1 {
+                        if !rows.contains(&y) {
+                            pixels.push(Rgb::ZERO);
+                            continue;
+                        }
                         let (c, bad) = render_pixel(scene, integrator, settings, x, y, &mut rays);
                         invalid += bad;
                         pixels.push(c);
@@ -213,37 +232,27 @@ fn prepare_cache(
         params: ic.params.clone(),
     };
     let mut loaded = 0u64;
-    let mut out = match &ic.cache_file {
+    let mut shared = match &ic.cache_file {
         None => None,
-        Some(path) if path.exists() => {
-            let contents = file::read(path)?;
-            if let Some(why) = contents.header.mismatch(&header) {
-                if !ic.force_reuse {
-                    return Err(file::CacheFileError::Stale {
-                        path: path.clone(),
-                        why,
-                    }
-                    .into());
-                }
-            }
+        Some(path) => {
+            let (f, contents) = CacheFile::open(path, &header, ic.force_reuse)?;
             for r in &contents.records {
                 if let Some(store) = cache.levels.get_mut(r.level as usize) {
                     store.insert(*r);
                     loaded += 1;
                 }
             }
-            Some(CacheFile::append_to(path, &contents)?)
+            Some(SharedFile {
+                file: f,
+                failure: None,
+            })
         }
-        Some(path) => Some(CacheFile::create(path, &header)?),
     };
     let mut stats = if ic.params.bounces > 0 {
-        let mut failure = None;
-        let mut sink = |records: &[crate::irradiance_cache::Record]| {
-            if let (Some(f), None) = (out.as_mut(), &failure) {
-                if let Err(e) = f.append(records) {
-                    failure = Some(e);
-                }
-            }
+        let mut none = ();
+        let hook: &mut (dyn BatchHook + Send) = match shared.as_mut() {
+            Some(s) => s,
+            None => &mut none,
         };
         let stats = pool.install(|| {
             fill_for_image(
@@ -251,11 +260,12 @@ fn prepare_cache(
                 &mut cache,
                 settings.width,
                 settings.height,
+                settings.rows(),
                 settings.seed,
-                &mut sink,
+                hook,
             )
         });
-        if let Some(e) = failure {
+        if let Some(e) = shared.and_then(|s| s.failure) {
             return Err(e.into());
         }
         stats
@@ -265,4 +275,36 @@ fn prepare_cache(
     stats.records_loaded = loaded;
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     Ok((cache, stats))
+}
+
+/// The pre-pass's link to a cache file shared with other processes: their records come in
+/// before and after each batch, this process's go out after it.
+struct SharedFile {
+    file: CacheFile,
+    failure: Option<file::CacheFileError>,
+}
+
+impl BatchHook for SharedFile {
+    fn before(&mut self) -> Vec<crate::irradiance_cache::Record> {
+        if self.failure.is_some() {
+            return Vec::new();
+        }
+        self.file.read_new().unwrap_or_else(|e| {
+            self.failure = Some(e);
+            Vec::new()
+        })
+    }
+
+    fn after(
+        &mut self,
+        added: &[crate::irradiance_cache::Record],
+    ) -> Vec<crate::irradiance_cache::Record> {
+        if self.failure.is_some() {
+            return Vec::new();
+        }
+        self.file.append(added).unwrap_or_else(|e| {
+            self.failure = Some(e);
+            Vec::new()
+        })
+    }
 }

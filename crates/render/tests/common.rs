@@ -91,6 +91,7 @@ pub fn render_desc(desc: &SceneDesc, threads: usize, seed: u64) -> RenderOutput 
         seed,
         threads,
         filter: Filter::from_desc(&desc.sensor.film.filter),
+        band: None,
     };
     render(&scene, &integrator, &settings, &|_| {}).expect("render")
 }

@@ -299,6 +299,7 @@ fn records_match_the_exact_irradiance_at_their_positions() {
             seed: 5,
             threads: 2,
             filter: ircache_render::film::Filter::Box,
+            band: None,
         },
         &|_| {},
     )

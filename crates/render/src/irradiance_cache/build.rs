@@ -38,6 +38,8 @@ pub struct CacheStats {
     pub batches: u32,
     /// Records read from a cache file before the pre-pass.
     pub records_loaded: u64,
+    /// Records other processes sharing the cache file made during the pre-pass.
+    pub records_from_others: u64,
 }
 
 impl CacheStats {
@@ -69,8 +71,31 @@ pub fn first_diffuse_point(scene: &Scene, ray: &Ray) -> Option<ShadingPoint> {
     None
 }
 
-/// Called with each batch's new records, in the order they entered the cache.
-pub type BatchSink<'a> = &'a mut dyn FnMut(&[Record]);
+/// Hooks around each batch of the pre-pass; a cache file shared with other processes uses them
+/// to bring in their records and hand out this process's.
+pub trait BatchHook {
+    /// Before a batch: records made elsewhere, to add to the cache.
+    fn before(&mut self) -> Vec<Record> {
+        Vec::new()
+    }
+    /// After a batch, with the records it added (in order): more records made elsewhere.
+    fn after(&mut self, added: &[Record]) -> Vec<Record> {
+        let _ = added;
+        Vec::new()
+    }
+}
+
+impl BatchHook for () {}
+
+/// Adds records made elsewhere to their levels' stores.
+fn take_in(cache: &mut IrradianceCache, records: Vec<Record>, stats: &mut CacheStats) {
+    for r in records {
+        if let Some(store) = cache.levels.get_mut(r.level as usize) {
+            store.insert(r);
+            stats.records_from_others += 1;
+        }
+    }
+}
 
 /// Runs one batch: `points[i] = (key, point)`; hands the new records to `sink`.
 pub fn run_batch(
@@ -79,8 +104,9 @@ pub fn run_batch(
     seed: u64,
     points: &[(u64, ShadingPoint)],
     stats: &mut CacheStats,
-    sink: BatchSink,
+    hook: &mut (dyn BatchHook + Send),
 ) {
+    take_in(cache, hook.before(), stats);
     let results: Vec<Option<(Record, WorkState)>> = {
         let g = Gatherer {
             scene,
@@ -121,7 +147,8 @@ pub fn run_batch(
     stats.gather_rays += counts.gather_rays;
     stats.shadow_rays += counts.shadow_rays;
     stats.batches += 1;
-    sink(&added);
+    let others = hook.after(&added);
+    take_in(cache, others, stats);
 }
 
 /// Fills `cache` for a `width`×`height` view of `scene` (run inside the caller's thread pool).
@@ -130,8 +157,9 @@ pub fn fill_for_image(
     cache: &mut IrradianceCache,
     width: usize,
     height: usize,
+    rows: std::ops::Range<usize>,
     seed: u64,
-    sink: BatchSink,
+    hook: &mut (dyn BatchHook + Send),
 ) -> CacheStats {
     let start = Instant::now();
     let mut stats = CacheStats::default();
@@ -151,7 +179,9 @@ pub fn fill_for_image(
                 .step_by(stride)
                 .flat_map(|y| (0..width).step_by(stride).map(move |x| (x, y)))
                 .filter(|&(x, y)| {
-                    stride == coarsest || ((x / stride) % 2 == px && (y / stride) % 2 == py)
+                    rows.contains(&y)
+                        && (stride == coarsest
+                            || ((x / stride) % 2 == px && (y / stride) % 2 == py))
                 })
                 .collect();
             let points: Vec<(u64, ShadingPoint)> = pixels
@@ -163,7 +193,7 @@ pub fn fill_for_image(
                         .map(|sp| (mix(0x0070_7265_7061_7373, (y * width + x) as u64), sp))
                 })
                 .collect();
-            run_batch(scene, cache, seed, &points, &mut stats, sink);
+            run_batch(scene, cache, seed, &points, &mut stats, hook);
         }
         stride /= 2;
     }
@@ -190,7 +220,7 @@ pub fn fill_for_points(
             .filter(|(i, _)| i % stride == 0 && (stride == 64 || i % (2 * stride) != 0))
             .map(|(i, sp)| (mix(0x706f_696e_7473, i as u64), *sp))
             .collect();
-        run_batch(scene, cache, seed, &batch, &mut stats, &mut |_| {});
+        run_batch(scene, cache, seed, &batch, &mut stats, &mut ());
         stride /= 2;
     }
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();

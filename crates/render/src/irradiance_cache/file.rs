@@ -340,62 +340,142 @@ pub fn read(path: &Path) -> Result<Contents, CacheFileError> {
     })
 }
 
-/// A cache file open for appending records.
+/// A cache file shared with other processes: every access holds an advisory lock on the file
+/// (shared to read, exclusive to write), and writes are whole batches, so readers never see half
+/// a batch. Each process reads the records the others appended since it last looked.
 #[derive(Debug)]
 pub struct CacheFile {
     path: PathBuf,
     file: File,
+    /// Offset just after the last record this process has read or written.
+    read_pos: u64,
+}
+
+/// Holds a lock until dropped.
+struct Locked<'a>(&'a File);
+
+impl Drop for Locked<'_> {
+    fn drop(&mut self) {
+        let _ = self.0.unlock();
+    }
 }
 
 impl CacheFile {
-    /// Creates (or replaces) `path` with `header` and no records.
-    pub fn create(path: &Path, header: &Header) -> Result<CacheFile, CacheFileError> {
-        let io = |source| CacheFileError::Io {
-            path: path.to_path_buf(),
+    fn io(&self) -> impl Fn(std::io::Error) -> CacheFileError + '_ {
+        |source| CacheFileError::Io {
+            path: self.path.clone(),
             source,
-        };
-        let mut file = File::create(path).map_err(io)?;
-        file.write_all(&header.encode()).map_err(io)?;
-        file.sync_data().map_err(io)?;
-        Ok(CacheFile {
-            path: path.to_path_buf(),
-            file,
-        })
+        }
     }
 
-    /// Opens an existing file for appending after its last intact record (a torn tail is cut
-    /// off first).
-    pub fn append_to(path: &Path, contents: &Contents) -> Result<CacheFile, CacheFileError> {
-        let io = |source| CacheFileError::Io {
+    /// Opens `path`, creating it with `header` if it does not exist or is empty. An existing
+    /// file must have been made for the same scene and settings unless `force`; its torn tail
+    /// (a crash in the middle of a write) is cut off. Returns the file and what it held.
+    pub fn open(
+        path: &Path,
+        header: &Header,
+        force: bool,
+    ) -> Result<(CacheFile, Contents), CacheFileError> {
+        let file = OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(path)
+            .map_err(|source| CacheFileError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        let mut this = CacheFile {
             path: path.to_path_buf(),
-            source,
+            file,
+            read_pos: 0,
         };
-        let mut file = OpenOptions::new().write(true).open(path).map_err(io)?;
+        this.file.lock().map_err(this.io())?;
+        let guard = Locked(&this.file);
+        let len = this.file.metadata().map_err(this.io())?.len();
+        let contents = if len == 0 {
+            let mut f = &this.file;
+            f.write_all(&header.encode()).map_err(this.io())?;
+            f.sync_data().map_err(this.io())?;
+            Contents {
+                header: header.clone(),
+                records: Vec::new(),
+                torn_bytes: 0,
+            }
+        } else {
+            let contents = read(path)?;
+            if let Some(why) = contents.header.mismatch(header) {
+                if !force {
+                    return Err(CacheFileError::Stale {
+                        path: path.to_path_buf(),
+                        why,
+                    });
+                }
+            }
+            contents
+        };
         let end = (HEADER_BYTES + contents.records.len() * RECORD_BYTES) as u64;
-        file.set_len(end).map_err(io)?;
-        file.seek(SeekFrom::Start(end)).map_err(io)?;
-        Ok(CacheFile {
-            path: path.to_path_buf(),
-            file,
-        })
+        if contents.torn_bytes > 0 {
+            this.file.set_len(end).map_err(this.io())?;
+        }
+        drop(guard);
+        this.read_pos = end;
+        Ok((this, contents))
     }
 
-    /// Appends records and flushes them to the disk.
-    pub fn append(&mut self, records: &[Record]) -> Result<(), CacheFileError> {
-        if records.is_empty() {
-            return Ok(());
+    /// Intact records from `read_pos` to the end of the file (the caller holds a lock), and
+    /// the offset after the last of them.
+    fn read_tail(&self) -> Result<(Vec<Record>, u64, u64), CacheFileError> {
+        let mut f = &self.file;
+        let len = f.metadata().map_err(self.io())?.len();
+        let mut bytes = Vec::new();
+        if len > self.read_pos {
+            f.seek(SeekFrom::Start(self.read_pos)).map_err(self.io())?;
+            f.take(len - self.read_pos)
+                .read_to_end(&mut bytes)
+                .map_err(self.io())?;
+        }
+        let records: Vec<Record> = bytes
+            .chunks_exact(RECORD_BYTES)
+            .map_while(decode_record)
+            .collect();
+        let end = self.read_pos + (records.len() * RECORD_BYTES) as u64;
+        Ok((records, end, len))
+    }
+
+    /// Records other processes appended since this one last looked.
+    pub fn read_new(&mut self) -> Result<Vec<Record>, CacheFileError> {
+        self.file.lock_shared().map_err(self.io())?;
+        let guard = Locked(&self.file);
+        let (records, end, _) = self.read_tail()?;
+        drop(guard);
+        self.read_pos = end;
+        Ok(records)
+    }
+
+    /// Appends `records` (flushed to the disk before the lock is released) and returns the
+    /// records others appended since this process last looked, which come before them.
+    pub fn append(&mut self, records: &[Record]) -> Result<Vec<Record>, CacheFileError> {
+        self.file.lock().map_err(self.io())?;
+        let guard = Locked(&self.file);
+        let (others, end, len) = self.read_tail()?;
+        if len > end {
+            // What follows the last intact record is the remnant of a crashed write.
+            self.file.set_len(end).map_err(self.io())?;
         }
         let mut buf = Vec::with_capacity(records.len() * RECORD_BYTES);
         for r in records {
             buf.extend_from_slice(&encode_record(r));
         }
-        self.file
-            .write_all(&buf)
-            .and_then(|()| self.file.sync_data())
-            .map_err(|source| CacheFileError::Io {
-                path: self.path.clone(),
-                source,
-            })
+        let mut f = &self.file;
+        f.seek(SeekFrom::Start(end)).map_err(self.io())?;
+        f.write_all(&buf)
+            .and_then(|()| f.sync_data())
+            .map_err(self.io())?;
+        drop(guard);
+        self.read_pos = end + buf.len() as u64;
+        Ok(others)
     }
 }
 
@@ -436,11 +516,26 @@ mod tests {
     #[test]
     fn round_trip_of_header_and_records() {
         let path = temp("round-trip");
-        let mut f = CacheFile::create(&path, &header()).unwrap();
+        let _ = std::fs::remove_file(&path);
+        let (mut f, c) = CacheFile::open(&path, &header(), false).unwrap();
+        assert!(c.records.is_empty());
         let recs: Vec<Record> = (0..10).map(record).collect();
-        f.append(&recs[..4]).unwrap();
-        f.append(&recs[4..]).unwrap();
-        drop(f);
+        assert!(f.append(&recs[..4]).unwrap().is_empty());
+        // A second writer on the same file sees the first one's records and adds its own.
+        let (mut g, c) = CacheFile::open(&path, &header(), false).unwrap();
+        assert_eq!(c.records, recs[..4]);
+        assert!(g.append(&recs[4..7]).unwrap().is_empty());
+        assert_eq!(f.read_new().unwrap(), recs[4..7]);
+        assert!(f.append(&recs[7..]).unwrap().is_empty());
+        assert_eq!(g.read_new().unwrap(), recs[7..]);
+        drop((f, g));
+        let mut other = header();
+        other.params.accuracy = 0.5;
+        let e = CacheFile::open(&path, &other, false)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("accuracy 0.2 (now 0.5)"), "{e}");
+        assert!(CacheFile::open(&path, &other, true).is_ok());
         let c = read(&path).unwrap();
         assert_eq!(c.header, header());
         assert_eq!(c.records, recs);
@@ -459,7 +554,8 @@ mod tests {
     fn a_torn_last_record_leaves_every_earlier_one() {
         let path = temp("torn");
         let recs: Vec<Record> = (0..6).map(record).collect();
-        let mut f = CacheFile::create(&path, &header()).unwrap();
+        let _ = std::fs::remove_file(&path);
+        let (mut f, _) = CacheFile::open(&path, &header(), false).unwrap();
         f.append(&recs).unwrap();
         drop(f);
         let full = std::fs::read(&path).unwrap();
@@ -470,8 +566,9 @@ mod tests {
             let c = read(&cut).unwrap();
             assert_eq!(c.records, recs[..5], "cut at {len}");
             assert_eq!(c.torn_bytes, (len - last) as u64);
-            // Appending cuts the torn tail off first.
-            let mut f = CacheFile::append_to(&cut, &c).unwrap();
+            // Opening cuts the torn tail off.
+            let (mut f, c2) = CacheFile::open(&cut, &header(), false).unwrap();
+            assert_eq!(c2.records, recs[..5]);
             f.append(&[record(9)]).unwrap();
             drop(f);
             let c = read(&cut).unwrap();
