@@ -34,6 +34,13 @@ pub struct CacheArgs {
     /// Light samples per pixel sample for the direct term.
     #[arg(long = "direct-samples", help_heading = "Irradiance cache")]
     pub direct_samples: Option<String>,
+    /// Weight of the ambient value in a running average with computed irradiance (Radiance -aw).
+    #[arg(
+        long = "ambient-weight",
+        visible_alias = "aw",
+        help_heading = "Irradiance cache"
+    )]
+    pub ambient_weight: Option<String>,
     /// Gradients used in interpolation: none, rotation, full.
     #[arg(long, help_heading = "Irradiance cache")]
     pub gradients: Option<String>,
@@ -68,6 +75,7 @@ impl CacheArgs {
             ("gradients", &self.gradients),
             ("direct_samples", &self.direct_samples),
             ("supersamples", &self.supersamples),
+            ("ambient_weight", &self.ambient_weight),
             ("gradient_formula", &self.gradient_formula),
         ]
         .into_iter()
@@ -114,7 +122,7 @@ pub fn rewrite_radiance_options(args: Vec<String>) -> Vec<String> {
     while i < args.len() {
         let a = &args[i];
         match a.as_str() {
-            "-aa" | "-ad" | "-ar" | "-ab" | "-as" | "-af" => out.push(format!("-{a}")),
+            "-aa" | "-ad" | "-ar" | "-ab" | "-as" | "-af" | "-aw" => out.push(format!("-{a}")),
             "-av" => {
                 out.push("--av".into());
                 let three: Vec<&String> = args.iter().skip(i + 1).take(3).collect();

@@ -166,6 +166,7 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         supersamples: args.supersamples.clone(),
         cache: None,
         cache_reuse: None,
+        ambient_weight: None,
     };
     cache_args.apply(&mut params)?;
     let pool = rayon::ThreadPoolBuilder::new()

@@ -302,3 +302,65 @@ fn supersampling_lowers_record_error_at_equal_rays_on_sponza() {
         "super-sampling {adaptive:.4} vs plain {plain:.4} (sum over 3 seeds)"
     );
 }
+
+#[test]
+fn ambient_average_raises_the_truncated_image_without_overshooting() {
+    // 003 item 1: with -aw, the light beyond the last bounce is estimated from what the cache
+    // computed; one bounce gets brighter, towards the converged image, and stays below it.
+    let mean = |img: &ircache_image::Image| {
+        img.pixels.iter().map(|p| p.luminance() as f64).sum::<f64>() / img.pixels.len() as f64
+    };
+    let plain = mean(&small_cornell("ic", 3, 16, &[]));
+    let averaged = mean(&small_cornell("ic", 3, 16, &[("ambient_weight", "32")]));
+    let converged = mean(&small_cornell("path", 12, 512, &[]));
+    eprintln!("one bounce {plain:.5}, with -aw {averaged:.5}, converged {converged:.5}");
+    assert!(averaged > plain * 1.01, "{averaged} vs {plain}");
+    assert!(averaged < converged, "{averaged} vs {converged}");
+}
+
+#[test]
+fn no_minimum_spacing_resolves_corners_further() {
+    // 003 items 3–4: -ar 0 means no minimum record radius, so corners get more records.
+    let records = |ar: &str| {
+        let root = shared();
+        let mut desc = ircache_scene::load_scene(
+            &root.join("scenes/cornell-box/scene.xml"),
+            &[],
+            &ObjCamera::default(),
+        )
+        .expect("scene loads");
+        desc.integrator.kind = "ic".into();
+        desc.sensor.film.width = 128;
+        desc.sensor.film.height = 128;
+        let built = Scene::build(&desc).expect("scene builds");
+        let mut integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
+        if let Integrator::Ic(i) = &mut integrator {
+            i.params.set("resolution", ar).unwrap();
+            i.params.set("divisions", "128").unwrap();
+        }
+        let settings = RenderSettings {
+            width: 128,
+            height: 128,
+            spp: 1,
+            seed: 1,
+            threads: 0,
+            filter: Filter::Box,
+            band: None,
+        };
+        let out = render(&built, &integrator, &settings, &|_| {}).expect("render");
+        let c = out.cache.expect("cache");
+        let min_r = c.cache.levels[0]
+            .records()
+            .iter()
+            .map(|r| r.r)
+            .fold(f32::INFINITY, f32::min);
+        (c.stats.records(), min_r, c.cache.r_min)
+    };
+    let (coarse, coarse_min, floor) = records("16");
+    let (free, free_min, zero) = records("0");
+    eprintln!("ar 16: {coarse} records, smallest radius {coarse_min} (floor {floor}); ar 0: {free}, {free_min}");
+    assert_eq!(zero, 0.0);
+    assert!(coarse_min >= floor * 0.999);
+    assert!(free_min < floor);
+    assert!(free > coarse, "{free} vs {coarse}");
+}

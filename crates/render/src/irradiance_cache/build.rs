@@ -149,6 +149,7 @@ pub fn run_batch(
     stats.batches += 1;
     let others = hook.after(&added);
     take_in(cache, others, stats);
+    cache.update_ambient();
 }
 
 /// Fills `cache` for a `width`×`height` view of `scene` (run inside the caller's thread pool).

@@ -6,7 +6,7 @@
 //! Layout (little-endian):
 //! - header, 64 bytes: magic `IRCACHE\0`, format version (u32), bounces (u32), scene hash (u64),
 //!   accuracy, resolution, ambient value r g b (f32 × 5), divisions, super-samples (u32 × 2),
-//!   gradient mode and formula (u8 × 2), 2 bytes zero, header checksum (u64: FNV-1a of the
+//!   gradient mode and formula (u8 × 2), ambient weight (u16), header checksum (u64: FNV-1a of the
 //!   bytes before it);
 //! - records, 124 bytes each: level (u8), 3 bytes zero, position, normal, irradiance (f32 × 9),
 //!   radius (f32), translational then rotational gradient (f32 × 18), checksum (u64: FNV-1a of
@@ -134,7 +134,7 @@ impl Header {
             TranslationalFormula::WardHeckbert => 0,
             TranslationalFormula::Krivanek => 1,
         });
-        b.extend_from_slice(&[0, 0]);
+        b.extend_from_slice(&(p.ambient_weight.min(65535) as u16).to_le_bytes());
         let sum = Fnv::of(&b);
         b.extend_from_slice(&sum.to_le_bytes());
         let mut out = [0u8; HEADER_BYTES];
@@ -175,6 +175,7 @@ impl Header {
                 1 => GradientMode::Rotation,
                 _ => GradientMode::Full,
             },
+            ambient_weight: u32::from(u16::from_le_bytes([b[54], b[55]])),
             formula: if b[53] == 1 {
                 TranslationalFormula::Krivanek
             } else {

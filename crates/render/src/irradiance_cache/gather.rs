@@ -26,6 +26,11 @@ pub struct IrradianceCache {
     pub r_min: f32,
     /// Largest record radius.
     pub r_max: f32,
+    /// The radiance beyond the last bounce now: the ambient value, or with an ambient weight
+    /// its running average with what the cache has computed.
+    pub ambient: Rgb,
+    /// Area-weighted mean diffuse albedo (luminance) of the scene's surfaces.
+    pub mean_albedo: f32,
 }
 
 impl IrradianceCache {
@@ -46,7 +51,41 @@ impl IrradianceCache {
                 .collect(),
             r_min,
             r_max,
+            ambient: params.ambient_value,
+            mean_albedo: mean_albedo(scene),
         }
+    }
+
+    /// With an ambient weight w > 0 (003 item 1), the radiance beyond the last bounce becomes
+    /// (w · av + n · ρ̄ Ē/π) / (w + n) over the n last-level records: Ē/π is the mean radiance
+    /// arriving at the last level's points, and ρ̄ times it is the first term of what follows
+    /// (the rest of the series is left out, so the estimate stays low: over-estimating the
+    /// ambient term is worse than under-estimating it).
+    pub fn update_ambient(&mut self) {
+        let w = self.params.ambient_weight;
+        if w == 0 {
+            return;
+        }
+        let last = &self.levels[self.levels.len() - 1];
+        let n = last.len();
+        if n == 0 {
+            return;
+        }
+        // Weighted by the area each record serves (r²): records crowd into dark corners.
+        let (mut sum, mut wsum) = (Rgb::ZERO, 0.0f64);
+        for r in last.records() {
+            let w = f64::from(r.r) * f64::from(r.r);
+            sum += r.e * w as f32;
+            wsum += w;
+        }
+        let mean_e = if wsum > 0.0 {
+            sum / wsum as f32
+        } else {
+            Rgb::ZERO
+        };
+        let tail = mean_e * (self.mean_albedo * ircache_math::INV_PI);
+        self.ambient =
+            (self.params.ambient_value * w as f32 + tail * n as f32) / (w as f32 + n as f32);
     }
 
     /// An empty store shaped like this cache's stores.
@@ -58,6 +97,37 @@ impl IrradianceCache {
             self.r_max * 2e-4
         };
         RecordStore::new(base, self.params.accuracy)
+    }
+}
+
+/// Area-weighted mean luminance of the diffuse albedo over the scene's triangles (spheres by
+/// their area).
+fn mean_albedo(scene: &Scene) -> f32 {
+    let (mut sum, mut area) = (0.0f64, 0.0f64);
+    for s in &scene.shapes {
+        let a = match &s.geometry {
+            crate::scene::ShapeGeometry::Mesh(m) => m
+                .indices
+                .iter()
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                    0.5 * f64::from((b - a).cross(c - a).length())
+                })
+                .sum(),
+            crate::scene::ShapeGeometry::Sphere { radius, .. } => {
+                4.0 * std::f64::consts::PI * f64::from(*radius).powi(2)
+            }
+        };
+        let rho = scene.materials[s.material]
+            .mean_diffuse_reflectance()
+            .luminance();
+        sum += a * f64::from(rho);
+        area += a;
+    }
+    if area > 0.0 {
+        (sum / area).clamp(0.0, 1.0) as f32
+    } else {
+        0.0
     }
 }
 
@@ -445,7 +515,7 @@ impl Gatherer<'_> {
                 }
             }
         } else {
-            l += albedo * params.ambient_value;
+            l += albedo * self.cache.ambient;
         }
         l
     }

@@ -49,6 +49,9 @@ pub struct IcParams {
     pub gradients: GradientMode,
     /// Translational gradient formula.
     pub formula: TranslationalFormula,
+    /// Weight of `ambient_value` in a running average with the irradiance the cache computes
+    /// (`-aw`, 003 item 1); 0 keeps the ambient value fixed.
+    pub ambient_weight: u32,
     /// Adaptive super-samples per record (`-as`): extra gather rays for the cells whose
     /// neighbours differ most (003 item 2); 0: none.
     pub supersamples: usize,
@@ -69,6 +72,7 @@ impl Default for IcParams {
             formula: TranslationalFormula::WardHeckbert,
             direct_samples: 4,
             supersamples: 0,
+            ambient_weight: 0,
         }
     }
 }
@@ -101,6 +105,16 @@ impl IcParams {
                     ));
                 }
                 self.divisions = d;
+            }
+            "ambient_weight" | "ambient-weight" | "aw" => {
+                self.ambient_weight = value
+                    .trim()
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|n| *n <= 65535)
+                    .ok_or_else(|| {
+                        format!("{name}: expected a whole weight 0 to 65535, found \"{value}\"")
+                    })?;
             }
             "supersamples" | "as" => {
                 self.supersamples = value
