@@ -59,6 +59,39 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub cache_reuse: Option<String>,
+    /// Surfaces (shape id in XML, material in OBJ) that take no records but the ambient value
+    /// instead (Radiance -ae); repeatable.
+    #[arg(
+        long = "ambient-exclude",
+        visible_alias = "ae",
+        value_name = "NAME",
+        help_heading = "Irradiance cache"
+    )]
+    pub ambient_exclude: Vec<String>,
+    /// A file of names to exclude, one per line (Radiance -aE).
+    #[arg(
+        long = "ambient-exclude-file",
+        visible_alias = "aE",
+        value_name = "FILE",
+        help_heading = "Irradiance cache"
+    )]
+    pub ambient_exclude_file: Vec<std::path::PathBuf>,
+    /// Only these surfaces take records (Radiance -ai); repeatable.
+    #[arg(
+        long = "ambient-include",
+        visible_alias = "ai",
+        value_name = "NAME",
+        help_heading = "Irradiance cache"
+    )]
+    pub ambient_include: Vec<String>,
+    /// A file of names to include, one per line (Radiance -aI).
+    #[arg(
+        long = "ambient-include-file",
+        visible_alias = "aI",
+        value_name = "FILE",
+        help_heading = "Irradiance cache"
+    )]
+    pub ambient_include_file: Vec<std::path::PathBuf>,
     /// Translational gradient formula: ward-heckbert (000 eq. 3.48) or krivanek (3.47).
     #[arg(long = "gradient-formula", help_heading = "Irradiance cache")]
     pub gradient_formula: Option<String>,
@@ -86,7 +119,42 @@ impl CacheArgs {
     /// True when any option was given.
     #[must_use]
     pub fn any(&self) -> bool {
-        !self.pairs().is_empty() || self.cache.is_some() || self.cache_reuse.is_some()
+        !self.pairs().is_empty()
+            || self.cache.is_some()
+            || self.cache_reuse.is_some()
+            || !self.ambient_exclude.is_empty()
+            || !self.ambient_include.is_empty()
+            || !self.ambient_exclude_file.is_empty()
+            || !self.ambient_include_file.is_empty()
+    }
+
+    /// The exclusion or inclusion list (names and names read from files).
+    pub fn exclusions(&self) -> Result<ircache_render::integrators::ic::Exclusions> {
+        use ircache_render::integrators::ic::Exclusions;
+        let read = |names: &[String], files: &[std::path::PathBuf]| -> Result<Vec<String>> {
+            let mut all = names.to_vec();
+            for f in files {
+                let text = std::fs::read_to_string(f)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", f.display()))?;
+                all.extend(
+                    text.lines()
+                        .map(str::trim)
+                        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+                        .map(String::from),
+                );
+            }
+            Ok(all)
+        };
+        let ex = read(&self.ambient_exclude, &self.ambient_exclude_file)?;
+        let inc = read(&self.ambient_include, &self.ambient_include_file)?;
+        match (ex.is_empty(), inc.is_empty()) {
+            (true, true) => Ok(Exclusions::None),
+            (false, true) => Ok(Exclusions::Exclude(ex)),
+            (true, false) => Ok(Exclusions::Include(inc)),
+            (false, false) => bail!(
+                "--ambient-exclude and --ambient-include cannot be combined (Radiance's -ae/-ai either)"
+            ),
+        }
     }
 
     /// The cache file and whether a stale one may be used.
@@ -122,7 +190,8 @@ pub fn rewrite_radiance_options(args: Vec<String>) -> Vec<String> {
     while i < args.len() {
         let a = &args[i];
         match a.as_str() {
-            "-aa" | "-ad" | "-ar" | "-ab" | "-as" | "-af" | "-aw" => out.push(format!("-{a}")),
+            "-aa" | "-ad" | "-ar" | "-ab" | "-as" | "-af" | "-aw" | "-ae" | "-aE" | "-ai"
+            | "-aI" => out.push(format!("-{a}")),
             "-av" => {
                 out.push("--av".into());
                 let three: Vec<&String> = args.iter().skip(i + 1).take(3).collect();

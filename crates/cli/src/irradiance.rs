@@ -167,6 +167,10 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         cache: None,
         cache_reuse: None,
         ambient_weight: None,
+        ambient_exclude: Vec::new(),
+        ambient_exclude_file: Vec::new(),
+        ambient_include: Vec::new(),
+        ambient_include_file: Vec::new(),
     };
     cache_args.apply(&mut params)?;
     let pool = rayon::ThreadPoolBuilder::new()

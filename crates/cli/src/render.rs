@@ -217,6 +217,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         Integrator::Ic(ic) => {
             args.cache.apply(&mut ic.params)?;
             (ic.cache_file, ic.force_reuse) = args.cache.cache_file()?;
+            ic.exclusions = args.cache.exclusions()?;
         }
         _ if args.cache.any() => bail!(
             "irradiance cache options apply to the ic integrator only (this scene uses \"{}\"; \

@@ -364,3 +364,75 @@ fn no_minimum_spacing_resolves_corners_further() {
     assert!(free_min < floor);
     assert!(free > coarse, "{free} vs {coarse}");
 }
+
+#[test]
+fn excluded_surfaces_take_no_records_and_included_ones_take_all() {
+    use ircache_render::integrators::ic::Exclusions;
+    let root = shared();
+    let mut desc = ircache_scene::load_scene(
+        &root.join("scenes/cornell-box/scene.xml"),
+        &[],
+        &ObjCamera::default(),
+    )
+    .expect("scene loads");
+    desc.integrator.kind = "ic".into();
+    let built = Scene::build(&desc).expect("scene builds");
+    let run = |ex: Exclusions| {
+        let mut integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
+        if let Integrator::Ic(i) = &mut integrator {
+            i.params.set("divisions", "128").unwrap();
+            i.exclusions = ex;
+        }
+        let settings = RenderSettings {
+            width: 96,
+            height: 96,
+            spp: 2,
+            seed: 1,
+            threads: 0,
+            filter: Filter::Box,
+            band: None,
+        };
+        render(&built, &integrator, &settings, &|_| {}).expect("render")
+    };
+    let on_floor =
+        |r: &ircache_render::irradiance_cache::Record| r.p.y.abs() < 1e-3 && r.n.y > 0.99;
+    let all = run(Exclusions::None);
+    let no_floor = run(Exclusions::Exclude(vec!["Floor".into()]));
+    let only_floor = run(Exclusions::Include(vec!["Floor".into()]));
+    let recs = |o: &ircache_render::render::RenderOutput| {
+        o.cache.as_ref().unwrap().cache.levels[0].records().to_vec()
+    };
+    let (a, b, c) = (recs(&all), recs(&no_floor), recs(&only_floor));
+    assert!(a.iter().any(on_floor));
+    assert!(!b.iter().any(on_floor) && b.len() < a.len());
+    assert!(!c.is_empty() && c.iter().all(on_floor));
+    // The excluded floor gets the ambient value (0 here) as its indirect light: darker.
+    let bottom = |o: &ircache_render::render::RenderOutput| -> f32 {
+        (0..96).map(|x| o.image.get(x, 92).luminance()).sum()
+    };
+    assert!(
+        bottom(&no_floor) < 0.97 * bottom(&all),
+        "{} vs {}",
+        bottom(&no_floor),
+        bottom(&all)
+    );
+    // Unknown names are an error that lists the known ones.
+    let mut integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
+    if let Integrator::Ic(i) = &mut integrator {
+        i.exclusions = Exclusions::Exclude(vec!["Flor".into()]);
+    }
+    let settings = RenderSettings {
+        width: 8,
+        height: 8,
+        spp: 1,
+        seed: 1,
+        threads: 1,
+        filter: Filter::Box,
+        band: None,
+    };
+    let e = render(&built, &integrator, &settings, &|_| {})
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(e.contains("\"Flor\"") && e.contains("Floor"), "{e}");
+}

@@ -226,9 +226,10 @@ fn prepare_cache(
     pool: &rayon::ThreadPool,
 ) -> Result<(IrradianceCache, CacheStats), RenderError> {
     let mut cache = IrradianceCache::new(scene, &ic.params);
+    cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     let header = Header {
         version: file::VERSION,
-        scene_hash: scene.content_hash,
+        scene_hash: scene.content_hash ^ ic.exclusions.hash(),
         params: ic.params.clone(),
     };
     let mut loaded = 0u64;

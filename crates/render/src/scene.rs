@@ -50,6 +50,8 @@ pub enum ShapeGeometry {
 /// One shape at render time.
 #[derive(Clone, Debug)]
 pub struct Shape {
+    /// The shape's `id` in XML, its material's name in OBJ.
+    pub name: Option<String>,
     /// Its geometry.
     pub geometry: ShapeGeometry,
     /// Index into [`Scene::materials`].
@@ -190,6 +192,7 @@ impl Scene {
                 && !material.is_textured();
             materials.push(material);
             shapes.push(Shape {
+                name: s.id.clone(),
                 geometry,
                 material: i,
                 area_light: None,

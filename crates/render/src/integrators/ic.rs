@@ -38,6 +38,72 @@ pub struct IcIntegrator {
     pub cache_file: Option<std::path::PathBuf>,
     /// Use a cache file made for another scene or with other settings anyway.
     pub force_reuse: bool,
+    /// Surfaces excluded from the cache (003 item 6).
+    pub exclusions: Exclusions,
+}
+
+/// Which surfaces take no cache records (Radiance's `-ae`/`-aE` and `-ai`/`-aI`): they get the
+/// ambient value as their indirect light, a much cheaper estimate.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum Exclusions {
+    /// Every surface takes records.
+    #[default]
+    None,
+    /// These names (shape ids in XML, material names in OBJ) take none.
+    Exclude(Vec<String>),
+    /// Only these names take records.
+    Include(Vec<String>),
+}
+
+impl Exclusions {
+    /// Per shape, whether it is excluded; names that match no shape are an error.
+    pub fn resolve(&self, scene: &Scene) -> Result<Vec<bool>, String> {
+        let names = match self {
+            Exclusions::None => return Ok(vec![false; scene.shapes.len()]),
+            Exclusions::Exclude(n) | Exclusions::Include(n) => n,
+        };
+        for n in names {
+            if !scene.shapes.iter().any(|s| s.name.as_deref() == Some(n)) {
+                let mut known: Vec<&str> = scene
+                    .shapes
+                    .iter()
+                    .filter_map(|s| s.name.as_deref())
+                    .collect();
+                known.sort_unstable();
+                known.dedup();
+                return Err(format!(
+                    "no surface is named \"{n}\" (names: {})",
+                    if known.is_empty() {
+                        "none".into()
+                    } else {
+                        known.join(", ")
+                    }
+                ));
+            }
+        }
+        let listed = |s: &crate::scene::Shape| s.name.as_ref().is_some_and(|x| names.contains(x));
+        Ok(scene
+            .shapes
+            .iter()
+            .map(|s| match self {
+                Exclusions::Include(_) => !listed(s),
+                _ => listed(s),
+            })
+            .collect())
+    }
+
+    /// A hash of the list, folded into a cache file's scene hash (exclusions change records).
+    #[must_use]
+    pub fn hash(&self) -> u64 {
+        use std::fmt::Write;
+        let mut h = crate::irradiance_cache::file::Fnv::default();
+        let _ = write!(h, "{self:?}");
+        if *self == Exclusions::None {
+            0
+        } else {
+            h.0
+        }
+    }
 }
 
 impl IcIntegrator {
@@ -67,6 +133,7 @@ impl IcIntegrator {
             uncached_samples: Arc::new(AtomicU64::new(0)),
             cache_file: None,
             force_reuse: false,
+            exclusions: Exclusions::None,
         })
     }
 
@@ -127,8 +194,13 @@ impl IcIntegrator {
             l += beta * estimate_direct(scene, &it, &bsdf, wo_local, ne, nb, rng, rays);
             let albedo = bsdf.diffuse_reflectance_towards(wo_local);
             if !albedo.is_black() {
-                let e = if self.params.bounces == 0 {
-                    self.params.ambient_value * std::f32::consts::PI
+                let excluded = self.cache.as_ref().is_some_and(|c| c.is_excluded(it.shape));
+                let e = if self.params.bounces == 0 || excluded {
+                    let av = self
+                        .cache
+                        .as_ref()
+                        .map_or(self.params.ambient_value, |c| c.ambient);
+                    av * std::f32::consts::PI
                 } else {
                     self.indirect_irradiance(scene, &ShadingPoint::facing(it, wo), rng, rays)
                 };

@@ -191,6 +191,7 @@ pub fn fill_for_image(
                     let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) * inv;
                     let ray = scene.camera.generate_ray(film);
                     first_diffuse_point(scene, &ray)
+                        .filter(|sp| !cache.is_excluded(sp.it.shape))
                         .map(|sp| (mix(0x0070_7265_7061_7373, (y * width + x) as u64), sp))
                 })
                 .collect();

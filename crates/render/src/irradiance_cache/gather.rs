@@ -31,6 +31,9 @@ pub struct IrradianceCache {
     pub ambient: Rgb,
     /// Area-weighted mean diffuse albedo (luminance) of the scene's surfaces.
     pub mean_albedo: f32,
+    /// Shapes excluded from the cache (003 item 6), by shape index: they get the ambient value
+    /// as their indirect light instead of records.
+    pub excluded: Vec<bool>,
 }
 
 impl IrradianceCache {
@@ -53,7 +56,15 @@ impl IrradianceCache {
             r_max,
             ambient: params.ambient_value,
             mean_albedo: mean_albedo(scene),
+            excluded: vec![false; scene.shapes.len()],
         }
+    }
+
+    /// True when shape `shape` takes no records.
+    #[inline]
+    #[must_use]
+    pub fn is_excluded(&self, shape: u32) -> bool {
+        self.excluded.get(shape as usize).copied().unwrap_or(false)
     }
 
     /// With an ambient weight w > 0 (003 item 1), the radiance beyond the last bounce becomes
@@ -495,7 +506,7 @@ impl Gatherer<'_> {
             return l;
         }
         let params = &self.cache.params;
-        if level + 1 < params.bounces {
+        if level + 1 < params.bounces && !self.cache.is_excluded(hit.shape) {
             let sp = ShadingPoint::facing(*hit, wo);
             match self.deeper {
                 Deeper::Cache => {
