@@ -431,8 +431,7 @@ fn excluded_surfaces_take_no_records_and_included_ones_take_all() {
         band: None,
     };
     let e = render(&built, &integrator, &settings, &|_| {})
-        .err()
-        .expect("refused")
+        .expect_err("refused")
         .to_string();
     assert!(e.contains("\"Flor\"") && e.contains("Floor"), "{e}");
 }
