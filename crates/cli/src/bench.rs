@@ -531,7 +531,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             "variant", "threads", "seconds", "pre-pass", "pixels", "records", "relMSE_trim"
         );
         let mut best = (f64::INFINITY, 0.0);
-        let variants: [IcVariant; 6] = [
+        let variants: [IcVariant; 9] = [
             ("gradients full (3.48)", &[], &[1, 2]),
             (
                 "gradients full (3.47)",

@@ -41,6 +41,12 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub ambient_weight: Option<String>,
+    /// Record error metric: ward (split sphere) or tabellion (Tabellion–Lamorlette).
+    #[arg(long = "error-metric", help_heading = "Irradiance cache")]
+    pub error_metric: Option<String>,
+    /// Neighbour clamping (on/off): a record's radius never exceeds a neighbour's plus their distance.
+    #[arg(long = "neighbour-clamp", help_heading = "Irradiance cache")]
+    pub neighbour_clamp: Option<String>,
     /// Gradients used in interpolation: none, rotation, full.
     #[arg(long, help_heading = "Irradiance cache")]
     pub gradients: Option<String>,
@@ -109,6 +115,8 @@ impl CacheArgs {
             ("direct_samples", &self.direct_samples),
             ("supersamples", &self.supersamples),
             ("ambient_weight", &self.ambient_weight),
+            ("error_metric", &self.error_metric),
+            ("neighbour_clamp", &self.neighbour_clamp),
             ("gradient_formula", &self.gradient_formula),
         ]
         .into_iter()

@@ -167,6 +167,8 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         cache: None,
         cache_reuse: None,
         ambient_weight: None,
+        error_metric: None,
+        neighbour_clamp: None,
         ambient_exclude: Vec::new(),
         ambient_exclude_file: Vec::new(),
         ambient_include: Vec::new(),

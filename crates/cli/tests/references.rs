@@ -335,6 +335,7 @@ fn no_minimum_spacing_resolves_corners_further() {
         let built = Scene::build(&desc).expect("scene builds");
         let mut integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
         if let Integrator::Ic(i) = &mut integrator {
+            i.params.set("error_metric", "ward").unwrap();
             i.params.set("resolution", ar).unwrap();
             i.params.set("divisions", "128").unwrap();
         }

@@ -227,6 +227,7 @@ fn prepare_cache(
 ) -> Result<(IrradianceCache, CacheStats), RenderError> {
     let mut cache = IrradianceCache::new(scene, &ic.params);
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
+    cache.pixel_angle = 2.0 * scene.camera.tan_half_x / settings.width.max(1) as f32;
     let header = Header {
         version: file::VERSION,
         scene_hash: scene.content_hash ^ ic.exclusions.hash(),

@@ -331,6 +331,7 @@ fn records_grow_as_accuracy_falls() {
             1.0,
             ic_desc(&[
                 ("ambient_value", "1"),
+                ("error_metric", "ward"),
                 ("accuracy", a),
                 ("divisions", "128"),
                 ("resolution", "32"),

@@ -230,9 +230,8 @@ impl IcIntegrator {
             }
         };
         let store = &cache.levels[0];
-        let a = self.params.accuracy;
-        for max_error in [a, 2.0 * a, 4.0 * a] {
-            if let Some(i) = store.interpolate(sp.it.p, sp.n, max_error, self.params.gradients) {
+        for threshold in [1.0, 2.0, 4.0] {
+            if let Some(i) = store.interpolate(sp.it.p, sp.n, threshold, self.params.gradients) {
                 return i.e;
             }
         }

@@ -17,7 +17,6 @@ pub fn irradiance_image(
     width: usize,
     height: usize,
 ) -> Image {
-    let a = cache.params.accuracy;
     let pixels: Vec<Rgb> = (0..width * height)
         .into_par_iter()
         .with_max_len(256)
@@ -29,7 +28,7 @@ pub fn irradiance_image(
             let ray = scene.camera.generate_ray(film);
             first_diffuse_point(scene, &ray)
                 .and_then(|sp| {
-                    [a, 2.0 * a].into_iter().find_map(|m| {
+                    [1.0, 2.0].into_iter().find_map(|m| {
                         cache.levels[0].interpolate(sp.it.p, sp.n, m, cache.params.gradients)
                     })
                 })

@@ -6,14 +6,14 @@
 //! Layout (little-endian):
 //! - header, 64 bytes: magic `IRCACHE\0`, format version (u32), bounces (u32), scene hash (u64),
 //!   accuracy, resolution, ambient value r g b (f32 × 5), divisions, super-samples (u32 × 2),
-//!   gradient mode and formula (u8 × 2), ambient weight (u16), header checksum (u64: FNV-1a of the
+//!   gradient mode (u8), formula | metric << 1 | neighbour clamping << 2 (u8), ambient weight (u16), header checksum (u64: FNV-1a of the
 //!   bytes before it);
 //! - records, 124 bytes each: level (u8), 3 bytes zero, position, normal, irradiance (f32 × 9),
 //!   radius (f32), translational then rotational gradient (f32 × 18), checksum (u64: FNV-1a of
 //!   the 116 bytes before it).
 
 use super::params::{IcParams, TranslationalFormula};
-use super::record::{GradientMode, Record};
+use super::record::{ErrorMetric, GradientMode, Record};
 use ircache_math::{Rgb, Vec3};
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -130,10 +130,14 @@ impl Header {
         b.extend_from_slice(&(p.divisions as u32).to_le_bytes());
         b.extend_from_slice(&(p.supersamples as u32).to_le_bytes());
         b.push(mode_code(p.gradients));
-        b.push(match p.formula {
-            TranslationalFormula::WardHeckbert => 0,
-            TranslationalFormula::Krivanek => 1,
-        });
+        // Formula (bit 0), error metric (bit 1), neighbour clamping (bit 2).
+        b.push(
+            match p.formula {
+                TranslationalFormula::WardHeckbert => 0,
+                TranslationalFormula::Krivanek => 1,
+            } | (u8::from(p.error_metric == ErrorMetric::Tabellion) << 1)
+                | (u8::from(p.neighbour_clamp) << 2),
+        );
         b.extend_from_slice(&(p.ambient_weight.min(65535) as u16).to_le_bytes());
         let sum = Fnv::of(&b);
         b.extend_from_slice(&sum.to_le_bytes());
@@ -176,7 +180,13 @@ impl Header {
                 _ => GradientMode::Full,
             },
             ambient_weight: u32::from(u16::from_le_bytes([b[54], b[55]])),
-            formula: if b[53] == 1 {
+            error_metric: if b[53] & 2 != 0 {
+                ErrorMetric::Tabellion
+            } else {
+                ErrorMetric::Ward
+            },
+            neighbour_clamp: b[53] & 4 != 0,
+            formula: if b[53] & 1 == 1 {
                 TranslationalFormula::Krivanek
             } else {
                 TranslationalFormula::WardHeckbert
@@ -535,7 +545,7 @@ mod tests {
         let e = CacheFile::open(&path, &other, false)
             .unwrap_err()
             .to_string();
-        assert!(e.contains("accuracy 0.2 (now 0.5)"), "{e}");
+        assert!(e.contains("accuracy 0.4 (now 0.5)"), "{e}");
         assert!(CacheFile::open(&path, &other, true).is_ok());
         let c = read(&path).unwrap();
         assert_eq!(c.header, header());
@@ -543,9 +553,9 @@ mod tests {
         assert_eq!(c.torn_bytes, 0);
         assert!(c.header.mismatch(&header()).is_none());
         let mut other = header();
-        other.params.divisions = 512;
+        other.params.divisions = 256;
         let why = c.header.mismatch(&other).unwrap();
-        assert!(why.contains("divisions 1024 (now 512)"), "{why}");
+        assert!(why.contains("divisions 512 (now 256)"), "{why}");
         other.scene_hash ^= 1;
         assert!(c.header.mismatch(&other).unwrap().contains("another scene"));
         let _ = std::fs::remove_file(path);

@@ -10,7 +10,7 @@
 
 use super::hemisphere::{to_world, HemisphereSamples, Stratification};
 use super::params::{IcParams, TranslationalFormula};
-use super::record::Record;
+use super::record::{ErrorMetric, Record};
 use super::store::RecordStore;
 use crate::scene::{Interaction, Scene};
 use ircache_math::{sampling, Frame, Ray, Rgb, Rng, Vec2, Vec3, INV_PI};
@@ -31,6 +31,9 @@ pub struct IrradianceCache {
     pub ambient: Rgb,
     /// Area-weighted mean diffuse albedo (luminance) of the scene's surfaces.
     pub mean_albedo: f32,
+    /// Angle one pixel subtends at the camera (2 tan(fov/2) / width): Tabellion's radius
+    /// limits are 1.5 and 10 pixel footprints at a level-0 record; 0 without a camera view.
+    pub pixel_angle: f32,
     /// Shapes excluded from the cache (003 item 6), by shape index: they get the ambient value
     /// as their indirect light instead of records.
     pub excluded: Vec<bool>,
@@ -50,13 +53,21 @@ impl IrradianceCache {
         IrradianceCache {
             params: params.clone(),
             levels: (0..params.bounces.max(1))
-                .map(|_| RecordStore::new(base, params.accuracy))
+                .map(|_| {
+                    RecordStore::new(
+                        base,
+                        params.accuracy,
+                        params.error_metric,
+                        params.neighbour_clamp,
+                    )
+                })
                 .collect(),
             r_min,
             r_max,
             ambient: params.ambient_value,
             mean_albedo: mean_albedo(scene),
             excluded: vec![false; scene.shapes.len()],
+            pixel_angle: 0.0,
         }
     }
 
@@ -107,7 +118,12 @@ impl IrradianceCache {
         } else {
             self.r_max * 2e-4
         };
-        RecordStore::new(base, self.params.accuracy)
+        RecordStore::new(
+            base,
+            self.params.accuracy,
+            self.params.error_metric,
+            self.params.neighbour_clamp,
+        )
     }
 }
 
@@ -383,7 +399,21 @@ impl Gatherer<'_> {
         };
         let mut grad_t = to_world(&grad_t_local, frame.s, frame.t);
         let grad_r = to_world(&h.rotational_gradient(), frame.s, frame.t);
-        let mut r = h.harmonic_mean_distance().min(self.cache.r_max);
+        // Radius limits: the resolution's (003 items 3–4), or for Tabellion's metric 1.5 and 10
+        // pixel footprints at a record the camera sees (000 eq. 3.60).
+        let (mut r_min, mut r_max) = (self.cache.r_min, self.cache.r_max);
+        let mut r = match params.error_metric {
+            ErrorMetric::Ward => h.harmonic_mean_distance(),
+            ErrorMetric::Tabellion => {
+                if level == 0 && self.cache.pixel_angle > 0.0 && sp.it.t > 0.0 {
+                    let cos = sp.n.dot(sp.it.frame.n).abs().max(0.05);
+                    let footprint = self.cache.pixel_angle * sp.it.t / cos.sqrt();
+                    (r_min, r_max) = (1.5 * footprint, 10.0 * footprint);
+                }
+                0.5 * h.distance.iter().copied().fold(f32::INFINITY, f32::min)
+            }
+        }
+        .min(r_max);
         // Gradient limit (003 item 4): the gradient may not predict a change larger than E
         // itself within the radius; at the minimum spacing the gradient is reduced instead.
         let mut limit = f32::INFINITY;
@@ -396,8 +426,8 @@ impl Gatherer<'_> {
             }
         }
         r = r.min(limit);
-        if r < self.cache.r_min {
-            r = self.cache.r_min;
+        if r < r_min {
+            r = r_min;
             if limit < r {
                 let f = limit / r;
                 grad_t = grad_t.map(|g| g * f);
@@ -425,7 +455,7 @@ impl Gatherer<'_> {
             .into_iter()
             .flatten()
         {
-            if let Some(i) = store.interpolate(sp.it.p, sp.n, params.accuracy, params.gradients) {
+            if let Some(i) = store.interpolate(sp.it.p, sp.n, 1.0, params.gradients) {
                 sum += i.e * i.weight_sum;
                 wsum += i.weight_sum;
                 found = true;

@@ -1,13 +1,14 @@
 //! Parameters of the irradiance cache, named for users, with Radiance's names accepted too
 //! (`-aa`, `-ad`, `-ar`, `-ab`, `-av`).
 
-use super::record::GradientMode;
+use super::record::{ErrorMetric, GradientMode};
 use ircache_math::Rgb;
 
 /// The settings `ircache bench` times on the Cornell box (at 16 spp), and the reference test
 /// checks: they reach Radiance's "high" error there.
 pub const CORNELL_BOX_BENCH: &[(&str, &str)] = &[
-    ("accuracy", "0.2"),
+    ("error_metric", "tabellion"),
+    ("accuracy", "0.5"),
     ("divisions", "512"),
     ("resolution", "256"),
     ("direct_samples", "4"),
@@ -15,8 +16,9 @@ pub const CORNELL_BOX_BENCH: &[(&str, &str)] = &[
 
 /// The settings `ircache bench` times on Sponza (at 8 spp).
 pub const SPONZA_BENCH: &[(&str, &str)] = &[
-    ("accuracy", "0.25"),
-    ("divisions", "1024"),
+    ("error_metric", "tabellion"),
+    ("accuracy", "0.35"),
+    ("divisions", "384"),
     ("resolution", "64"),
 ];
 
@@ -33,7 +35,8 @@ pub enum TranslationalFormula {
 /// Irradiance cache settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct IcParams {
-    /// Accuracy `a` (`-aa`): a record serves where its split-sphere error ε ≤ a.
+    /// Accuracy `a` (`-aa`): with Ward's metric a record serves where its split-sphere error
+    /// ε ≤ a (Radiance's meaning); with Tabellion's, κ = 0.2/a.
     pub accuracy: f32,
     /// Hemisphere divisions per record (`-ad`), split as polar × azimuthal ≈ π × polar.
     pub divisions: usize,
@@ -49,6 +52,10 @@ pub struct IcParams {
     pub gradients: GradientMode,
     /// Translational gradient formula.
     pub formula: TranslationalFormula,
+    /// How a record's error is measured (`--error-metric`).
+    pub error_metric: ErrorMetric,
+    /// Neighbour clamping: a record's radius never exceeds a neighbour's plus their distance.
+    pub neighbour_clamp: bool,
     /// Weight of `ambient_value` in a running average with the irradiance the cache computes
     /// (`-aw`, 003 item 1); 0 keeps the ambient value fixed.
     pub ambient_weight: u32,
@@ -63,8 +70,8 @@ pub struct IcParams {
 impl Default for IcParams {
     fn default() -> Self {
         IcParams {
-            accuracy: 0.2,
-            divisions: 1024,
+            accuracy: 0.4,
+            divisions: 512,
             resolution: 128.0,
             bounces: 1,
             ambient_value: Rgb::ZERO,
@@ -73,6 +80,10 @@ impl Default for IcParams {
             direct_samples: 4,
             supersamples: 0,
             ambient_weight: 0,
+            // Chosen by measurement (BENCHMARKS.md): at equal time Tabellion–Lamorlette's metric
+            // reaches about half Ward's error on Sponza and two thirds on the Cornell box.
+            error_metric: ErrorMetric::Tabellion,
+            neighbour_clamp: false,
         }
     }
 }
@@ -173,6 +184,16 @@ impl IcParams {
                     .ok_or_else(|| {
                         format!("{name}: expected 1 to 4096 light samples, found \"{value}\"")
                     })?;
+            }
+            "error_metric" | "error-metric" => {
+                self.error_metric = ErrorMetric::parse(value.trim())?
+            }
+            "neighbour_clamp" | "neighbour-clamp" | "neighbor_clamp" => {
+                self.neighbour_clamp = match value.trim() {
+                    "on" | "true" | "1" => true,
+                    "off" | "false" | "0" => false,
+                    v => return Err(format!("{name}: expected on or off, found \"{v}\"")),
+                }
             }
             "gradients" => self.gradients = GradientMode::parse(value.trim())?,
             "gradient_formula" | "gradient-formula" => {

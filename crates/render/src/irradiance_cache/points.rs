@@ -7,7 +7,6 @@ use super::build::{fill_for_points, CacheStats};
 use super::gather::{mix, Deeper, Gatherer, IrradianceCache, ShadingPoint, WorkState};
 use super::hemisphere::{to_world, Stratification};
 use super::params::{IcParams, TranslationalFormula};
-use super::record::{split_sphere_error, weight};
 use crate::scene::{Interaction, Scene};
 use ircache_math::{Frame, Rgb, Rng, Vec2, Vec3};
 use rayon::prelude::*;
@@ -136,29 +135,17 @@ fn interpolate_with_gradients(
     sp: &ShadingPoint,
 ) -> (Rgb, [Vec3; 3], [Vec3; 3]) {
     let store = &cache.levels[0];
-    let a = cache.params.accuracy;
-    for max_error in [a, 2.0 * a, f32::INFINITY] {
+    for threshold in [1.0, 2.0, 4.0, 16.0] {
         let (mut e, mut gt, mut gr, mut wsum) =
             (Rgb::ZERO, [Vec3::ZERO; 3], [Vec3::ZERO; 3], 0.0f32);
-        let mut visit = |id: u32| {
-            let rec = &store.records()[id as usize];
-            if let Some(err) = split_sphere_error(rec, sp.it.p, sp.n) {
-                if err <= max_error {
-                    let w = weight(err, a);
-                    e += super::record::extrapolate(rec, sp.it.p, sp.n, cache.params.gradients) * w;
-                    for c in 0..3 {
-                        gt[c] += rec.grad_t[c] * w;
-                        gr[c] += rec.grad_r[c] * w;
-                    }
-                    wsum += w;
-                }
+        store.for_each_serving(sp.it.p, sp.n, threshold, |rec, w| {
+            e += super::record::extrapolate(rec, sp.it.p, sp.n, cache.params.gradients) * w;
+            for c in 0..3 {
+                gt[c] += rec.grad_t[c] * w;
+                gr[c] += rec.grad_r[c] * w;
             }
-        };
-        if max_error.is_finite() {
-            store.for_each_near(sp.it.p, &mut visit);
-        } else {
-            (0..store.len() as u32).for_each(&mut visit);
-        }
+            wsum += w;
+        });
         if wsum > 0.0 {
             return (
                 (e / wsum).max(Rgb::ZERO),

@@ -59,29 +59,82 @@ impl GradientMode {
     }
 }
 
-/// The split-sphere error ε_i(x, n) = ‖x − x_i‖/R_i + √(1 − n·n_i) (3.10's denominator), or
-/// `None` when the record lies in front of the query point (Ward 1988: it would see occluders
-/// the point does not). The test is an angle, so it is scale-free: the record is rejected when
-/// it sits more than about 3° above the mean tangent plane as seen from x.
-#[inline]
-#[must_use]
-pub fn split_sphere_error(rec: &Record, p: Vec3, n: Vec3) -> Option<f32> {
-    let d = p - rec.p;
-    let dist2 = d.length_squared();
-    let cos = n.dot(rec.n).min(1.0);
-    let e = dist2.sqrt() / rec.r + (1.0 - cos).max(0.0).sqrt();
-    let front = d.dot(n + rec.n);
-    if front < -0.1 * dist2.sqrt() {
-        return None;
-    }
-    Some(e)
+/// How a record's error at a query point is measured (`--error-metric`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ErrorMetric {
+    /// Ward's split sphere (000 eq. 3.10): ε = ‖x − xᵢ‖/Rᵢ + √(1 − n·nᵢ), valid where ε ≤ a,
+    /// weight 1/ε; R is the harmonic mean distance.
+    #[default]
+    Ward,
+    /// Tabellion and Lamorlette (000 eqs. 3.59–3.62): ε = κ max(‖x − xᵢ‖/Rᵢ,
+    /// √(1 − n·nᵢ)/√(1 − cos 10°)), valid where ε < 1, weight 1 − ε; R is half the closest
+    /// distance clamped to [1.5, 10] pixel footprints; κ = 0.2/a (1 at the default accuracy).
+    Tabellion,
 }
 
-/// Weight 1/ε (3.10), bounded where ε vanishes.
-#[inline]
-#[must_use]
-pub fn weight(error: f32, accuracy: f32) -> f32 {
-    1.0 / error.max(1e-4 * accuracy)
+impl ErrorMetric {
+    /// Parses `ward` or `tabellion`.
+    pub fn parse(s: &str) -> Result<ErrorMetric, String> {
+        match s {
+            "ward" => Ok(ErrorMetric::Ward),
+            "tabellion" => Ok(ErrorMetric::Tabellion),
+            _ => Err(format!(
+                "unknown error metric \"{s}\" (expected ward or tabellion)"
+            )),
+        }
+    }
+
+    /// The name `parse` accepts.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            ErrorMetric::Ward => "ward",
+            ErrorMetric::Tabellion => "tabellion",
+        }
+    }
+
+    /// The record's error at (p, n) divided by its threshold (≤ 1: the record serves), or `None`
+    /// when the record lies in front of p (Ward 1988: it would see occluders p does not). The
+    /// in-front test is an angle, so it is scale-free: more than about 3° above the mean
+    /// tangent plane as seen from p.
+    #[inline]
+    #[must_use]
+    pub fn error(self, rec: &Record, p: Vec3, n: Vec3, accuracy: f32) -> Option<f32> {
+        let d = p - rec.p;
+        let dist = d.length();
+        if d.dot(n + rec.n) < -0.1 * dist {
+            return None;
+        }
+        let normal = (1.0 - n.dot(rec.n).min(1.0)).max(0.0).sqrt();
+        Some(match self {
+            ErrorMetric::Ward => (dist / rec.r + normal) / accuracy,
+            ErrorMetric::Tabellion => {
+                // √(1 − cos 10°)
+                const NORMAL_SCALE: f32 = 0.123_257_4;
+                (0.2 / accuracy) * (dist / rec.r).max(normal / NORMAL_SCALE)
+            }
+        })
+    }
+
+    /// Weight of a record whose normalised error is `e`, serving up to `threshold`.
+    #[inline]
+    #[must_use]
+    pub fn weight(self, e: f32, threshold: f32) -> f32 {
+        match self {
+            ErrorMetric::Ward => 1.0 / e.max(1e-4),
+            ErrorMetric::Tabellion => (1.0 - e / threshold).max(1e-6),
+        }
+    }
+
+    /// Distance from the record beyond which it never serves (at threshold 1).
+    #[inline]
+    #[must_use]
+    pub fn validity_radius(self, rec: &Record, accuracy: f32) -> f32 {
+        match self {
+            ErrorMetric::Ward => accuracy * rec.r,
+            ErrorMetric::Tabellion => rec.r * accuracy / 0.2,
+        }
+    }
 }
 
 /// The record's value extrapolated to (p, n) by 3.15 with the gradients `mode` selects.

@@ -4,7 +4,7 @@
 //! query visits one cell per level in use. Records are only ever appended, in an order decided by
 //! the caller, which keeps lookups deterministic.
 
-use super::record::{extrapolate, split_sphere_error, weight, GradientMode, Record};
+use super::record::{extrapolate, ErrorMetric, GradientMode, Record};
 use ircache_math::{Rgb, Vec3};
 use rustc_hash::FxHashMap;
 
@@ -14,8 +14,12 @@ pub struct RecordStore {
     records: Vec<Record>,
     /// Cell size of grid level 0 (the smallest validity radius expected).
     base_cell: f32,
-    /// Accuracy `a`: validity radius is `a · R`.
+    /// Accuracy `a`.
     accuracy: f32,
+    /// How errors are measured.
+    metric: ErrorMetric,
+    /// Neighbour clamping: a record's radius never exceeds a neighbour's plus their distance.
+    clamp_neighbours: bool,
     /// (level, cell) → record indices.
     cells: FxHashMap<(u8, [i32; 3]), Vec<u32>>,
     /// Grid levels holding at least one record.
@@ -39,11 +43,18 @@ impl RecordStore {
     /// An empty store; `min_validity_radius` sets the finest grid (any positive value works,
     /// close to the smallest a·R keeps cells small).
     #[must_use]
-    pub fn new(min_validity_radius: f32, accuracy: f32) -> RecordStore {
+    pub fn new(
+        min_validity_radius: f32,
+        accuracy: f32,
+        metric: ErrorMetric,
+        clamp_neighbours: bool,
+    ) -> RecordStore {
         RecordStore {
             records: Vec::new(),
             base_cell: min_validity_radius.max(f32::MIN_POSITIVE),
             accuracy,
+            metric,
+            clamp_neighbours,
             cells: FxHashMap::default(),
             levels_used: 0,
         }
@@ -76,9 +87,26 @@ impl RecordStore {
         [q.x, q.y, q.z].map(|c| c.floor().clamp(-2.0e9, 2.0e9) as i32)
     }
 
-    /// Appends a record and indexes it.
-    pub fn insert(&mut self, rec: Record) {
-        let rho = self.accuracy * rec.r;
+    /// Appends a record and indexes it. With neighbour clamping (Křivánek et al. 2006), the
+    /// records whose validity sphere holds the new one's position and the new one bound each
+    /// other's radius by their own plus their distance; records are only ever shrunk, and
+    /// in insertion order, so the result does not depend on timing.
+    pub fn insert(&mut self, mut rec: Record) {
+        if self.clamp_neighbours {
+            let mut near = Vec::new();
+            self.for_each_near(rec.p, |id| near.push(id));
+            near.sort_unstable();
+            near.dedup();
+            for id in near {
+                let other = &mut self.records[id as usize];
+                let d = other.p.distance(rec.p);
+                if d <= self.metric.validity_radius(other, self.accuracy) {
+                    rec.r = rec.r.min(other.r + d);
+                    other.r = other.r.min(rec.r + d);
+                }
+            }
+        }
+        let rho = self.metric.validity_radius(&rec, self.accuracy);
         let mut level = 0u8;
         while level < MAX_GRID_LEVEL && self.cell_size(level) < rho {
             level += 1;
@@ -114,14 +142,14 @@ impl RecordStore {
         }
     }
 
-    /// Interpolates at (p, n) from the records with ε ≤ `max_error` (normally the accuracy
-    /// `a`, i.e. w ≥ 1/a) that are not in front of p (000 eq. 3.15).
+    /// Interpolates at (p, n) from the records whose normalised error is at most `threshold`
+    /// (1: the accuracy; more: relaxed) and that are not in front of p (000 eq. 3.15).
     #[must_use]
     pub fn interpolate(
         &self,
         p: Vec3,
         n: Vec3,
-        max_error: f32,
+        threshold: f32,
         mode: GradientMode,
     ) -> Option<Interpolated> {
         let mut sum = Rgb::ZERO;
@@ -129,9 +157,9 @@ impl RecordStore {
         let mut count = 0;
         self.for_each_near(p, |id| {
             let rec = &self.records[id as usize];
-            if let Some(err) = split_sphere_error(rec, p, n) {
-                if err <= max_error {
-                    let w = weight(err, self.accuracy);
+            if let Some(err) = self.metric.error(rec, p, n, self.accuracy) {
+                if err <= threshold {
+                    let w = self.metric.weight(err, threshold);
                     sum += extrapolate(rec, p, n, mode) * w;
                     wsum += w;
                     count += 1;
@@ -145,6 +173,24 @@ impl RecordStore {
         })
     }
 
+    /// The records serving (p, n) within `threshold`, with their weights.
+    pub fn for_each_serving(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        threshold: f32,
+        mut f: impl FnMut(&Record, f32),
+    ) {
+        self.for_each_near(p, |id| {
+            let rec = &self.records[id as usize];
+            if let Some(err) = self.metric.error(rec, p, n, self.accuracy) {
+                if err <= threshold {
+                    f(rec, self.metric.weight(err, threshold));
+                }
+            }
+        });
+    }
+
     /// True when some record covers (p, n) at the store's accuracy.
     #[must_use]
     pub fn covers(&self, p: Vec3, n: Vec3) -> bool {
@@ -152,9 +198,72 @@ impl RecordStore {
         self.for_each_near(p, |id| {
             if !hit {
                 let rec = &self.records[id as usize];
-                hit = split_sphere_error(rec, p, n).is_some_and(|e| e <= self.accuracy);
+                hit = self
+                    .metric
+                    .error(rec, p, n, self.accuracy)
+                    .is_some_and(|e| e <= 1.0);
             }
         });
         hit
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rec(p: Vec3, r: f32) -> Record {
+        Record {
+            p,
+            n: Vec3::Z,
+            e: Rgb::ONE,
+            r,
+            grad_t: [Vec3::ZERO; 3],
+            grad_r: [Vec3::ZERO; 3],
+            level: 0,
+        }
+    }
+
+    #[test]
+    fn neighbour_clamping_bounds_radii_by_neighbour_plus_distance() {
+        for clamp in [false, true] {
+            let mut s = RecordStore::new(0.01, 0.5, ErrorMetric::Ward, clamp);
+            s.insert(rec(Vec3::ZERO, 10.0));
+            s.insert(rec(Vec3::new(1.0, 0.0, 0.0), 0.2));
+            let big = s.records()[0].r;
+            if clamp {
+                assert!((big - 1.2).abs() < 1e-5, "{big}");
+            } else {
+                assert_eq!(big, 10.0);
+            }
+            // A later big record next to the small one is clamped on insertion.
+            s.insert(rec(Vec3::new(1.05, 0.0, 0.0), 8.0));
+            let third = s.records()[2].r;
+            assert_eq!(third <= 0.2 + 0.05 + 1e-5, clamp, "{third}");
+        }
+    }
+
+    #[test]
+    fn metrics_measure_as_their_equations_say() {
+        let r = rec(Vec3::ZERO, 2.0);
+        // Ward (3.10): ε = d/R + √(1 − n·nᵢ), normalised by a.
+        let e = ErrorMetric::Ward
+            .error(&r, Vec3::new(1.0, 0.0, 0.0), Vec3::Z, 0.5)
+            .unwrap();
+        assert!((e - 1.0).abs() < 1e-6);
+        // Tabellion (3.59–3.61) at a = 0.2 (κ = 1): the larger of d/R and the normal term,
+        // which is 1 at 10°.
+        let t = ErrorMetric::Tabellion;
+        let e = t.error(&r, Vec3::new(1.0, 0.0, 0.0), Vec3::Z, 0.2).unwrap();
+        assert!((e - 0.5).abs() < 1e-6);
+        let ten = 10f32.to_radians();
+        let n = Vec3::new(ten.sin(), 0.0, ten.cos());
+        let e = t.error(&r, Vec3::ZERO, n, 0.2).unwrap();
+        assert!((e - 1.0).abs() < 1e-3, "{e}");
+        assert!((t.weight(0.25, 1.0) - 0.75).abs() < 1e-6);
+        // A record in front of the query point never serves.
+        assert!(ErrorMetric::Ward
+            .error(&r, Vec3::new(1.0, 0.0, -0.5), Vec3::Z, 0.5)
+            .is_none());
     }
 }
