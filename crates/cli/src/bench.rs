@@ -546,6 +546,21 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
                 &[("supersamples", "0.5x")],
                 &[2],
             ),
+            ("+ neighbour clamping", &[("neighbour_clamp", "on")], &[2]),
+            (
+                "error metric ward, a 0.25",
+                &[("error_metric", "ward"), ("accuracy", "0.25")],
+                &[2],
+            ),
+            (
+                "ward, a 0.4, neighbour clamping",
+                &[
+                    ("error_metric", "ward"),
+                    ("accuracy", "0.4"),
+                    ("neighbour_clamp", "on"),
+                ],
+                &[2],
+            ),
         ];
         let mut one_thread = 0.0;
         for (label, extra, threads) in variants {
