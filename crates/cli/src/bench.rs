@@ -531,7 +531,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             "variant", "threads", "seconds", "pre-pass", "pixels", "records", "relMSE_trim"
         );
         let mut best = (f64::INFINITY, 0.0);
-        let variants: [IcVariant; 9] = [
+        let variants: [IcVariant; 10] = [
             ("gradients full (3.48)", &[], &[1, 2]),
             (
                 "gradients full (3.47)",
@@ -547,6 +547,11 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
                 &[2],
             ),
             ("+ neighbour clamping", &[("neighbour_clamp", "on")], &[2]),
+            (
+                "overture coarse (every 4th pixel)",
+                &[("overture", "coarse")],
+                &[2],
+            ),
             (
                 "error metric ward, a 0.25",
                 &[("error_metric", "ward"), ("accuracy", "0.25")],

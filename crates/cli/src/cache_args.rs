@@ -41,6 +41,10 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub ambient_weight: Option<String>,
+    /// The pre-pass that fills the cache before the pixels: full (every pixel centre), coarse
+    /// (every fourth), off.
+    #[arg(long, help_heading = "Irradiance cache")]
+    pub overture: Option<String>,
     /// Record error metric: ward (split sphere) or tabellion (Tabellion–Lamorlette).
     #[arg(long = "error-metric", help_heading = "Irradiance cache")]
     pub error_metric: Option<String>,
@@ -116,6 +120,7 @@ impl CacheArgs {
             ("supersamples", &self.supersamples),
             ("ambient_weight", &self.ambient_weight),
             ("error_metric", &self.error_metric),
+            ("overture", &self.overture),
             ("neighbour_clamp", &self.neighbour_clamp),
             ("gradient_formula", &self.gradient_formula),
         ]

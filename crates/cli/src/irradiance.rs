@@ -168,6 +168,7 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         cache_reuse: None,
         ambient_weight: None,
         error_metric: None,
+        overture: None,
         neighbour_clamp: None,
         ambient_exclude: Vec::new(),
         ambient_exclude_file: Vec::new(),

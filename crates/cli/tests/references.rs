@@ -436,3 +436,18 @@ fn excluded_surfaces_take_no_records_and_included_ones_take_all() {
         .to_string();
     assert!(e.contains("\"Flor\"") && e.contains("Floor"), "{e}");
 }
+
+#[test]
+fn the_full_overture_lowers_the_error() {
+    // 002 / Mitsuba's irrcache: the pre-pass fills the cache so the pixels interpolate; stopping
+    // it at every fourth pixel leaves more to extrapolation. (Without any pre-pass every sample
+    // gathers a small record of its own: accurate but many times slower; see BENCHMARKS.md.)
+    let path = small_cornell("path", 3, 1024, &[]);
+    let err = |overture: &str| {
+        let img = small_cornell("ic", 3, 4, &[("overture", overture)]);
+        compare(&img, &path).expect("same size").rel_mse_trim
+    };
+    let (full, coarse) = (err("full"), err("coarse"));
+    eprintln!("overture full {full:.3e}, coarse {coarse:.3e}");
+    assert!(full < 0.95 * coarse, "{full} vs {coarse}");
+}

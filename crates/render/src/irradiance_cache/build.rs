@@ -167,7 +167,8 @@ pub fn fill_for_image(
     let coarsest = 32usize;
     let mut stride = coarsest;
     let inv = Vec2::new(1.0 / width as f32, 1.0 / height as f32);
-    while stride >= 1 {
+    let finest = cache.params.overture.finest_stride();
+    while stride >= finest.max(1) && finest > 0 {
         // Phases: (x/stride mod 2, y/stride mod 2); (0, 0) belongs to the coarser grid except
         // on the coarsest.
         let phases: &[(usize, usize)] = if stride == coarsest {

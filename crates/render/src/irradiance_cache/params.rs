@@ -22,6 +22,31 @@ pub const SPONZA_BENCH: &[(&str, &str)] = &[
     ("resolution", "64"),
 ];
 
+/// How far the pre-pass (the overture: 002, Mitsuba's irrcache) fills the cache before the
+/// pixels are rendered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Overture {
+    /// Down to every pixel centre: the pixel pass interpolates.
+    #[default]
+    Full,
+    /// Down to every fourth pixel: the pixel pass extrapolates more (relaxed lookups).
+    Coarse,
+    /// No pre-pass: every pixel sample outside all records gathers a small record of its own.
+    Off,
+}
+
+impl Overture {
+    /// The finest pixel stride the pre-pass visits (0: none).
+    #[must_use]
+    pub fn finest_stride(self) -> usize {
+        match self {
+            Overture::Full => 1,
+            Overture::Coarse => 4,
+            Overture::Off => 0,
+        }
+    }
+}
+
 /// Which translational-gradient formula records use (they are equal, 000 §3.6.3).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum TranslationalFormula {
@@ -52,6 +77,8 @@ pub struct IcParams {
     pub gradients: GradientMode,
     /// Translational gradient formula.
     pub formula: TranslationalFormula,
+    /// How far the pre-pass fills the cache (`--overture`).
+    pub overture: Overture,
     /// How a record's error is measured (`--error-metric`).
     pub error_metric: ErrorMetric,
     /// Neighbour clamping: a record's radius never exceeds a neighbour's plus their distance.
@@ -83,6 +110,7 @@ impl Default for IcParams {
             // Chosen by measurement (BENCHMARKS.md): at equal time Tabellion–Lamorlette's metric
             // reaches about half Ward's error on Sponza and two thirds on the Cornell box.
             error_metric: ErrorMetric::Tabellion,
+            overture: Overture::Full,
             neighbour_clamp: false,
         }
     }
@@ -184,6 +212,18 @@ impl IcParams {
                     .ok_or_else(|| {
                         format!("{name}: expected 1 to 4096 light samples, found \"{value}\"")
                     })?;
+            }
+            "overture" => {
+                self.overture = match value.trim() {
+                    "full" | "on" => Overture::Full,
+                    "coarse" => Overture::Coarse,
+                    "off" => Overture::Off,
+                    v => {
+                        return Err(format!(
+                            "{name}: expected full, coarse or off, found \"{v}\""
+                        ))
+                    }
+                }
             }
             "error_metric" | "error-metric" => {
                 self.error_metric = ErrorMetric::parse(value.trim())?
