@@ -531,7 +531,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             "variant", "threads", "seconds", "pre-pass", "pixels", "records", "relMSE_trim"
         );
         let mut best = (f64::INFINITY, 0.0);
-        let variants: [IcVariant; 10] = [
+        let variants: [IcVariant; 11] = [
             ("gradients full (3.48)", &[], &[1, 2]),
             (
                 "gradients full (3.47)",
@@ -550,6 +550,11 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             (
                 "overture coarse (every 4th pixel)",
                 &[("overture", "coarse")],
+                &[2],
+            ),
+            (
+                "record order spatial (Morton)",
+                &[("record_order", "spatial")],
                 &[2],
             ),
             (

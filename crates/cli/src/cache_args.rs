@@ -45,6 +45,9 @@ pub struct CacheArgs {
     /// (every fourth), off.
     #[arg(long, help_heading = "Irradiance cache")]
     pub overture: Option<String>,
+    /// Record order in memory after the pre-pass: insertion or spatial (Morton order).
+    #[arg(long = "record-order", help_heading = "Irradiance cache")]
+    pub record_order: Option<String>,
     /// Record error metric: ward (split sphere) or tabellion (Tabellion–Lamorlette).
     #[arg(long = "error-metric", help_heading = "Irradiance cache")]
     pub error_metric: Option<String>,
@@ -121,6 +124,7 @@ impl CacheArgs {
             ("ambient_weight", &self.ambient_weight),
             ("error_metric", &self.error_metric),
             ("overture", &self.overture),
+            ("record_order", &self.record_order),
             ("neighbour_clamp", &self.neighbour_clamp),
             ("gradient_formula", &self.gradient_formula),
         ]

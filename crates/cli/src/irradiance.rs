@@ -169,6 +169,7 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         ambient_weight: None,
         error_metric: None,
         overture: None,
+        record_order: None,
         neighbour_clamp: None,
         ambient_exclude: Vec::new(),
         ambient_exclude_file: Vec::new(),

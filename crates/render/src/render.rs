@@ -274,6 +274,11 @@ fn prepare_cache(
     } else {
         CacheStats::default()
     };
+    if ic.params.spatial_order {
+        for store in &mut cache.levels {
+            store.sort_spatially();
+        }
+    }
     stats.records_loaded = loaded;
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     Ok((cache, stats))

@@ -77,6 +77,8 @@ pub struct IcParams {
     pub gradients: GradientMode,
     /// Translational gradient formula.
     pub formula: TranslationalFormula,
+    /// Reorder records spatially after the pre-pass (003 item 8, `--record-order spatial`).
+    pub spatial_order: bool,
     /// How far the pre-pass fills the cache (`--overture`).
     pub overture: Overture,
     /// How a record's error is measured (`--error-metric`).
@@ -111,6 +113,7 @@ impl Default for IcParams {
             // reaches about half Ward's error on Sponza and two thirds on the Cornell box.
             error_metric: ErrorMetric::Tabellion,
             overture: Overture::Full,
+            spatial_order: false,
             neighbour_clamp: false,
         }
     }
@@ -212,6 +215,17 @@ impl IcParams {
                     .ok_or_else(|| {
                         format!("{name}: expected 1 to 4096 light samples, found \"{value}\"")
                     })?;
+            }
+            "record_order" | "record-order" => {
+                self.spatial_order = match value.trim() {
+                    "spatial" => true,
+                    "insertion" => false,
+                    v => {
+                        return Err(format!(
+                            "{name}: expected insertion or spatial, found \"{v}\""
+                        ))
+                    }
+                }
             }
             "overture" => {
                 self.overture = match value.trim() {
