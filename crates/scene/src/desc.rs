@@ -195,7 +195,7 @@ pub enum TextureDesc {
 }
 
 /// An image texture (`<texture type="bitmap">`).
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct BitmapDesc {
     /// The file it came from.
     pub path: PathBuf,
@@ -207,6 +207,21 @@ pub struct BitmapDesc {
     pub wrap: WrapMode,
     /// 2D affine transform of uv coordinates (`to_uv`), as a 3×3 matrix acting on (u, v, 1).
     pub to_uv: ircache_math::Mat3,
+}
+
+/// The file, the size and the lookup settings, not the texels (which would be millions of
+/// numbers; scene content hashes use this too).
+impl std::fmt::Debug for BitmapDesc {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("BitmapDesc")
+            .field("path", &self.path)
+            .field("width", &self.image.width)
+            .field("height", &self.image.height)
+            .field("filter", &self.filter)
+            .field("wrap", &self.wrap)
+            .field("to_uv", &self.to_uv)
+            .finish()
+    }
 }
 
 /// Texture filter.
