@@ -580,3 +580,109 @@ fn four_processes_share_one_cache_file_on_disjoint_tiles() {
         "relMSE_trim {e}, lum ratio {lum}"
     );
 }
+
+/// A room whose floor has a bumpy normal map (or none), lit by a point light.
+fn bumpy_room_xml(bumpy: bool) -> String {
+    let floor_bsdf = r#"<bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.6"/></bsdf></bsdf>"#;
+    let floor_bsdf = if bumpy {
+        format!(
+            r#"<bsdf type="normalmap"><texture name="normalmap" type="bitmap"><string name="filename" value="bumps.exr"/><boolean name="raw" value="true"/></texture>{floor_bsdf}</bsdf>"#
+        )
+    } else {
+        floor_bsdf.to_string()
+    };
+    format!(
+        r#"<scene version="3.0.0">
+  <integrator type="irrcache"><integer name="max_depth" value="3"/></integrator>
+  <sensor type="perspective"><float name="fov" value="70"/>
+    <transform name="to_world"><lookat origin="0.5,0.05,0.6" target="0.5,0.8,0.0" up="0,0,1"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="2"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="64"/></film>
+  </sensor>
+  <shape type="cube"><transform name="to_world"><scale value="0.5"/><translate value="0.5,0.5,0.5"/></transform>
+    <bsdf type="twosided"><bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.3, 0.2"/></bsdf></bsdf></shape>
+  <shape type="rectangle"><transform name="to_world"><scale value="0.499"/><translate value="0.5,0.5,0.001"/></transform>
+    {floor_bsdf}</shape>
+  <emitter type="point"><point name="position" value="0.3,0.5,0.8"/><rgb name="intensity" value="1"/></emitter>
+</scene>"#
+    )
+}
+
+#[test]
+fn normal_maps_reach_the_cache_through_the_rotation_gradient_not_more_records() {
+    // 003 item 5: records use the unperturbed normal, so a bumpy floor takes about as many
+    // records as a flat one; the bumps still show, through direct light and the rotation
+    // gradient.
+    let d = temp_dir("bumps");
+    // Tangent-space normals tilted up to ~35° in a 16×16 pattern.
+    let (w, h) = (64usize, 64usize);
+    let mut img = ircache_image::Image::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            let (u, v) = (x as f32 / w as f32, y as f32 / h as f32);
+            let t = 0.7 * (u * 16.0 * std::f32::consts::TAU).sin();
+            let s = 0.7 * (v * 16.0 * std::f32::consts::TAU).cos();
+            let n = ircache_math::Vec3::new(t, s, 1.0).normalize();
+            img.set(
+                x,
+                y,
+                ircache_math::Rgb::new(0.5 * n.x + 0.5, 0.5 * n.y + 0.5, 0.5 * n.z + 0.5),
+            );
+        }
+    }
+    ircache_image::write_image(&d.join("bumps.exr"), &img, 0.0).unwrap();
+    std::fs::write(d.join("flat.xml"), bumpy_room_xml(false)).unwrap();
+    std::fs::write(d.join("bumpy.xml"), bumpy_room_xml(true)).unwrap();
+    let run = |scene: &str, extra: &[&str]| {
+        let stats = format!("{scene}{}.json", extra.len());
+        let out = format!("{scene}{}.exr", extra.len());
+        let o = ircache(
+            &[
+                &[
+                    "render", scene, "-ad", "128", "-o", &out, "--stats", &stats, "-q",
+                ][..],
+                extra,
+            ]
+            .concat(),
+            &d,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        (
+            stats_of(&d, &stats)["records"].as_u64().unwrap() as f64,
+            ircache_image::read_image(&d.join(out)).unwrap(),
+        )
+    };
+    let (flat, flat_img) = run("flat.xml", &[]);
+    let (bumpy, bumpy_img) = run("bumpy.xml", &[]);
+    assert!(
+        (bumpy - flat).abs() <= 0.1 * flat,
+        "{bumpy} records on the bumpy floor vs {flat} on the flat one"
+    );
+    // The bumps show.
+    let diff: f32 = flat_img
+        .pixels
+        .iter()
+        .zip(&bumpy_img.pixels)
+        .map(|(a, b)| (a.luminance() - b.luminance()).abs())
+        .sum::<f32>()
+        / flat_img.pixels.len() as f32;
+    let mean: f32 =
+        flat_img.pixels.iter().map(|p| p.luminance()).sum::<f32>() / flat_img.pixels.len() as f32;
+    assert!(diff > 0.02 * mean, "{diff} vs mean {mean}");
+    // And through the cache: the indirect irradiance image differs on the floor.
+    run("flat.xml", &["--aov", "irradiance"]);
+    run("bumpy.xml", &["--aov", "irradiance"]);
+    let fe = ircache_image::read_image(&d.join("flat.xml2-irradiance.exr")).unwrap();
+    let be = ircache_image::read_image(&d.join("bumpy.xml2-irradiance.exr")).unwrap();
+    let ediff: f32 = fe
+        .pixels
+        .iter()
+        .zip(&be.pixels)
+        .map(|(a, b)| (a.luminance() - b.luminance()).abs())
+        .sum();
+    let esum: f32 = fe.pixels.iter().map(|p| p.luminance()).sum();
+    assert!(
+        ediff > 0.01 * esum,
+        "the irradiance did not follow the bumps: {ediff} of {esum}"
+    );
+}

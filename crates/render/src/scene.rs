@@ -70,8 +70,10 @@ pub struct Interaction {
     pub p: Vec3,
     /// Unit geometric normal (triangle winding, or outward for spheres unless flipped).
     pub ng: Vec3,
-    /// Shading frame around the unit shading normal.
+    /// Shading frame around the unit shading normal (after a normal or bump map).
     pub frame: Frame,
+    /// The shading normal before a normal or bump map (irradiance cache records use it).
+    pub base_n: Vec3,
     /// Texture coordinates.
     pub uv: Vec2,
     /// Shape index.
@@ -247,6 +249,7 @@ impl Scene {
                     p: ray.at(hit.t),
                     ng,
                     frame: Frame::from_z(ng),
+                    base_n: ng,
                     uv: Vec2::new(hit.u, hit.v),
                     shape: hit.geom_id,
                     prim: hit.prim_id,
@@ -270,11 +273,27 @@ impl Scene {
                     Some(t) => b0 * t[i0] + b1 * t[i1] + b2 * t[i2],
                     None => Vec2::new(b1, b2),
                 };
-                let dpdu = p1 - p0;
+                let mut dpdu = p1 - p0;
+                let mut frame = Frame::from_normal_tangent(ns, dpdu);
+                if let (Some(perturb), Some(t)) =
+                    (self.materials[shape.material].perturbation(), &m.uvs)
+                {
+                    // dp/du and dp/dv from the triangle's texture coordinates.
+                    let (d1, d2) = (t[i0] - t[i2], t[i1] - t[i2]);
+                    let (e1, e2) = (p0 - p2, p1 - p2);
+                    let det = d1.x * d2.y - d1.y * d2.x;
+                    if det.abs() > f32::MIN_POSITIVE {
+                        dpdu = (e1 * d2.y - e2 * d1.y) / det;
+                        let dpdv = (e2 * d1.x - e1 * d2.x) / det;
+                        let n = perturb.normal(uv, ns, dpdu, dpdv);
+                        frame = Frame::from_normal_tangent(n, dpdu);
+                    }
+                }
                 Interaction {
                     p,
                     ng,
-                    frame: Frame::from_normal_tangent(ns, dpdu),
+                    frame,
+                    base_n: ns,
                     uv,
                     shape: hit.geom_id,
                     prim: hit.prim_id,
@@ -305,6 +324,7 @@ impl Scene {
                     p,
                     ng: n,
                     frame: Frame::from_z(n),
+                    base_n: n,
                     uv,
                     shape: hit.geom_id,
                     prim: hit.prim_id,

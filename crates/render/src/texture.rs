@@ -73,6 +73,18 @@ impl Texture {
         }
     }
 
+    /// One texel's size in uv (u, v); 1/1024 for constants.
+    #[must_use]
+    pub fn texel_size(&self) -> (f32, f32) {
+        match self {
+            Texture::Constant(_) => (1.0 / 1024.0, 1.0 / 1024.0),
+            Texture::Bitmap(b) => (
+                1.0 / b.image.width.max(1) as f32,
+                1.0 / b.image.height.max(1) as f32,
+            ),
+        }
+    }
+
     /// The value at texture coordinates `uv`.
     #[must_use]
     pub fn eval(&self, uv: Vec2) -> Rgb {

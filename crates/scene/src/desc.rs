@@ -268,6 +268,24 @@ pub enum BsdfDesc {
         /// A different BSDF for the back side, if two were given.
         back: Option<Arc<BsdfDesc>>,
     },
+    /// Mitsuba's `normalmap`: the shading normal from a tangent-space normal texture
+    /// (n = 2·rgb − 1 along dp/du, dp/dv, n).
+    NormalMap {
+        /// The normal texture (read raw).
+        normals: Arc<BitmapDesc>,
+        /// The BSDF it perturbs.
+        nested: Arc<BsdfDesc>,
+    },
+    /// Mitsuba's `bumpmap` (and MTL's `bump`/`map_bump`): the surface displaced along its
+    /// normal by `scale` × the texture's luminance, for shading only.
+    BumpMap {
+        /// The height texture.
+        height: Arc<BitmapDesc>,
+        /// Height scale.
+        scale: f32,
+        /// The BSDF it perturbs.
+        nested: Arc<BsdfDesc>,
+    },
     /// Smooth dielectric coating over a diffuse base.
     Plastic {
         /// Base albedo (default 0.5).

@@ -230,7 +230,38 @@ fn material(
         _ => diffuse(albedo),
     };
     let emission = m.emission.filter(|e| e.max_channel() > 0.0);
-    Ok((two_sided(front), emission))
+    let mut bsdf = two_sided(front);
+    if let Some(tex) = &m.map_bump {
+        // `bump`/`map_bump`: heights (luminance, raw) times -bm, as Mitsuba's bumpmap.
+        let dir = tex
+            .location
+            .file
+            .parent()
+            .unwrap_or(Path::new(""))
+            .to_path_buf();
+        let tex_path = resolve(&dir, &tex.path);
+        let image =
+            ircache_image::read_texture(&tex_path, true).map_err(|e| SceneError::Referenced {
+                location: tex.location.clone(),
+                path: tex_path.clone(),
+                message: match e {
+                    ImageError::Read { message, .. } => message,
+                    other => other.to_string(),
+                },
+            })?;
+        bsdf = Arc::new(BsdfDesc::BumpMap {
+            height: Arc::new(BitmapDesc {
+                path: tex_path,
+                image: Arc::new(image),
+                filter: TextureFilter::Bilinear,
+                wrap: WrapMode::Repeat,
+                to_uv: Mat3::IDENTITY,
+            }),
+            scale: tex.bump_multiplier.unwrap_or(1.0),
+            nested: bsdf,
+        });
+    }
+    Ok((bsdf, emission))
 }
 
 fn shape(group: &ObjGroup, bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> ShapeDesc {

@@ -197,10 +197,21 @@ fn textured_sponza() {
     let path = Path::new(SCENES).join("sponza-dabrovic/sponza.obj");
     let s = load(&path, &ObjCamera::default()).unwrap();
     assert_eq!(s.emitters.len(), 1);
+    // `map_bump` wraps the material in a bump map.
+    let unwrap = |b: &std::sync::Arc<BsdfDesc>| match &**b {
+        BsdfDesc::BumpMap { nested, .. } => nested.clone(),
+        _ => b.clone(),
+    };
+    let bumped = s
+        .shapes
+        .iter()
+        .filter(|sh| matches!(&*sh.bsdf, BsdfDesc::BumpMap { scale, .. } if *scale > 0.0))
+        .count();
+    assert!(bumped > 0, "no map_bump became a bump map");
     let textured = s
         .shapes
         .iter()
-        .filter(|sh| match &*sh.bsdf {
+        .filter(|sh| match &*unwrap(&sh.bsdf) {
             BsdfDesc::TwoSided { front, .. } => {
                 matches!(
                     &**front,

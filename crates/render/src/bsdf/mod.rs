@@ -287,6 +287,10 @@ impl Compiled {
             },
             // Nested twosided: the inner front model (Mitsuba does not nest them either).
             BsdfDesc::TwoSided { front, .. } => Compiled::new(front),
+            // Normal and bump maps act on the shading frame (`Material::perturb`).
+            BsdfDesc::NormalMap { nested, .. } | BsdfDesc::BumpMap { nested, .. } => {
+                Compiled::new(nested)
+            }
             BsdfDesc::Plastic {
                 diffuse_reflectance,
                 specular_reflectance,
@@ -440,13 +444,85 @@ pub struct Material {
     front: Compiled,
     /// `Some` for `twosided` (the back model, or a copy of the front one).
     back: Option<Compiled>,
+    /// A normal or bump map.
+    perturbation: Option<Perturbation>,
+}
+
+/// A perturbation of the shading normal by a texture (normal or bump map).
+#[derive(Clone, Debug)]
+pub enum Perturbation {
+    /// Tangent-space normals n = 2·rgb − 1 along (dp/du, dp/dv, n).
+    NormalMap(Texture),
+    /// Heights scale × luminance; the normal of the displaced surface.
+    BumpMap(Texture, f32),
+}
+
+impl Perturbation {
+    /// The perturbed unit shading normal at `uv` for the unperturbed normal `n` and the surface
+    /// derivatives `dpdu`, `dpdv`; `n` itself where the derivatives are degenerate.
+    #[must_use]
+    pub fn normal(&self, uv: Vec2, n: Vec3, dpdu: Vec3, dpdv: Vec3) -> Vec3 {
+        // An orthonormal tangent frame around n, with s along dp/du.
+        let s = (dpdu - n * n.dot(dpdu)).normalize_or_zero();
+        if s == Vec3::ZERO {
+            return n;
+        }
+        let t = n.cross(s);
+        // dp/dv's side decides the handedness of the texture's y.
+        let t = if t.dot(dpdv) < 0.0 { -t } else { t };
+        let out = match self {
+            Perturbation::NormalMap(tex) => {
+                let c = tex.eval(uv);
+                s * (2.0 * c.r - 1.0) + t * (2.0 * c.g - 1.0) + n * (2.0 * c.b - 1.0)
+            }
+            Perturbation::BumpMap(tex, scale) => {
+                // Central differences of the height, one texel apart.
+                let (du, dv) = tex.texel_size();
+                let h = |uv: Vec2| tex.eval(uv).luminance() * *scale;
+                let dhdu = (h(uv + Vec2::new(du, 0.0)) - h(uv - Vec2::new(du, 0.0))) / (2.0 * du);
+                let dhdv = (h(uv + Vec2::new(0.0, dv)) - h(uv - Vec2::new(0.0, dv))) / (2.0 * dv);
+                let (lu, lv) = (dpdu.length(), dpdv.length());
+                if lu <= 0.0 || lv <= 0.0 {
+                    return n;
+                }
+                // The displaced surface p + h n has tangents dp/du + h_u n, dp/dv + h_v n.
+                n - s * (dhdu / lu) - t * (dhdv / lv)
+            }
+        };
+        let out = out.normalize_or_zero();
+        if out == Vec3::ZERO || out.dot(n) <= 0.0 {
+            n
+        } else {
+            out
+        }
+    }
 }
 
 impl Material {
     /// Compiles a description.
     #[must_use]
     pub fn from_desc(desc: &BsdfDesc) -> Material {
-        match desc {
+        let (desc, perturbation) = match desc {
+            BsdfDesc::NormalMap { normals, nested } => (
+                nested.as_ref(),
+                Some(Perturbation::NormalMap(Texture::from_desc(
+                    &ircache_scene::TextureDesc::Bitmap(normals.clone()),
+                ))),
+            ),
+            BsdfDesc::BumpMap {
+                height,
+                scale,
+                nested,
+            } => (
+                nested.as_ref(),
+                Some(Perturbation::BumpMap(
+                    Texture::from_desc(&ircache_scene::TextureDesc::Bitmap(height.clone())),
+                    *scale,
+                )),
+            ),
+            d => (d, None),
+        };
+        let mut m = match desc {
             BsdfDesc::TwoSided { front, back } => {
                 let f = Compiled::new(front);
                 let b = match back {
@@ -456,13 +532,32 @@ impl Material {
                 Material {
                     front: f,
                     back: Some(b),
+                    perturbation: None,
                 }
             }
             d => Material {
                 front: Compiled::new(d),
                 back: None,
+                perturbation: None,
             },
-        }
+        };
+        // A normal or bump map inside twosided applies to both sides.
+        m.perturbation = perturbation.or_else(|| match desc {
+            BsdfDesc::TwoSided { front, .. } => match front.as_ref() {
+                BsdfDesc::NormalMap { .. } | BsdfDesc::BumpMap { .. } => {
+                    Material::from_desc(front).perturbation
+                }
+                _ => None,
+            },
+            _ => None,
+        });
+        m
+    }
+
+    /// The normal or bump map, if any.
+    #[must_use]
+    pub fn perturbation(&self) -> Option<&Perturbation> {
+        self.perturbation.as_ref()
     }
 
     /// The BSDF at texture coordinates `uv`.
@@ -490,7 +585,7 @@ impl Material {
                     | Compiled::Phong { .. }
             )
         };
-        free(&self.front) && self.back.as_ref().is_none_or(free)
+        free(&self.front) && self.back.as_ref().is_none_or(free) && self.perturbation.is_none()
     }
 
     /// True when some model of the material reads an image texture (it needs texture
@@ -504,7 +599,9 @@ impl Material {
             | Compiled::Phong { diffuse: t, .. } => !matches!(t, Texture::Constant(_)),
             Compiled::Fixed(_) => false,
         };
-        textured(&self.front) || self.back.as_ref().is_some_and(textured)
+        textured(&self.front)
+            || self.back.as_ref().is_some_and(textured)
+            || self.perturbation.is_some()
     }
 
     /// True for Mitsuba's `twosided` wrapper.

@@ -231,7 +231,9 @@ impl IcIntegrator {
         };
         let store = &cache.levels[0];
         for threshold in [1.0, 2.0, 4.0] {
-            if let Some(i) = store.interpolate(sp.it.p, sp.n, threshold, self.params.gradients) {
+            if let Some(i) =
+                store.interpolate(sp.it.p, sp.n, sp.n_bump, threshold, self.params.gradients)
+            {
                 return i.e;
             }
         }

@@ -29,7 +29,13 @@ pub fn irradiance_image(
             first_diffuse_point(scene, &ray)
                 .and_then(|sp| {
                     [1.0, 2.0].into_iter().find_map(|m| {
-                        cache.levels[0].interpolate(sp.it.p, sp.n, m, cache.params.gradients)
+                        cache.levels[0].interpolate(
+                            sp.it.p,
+                            sp.n,
+                            sp.n_bump,
+                            m,
+                            cache.params.gradients,
+                        )
                     })
                 })
                 .map_or(Rgb::ZERO, |i| i.e)

@@ -236,20 +236,25 @@ pub struct Gatherer<'a> {
 pub struct ShadingPoint {
     /// The interaction (for spawning rays).
     pub it: Interaction,
-    /// Shading normal turned towards the viewer.
+    /// Shading normal before any normal or bump map, turned towards the viewer: records are
+    /// gathered around it and weighted by it (003 item 5).
     pub n: Vec3,
+    /// Shading normal after the normal or bump map, on the same side: interpolation turns the
+    /// records' irradiance towards it through the rotational gradient.
+    pub n_bump: Vec3,
 }
 
 impl ShadingPoint {
     /// The interaction seen from direction `wo` (unit, pointing away from the surface).
     #[must_use]
     pub fn facing(it: Interaction, wo: Vec3) -> ShadingPoint {
-        let n = if it.frame.n.dot(wo) < 0.0 {
-            -it.frame.n
-        } else {
-            it.frame.n
-        };
-        ShadingPoint { it, n }
+        let flip = it.base_n.dot(wo) < 0.0;
+        let s = if flip { -1.0 } else { 1.0 };
+        ShadingPoint {
+            it,
+            n: it.base_n * s,
+            n_bump: it.frame.n * s,
+        }
     }
 }
 
@@ -455,7 +460,7 @@ impl Gatherer<'_> {
             .into_iter()
             .flatten()
         {
-            if let Some(i) = store.interpolate(sp.it.p, sp.n, 1.0, params.gradients) {
+            if let Some(i) = store.interpolate(sp.it.p, sp.n, sp.n_bump, 1.0, params.gradients) {
                 sum += i.e * i.weight_sum;
                 wsum += i.weight_sum;
                 found = true;

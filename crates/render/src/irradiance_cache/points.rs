@@ -45,12 +45,14 @@ pub fn query_point(p: Vec3, n: Vec3) -> ShadingPoint {
             p,
             ng: n,
             frame: Frame::from_z(n),
+            base_n: n,
             uv: Vec2::ZERO,
             shape: u32::MAX,
             prim: 0,
             t: 0.0,
         },
         n,
+        n_bump: n,
     }
 }
 

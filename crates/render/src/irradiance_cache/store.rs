@@ -180,12 +180,15 @@ impl RecordStore {
     }
 
     /// Interpolates at (p, n) from the records whose normalised error is at most `threshold`
-    /// (1: the accuracy; more: relaxed) and that are not in front of p (000 eq. 3.15).
+    /// (1: the accuracy; more: relaxed) and that are not in front of p (000 eq. 3.15). Weights
+    /// use the normal `n`; the rotational gradient turns each record towards `n_rot` (a bump-
+    /// or normal-mapped normal, 003 item 5; `n` itself otherwise).
     #[must_use]
     pub fn interpolate(
         &self,
         p: Vec3,
         n: Vec3,
+        n_rot: Vec3,
         threshold: f32,
         mode: GradientMode,
     ) -> Option<Interpolated> {
@@ -197,7 +200,7 @@ impl RecordStore {
             if let Some(err) = self.metric.error(rec, p, n, self.accuracy) {
                 if err <= threshold {
                     let w = self.metric.weight(err, threshold);
-                    sum += extrapolate(rec, p, n, mode) * w;
+                    sum += extrapolate(rec, p, n_rot, mode) * w;
                     wsum += w;
                     count += 1;
                 }
@@ -330,14 +333,14 @@ mod order_tests {
             .collect();
         let before: Vec<_> = queries
             .iter()
-            .map(|&q| s.interpolate(q, Vec3::Z, 1.0, GradientMode::Full))
+            .map(|&q| s.interpolate(q, Vec3::Z, Vec3::Z, 1.0, GradientMode::Full))
             .collect();
         let order_before: Vec<Vec3> = s.records().iter().map(|r| r.p).collect();
         s.sort_spatially();
         let order_after: Vec<Vec3> = s.records().iter().map(|r| r.p).collect();
         assert_ne!(order_before, order_after);
         for (q, b) in queries.iter().zip(&before) {
-            let a = s.interpolate(*q, Vec3::Z, 1.0, GradientMode::Full);
+            let a = s.interpolate(*q, Vec3::Z, Vec3::Z, 1.0, GradientMode::Full);
             match (a, b) {
                 (Some(a), Some(b)) => {
                     assert_eq!(a.count, b.count);

@@ -60,6 +60,8 @@ pub struct MtlMaterial {
 pub struct MtlTexture {
     /// The file name as written (relative to the MTL file's folder unless absolute).
     pub path: PathBuf,
+    /// The `-bm` bump multiplier, if given.
+    pub bump_multiplier: Option<f32>,
     /// Where the statement was written.
     pub location: SourceLocation,
 }
@@ -220,6 +222,7 @@ fn option_arity(name: &str) -> Option<(usize, usize, bool)> {
 fn texture(toks: &[Token], file: &Arc<PathBuf>) -> Result<MtlTexture, SceneError> {
     let kw = toks[0].text;
     let mut i = 1;
+    let mut bump_multiplier = None;
     while i < toks.len() {
         let Some((min, max, numeric)) = option_arity(toks[i].text) else {
             break;
@@ -247,6 +250,13 @@ fn texture(toks: &[Token], file: &Arc<PathBuf>) -> Result<MtlTexture, SceneError
                 format!("expected an argument after texture option '{opt}'"),
             ));
         }
+        if opt == "-bm" && taken >= 1 {
+            bump_multiplier = toks[i + 1]
+                .text
+                .parse::<f32>()
+                .ok()
+                .filter(|x| x.is_finite());
+        }
         i += 1 + taken;
     }
     if i >= toks.len() {
@@ -263,6 +273,7 @@ fn texture(toks: &[Token], file: &Arc<PathBuf>) -> Result<MtlTexture, SceneError
         .join(" ");
     Ok(MtlTexture {
         path: PathBuf::from(path),
+        bump_multiplier,
         location: toks[0].location(file),
     })
 }

@@ -27,6 +27,8 @@ const BSDFS: &[&str] = &[
     "roughconductor",
     "dielectric",
     "thindielectric",
+    "normalmap",
+    "bumpmap",
 ];
 const TEXTURES: &[&str] = &["bitmap"];
 
@@ -50,6 +52,35 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
                 check_unit_range(*c, "reflectance", prop)?;
             }
             BsdfDesc::Diffuse { reflectance }
+        }
+        "normalmap" | "bumpmap" => {
+            let mut texture = None;
+            let mut nested = None;
+            for (obj, prop) in p.objects(&ctx.ids)? {
+                match obj.tag.as_str() {
+                    "texture" if texture.is_none() => texture = Some(build_texture(ctx, &obj)?),
+                    "bsdf" if nested.is_none() => nested = Some(build_bsdf(ctx, &obj)?),
+                    _ => expect_tag(&obj, prop, "one texture and one bsdf")?,
+                }
+            }
+            let texture = texture.ok_or_else(|| p.error("a nested bitmap texture is required"))?;
+            let nested = nested.ok_or_else(|| p.error("a nested BSDF is required"))?;
+            if p.ty == "normalmap" {
+                BsdfDesc::NormalMap {
+                    normals: texture,
+                    nested,
+                }
+            } else {
+                let scale = p.float("scale", 1.0)?;
+                if !scale.is_finite() {
+                    return Err(p.error("scale must be finite"));
+                }
+                BsdfDesc::BumpMap {
+                    height: texture,
+                    scale,
+                    nested,
+                }
+            }
         }
         "twosided" => {
             let nested = p.objects(&ctx.ids)?;
