@@ -169,6 +169,44 @@ fn two_sided(front: BsdfDesc) -> Arc<BsdfDesc> {
     })
 }
 
+/// Reads an MTL texture (once per file and decoding: `raw` skips the sRGB decoding).
+fn load_texture(
+    tex: &crate::mesh::mtl::MtlTexture,
+    raw: bool,
+    textures: &mut HashMap<PathBuf, Arc<Image>>,
+) -> Result<(PathBuf, Arc<Image>), SceneError> {
+    let dir = tex
+        .location
+        .file
+        .parent()
+        .unwrap_or(Path::new(""))
+        .to_path_buf();
+    let tex_path = resolve(&dir, &tex.path);
+    // Raw and decoded reads of one file are different images.
+    let key = if raw {
+        tex_path.with_extension(format!(
+            "{}#raw",
+            tex_path.extension().and_then(|e| e.to_str()).unwrap_or("")
+        ))
+    } else {
+        tex_path.clone()
+    };
+    if let Some(img) = textures.get(&key) {
+        return Ok((tex_path, img.clone()));
+    }
+    let img = ircache_image::read_texture(&tex_path, raw).map_err(|e| SceneError::Referenced {
+        location: tex.location.clone(),
+        path: tex_path.clone(),
+        message: match e {
+            ImageError::Read { message, .. } => message,
+            other => other.to_string(),
+        },
+    })?;
+    let img = Arc::new(img);
+    textures.insert(key, img.clone());
+    Ok((tex_path, img))
+}
+
 /// The BSDF and emitted radiance of an MTL material.
 fn material(
     m: &MtlMaterial,
@@ -176,31 +214,7 @@ fn material(
 ) -> Result<(Arc<BsdfDesc>, Option<Rgb>), SceneError> {
     let albedo = match &m.map_kd {
         Some(tex) => {
-            let dir = tex
-                .location
-                .file
-                .parent()
-                .unwrap_or(Path::new(""))
-                .to_path_buf();
-            let tex_path = resolve(&dir, &tex.path);
-            let image = match textures.get(&tex_path) {
-                Some(img) => img.clone(),
-                None => {
-                    let img = ircache_image::read_texture(&tex_path, false).map_err(|e| {
-                        SceneError::Referenced {
-                            location: tex.location.clone(),
-                            path: tex_path.clone(),
-                            message: match e {
-                                ImageError::Read { message, .. } => message,
-                                other => other.to_string(),
-                            },
-                        }
-                    })?;
-                    let img = Arc::new(img);
-                    textures.insert(tex_path.clone(), img.clone());
-                    img
-                }
-            };
+            let (tex_path, image) = load_texture(tex, false, textures)?;
             let image = match m.diffuse {
                 Some(kd) if kd != Rgb::ONE => {
                     let mut scaled = (*image).clone();
@@ -233,26 +247,11 @@ fn material(
     let mut bsdf = two_sided(front);
     if let Some(tex) = &m.map_bump {
         // `bump`/`map_bump`: heights (luminance, raw) times -bm, as Mitsuba's bumpmap.
-        let dir = tex
-            .location
-            .file
-            .parent()
-            .unwrap_or(Path::new(""))
-            .to_path_buf();
-        let tex_path = resolve(&dir, &tex.path);
-        let image =
-            ircache_image::read_texture(&tex_path, true).map_err(|e| SceneError::Referenced {
-                location: tex.location.clone(),
-                path: tex_path.clone(),
-                message: match e {
-                    ImageError::Read { message, .. } => message,
-                    other => other.to_string(),
-                },
-            })?;
+        let (tex_path, image) = load_texture(tex, true, textures)?;
         bsdf = Arc::new(BsdfDesc::BumpMap {
             height: Arc::new(BitmapDesc {
                 path: tex_path,
-                image: Arc::new(image),
+                image,
                 filter: TextureFilter::Bilinear,
                 wrap: WrapMode::Repeat,
                 to_uv: Mat3::IDENTITY,
