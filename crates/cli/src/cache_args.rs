@@ -9,19 +9,22 @@ use ircache_render::irradiance_cache::IcParams;
 /// Irradiance cache settings from the command line.
 #[derive(Args, Debug, Clone, Default)]
 pub struct CacheArgs {
-    /// Irradiance cache accuracy a (Radiance -aa): a record serves where its error ε ≤ a.
+    /// Accuracy a (Radiance -aa; default 0.4): with --error-metric ward a record serves where
+    /// its split-sphere error ε ≤ a; with tabellion (the default) κ = 0.2/a.
     #[arg(long, visible_alias = "aa", help_heading = "Irradiance cache")]
     pub accuracy: Option<String>,
-    /// Hemisphere divisions per record (Radiance -ad).
+    /// Hemisphere divisions per record (Radiance -ad; default 512).
     #[arg(long, visible_alias = "ad", help_heading = "Irradiance cache")]
     pub divisions: Option<String>,
-    /// Resolution (Radiance -ar): smallest record radius = scene size / resolution; 0: none.
+    /// Resolution (Radiance -ar; default 128): smallest record radius = scene size / resolution;
+    /// 0: none.
     #[arg(long, visible_alias = "ar", help_heading = "Irradiance cache")]
     pub resolution: Option<String>,
-    /// Indirect bounces (Radiance -ab); equals path tracing with max_depth N + 2.
+    /// Indirect bounces (Radiance -ab; default max_depth − 2); equals path tracing with
+    /// max_depth N + 2.
     #[arg(long, visible_alias = "ab", help_heading = "Irradiance cache")]
     pub bounces: Option<String>,
-    /// Radiance beyond the last bounce, "v" or "r,g,b" (Radiance -av r g b).
+    /// Radiance beyond the last bounce, "v" or "r,g,b" (Radiance -av r g b; default 0).
     #[arg(
         long = "ambient-value",
         visible_alias = "av",
@@ -31,7 +34,7 @@ pub struct CacheArgs {
     /// Adaptive super-samples per record (Radiance -as): extra rays where neighbours differ most.
     #[arg(long, visible_alias = "as", help_heading = "Irradiance cache")]
     pub supersamples: Option<String>,
-    /// Light samples per pixel sample for the direct term.
+    /// Light samples per pixel sample for the direct term (default 4).
     #[arg(long = "direct-samples", help_heading = "Irradiance cache")]
     pub direct_samples: Option<String>,
     /// Weight of the ambient value in a running average with computed irradiance (Radiance -aw).
@@ -48,13 +51,13 @@ pub struct CacheArgs {
     /// Record order in memory after the pre-pass: insertion or spatial (Morton order).
     #[arg(long = "record-order", help_heading = "Irradiance cache")]
     pub record_order: Option<String>,
-    /// Record error metric: ward (split sphere) or tabellion (Tabellion–Lamorlette).
+    /// Record error metric: ward (split sphere) or tabellion (Tabellion–Lamorlette, default).
     #[arg(long = "error-metric", help_heading = "Irradiance cache")]
     pub error_metric: Option<String>,
     /// Neighbour clamping (on/off): a record's radius never exceeds a neighbour's plus their distance.
     #[arg(long = "neighbour-clamp", help_heading = "Irradiance cache")]
     pub neighbour_clamp: Option<String>,
-    /// Gradients used in interpolation: none, rotation, full.
+    /// Gradients used in interpolation: none, rotation, full (default).
     #[arg(long, help_heading = "Irradiance cache")]
     pub gradients: Option<String>,
     /// Persistent cache file (Radiance -af): records are read from it first and new ones appended.
