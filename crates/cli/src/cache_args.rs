@@ -31,7 +31,8 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub ambient_value: Option<String>,
-    /// Adaptive super-samples per record (Radiance -as): extra rays where neighbours differ most.
+    /// Adaptive super-samples per record (Radiance -as; default 256): extra rays where
+    /// neighbours differ most.
     #[arg(long, visible_alias = "as", help_heading = "Irradiance cache")]
     pub supersamples: Option<String>,
     /// Light samples per pixel sample for the direct term (default 4).

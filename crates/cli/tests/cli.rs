@@ -492,7 +492,7 @@ fn four_processes_share_one_cache_file_on_disjoint_tiles() {
         "render",
         "room.xml",
         "-ad",
-        "128",
+        "512",
         "--width",
         "64",
         "--height",

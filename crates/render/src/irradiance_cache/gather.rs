@@ -340,7 +340,8 @@ impl Gatherer<'_> {
     /// Adaptive super-sampling (003 item 2): the cells whose neighbours differ most among
     /// themselves get three more rays each (`extra` / 3 cells), placed with the first sample on
     /// a 2×2 lattice shifted by that sample's jitter, so the cell stays stratified; it keeps the
-    /// mean of its four samples. The choice never looks at the cell's own sample, which keeps
+    /// mean of its four samples and the nearest of their distances. The choice never looks at
+    /// the cell's own sample, which keeps
     /// the estimate unbiased (see [`HemisphereSamples::neighbour_spread`]).
     #[allow(clippy::too_many_arguments)]
     fn supersample(
@@ -370,9 +371,11 @@ impl Gatherer<'_> {
                 let u = Vec2::new((v.x + dx).fract(), (v.y + dy).fract());
                 let local = strata.direction(j, k, u);
                 let sample_key = mix(key, (strata.cells() + 3 * n + q) as u64);
-                if let Some((l, _)) = self.sample(st, sp, frame, ng, local, level, sample_key, rng)
+                if let Some((l, t)) = self.sample(st, sp, frame, ng, local, level, sample_key, rng)
                 {
                     sum += l;
+                    // The nearest surface in the cell moves its walls (3.42, 3.46).
+                    h.distance[idx] = h.distance[idx].min(t);
                 }
             }
             h.radiance[idx] = sum * 0.25;

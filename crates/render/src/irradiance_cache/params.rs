@@ -17,8 +17,9 @@ pub const CORNELL_BOX_BENCH: &[(&str, &str)] = &[
 /// The settings `ircache bench` times on Sponza (at 8 spp).
 pub const SPONZA_BENCH: &[(&str, &str)] = &[
     ("error_metric", "tabellion"),
-    ("accuracy", "0.35"),
-    ("divisions", "384"),
+    ("accuracy", "0.5"),
+    ("divisions", "1024"),
+    ("supersamples", "512"),
     ("resolution", "64"),
 ];
 
@@ -107,7 +108,7 @@ impl Default for IcParams {
             gradients: GradientMode::Full,
             formula: TranslationalFormula::WardHeckbert,
             direct_samples: 4,
-            supersamples: 0,
+            supersamples: 256,
             ambient_weight: 0,
             // Chosen by measurement (BENCHMARKS.md): at equal time Tabellion–Lamorlette's metric
             // reaches about half Ward's error on Sponza and two thirds on the Cornell box.
