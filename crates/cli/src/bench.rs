@@ -540,9 +540,14 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             ),
             ("gradients rotation", &[("gradients", "rotation")], &[2]),
             ("gradients none", &[("gradients", "none")], &[2]),
-            ("1.5× divisions", &[("divisions", "1.5x")], &[2]),
+            // Equal rays: 1.5 N stratified against N + 0.5 N adaptive super-samples.
             (
-                "+ 0.5× divisions super-samples",
+                "1.5× divisions, no super-samples",
+                &[("divisions", "1.5x"), ("supersamples", "0")],
+                &[2],
+            ),
+            (
+                "1× divisions + 0.5× super-samples",
                 &[("supersamples", "0.5x")],
                 &[2],
             ),
