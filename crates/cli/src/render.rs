@@ -391,6 +391,8 @@ fn write_stats(
             "resolution": p.resolution,
             "bounces": p.bounces,
             "gradients": p.gradients.name(),
+            "error_metric": p.error_metric.name(),
+            "supersamples": p.supersamples,
         });
         if let (Some(a), Some(b)) = (json.as_object_mut(), extra.as_object()) {
             a.extend(b.clone());
