@@ -330,3 +330,51 @@ fn textured_sponza() {
     }
     assert_eq!(textured, 19);
 }
+
+#[test]
+fn normalmap_and_bumpmap_wrap_a_bsdf_with_a_texture() {
+    let dir = std::env::temp_dir().join(format!("ircache-bump-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut img = ircache_image::Image::new(4, 4);
+    img.pixels.fill(Rgb::new(0.5, 0.5, 1.0));
+    ircache_image::write_image(&dir.join("n.exr"), &img, 0.0).unwrap();
+    let scene = |bsdf: &str| {
+        format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"/>\
+             <shape type=\"rectangle\">{bsdf}</shape></scene>"
+        )
+    };
+    let tex = r#"<texture type="bitmap" name="normalmap"><string name="filename" value="n.exr"/><boolean name="raw" value="true"/></texture>"#;
+    let load = |text: String| {
+        let path = dir.join("s.xml");
+        std::fs::write(&path, text).unwrap();
+        mitsuba::load(&path, &[])
+    };
+    let s = load(scene(&format!(
+        r#"<bsdf type="normalmap">{tex}<bsdf type="diffuse"/></bsdf>"#
+    )))
+    .unwrap();
+    assert!(matches!(
+        &*s.shapes[0].bsdf,
+        BsdfDesc::NormalMap { nested, .. } if matches!(**nested, BsdfDesc::Diffuse { .. })
+    ));
+    let s = load(scene(&format!(
+        r#"<bsdf type="bumpmap">{tex}<float name="scale" value="0.25"/><bsdf type="diffuse"/></bsdf>"#
+    )))
+    .unwrap();
+    assert!(matches!(&*s.shapes[0].bsdf, BsdfDesc::BumpMap { scale, .. } if *scale == 0.25));
+    // Missing pieces are errors that say what is expected.
+    let e = load(scene(
+        r#"<bsdf type="normalmap"><bsdf type="diffuse"/></bsdf>"#,
+    ))
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("texture is required") && e.contains("s.xml:"),
+        "{e}"
+    );
+    let e = load(scene(&format!(r#"<bsdf type="bumpmap">{tex}</bsdf>"#)))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("BSDF is required"), "{e}");
+}
