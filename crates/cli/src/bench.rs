@@ -531,7 +531,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             "variant", "threads", "seconds", "pre-pass", "pixels", "records", "relMSE_trim"
         );
         let mut best = (f64::INFINITY, 0.0);
-        let variants: [IcVariant; 11] = [
+        let variants: [IcVariant; 12] = [
             ("gradients full (3.48)", &[], &[1, 2]),
             (
                 "gradients full (3.47)",
@@ -565,6 +565,11 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
             (
                 "error metric ward, a 0.25",
                 &[("error_metric", "ward"), ("accuracy", "0.25")],
+                &[2],
+            ),
+            (
+                "error metric hessian, a 0.05",
+                &[("error_metric", "hessian"), ("accuracy", "0.05")],
                 &[2],
             ),
             (

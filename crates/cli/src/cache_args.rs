@@ -52,7 +52,8 @@ pub struct CacheArgs {
     /// Record order in memory after the pre-pass: insertion or spatial (Morton order).
     #[arg(long = "record-order", help_heading = "Irradiance cache")]
     pub record_order: Option<String>,
-    /// Record error metric: ward (split sphere) or tabellion (Tabellion–Lamorlette, default).
+    /// Record error metric: ward (split sphere), tabellion (Tabellion–Lamorlette, default) or
+    /// hessian (second-order radius from the gather's Hessian).
     #[arg(long = "error-metric", help_heading = "Irradiance cache")]
     pub error_metric: Option<String>,
     /// Neighbour clamping (on/off): a record's radius never exceeds a neighbour's plus their distance.

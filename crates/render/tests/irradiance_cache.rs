@@ -376,3 +376,63 @@ fn cache_render_is_deterministic_and_finite() {
     assert_eq!(st.records_per_level.len(), 2);
     assert!(st.records_per_level[1] > 0);
 }
+
+#[test]
+fn hessian_by_reprojection_matches_second_differences() {
+    use ircache_render::irradiance_cache::gather::{Deeper, Gatherer, IrradianceCache, WorkState};
+    use ircache_render::irradiance_cache::hemisphere::Stratification;
+    use ircache_render::irradiance_cache::points::query_point;
+    // The box with the opening, without the occluder (whose silhouette would uncover surfaces
+    // the gather never saw): E = π (1 − F_hole).
+    let mut desc = box_scene(1.0, true, 1.0, ic_desc(&[]), 8);
+    desc.shapes.pop();
+    let scene = Scene::build(&desc).unwrap();
+    let exact_hole = |x: Vec3| -> f64 {
+        let [hx, hy] = HOLE;
+        f64::from(PI * (1.0 - form_factor(x, Vec3::Z, &rect_z(hx, hy, 1.0))))
+    };
+    let p = params(&[
+        ("ambient_value", "1"),
+        ("bounces", "1"),
+        ("supersamples", "0"),
+    ]);
+    let cache = IrradianceCache::new(&scene, &p);
+    for x in [v(0.3, 0.5, 0.0), v(0.6, 0.3, 0.0), v(0.5, 0.45, 0.0)] {
+        let sp = query_point(x, Vec3::Z);
+        let mut hsum = [0.0f64; 3];
+        let seeds = 8;
+        let mut frame = None;
+        for seed in 0..seeds {
+            let g = Gatherer {
+                scene: &scene,
+                cache: &cache,
+                seed,
+                deeper: Deeper::PathTraced,
+            };
+            let mut st = WorkState::new(1);
+            let (h, f) = g.gather(&mut st, &sp, Stratification::from_divisions(16384), 0, 1);
+            let hh = h.translational_hessian(1e-3);
+            for c in 0..3 {
+                hsum[c] += hh[c] / seeds as f64;
+            }
+            frame = Some(f);
+        }
+        let f = frame.unwrap();
+        let (s, t) = (f.s, f.t);
+        let d = 1e-2f32;
+        let e = |a: f32, b: f32| exact_hole(x + s * a + t * b);
+        let dd = f64::from(d * d);
+        let exact = [
+            (e(d, 0.0) - 2.0 * e(0.0, 0.0) + e(-d, 0.0)) / dd,
+            (e(d, d) - e(d, -d) - e(-d, d) + e(-d, -d)) / (4.0 * dd),
+            (e(0.0, d) - 2.0 * e(0.0, 0.0) + e(0.0, -d)) / dd,
+        ];
+        let norm = |m: [f64; 3]| (m[0] * m[0] + 2.0 * m[1] * m[1] + m[2] * m[2]).sqrt();
+        let diff = [hsum[0] - exact[0], hsum[1] - exact[1], hsum[2] - exact[2]];
+        eprintln!("at {x}: reprojected {hsum:?}, second differences {exact:?}");
+        assert!(
+            norm(diff) <= 0.15 * norm(exact),
+            "Hessian at {x}: {hsum:?} vs {exact:?}"
+        );
+    }
+}

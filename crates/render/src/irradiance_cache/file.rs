@@ -6,7 +6,7 @@
 //! Layout (little-endian):
 //! - header, 64 bytes: magic `IRCACHE\0`, format version (u32), bounces (u32), scene hash (u64),
 //!   accuracy, resolution, ambient value r g b (f32 × 5), divisions, super-samples (u32 × 2),
-//!   gradient mode (u8), formula | metric << 1 | neighbour clamping << 2 (u8), ambient weight (u16), header checksum (u64: FNV-1a of the
+//!   gradient mode (u8), formula | metric << 1 | neighbour clamping << 3 (u8), ambient weight (u16), header checksum (u64: FNV-1a of the
 //!   bytes before it);
 //! - records, 124 bytes each: level (u8), 3 bytes zero, position, normal, irradiance (f32 × 9),
 //!   radius (f32), translational then rotational gradient (f32 × 18), checksum (u64: FNV-1a of
@@ -135,8 +135,12 @@ impl Header {
             match p.formula {
                 TranslationalFormula::WardHeckbert => 0,
                 TranslationalFormula::Krivanek => 1,
-            } | (u8::from(p.error_metric == ErrorMetric::Tabellion) << 1)
-                | (u8::from(p.neighbour_clamp) << 2),
+            } | (match p.error_metric {
+                ErrorMetric::Ward => 0,
+                ErrorMetric::Tabellion => 1,
+                ErrorMetric::Hessian => 2,
+            } << 1)
+                | (u8::from(p.neighbour_clamp) << 3),
         );
         b.extend_from_slice(&(p.ambient_weight.min(65535) as u16).to_le_bytes());
         let sum = Fnv::of(&b);
@@ -180,12 +184,12 @@ impl Header {
                 _ => GradientMode::Full,
             },
             ambient_weight: u32::from(u16::from_le_bytes([b[54], b[55]])),
-            error_metric: if b[53] & 2 != 0 {
-                ErrorMetric::Tabellion
-            } else {
-                ErrorMetric::Ward
+            error_metric: match (b[53] >> 1) & 3 {
+                1 => ErrorMetric::Tabellion,
+                2 => ErrorMetric::Hessian,
+                _ => ErrorMetric::Ward,
             },
-            neighbour_clamp: b[53] & 4 != 0,
+            neighbour_clamp: b[53] & 8 != 0,
             formula: if b[53] & 1 == 1 {
                 TranslationalFormula::Krivanek
             } else {
@@ -558,6 +562,18 @@ mod tests {
         assert!(why.contains("divisions 512 (now 256)"), "{why}");
         other.scene_hash ^= 1;
         assert!(c.header.mismatch(&other).unwrap().contains("another scene"));
+        // Every metric and the clamping flag survive the header.
+        for (metric, clamp) in [
+            (ErrorMetric::Ward, true),
+            (ErrorMetric::Tabellion, false),
+            (ErrorMetric::Hessian, true),
+        ] {
+            let mut h = header();
+            h.params.error_metric = metric;
+            h.params.neighbour_clamp = clamp;
+            let bytes = h.encode();
+            assert_eq!(Header::decode(&bytes, &path).unwrap(), h);
+        }
         let _ = std::fs::remove_file(path);
     }
 

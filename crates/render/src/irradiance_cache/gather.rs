@@ -8,7 +8,7 @@
 //! at the last bounce the ambient value. Records needed at deeper levels during a batch go to a
 //! private overlay of the work item, so the batch's result does not depend on thread timing.
 
-use super::hemisphere::{to_world, HemisphereSamples, Stratification};
+use super::hemisphere::{largest_eigenvalue, to_world, HemisphereSamples, Stratification};
 use super::params::{IcParams, TranslationalFormula};
 use super::record::{ErrorMetric, Record};
 use super::store::RecordStore;
@@ -289,7 +289,7 @@ impl Gatherer<'_> {
         );
         for (j, k, local) in dirs {
             let idx = j * strata.azimuthal + k;
-            if let Some((l, t)) = self.sample(
+            if let Some((l, t, n_hit)) = self.sample(
                 st,
                 sp,
                 &frame,
@@ -301,6 +301,7 @@ impl Gatherer<'_> {
             ) {
                 h.radiance[idx] = l;
                 h.distance[idx] = t;
+                h.hits[idx] = (local, n_hit);
             }
         }
         let extra = self.cache.params.supersamples;
@@ -326,7 +327,7 @@ impl Gatherer<'_> {
         level: u32,
         key: u64,
         rng: &mut Rng,
-    ) -> Option<(Rgb, f32)> {
+    ) -> Option<(Rgb, f32, Vec3)> {
         let d = frame.from_local(local);
         if d.dot(ng) <= 0.0 {
             return None; // below the geometric surface: nothing arrives
@@ -334,7 +335,8 @@ impl Gatherer<'_> {
         let ray = self.scene.spawn_ray(&sp.it, d);
         st.counts.gather_rays += 1;
         let hit = self.scene.intersect(&ray)?;
-        Some((self.outgoing(st, &ray, &hit, level, key, rng, 0), hit.t))
+        let l = self.outgoing(st, &ray, &hit, level, key, rng, 0);
+        Some((l, hit.t, frame.to_local(hit.ng)))
     }
 
     /// Adaptive super-sampling (003 item 2): the cells whose neighbours differ most among
@@ -371,11 +373,15 @@ impl Gatherer<'_> {
                 let u = Vec2::new((v.x + dx).fract(), (v.y + dy).fract());
                 let local = strata.direction(j, k, u);
                 let sample_key = mix(key, (strata.cells() + 3 * n + q) as u64);
-                if let Some((l, t)) = self.sample(st, sp, frame, ng, local, level, sample_key, rng)
+                if let Some((l, t, n_hit)) =
+                    self.sample(st, sp, frame, ng, local, level, sample_key, rng)
                 {
                     sum += l;
                     // The nearest surface in the cell moves its walls (3.42, 3.46).
-                    h.distance[idx] = h.distance[idx].min(t);
+                    if t < h.distance[idx] {
+                        h.distance[idx] = t;
+                        h.hits[idx] = (local, n_hit);
+                    }
                 }
             }
             h.radiance[idx] = sum * 0.25;
@@ -419,6 +425,26 @@ impl Gatherer<'_> {
                     (r_min, r_max) = (1.5 * footprint, 10.0 * footprint);
                 }
                 0.5 * h.distance.iter().copied().fold(f32::INFINITY, f32::min)
+            }
+            ErrorMetric::Hessian => {
+                // ½ λ R² = a E: the second-order error reaches a E at R.
+                let near = h.distance.iter().copied().fold(f32::INFINITY, f32::min);
+                let step = if near.is_finite() {
+                    0.01 * f64::from(near)
+                } else {
+                    1e-3
+                };
+                let lambda = largest_eigenvalue(h.translational_hessian(step));
+                let y = f64::from(e.luminance());
+                let r_h = if lambda > 0.0 && y > 0.0 {
+                    (2.0 * f64::from(params.accuracy) * y / lambda).sqrt() as f32
+                } else {
+                    f32::INFINITY
+                };
+                // The reprojection cannot see visibility change behind nearby occluders: the
+                // harmonic mean distance bounds the radius there (Radiance's corral plays
+                // this part).
+                r_h.min(h.harmonic_mean_distance())
             }
         }
         .min(r_max);

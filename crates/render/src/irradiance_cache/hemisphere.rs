@@ -90,6 +90,9 @@ pub struct HemisphereSamples {
     pub radiance: Vec<Rgb>,
     /// Distance to the surface seen per cell.
     pub distance: Vec<f32>,
+    /// Per cell, the local direction of its sample and the unit normal of the surface it hit
+    /// (local frame; zero when it hit nothing), for the Hessian by reprojection.
+    pub hits: Vec<(Vec3, Vec3)>,
 }
 
 /// Per-channel gradients in the local frame (z components are zero).
@@ -103,6 +106,7 @@ impl HemisphereSamples {
             strata,
             radiance: vec![Rgb::ZERO; strata.cells()],
             distance: vec![f32::INFINITY; strata.cells()],
+            hits: vec![(Vec3::ZERO, Vec3::ZERO); strata.cells()],
         }
     }
 
@@ -287,6 +291,64 @@ impl HemisphereSamples {
         }
         g.map(|gc| Vec3::new(gc[0] as f32, gc[1] as f32, 0.0))
     }
+}
+
+impl HemisphereSamples {
+    /// Irradiance (luminance) at the point moved by `(dx, dy)` in the tangent plane with the
+    /// surfaces the samples hit held fixed: each sample keeps its radiance, and its cell's
+    /// projected solid angle π/(MN) scales by (cos θ′/cos θ)(r/r′)²(cos α′/cos α), α the angle
+    /// at the surface hit. Visibility changes are not modelled (as in Radiance's ambHessian).
+    #[must_use]
+    pub fn reprojected_irradiance(&self, dx: f64, dy: f64) -> f64 {
+        let mut e = 0.0f64;
+        for (i, &(w, n)) in self.hits.iter().enumerate() {
+            let r = f64::from(self.distance[i]);
+            if !r.is_finite() || n == Vec3::ZERO {
+                continue;
+            }
+            let (w, n) = (w.as_dvec3(), n.as_dvec3());
+            let p = w * r; // the hit point, relative to the original position
+            let q = p - Vec3::new(dx as f32, dy as f32, 0.0).as_dvec3();
+            let r2 = q.length();
+            if r2 <= 0.0 {
+                continue;
+            }
+            let w2 = q / r2;
+            if w2.z <= 0.0 || w.z <= 0.0 {
+                continue;
+            }
+            let cos_a = n.dot(w).abs().max(0.05);
+            let cos_a2 = n.dot(w2).abs();
+            e += f64::from(self.radiance[i].luminance())
+                * (w2.z / w.z)
+                * (r / r2).powi(2)
+                * (cos_a2 / cos_a);
+        }
+        e * PI / self.strata.cells() as f64
+    }
+
+    /// The 2×2 translational Hessian (xx, xy, yy) of the irradiance's luminance in the local
+    /// frame, by central second differences of [`Self::reprojected_irradiance`] with a step of
+    /// `step` (a small fraction of the nearest distance).
+    #[must_use]
+    pub fn translational_hessian(&self, step: f64) -> [f64; 3] {
+        let e = |x, y| self.reprojected_irradiance(x, y);
+        let h = step;
+        let e0 = e(0.0, 0.0);
+        let xx = (e(h, 0.0) - 2.0 * e0 + e(-h, 0.0)) / (h * h);
+        let yy = (e(0.0, h) - 2.0 * e0 + e(0.0, -h)) / (h * h);
+        let xy = (e(h, h) - e(h, -h) - e(-h, h) + e(-h, -h)) / (4.0 * h * h);
+        [xx, xy, yy]
+    }
+}
+
+/// The largest eigenvalue magnitude of the symmetric 2×2 matrix (xx, xy, yy).
+#[must_use]
+pub fn largest_eigenvalue(h: [f64; 3]) -> f64 {
+    let [a, b, c] = h;
+    let mean = 0.5 * (a + c);
+    let d = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+    (mean + d).abs().max((mean - d).abs())
 }
 
 /// Angles of the polar cell boundaries: sin²θ_j = j/M for j = 0..=M.

@@ -70,6 +70,13 @@ pub enum ErrorMetric {
     /// √(1 − n·nᵢ)/√(1 − cos 10°)), valid where ε < 1, weight 1 − ε; R is half the closest
     /// distance clamped to [1.5, 10] pixel footprints; κ = 0.2/a (1 at the default accuracy).
     Tabellion,
+    /// Second-order error control after Schwarzhaupt, Jensen and Jarosz (2012): R is the
+    /// distance at which ½ λ R² = a E, λ the largest eigenvalue of the translational Hessian of
+    /// the irradiance (estimated by reprojecting the gather's hit points), bounded by the
+    /// harmonic mean distance where occluders hide what reprojection cannot see; the error is
+    /// ‖x − xᵢ‖/R plus √(1 − n·nᵢ)/a, valid up to 1, weight its inverse. Isotropic: the
+    /// paper's anisotropic (elliptical) radii are not implemented.
+    Hessian,
 }
 
 impl ErrorMetric {
@@ -78,8 +85,9 @@ impl ErrorMetric {
         match s {
             "ward" => Ok(ErrorMetric::Ward),
             "tabellion" => Ok(ErrorMetric::Tabellion),
+            "hessian" => Ok(ErrorMetric::Hessian),
             _ => Err(format!(
-                "unknown error metric \"{s}\" (expected ward or tabellion)"
+                "unknown error metric \"{s}\" (expected ward, tabellion or hessian)"
             )),
         }
     }
@@ -90,6 +98,7 @@ impl ErrorMetric {
         match self {
             ErrorMetric::Ward => "ward",
             ErrorMetric::Tabellion => "tabellion",
+            ErrorMetric::Hessian => "hessian",
         }
     }
 
@@ -113,6 +122,7 @@ impl ErrorMetric {
                 const NORMAL_SCALE: f32 = 0.123_257_4;
                 (0.2 / accuracy) * (dist / rec.r).max(normal / NORMAL_SCALE)
             }
+            ErrorMetric::Hessian => dist / rec.r + normal / accuracy,
         })
     }
 
@@ -121,7 +131,7 @@ impl ErrorMetric {
     #[must_use]
     pub fn weight(self, e: f32, threshold: f32) -> f32 {
         match self {
-            ErrorMetric::Ward => 1.0 / e.max(1e-4),
+            ErrorMetric::Ward | ErrorMetric::Hessian => 1.0 / e.max(1e-4),
             ErrorMetric::Tabellion => (1.0 - e / threshold).max(1e-6),
         }
     }
@@ -133,6 +143,7 @@ impl ErrorMetric {
         match self {
             ErrorMetric::Ward => accuracy * rec.r,
             ErrorMetric::Tabellion => rec.r * accuracy / 0.2,
+            ErrorMetric::Hessian => rec.r,
         }
     }
 }

@@ -301,6 +301,12 @@ mod tests {
         let e = t.error(&r, Vec3::ZERO, n, 0.2).unwrap();
         assert!((e - 1.0).abs() < 1e-3, "{e}");
         assert!((t.weight(0.25, 1.0) - 0.75).abs() < 1e-6);
+        // Hessian: d/R + √(1 − n·nᵢ)/a.
+        let e = ErrorMetric::Hessian
+            .error(&r, Vec3::new(1.0, 0.0, 0.0), n, 0.5)
+            .unwrap();
+        let expect = 0.5 + (1.0 - n.z).sqrt() / 0.5;
+        assert!((e - expect).abs() < 1e-5, "{e} vs {expect}");
         // A record in front of the query point never serves.
         assert!(ErrorMetric::Ward
             .error(&r, Vec3::new(1.0, 0.0, -0.5), Vec3::Z, 0.5)
