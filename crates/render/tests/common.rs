@@ -114,3 +114,40 @@ pub fn mean_and_error(img: &ircache_image::Image) -> (Rgb, Rgb) {
         Rgb::new(e[0] as f32, e[1] as f32, e[2] as f32),
     )
 }
+
+/// A scene of just `shapes` and `emitters` behind a fixed camera (for the emitter tests).
+pub fn light_scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>) -> SceneDesc {
+    SceneDesc {
+        source: PathBuf::from("<test>"),
+        sensor: SensorDesc {
+            to_world: Mat4::IDENTITY,
+            fov_degrees: 45.0,
+            fov_axis: FovAxis::X,
+            near_clip: 0.01,
+            far_clip: 1e4,
+            film: FilmDesc {
+                width: 4,
+                height: 4,
+                filter: FilterDesc::Box,
+            },
+            spp: 1,
+            sampler: "independent".into(),
+        },
+        integrator: IntegratorDesc::default(),
+        shapes,
+        emitters,
+    }
+}
+
+/// A diffuse shape with an area emitter of `radiance`.
+pub fn emitting_shape(geometry: Geometry, radiance: Rgb) -> ShapeDesc {
+    ShapeDesc {
+        id: None,
+        geometry,
+        bsdf: Arc::new(BsdfDesc::Diffuse {
+            reflectance: TextureDesc::Constant(Rgb::splat(0.5)),
+        }),
+        emitter: Some(radiance),
+        location: here(),
+    }
+}

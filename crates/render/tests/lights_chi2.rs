@@ -12,6 +12,8 @@
 //! first rotated into a frame around the emitter and "zoomed": `1 − cos θ' = (1 − cos θ)/ε`, with
 //! the density multiplied by the Jacobian `ε` (`dω = ε dω'`).
 
+mod common;
+use common::{emitting_shape, light_scene};
 use ircache_math::{Frame, Mat4, Rgb, Vec2, Vec3};
 use ircache_render::lights::LightSet;
 use ircache_render::testing::ChiSquareTest;
@@ -22,49 +24,6 @@ use std::sync::Arc;
 /// Overall significance level and the number of χ² tests in this file (Šidák correction).
 const ALPHA: f64 = 0.01;
 const TESTS: usize = 8;
-
-fn here() -> SourceLocation {
-    SourceLocation {
-        file: Arc::new(PathBuf::from("<test>")),
-        line: 1,
-        column: 1,
-    }
-}
-
-fn desc(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>) -> SceneDesc {
-    SceneDesc {
-        source: PathBuf::from("<test>"),
-        sensor: SensorDesc {
-            to_world: Mat4::IDENTITY,
-            fov_degrees: 45.0,
-            fov_axis: FovAxis::X,
-            near_clip: 0.01,
-            far_clip: 1e4,
-            film: FilmDesc {
-                width: 4,
-                height: 4,
-                filter: FilterDesc::Box,
-            },
-            spp: 1,
-            sampler: "independent".into(),
-        },
-        integrator: IntegratorDesc::default(),
-        shapes,
-        emitters,
-    }
-}
-
-fn shape(geometry: Geometry, radiance: Rgb) -> ShapeDesc {
-    ShapeDesc {
-        id: None,
-        geometry,
-        bsdf: Arc::new(BsdfDesc::Diffuse {
-            reflectance: TextureDesc::Constant(Rgb::splat(0.5)),
-        }),
-        emitter: Some(radiance),
-        location: here(),
-    }
-}
 
 /// A triangle soup whose triangles are wound so that their normals face `towards`.
 fn soup_facing(tris: &[[Vec3; 3]], towards: Vec3) -> TriangleMesh {
@@ -264,8 +223,11 @@ fn mesh_case(
     } else {
         vec![]
     };
-    let d = desc(
-        vec![shape(Geometry::Mesh(mesh.clone()), Rgb::new(1.0, 2.0, 3.0))],
+    let d = light_scene(
+        vec![emitting_shape(
+            Geometry::Mesh(mesh.clone()),
+            Rgb::new(1.0, 2.0, 3.0),
+        )],
         emitters,
     );
     let lights = LightSet::new(&d, Vec3::ZERO, 10.0);
@@ -365,8 +327,8 @@ fn uneven_triangle_mesh() {
 }
 
 fn sphere_case(p: Vec3, c: Vec3, radius: f32, flip: bool, label: &str) {
-    let d = desc(
-        vec![shape(
+    let d = light_scene(
+        vec![emitting_shape(
             Geometry::Sphere {
                 center: c,
                 radius,
@@ -459,7 +421,7 @@ fn env_rotation() -> Mat4 {
 }
 
 fn env_case(emitters: Vec<EmitterDesc>, label: &str, delta_share: f64) {
-    let d = desc(vec![], emitters);
+    let d = light_scene(vec![], emitters);
     let lights = LightSet::new(&d, Vec3::ZERO, 1.0);
     assert!(lights.has_environment());
     let p = Vec3::new(0.3, 0.1, -0.2);

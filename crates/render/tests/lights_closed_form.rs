@@ -3,6 +3,8 @@
 //! the delta lights, `pdf_area` consistency with `sample`, one-sidedness, and Mitsuba 3's envmap
 //! lat-long mapping.
 
+mod common;
+use common::{emitting_shape, light_scene};
 use ircache_image::Image;
 use ircache_math::{Frame, Mat4, Rgb, Rng, Vec2, Vec3, PI};
 use ircache_render::lights::{LightSample, LightSet};
@@ -10,51 +12,8 @@ use ircache_scene::*;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-fn here() -> SourceLocation {
-    SourceLocation {
-        file: Arc::new(PathBuf::from("<test>")),
-        line: 1,
-        column: 1,
-    }
-}
-
-fn desc(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>) -> SceneDesc {
-    SceneDesc {
-        source: PathBuf::from("<test>"),
-        sensor: SensorDesc {
-            to_world: Mat4::IDENTITY,
-            fov_degrees: 45.0,
-            fov_axis: FovAxis::X,
-            near_clip: 0.01,
-            far_clip: 1e4,
-            film: FilmDesc {
-                width: 4,
-                height: 4,
-                filter: FilterDesc::Box,
-            },
-            spp: 1,
-            sampler: "independent".into(),
-        },
-        integrator: IntegratorDesc::default(),
-        shapes,
-        emitters,
-    }
-}
-
-fn shape(geometry: Geometry, radiance: Rgb) -> ShapeDesc {
-    ShapeDesc {
-        id: None,
-        geometry,
-        bsdf: Arc::new(BsdfDesc::Diffuse {
-            reflectance: TextureDesc::Constant(Rgb::splat(0.5)),
-        }),
-        emitter: Some(radiance),
-        location: here(),
-    }
-}
-
 fn sphere(center: Vec3, radius: f32, flip_normals: bool, radiance: f32) -> ShapeDesc {
-    shape(
+    emitting_shape(
         Geometry::Sphere {
             center,
             radius,
@@ -153,7 +112,7 @@ fn spherical_emitter_irradiance_is_pi_l_r2_over_h2() {
     let (p, f) = receiver();
     for (r, h) in [(0.5f32, 2.0f32), (0.9, 1.0), (0.01, 3.0)] {
         let lights = LightSet::new(
-            &desc(vec![sphere(p + h * f.n, r, false, 3.0)], vec![]),
+            &light_scene(vec![sphere(p + h * f.n, r, false, 3.0)], vec![]),
             p,
             5.0,
         );
@@ -172,7 +131,10 @@ fn rectangular_emitter_irradiance_matches_the_form_factor() {
     for (w, l, h) in [(1.5f32, 0.8f32, 1.2f32), (4.0, 4.0, 0.5), (0.3, 2.0, 1.0)] {
         let mesh = rectangle(p + h * f.n, f.s, f.t, w, l, p);
         let lights = LightSet::new(
-            &desc(vec![shape(Geometry::Mesh(mesh), Rgb::splat(2.0))], vec![]),
+            &light_scene(
+                vec![emitting_shape(Geometry::Mesh(mesh), Rgb::splat(2.0))],
+                vec![],
+            ),
             p,
             5.0,
         );
@@ -207,7 +169,7 @@ fn point_light_gives_i_cos_over_d2() {
     let (p, f) = receiver();
     let q = p + Vec3::new(1.0, -2.0, 3.0);
     let lights = LightSet::new(
-        &desc(
+        &light_scene(
             vec![],
             vec![EmitterDesc::Point {
                 position: q,
@@ -231,7 +193,7 @@ fn directional_light_gives_irradiance_times_cos() {
     let (p, f) = receiver();
     let dir = Vec3::new(0.2, 0.4, -1.0);
     let lights = LightSet::new(
-        &desc(
+        &light_scene(
             vec![],
             vec![EmitterDesc::Directional {
                 direction: dir,
@@ -257,7 +219,7 @@ fn spot_light_on_axis_in_the_ramp_and_outside() {
     let pos = p + 2.5 * f.n;
     let (cutoff, beam) = (30.0f32, 10.0f32);
     let lights = LightSet::new(
-        &desc(
+        &light_scene(
             vec![],
             vec![EmitterDesc::Spot {
                 to_world: lookat(pos, p),
@@ -311,10 +273,10 @@ fn mixed_set_sums_the_closed_forms_with_uniform_selection() {
     let dir = -(f.n + 0.3 * f.s).normalize();
     let spot_pos = p + 2.0 * (f.n - 0.5 * f.t).normalize();
     let lights = LightSet::new(
-        &desc(
+        &light_scene(
             vec![
                 sphere(p + h * f.n, r, false, 2.0),
-                shape(Geometry::Mesh(mesh), Rgb::splat(1.5)),
+                emitting_shape(Geometry::Mesh(mesh), Rgb::splat(1.5)),
             ],
             vec![
                 EmitterDesc::Point {
@@ -435,10 +397,10 @@ fn pdf_area_matches_the_sampled_pdf() {
     );
     let meshes = [rect, uneven];
     let lights = LightSet::new(
-        &desc(
+        &light_scene(
             vec![
-                shape(Geometry::Mesh(meshes[0].clone()), Rgb::ONE),
-                shape(Geometry::Mesh(meshes[1].clone()), Rgb::ONE),
+                emitting_shape(Geometry::Mesh(meshes[0].clone()), Rgb::ONE),
+                emitting_shape(Geometry::Mesh(meshes[1].clone()), Rgb::ONE),
                 sphere(p + 2.0 * f.n + f.s, 0.5, false, 1.0),
             ],
             vec![EmitterDesc::Point {
@@ -460,7 +422,7 @@ fn pdf_area_matches_the_sampled_pdf() {
         },
     );
     let inside = LightSet::new(
-        &desc(vec![sphere(p + 0.3 * f.s, 1.0, true, 1.0)], vec![]),
+        &light_scene(vec![sphere(p + 0.3 * f.s, 1.0, true, 1.0)], vec![]),
         p,
         5.0,
     );
@@ -472,9 +434,9 @@ fn area_emitters_are_one_sided() {
     let (p, f) = receiver();
     let mesh = rectangle(p + f.n, f.s, f.t, 1.0, 1.0, p);
     let lights = LightSet::new(
-        &desc(
+        &light_scene(
             vec![
-                shape(Geometry::Mesh(mesh), Rgb::splat(2.0)),
+                emitting_shape(Geometry::Mesh(mesh), Rgb::splat(2.0)),
                 sphere(p + 10.0 * f.s, 1.0, true, 1.0),
                 sphere(p - 10.0 * f.s, 1.0, false, 1.0),
             ],
@@ -523,7 +485,7 @@ fn envmap_uses_mitsubas_lat_long_mapping() {
     }
     let to_world = Mat4::from_rotation_y(0.7) * Mat4::from_rotation_z(-0.3);
     let lights = LightSet::new(
-        &desc(
+        &light_scene(
             vec![],
             vec![EmitterDesc::Envmap {
                 path: PathBuf::from("<test>"),
@@ -599,7 +561,7 @@ fn envmap_and_constant_irradiance() {
     // sampling weights; the mapping is checked by `envmap_uses_mitsubas_lat_long_mapping`).
     let (p, f) = receiver();
     let lights = LightSet::new(
-        &desc(
+        &light_scene(
             vec![],
             vec![EmitterDesc::Constant {
                 radiance: Rgb::splat(0.8),
@@ -629,7 +591,7 @@ fn envmap_and_constant_irradiance() {
         }
     }
     let lights = LightSet::new(
-        &desc(
+        &light_scene(
             vec![],
             vec![EmitterDesc::Envmap {
                 path: PathBuf::from("<test>"),
