@@ -214,6 +214,27 @@ impl HemisphereSamples {
     /// cosine at the cell's mid angle, each wall moving with the closer of its two cells.
     #[must_use]
     pub fn translational_gradient_krivanek(&self) -> LocalGradient {
+        self.translational_gradient_with(|w, j| {
+            let theta_c = 0.5 * (w.theta[j] + w.theta[j + 1]);
+            (w.cos[j] - w.cos[j + 1]) * theta_c.cos() / theta_c.sin()
+        })
+    }
+
+    /// Translational gradient in Ward and Heckbert's original form (000 eq. 3.48): the motion of
+    /// the projected cell boundaries.
+    #[must_use]
+    pub fn translational_gradient_ward_heckbert(&self) -> LocalGradient {
+        self.translational_gradient_with(|w, j| w.sin[j + 1] - w.sin[j])
+    }
+
+    /// The sum over cell walls that both formulations share. Polar walls (between rings j−1 and
+    /// j, at θ_{j−}: 3.42, ERRATA 3) weigh (2π/N) sin θ cos² θ in both; azimuthal walls (between
+    /// sectors k−1 and k: 3.46, ERRATA 2 and 4) weigh `azimuthal(walls, j)`, which is where
+    /// 3.47 and 3.48 differ in form. Each wall moves with the closer of its two cells.
+    fn translational_gradient_with(
+        &self,
+        azimuthal: impl Fn(&PolarWalls, usize) -> f64,
+    ) -> LocalGradient {
         let (m, n) = (self.strata.polar, self.strata.azimuthal);
         let walls = PolarWalls::new(m);
         let dphi = 2.0 * PI / n as f64;
@@ -228,7 +249,6 @@ impl HemisphereSamples {
             for j in 0..m {
                 let l = self.l(j, k);
                 if j > 0 {
-                    // Polar wall between rings j−1 and j at θ_{j−} (3.42, ERRATA 3).
                     let (s, c) = (walls.sin[j], walls.cos[j]);
                     let w = dphi * s * c * c / self.r(j, k).min(self.r(j - 1, k));
                     let lp = self.l(j - 1, k);
@@ -236,10 +256,7 @@ impl HemisphereSamples {
                         su[ch] += w * (l[ch] - lp[ch]);
                     }
                 }
-                // Azimuthal wall between sectors k−1 and k (3.46, ERRATA 2 and 4).
-                let theta_c = 0.5 * (walls.theta[j] + walls.theta[j + 1]);
-                let w = (walls.cos[j] - walls.cos[j + 1]) * theta_c.cos()
-                    / (theta_c.sin() * self.r(j, k).min(self.r(j, km)));
+                let w = azimuthal(&walls, j) / self.r(j, k).min(self.r(j, km));
                 let lm = self.l(j, km);
                 for ch in 0..3 {
                     sv[ch] += w * (l[ch] - lm[ch]);
@@ -248,45 +265,6 @@ impl HemisphereSamples {
             for ch in 0..3 {
                 g[ch][0] += u[0] * su[ch] + v[0] * sv[ch];
                 g[ch][1] += u[1] * su[ch] + v[1] * sv[ch];
-            }
-        }
-        g.map(|gc| Vec3::new(gc[0] as f32, gc[1] as f32, 0.0))
-    }
-
-    /// Translational gradient in Ward and Heckbert's original form (000 eq. 3.48): the motion of
-    /// the projected cell boundaries.
-    #[must_use]
-    pub fn translational_gradient_ward_heckbert(&self) -> LocalGradient {
-        let (m, n) = (self.strata.polar, self.strata.azimuthal);
-        let walls = PolarWalls::new(m);
-        let dphi = 2.0 * PI / n as f64;
-        let mut g = [[0.0f64; 2]; 3];
-        for k in 0..n {
-            let phi_c = (k as f64 + 0.5) * dphi;
-            let u = [phi_c.cos(), phi_c.sin()];
-            let phi_w = k as f64 * dphi;
-            let v = [-phi_w.sin(), phi_w.cos()];
-            let km = (k + n - 1) % n;
-            let (mut su, mut sv) = ([0.0f64; 3], [0.0f64; 3]);
-            for j in 0..m {
-                let l = self.l(j, k);
-                if j > 0 {
-                    let (s, c) = (walls.sin[j], walls.cos[j]);
-                    let w = s * c * c / self.r(j, k).min(self.r(j - 1, k));
-                    let lp = self.l(j - 1, k);
-                    for ch in 0..3 {
-                        su[ch] += w * (l[ch] - lp[ch]);
-                    }
-                }
-                let w = (walls.sin[j + 1] - walls.sin[j]) / self.r(j, k).min(self.r(j, km));
-                let lm = self.l(j, km);
-                for ch in 0..3 {
-                    sv[ch] += w * (l[ch] - lm[ch]);
-                }
-            }
-            for ch in 0..3 {
-                g[ch][0] += u[0] * dphi * su[ch] + v[0] * sv[ch];
-                g[ch][1] += u[1] * dphi * su[ch] + v[1] * sv[ch];
             }
         }
         g.map(|gc| Vec3::new(gc[0] as f32, gc[1] as f32, 0.0))
