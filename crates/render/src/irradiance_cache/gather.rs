@@ -26,6 +26,8 @@ pub struct IrradianceCache {
     pub r_min: f32,
     /// Largest record radius.
     pub r_max: f32,
+    /// Cell size of the stores' finest grid level.
+    pub base_cell: f32,
     /// The radiance beyond the last bounce now: the ambient value, or with an ambient weight
     /// its running average with what the cache has computed.
     pub ambient: Rgb,
@@ -45,30 +47,32 @@ impl IrradianceCache {
     pub fn new(scene: &Scene, params: &IcParams) -> IrradianceCache {
         let size = scene_size(scene);
         let (r_min, r_max) = params.radius_limits(size);
-        let base = if r_min > 0.0 {
-            params.accuracy * r_min
-        } else {
-            size * 1e-4
-        };
-        IrradianceCache {
+        let mut cache = IrradianceCache {
             params: params.clone(),
-            levels: (0..params.bounces.max(1))
-                .map(|_| {
-                    RecordStore::new(
-                        base,
-                        params.accuracy,
-                        params.error_metric,
-                        params.neighbour_clamp,
-                    )
-                })
-                .collect(),
+            levels: Vec::new(),
             r_min,
             r_max,
+            // Finest grid cell: the smallest validity radius (a fraction of the scene without
+            // a minimum spacing).
+            base_cell: if r_min > 0.0 {
+                params.accuracy * r_min
+            } else {
+                size * 1e-4
+            },
             ambient: params.ambient_value,
-            mean_albedo: mean_albedo(scene),
+            // Only the ambient running average needs it.
+            mean_albedo: if params.ambient_weight > 0 {
+                mean_albedo(scene)
+            } else {
+                0.0
+            },
             excluded: vec![false; scene.shapes.len()],
             pixel_angle: 0.0,
-        }
+        };
+        cache.levels = (0..params.bounces.max(1))
+            .map(|_| cache.empty_store())
+            .collect();
+        cache
     }
 
     /// True when shape `shape` takes no records.
@@ -113,13 +117,8 @@ impl IrradianceCache {
     /// An empty store shaped like this cache's stores.
     #[must_use]
     pub fn empty_store(&self) -> RecordStore {
-        let base = if self.r_min > 0.0 {
-            self.params.accuracy * self.r_min
-        } else {
-            self.r_max * 2e-4
-        };
         RecordStore::new(
-            base,
+            self.base_cell,
             self.params.accuracy,
             self.params.error_metric,
             self.params.neighbour_clamp,
@@ -133,14 +132,7 @@ fn mean_albedo(scene: &Scene) -> f32 {
     let (mut sum, mut area) = (0.0f64, 0.0f64);
     for s in &scene.shapes {
         let a = match &s.geometry {
-            crate::scene::ShapeGeometry::Mesh(m) => m
-                .indices
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|i| m.positions[i as usize]);
-                    0.5 * f64::from((b - a).cross(c - a).length())
-                })
-                .sum(),
+            crate::scene::ShapeGeometry::Mesh(m) => ircache_scene::shapes::mesh_area(m),
             crate::scene::ShapeGeometry::Sphere { radius, .. } => {
                 4.0 * std::f64::consts::PI * f64::from(*radius).powi(2)
             }
