@@ -401,12 +401,9 @@ fn gather(shared: &Path) -> Result<()> {
             scene.intersect(&scene.camera.generate_ray(film))
         })
         .collect();
-    let rays_of = |i: usize, it: &Interaction, f: &mut Vec<Ray>| {
-        stratified_rays(&scene, strata, i, it, |r| f.push(r));
-    };
     let mut all = Vec::new();
     for (i, it) in points.iter().enumerate() {
-        rays_of(i, it, &mut all);
+        stratified_rays(&scene, strata, i, it, |r| all.push(r));
     }
     println!(
         "\nIrradiance cache gather rays on Sponza: {} records × {} stratified rays ({} × {})",

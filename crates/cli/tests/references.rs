@@ -164,13 +164,15 @@ fn sponza_irradiance_cache_reaches_radiance_high() {
     assert!((lum - 1.0).abs() < 0.01, "mean luminance ratio {lum}");
 }
 
-/// Renders the Cornell box at 96×96 with the given integrator settings.
-fn small_cornell(
+/// Renders the Cornell box with integrator `kind` at `size`², `spp` and `seed` (all cores);
+/// `ic` adjusts the cache integrator before rendering.
+fn render_cornell(
     kind: &str,
-    max_depth: i32,
-    spp: u32,
-    ic: &[(&str, &str)],
-) -> ircache_image::Image {
+    max_depth: Option<i32>,
+    hide_emitters: bool,
+    (size, spp, seed): (u32, u32, u64),
+    ic: impl FnOnce(&mut ircache_render::integrators::ic::IcIntegrator),
+) -> Result<ircache_render::render::RenderOutput, ircache_render::scene::RenderError> {
     let root = shared();
     let mut desc = ircache_scene::load_scene(
         &root.join("scenes/cornell-box/scene.xml"),
@@ -179,31 +181,45 @@ fn small_cornell(
     )
     .expect("scene loads");
     desc.integrator.kind = kind.into();
-    desc.integrator.max_depth = max_depth;
-    // Pixels on the light's edge are so bright that their noise moves the mean by ~1 % at
-    // this size; hide the light itself.
-    desc.integrator.hide_emitters = true;
-    desc.sensor.film.width = 96;
-    desc.sensor.film.height = 96;
+    if let Some(d) = max_depth {
+        desc.integrator.max_depth = d;
+    }
+    desc.integrator.hide_emitters = hide_emitters;
+    desc.sensor.film.width = size;
+    desc.sensor.film.height = size;
     let built = Scene::build(&desc).expect("scene builds");
     let mut integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
     if let Integrator::Ic(i) = &mut integrator {
-        for (k, v) in ic {
-            i.params.set(k, v).expect("parameter");
-        }
+        ic(i);
     }
     let settings = RenderSettings {
-        width: 96,
-        height: 96,
+        width: size as usize,
+        height: size as usize,
         spp,
-        seed: 3,
+        seed,
         threads: 0,
         filter: Filter::Box,
         band: None,
     };
     render(&built, &integrator, &settings, &|_| {})
-        .expect("render")
-        .image
+}
+
+/// The Cornell box at 96×96 with the given integrator and cache parameters, its light hidden
+/// (pixels on the light's edge are so bright that their noise moves the mean by ~1 % at this
+/// size).
+fn small_cornell(
+    kind: &str,
+    max_depth: i32,
+    spp: u32,
+    ic: &[(&str, &str)],
+) -> ircache_image::Image {
+    render_cornell(kind, Some(max_depth), true, (96, spp, 3), |i| {
+        for (k, v) in ic {
+            i.params.set(k, v).expect("parameter");
+        }
+    })
+    .expect("render")
+    .image
 }
 
 #[test]
@@ -322,33 +338,12 @@ fn ambient_average_raises_the_truncated_image_without_overshooting() {
 fn no_minimum_spacing_resolves_corners_further() {
     // 003 items 3–4: -ar 0 means no minimum record radius, so corners get more records.
     let records = |ar: &str| {
-        let root = shared();
-        let mut desc = ircache_scene::load_scene(
-            &root.join("scenes/cornell-box/scene.xml"),
-            &[],
-            &ObjCamera::default(),
-        )
-        .expect("scene loads");
-        desc.integrator.kind = "ic".into();
-        desc.sensor.film.width = 128;
-        desc.sensor.film.height = 128;
-        let built = Scene::build(&desc).expect("scene builds");
-        let mut integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
-        if let Integrator::Ic(i) = &mut integrator {
+        let out = render_cornell("ic", None, false, (128, 1, 1), |i| {
             i.params.set("error_metric", "ward").unwrap();
             i.params.set("resolution", ar).unwrap();
             i.params.set("divisions", "128").unwrap();
-        }
-        let settings = RenderSettings {
-            width: 128,
-            height: 128,
-            spp: 1,
-            seed: 1,
-            threads: 0,
-            filter: Filter::Box,
-            band: None,
-        };
-        let out = render(&built, &integrator, &settings, &|_| {}).expect("render");
+        })
+        .expect("render");
         let c = out.cache.expect("cache");
         let min_r = c.cache.levels[0]
             .records()
@@ -369,31 +364,12 @@ fn no_minimum_spacing_resolves_corners_further() {
 #[test]
 fn excluded_surfaces_take_no_records_and_included_ones_take_all() {
     use ircache_render::integrators::ic::Exclusions;
-    let root = shared();
-    let mut desc = ircache_scene::load_scene(
-        &root.join("scenes/cornell-box/scene.xml"),
-        &[],
-        &ObjCamera::default(),
-    )
-    .expect("scene loads");
-    desc.integrator.kind = "ic".into();
-    let built = Scene::build(&desc).expect("scene builds");
     let run = |ex: Exclusions| {
-        let mut integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
-        if let Integrator::Ic(i) = &mut integrator {
+        render_cornell("ic", None, false, (96, 2, 1), |i| {
             i.params.set("divisions", "128").unwrap();
             i.exclusions = ex;
-        }
-        let settings = RenderSettings {
-            width: 96,
-            height: 96,
-            spp: 2,
-            seed: 1,
-            threads: 0,
-            filter: Filter::Box,
-            band: None,
-        };
-        render(&built, &integrator, &settings, &|_| {}).expect("render")
+        })
+        .expect("render")
     };
     let on_floor =
         |r: &ircache_render::irradiance_cache::Record| r.p.y.abs() < 1e-3 && r.n.y > 0.99;
@@ -418,22 +394,11 @@ fn excluded_surfaces_take_no_records_and_included_ones_take_all() {
         bottom(&all)
     );
     // Unknown names are an error that lists the known ones.
-    let mut integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
-    if let Integrator::Ic(i) = &mut integrator {
+    let e = render_cornell("ic", None, false, (8, 1, 1), |i| {
         i.exclusions = Exclusions::Exclude(vec!["Flor".into()]);
-    }
-    let settings = RenderSettings {
-        width: 8,
-        height: 8,
-        spp: 1,
-        seed: 1,
-        threads: 1,
-        filter: Filter::Box,
-        band: None,
-    };
-    let e = render(&built, &integrator, &settings, &|_| {})
-        .expect_err("refused")
-        .to_string();
+    })
+    .expect_err("refused")
+    .to_string();
     assert!(e.contains("\"Flor\"") && e.contains("Floor"), "{e}");
 }
 
