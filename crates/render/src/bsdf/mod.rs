@@ -125,6 +125,56 @@ impl Lobe {
         )
     }
 
+    /// Lambertian albedo seen from `wo` (upper hemisphere), the part a cache serves.
+    fn lambertian_albedo(&self, wo: Vec3) -> Rgb {
+        if wo.z <= 0.0 {
+            return Rgb::ZERO;
+        }
+        match self {
+            Lobe::Diffuse(b) => b.reflectance,
+            Lobe::Plastic(b) => b.lambertian_albedo(wo),
+            Lobe::RoughPlastic(b) => b.lambertian_albedo(wo),
+            Lobe::Phong(b) => b.diffuse,
+            _ => Rgb::ZERO,
+        }
+    }
+
+    fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self {
+            Lobe::Diffuse(_) | Lobe::Plastic(_) => Rgb::ZERO,
+            Lobe::RoughPlastic(b) => b.eval_specular(wo, wi),
+            Lobe::Phong(b) => b.eval_specular(wo, wi),
+            other => other.eval(wo, wi),
+        }
+    }
+
+    fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Lobe::Diffuse(_) | Lobe::Plastic(_) => 0.0,
+            Lobe::RoughPlastic(b) => b.pdf_specular(wo, wi),
+            Lobe::Phong(b) => b.pdf_specular(wo, wi),
+            other => other.pdf(wo, wi),
+        }
+    }
+
+    fn sample_glossy(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            Lobe::Diffuse(_) => None,
+            Lobe::Plastic(b) => b.sample_specular(wo),
+            Lobe::RoughPlastic(b) => b.sample_specular(wo, u),
+            Lobe::Phong(b) => b.sample_specular(wo, u),
+            other => other.sample(wo, u_lobe, u),
+        }
+    }
+
+    fn has_glossy(&self) -> bool {
+        match self {
+            Lobe::Diffuse(_) => false,
+            Lobe::Phong(b) => !b.specular.is_black(),
+            _ => true,
+        }
+    }
+
     fn diffuse_reflectance(&self) -> Rgb {
         match self {
             Lobe::Diffuse(b) => b.reflectance,
@@ -231,20 +281,88 @@ impl Bsdf {
         }
     }
 
-    /// Albedo of the Lambertian part seen from `wo` (local frame): the back model's for
-    /// `twosided` seen from below, zero for one-sided models seen from below.
+    /// The BSDF split for caching: `f = k(wo)/π + f_glossy`, where the Lambertian part `k/π`
+    /// times the irradiance is what an irradiance cache serves and the glossy part (every
+    /// non-Lambertian lobe: specular and rough reflection, refraction, plastic coatings) is
+    /// traced. This is `k(wo)` (local frame): the back model's for `twosided` seen from below,
+    /// zero for one-sided models seen from below. For plastics the coating's transmittance
+    /// towards the light is replaced by its cosine-weighted mean (exact under uniform incident
+    /// light); see [`plastic`] and [`roughplastic`].
     #[must_use]
-    pub fn diffuse_reflectance_towards(&self, wo: Vec3) -> Rgb {
+    pub fn lambertian_albedo(&self, wo: Vec3) -> Rgb {
         match self {
-            Bsdf::Single(l) if wo.z > 0.0 => l.diffuse_reflectance(),
-            Bsdf::Single(_) => Rgb::ZERO,
+            Bsdf::Single(l) => l.lambertian_albedo(wo),
             Bsdf::TwoSided { front, back } => {
                 if wo.z >= 0.0 {
-                    front.diffuse_reflectance()
+                    front.lambertian_albedo(wo)
                 } else {
-                    back.diffuse_reflectance()
+                    back.lambertian_albedo(flip(wo))
                 }
             }
+        }
+    }
+
+    /// The glossy part alone, `f_glossy(wo, wi) · |cos θ_i|` (zero for delta lobes).
+    #[must_use]
+    pub fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self {
+            Bsdf::Single(l) => l.eval_glossy(wo, wi),
+            Bsdf::TwoSided { front, back } => {
+                if wo.z > 0.0 {
+                    front.eval_glossy(wo, wi)
+                } else if wo.z < 0.0 {
+                    back.eval_glossy(flip(wo), flip(wi))
+                } else {
+                    Rgb::ZERO
+                }
+            }
+        }
+    }
+
+    /// Solid-angle density with which [`Self::sample_glossy`] produces `wi` (smooth lobes).
+    #[must_use]
+    pub fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Bsdf::Single(l) => l.pdf_glossy(wo, wi),
+            Bsdf::TwoSided { front, back } => {
+                if wo.z > 0.0 {
+                    front.pdf_glossy(wo, wi)
+                } else if wo.z < 0.0 {
+                    back.pdf_glossy(flip(wo), flip(wi))
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+
+    /// Samples the glossy part alone, weight `f_glossy · |cos θ_i| / pdf` (for delta lobes the
+    /// delta's weight over the probability of its choice among the glossy lobes).
+    #[must_use]
+    pub fn sample_glossy(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            Bsdf::Single(l) => l.sample_glossy(wo, u_lobe, u),
+            Bsdf::TwoSided { front, back } => {
+                if wo.z > 0.0 {
+                    front.sample_glossy(wo, u_lobe, u)
+                } else if wo.z < 0.0 {
+                    back.sample_glossy(flip(wo), u_lobe, u).map(|mut s| {
+                        s.wi = flip(s.wi);
+                        s
+                    })
+                } else {
+                    None
+                }
+            }
+        }
+    }
+
+    /// True when the BSDF has a glossy (non-Lambertian) part.
+    #[must_use]
+    pub fn has_glossy(&self) -> bool {
+        match self {
+            Bsdf::Single(l) => l.has_glossy(),
+            Bsdf::TwoSided { front, back } => front.has_glossy() || back.has_glossy(),
         }
     }
 

@@ -53,6 +53,62 @@ impl Phong {
         (self.diffuse * INV_PI + self.specular * spec) * wi.z
     }
 
+    /// The Phong lobe alone, `f_s · cos θ_i`.
+    #[must_use]
+    pub fn eval_specular(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let c = Self::cos_alpha(wo, wi);
+        if c <= 0.0 {
+            return Rgb::ZERO;
+        }
+        self.specular * ((self.exponent + 2.0) / (2.0 * PI) * c.powf(self.exponent) * wi.z)
+    }
+
+    /// Density of the Phong lobe's sampling alone.
+    #[must_use]
+    pub fn pdf_specular(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let c = Self::cos_alpha(wo, wi);
+        if c > 0.0 {
+            (self.exponent + 1.0) / (2.0 * PI) * c.powf(self.exponent)
+        } else {
+            0.0
+        }
+    }
+
+    /// Samples the Phong lobe alone, weight `eval_specular / pdf_specular`.
+    #[must_use]
+    pub fn sample_specular(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+        if wo.z <= 0.0 || self.specular.is_black() {
+            return None;
+        }
+        let wi = self.sample_lobe(wo, u);
+        let pdf = self.pdf_specular(wo, wi);
+        if wi.z <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            pdf,
+            weight: self.eval_specular(wo, wi) / pdf,
+            delta: false,
+            eta: 1.0,
+        })
+    }
+
+    /// A direction around the mirror direction with density ∝ cos^n α.
+    fn sample_lobe(&self, wo: Vec3, u: Vec2) -> Vec3 {
+        let cos_a = u.x.powf(1.0 / (self.exponent + 1.0));
+        let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+        let phi = 2.0 * PI * u.y;
+        let local = Vec3::new(sin_a * phi.cos(), sin_a * phi.sin(), cos_a);
+        Frame::from_z(reflect(wo).normalize()).from_local(local)
+    }
+
     /// Mixture density.
     #[must_use]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
@@ -76,11 +132,7 @@ impl Phong {
             return None;
         }
         let wi = if u_lobe < self.prob_specular() {
-            let cos_a = u.x.powf(1.0 / (self.exponent + 1.0));
-            let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-            let phi = 2.0 * PI * u.y;
-            let local = Vec3::new(sin_a * phi.cos(), sin_a * phi.sin(), cos_a);
-            Frame::from_z(reflect(wo).normalize()).from_local(local)
+            self.sample_lobe(wo, u)
         } else {
             sampling::square_to_cosine_hemisphere(u)
         };

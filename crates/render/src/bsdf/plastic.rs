@@ -79,6 +79,35 @@ impl Plastic {
         (1.0 - self.prob_specular(f_o)) * sampling::cosine_hemisphere_pdf(wi)
     }
 
+    /// The Lambertian albedo a cache serves (`k` in `k E / π`): the diffuse part with the
+    /// entering transmittance `1 − F(θ_i)` replaced by its cosine-weighted mean `1 − F_dr(η)`
+    /// (exact under uniform incident light; the direct term uses the exact form).
+    #[must_use]
+    pub fn lambertian_albedo(&self, wo: Vec3) -> Rgb {
+        if wo.z <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let f_o = fresnel_dielectric(wo.z, self.eta).r;
+        let t_mean = 1.0 - super::fresnel::fresnel_diffuse_reflectance(self.eta);
+        self.diffuse_term() * ((1.0 - f_o) * t_mean / (self.eta * self.eta))
+    }
+
+    /// The coating's specular reflection alone (a delta lobe, chosen with probability 1).
+    #[must_use]
+    pub fn sample_specular(&self, wo: Vec3) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let f_o = fresnel_dielectric(wo.z, self.eta).r;
+        Some(BsdfSample {
+            wi: reflect(wo),
+            pdf: 1.0,
+            weight: self.specular_reflectance * f_o,
+            delta: true,
+            eta: 1.0,
+        })
+    }
+
     /// Chooses the specular delta or the diffuse lobe.
     #[must_use]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {

@@ -53,6 +53,9 @@ pub struct RoughPlasticTables {
     pub external_transmittance: [f32; TRANSMITTANCE_RES],
     /// Internal diffuse reflectance `R_int`.
     pub internal_reflectance: f32,
+    /// Cosine-weighted mean transmittance `2 ∫ T(μ) μ dμ` (what diffuse light entering the
+    /// coating keeps under uniform incident radiance).
+    pub mean_transmittance: f32,
 }
 
 impl RoughPlasticTables {
@@ -102,9 +105,22 @@ impl RoughPlasticTables {
             external_transmittance[j] = t;
             internal += r;
         }
+        // 2 ∫ T(μ) μ dμ by the trapezoid rule over the table's nodes.
+        let h = 1.0 / (TRANSMITTANCE_RES - 1) as f64;
+        let mean_transmittance = (0..TRANSMITTANCE_RES - 1)
+            .map(|j| {
+                let (m0, m1) = (j as f64 * h, (j + 1) as f64 * h);
+                let (t0, t1) = (
+                    f64::from(external_transmittance[j]),
+                    f64::from(external_transmittance[j + 1]),
+                );
+                h * (t0 * m0 + t1 * m1)
+            })
+            .sum::<f64>();
         RoughPlasticTables {
             external_transmittance,
             internal_reflectance: (2.0 * internal / TRANSMITTANCE_RES as f64) as f32,
+            mean_transmittance: mean_transmittance as f32,
         }
     }
 
@@ -209,6 +225,64 @@ impl RoughPlastic {
         let t_i = self.tables.transmittance(wi.z);
         let inv_eta_2 = 1.0 / (self.eta * self.eta);
         spec + self.diffuse_term() * (INV_PI * inv_eta_2 * wi.z * t_o * t_i)
+    }
+
+    /// The Lambertian albedo a cache serves (`k` in `k E / π`): the diffuse part with the
+    /// entering transmittance `T(θ_i)` replaced by its cosine-weighted mean (exact under uniform
+    /// incident light; the direct term uses the exact form).
+    #[must_use]
+    pub fn lambertian_albedo(&self, wo: Vec3) -> Rgb {
+        if wo.z <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let t_o = self.tables.transmittance(wo.z);
+        self.diffuse_term() * (t_o * self.tables.mean_transmittance / (self.eta * self.eta))
+    }
+
+    /// The specular (coating) part alone, `f_s · cos θ_i`.
+    #[must_use]
+    pub fn eval_specular(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let h = (wo + wi).normalize();
+        let f = fresnel_dielectric(wo.dot(h), self.eta).r;
+        self.specular_reflectance
+            * (f * self.distr.eval(h) * self.distr.g(wo, wi, h) / (4.0 * wo.z))
+    }
+
+    /// Density of the specular part's sampling (visible normals) alone.
+    #[must_use]
+    pub fn pdf_specular(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let h = (wo + wi).normalize();
+        if wo.dot(h) > 0.0 && wi.dot(h) > 0.0 {
+            self.distr.eval(h) * self.distr.smith_g1(wo, h) / (4.0 * wo.z)
+        } else {
+            0.0
+        }
+    }
+
+    /// Samples the specular part alone (visible normals), weight `eval_specular / pdf_specular`.
+    #[must_use]
+    pub fn sample_specular(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let wi = reflect_about(wo, self.distr.sample_visible(wo, u)).normalize();
+        let pdf = self.pdf_specular(wo, wi);
+        if wi.z <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            pdf,
+            weight: self.eval_specular(wo, wi) / pdf,
+            delta: false,
+            eta: 1.0,
+        })
     }
 
     /// Mixture density of the two lobes.

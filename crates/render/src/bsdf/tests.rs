@@ -665,3 +665,65 @@ fn roughplastic_tables_are_quick_to_build() {
     assert!(t0.elapsed().as_secs_f32() < 5.0, "{:?}", t0.elapsed());
     eprintln!("two rough plastic tables: {:?}", t0.elapsed());
 }
+
+/// The caching split `f = k(wo)/π + f_glossy`: the glossy sampler's weights and densities agree
+/// with `eval_glossy`/`pdf_glossy`; and the Lambertian part's albedo under uniform light,
+/// `∫ (eval − eval_glossy) dωi` by quadrature, equals `k(wo)` (exactly for diffuse and Phong;
+/// for plastics `k` uses the mean entering transmittance, which is exact under uniform light).
+#[test]
+fn glossy_split_is_consistent() {
+    let mut rng = Rng::new(31, 32);
+    for (label, desc) in all_models() {
+        let b = mat(desc);
+        for &(t, p) in &WO_ANGLES[..3] {
+            let wo = dir(t, p);
+            // Sampler agrees with eval/pdf of the glossy part.
+            for _ in 0..300 {
+                let Some(s) = b.sample_glossy(wo, rng.next_f32(), rng.next_2d()) else {
+                    continue;
+                };
+                assert!(s.weight.is_valid_radiance(), "{label}: {s:?}");
+                if s.delta {
+                    continue;
+                }
+                let pdf = b.pdf_glossy(wo, s.wi);
+                assert!(
+                    (pdf - s.pdf).abs() <= 1e-3 * pdf.max(s.pdf),
+                    "{label}: pdf {} vs {pdf}",
+                    s.pdf
+                );
+                let expect = b.eval_glossy(wo, s.wi) / pdf;
+                for ch in 0..3 {
+                    let (a, e) = (s.weight[ch], expect[ch]);
+                    assert!(
+                        (a - e).abs() <= 1e-3 * e.abs().max(1e-3),
+                        "{label}: weight {a} vs {e}"
+                    );
+                }
+            }
+            // ∫ (eval − eval_glossy) dωi over the upper hemisphere by a midpoint rule in
+            // (cos θ, φ).
+            let (nt, np) = (400, 64);
+            let mut sum = Rgb::ZERO;
+            for i in 0..nt {
+                let mu = (i as f32 + 0.5) / nt as f32;
+                for j in 0..np {
+                    let phi = 2.0 * PI * (j as f32 + 0.5) / np as f32;
+                    let s = (1.0 - mu * mu).sqrt();
+                    let wi = Vec3::new(s * phi.cos(), s * phi.sin(), mu);
+                    sum += b.eval(wo, wi) - b.eval_glossy(wo, wi);
+                }
+            }
+            let lambert = sum * (2.0 * PI / (nt * np) as f32);
+            let k = b.lambertian_albedo(wo);
+            for ch in 0..3 {
+                assert!(
+                    (lambert[ch] - k[ch]).abs() <= 5e-3 * k[ch].max(0.05),
+                    "{label} θo={t}: ∫ f_lambert = {} vs k = {}",
+                    lambert[ch],
+                    k[ch]
+                );
+            }
+        }
+    }
+}

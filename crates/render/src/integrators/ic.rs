@@ -192,7 +192,7 @@ impl IcIntegrator {
             };
             let nb = u32::from(!bsdf.is_diffuse_only());
             l += beta * estimate_direct(scene, &it, &bsdf, wo_local, ne, nb, rng, rays);
-            let albedo = bsdf.diffuse_reflectance_towards(wo_local);
+            let albedo = bsdf.lambertian_albedo(wo_local);
             if !albedo.is_black() {
                 let excluded = self.cache.as_ref().is_some_and(|c| c.is_excluded(it.shape));
                 let e = if self.params.bounces == 0 || excluded {

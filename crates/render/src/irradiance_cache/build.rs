@@ -61,7 +61,7 @@ pub fn first_diffuse_point(scene: &Scene, ray: &Ray) -> Option<ShadingPoint> {
         let wo = -ray.d;
         if bsdf.has_smooth() {
             let wo_local = it.frame.to_local(wo);
-            return (!bsdf.diffuse_reflectance_towards(wo_local).is_black())
+            return (!bsdf.lambertian_albedo(wo_local).is_black())
                 .then(|| ShadingPoint::facing(it, wo));
         }
         // Deterministic continuation through the specular surface: its first lobe.

@@ -557,7 +557,7 @@ impl Gatherer<'_> {
             }
         }
         // Indirect light.
-        let albedo = bsdf.diffuse_reflectance_towards(wo_local);
+        let albedo = bsdf.lambertian_albedo(wo_local);
         if albedo.is_black() {
             return l;
         }
