@@ -16,7 +16,7 @@ pub struct CacheArgs {
     /// Hemisphere divisions per record (Radiance -ad; default 512).
     #[arg(long, visible_alias = "ad", help_heading = "Irradiance cache")]
     pub divisions: Option<String>,
-    /// Resolution (Radiance -ar; default 128): smallest record radius = scene size / resolution;
+    /// Resolution (Radiance -ar; default 1024): smallest record radius = scene size / resolution;
     /// 0: none.
     #[arg(long, visible_alias = "ar", help_heading = "Irradiance cache")]
     pub resolution: Option<String>,

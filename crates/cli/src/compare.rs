@@ -20,12 +20,28 @@ pub struct CompareArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Blur both images with a Gaussian of this standard deviation (pixels) before measuring:
+    /// the low-frequency error (blotches, leaks, bias) that survives while pixel noise fades.
+    #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
+    pub blur: f64,
 }
 
 /// Runs `ircache compare`.
 pub fn run(args: &CompareArgs) -> Result<()> {
+    if !(args.blur >= 0.0 && args.blur.is_finite()) {
+        anyhow::bail!(
+            "--blur: expected a standard deviation ≥ 0 in pixels, found {}",
+            args.blur
+        );
+    }
     let a = ircache_image::read_image(&args.image)?;
     let b = ircache_image::read_image(&args.reference)?;
+    let (a, b) = if args.blur > 0.0 {
+        use ircache_image::blur::gaussian_blur;
+        (gaussian_blur(&a, args.blur), gaussian_blur(&b, args.blur))
+    } else {
+        (a, b)
+    };
     let m = ircache_image::compare::compare(&a, &b)?;
     if let Some(fc) = &args.falsecolor {
         let img = ircache_image::falsecolor::false_colour(&a, &b, args.range);
@@ -43,6 +59,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "mean_lum_a": m.mean_lum_a,
             "mean_lum_b": m.mean_lum_b,
             "nonfinite_a": m.nonfinite_a,
+            "blur": args.blur,
         });
         println!("{j}");
     } else {

@@ -19,6 +19,7 @@
 use ircache_math::Rgb;
 use std::path::Path;
 
+pub mod blur;
 pub mod compare;
 pub mod exr;
 pub mod falsecolor;

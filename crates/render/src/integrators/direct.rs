@@ -2,11 +2,12 @@
 //! samples and `bsdf_samples` BSDF samples combined with the power heuristic, weighted by their
 //! sample counts; emitters seen directly are added as they are.
 
+use super::light_sampling::{sample_lights, BsdfStrategy};
 use super::{mis_weight, RayCounts};
 use crate::bsdf::Bsdf;
 use crate::scene::{Interaction, Scene};
 use ircache_embree::Hit;
-use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
+use ircache_math::{Ray, Rgb, Rng, Vec3};
 
 /// Parameters of the direct-illumination integrator.
 #[derive(Clone, Debug)]
@@ -57,10 +58,10 @@ impl DirectIntegrator {
     }
 }
 
-/// Direct light reflected at `it` towards `wo_local`: `ne` light samples (jittered over a
-/// √ne × √ne grid when ne > 1 is a square) and `nb` BSDF samples combined by the power heuristic
-/// weighted by the sample counts (Veach 1997 §9.2); emission found by BSDF samples through
-/// delta lobes counts fully.
+/// Direct light reflected at `it` towards `wo_local`: `ne` light samples
+/// ([`sample_lights`]) and `nb` BSDF samples combined by the power heuristic weighted by the
+/// sample counts (Veach 1997 §9.2); emission found by BSDF samples through delta lobes counts
+/// fully.
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_direct(
     scene: &Scene,
@@ -72,42 +73,19 @@ pub fn estimate_direct(
     rng: &mut Rng,
     rays: &mut RayCounts,
 ) -> Rgb {
-    let mut l = Rgb::ZERO;
+    let mut l = sample_lights(
+        scene,
+        it,
+        bsdf,
+        wo_local,
+        ne,
+        BsdfStrategy::All,
+        nb,
+        rng,
+        rays,
+    );
     let (fe, fb) = (ne as f32, nb as f32);
     let p_ref = it.p;
-    let side = (ne as f32).sqrt() as u32;
-    let grid = ne > 1 && side * side == ne;
-    if bsdf.has_smooth() && !scene.lights.is_empty() {
-        for i in 0..ne {
-            let u_sel = rng.next_f32();
-            let mut u = rng.next_2d();
-            if grid {
-                u = (Vec2::new((i % side) as f32, (i / side) as f32) + u) / side as f32;
-            }
-            let Some(ls) = scene.lights.sample(p_ref, u_sel, u) else {
-                continue;
-            };
-            let wi_local = it.frame.to_local(ls.wi);
-            let f = bsdf.eval(wo_local, wi_local);
-            if f.is_black() || ls.pdf <= 0.0 {
-                continue;
-            }
-            rays.shadow += 1;
-            if scene
-                .accel
-                .occluded(&scene.shadow_ray(it, ls.wi, ls.distance))
-            {
-                continue;
-            }
-            let w = if ls.is_delta {
-                1.0 / fe
-            } else {
-                mis_weight(fe * ls.pdf, fb * bsdf.pdf(wo_local, wi_local)) / fe
-            };
-            l += f * ls.radiance * (w / ls.pdf);
-        }
-    }
-
     for _ in 0..nb {
         let u_lobe = rng.next_f32();
         let u = rng.next_2d();

@@ -1,21 +1,20 @@
-//! The irradiance-cache integrator (`ic`, `<integrator type="irrcache">`): per pixel sample,
-//! emission, direct light (light and BSDF sampling combined by MIS) and specular reflection and
-//! refraction are computed as a path tracer would; the diffuse indirect light at the first
-//! non-specular surface is ρ/π times the irradiance interpolated from the level-0 cache
-//! (000 eq. 3.15). The cache is filled before the pixels are rendered (see
+//! The irradiance-cache integrator (`ic`, `<integrator type="irrcache">`): per pixel sample, a
+//! path as the path tracer follows it ([`super::path_continuation`]), with emission, direct light
+//! (light samples and BSDF samples combined by MIS), specular and glossy lobes traced; at each
+//! vertex with a Lambertian part, that part's indirect light is `k(wo)/π` times the irradiance
+//! interpolated from the cache of the vertex's depth (000 eq. 3.15), and the path continues
+//! through the glossy part alone. So every lobe is accounted for: whatever the cache does not
+//! hold is traced. The cache is filled before the pixels are rendered (see
 //! [`crate::irradiance_cache::build`]).
-//!
-//! Glossy interreflection (the non-Lambertian part of indirect light) is not in the cache and is
-//! left out; the scenes this targets are diffuse.
 
-use super::direct::estimate_direct;
+use super::path_continuation::{trace_path, Arrival, IndirectSource, PathSettings, PathStart};
 use super::RayCounts;
-use crate::irradiance_cache::gather::{mix, Deeper, Gatherer, ShadingPoint, WorkState};
+use crate::irradiance_cache::gather::{mix, Gatherer, ShadingPoint, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::{IcParams, IrradianceCache};
 use crate::scene::Scene;
 use ircache_embree::Hit;
-use ircache_math::{Ray, Rgb, Rng, INV_PI};
+use ircache_math::{Ray, Rgb, Rng};
 use ircache_scene::{IntegratorDesc, ParamValue};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -114,6 +113,16 @@ impl IcIntegrator {
         let mut params = IcParams::default();
         if desc.max_depth >= 0 {
             params.bounces = (desc.max_depth - 2).max(0) as u32;
+        } else if !desc
+            .extra
+            .iter()
+            .any(|(n, _, _)| n == "bounces" || n == "ab")
+        {
+            return Err(format!(
+                "the irradiance cache needs a finite depth, found max_depth {} (unbounded): give \
+                 max_depth ≥ 2 or bounces (max_depth = bounces + 2)",
+                desc.max_depth
+            ));
         }
         for (name, value, loc) in &desc.extra {
             let text = match value {
@@ -137,7 +146,10 @@ impl IcIntegrator {
         })
     }
 
-    /// Radiance along the camera ray `ray`, whose closest hit `first_hit` the caller traced.
+    /// Radiance along the camera ray `ray`, whose closest hit `first_hit` the caller traced: a
+    /// path traced to `max_depth` = bounces + 2 whose vertices take their Lambertian indirect
+    /// light from the cache of their depth where it has records, and continue through the
+    /// glossy part of the BSDF.
     pub fn li(
         &self,
         scene: &Scene,
@@ -146,81 +158,25 @@ impl IcIntegrator {
         rng: &mut Rng,
         rays: &mut RayCounts,
     ) -> Rgb {
-        let mut l = Rgb::ZERO;
-        let mut beta = Rgb::ONE;
-        let mut ray = *ray;
-        for depth in 0..8u32 {
-            let hit = if depth == 0 {
-                first_hit.map(|h| scene.interaction(&ray, h))
-            } else {
-                rays.bounce += 1;
-                scene.intersect(&ray)
-            };
-            let visible = !(depth == 0 && self.hide_emitters);
-            let Some(it) = hit else {
-                if visible {
-                    l += beta * scene.lights.environment_radiance(ray.d);
-                }
-                break;
-            };
-            let wo = -ray.d;
-            let shape = &scene.shapes[it.shape as usize];
-            if let (Some(light), true) = (shape.area_light, visible) {
-                l += beta * scene.lights.area_radiance(light, it.frame.n, wo);
-            }
-            let bsdf = scene.materials[shape.material].at(it.uv);
-            let wo_local = it.frame.to_local(wo);
-            if !bsdf.has_smooth() {
-                // Specular: follow the sampled lobe (deterministic chains stay sharp).
-                let (u_lobe, u) = (rng.next_f32(), rng.next_2d());
-                let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
-                    break;
-                };
-                beta *= bs.weight;
-                if beta.is_black() {
-                    break;
-                }
-                ray = scene.spawn_ray(&it, it.frame.from_local(bs.wi));
-                continue;
-            }
-            // Direct light: light samples (one when the only light is a delta light, where
-            // all samples are alike), plus a BSDF sample where the BSDF is not Lambertian.
-            let ne = if scene.lights.all_delta() && scene.lights.len() == 1 {
-                1
-            } else {
-                self.params.direct_samples.max(1)
-            };
-            let nb = u32::from(!bsdf.is_diffuse_only());
-            l += beta * estimate_direct(scene, &it, &bsdf, wo_local, ne, nb, rng, rays);
-            let albedo = bsdf.lambertian_albedo(wo_local);
-            if !albedo.is_black() {
-                let excluded = self.cache.as_ref().is_some_and(|c| c.is_excluded(it.shape));
-                let e = if self.params.bounces == 0 || excluded {
-                    let av = self
-                        .cache
-                        .as_ref()
-                        .map_or(self.params.ambient_value, |c| c.ambient);
-                    av * std::f32::consts::PI
-                } else {
-                    self.indirect_irradiance(scene, &ShadingPoint::facing(it, wo), rng, rays)
-                };
-                l += beta * albedo * e * INV_PI;
-            }
-            break;
-        }
-        l
-    }
-
-    /// Level-0 indirect irradiance at `sp`: interpolated at the accuracy `a`; else from records
-    /// up to 4a away (pixel samples off the pre-pass's pixel centres); else from a record
-    /// gathered for this sample alone.
-    fn indirect_irradiance(
-        &self,
-        scene: &Scene,
-        sp: &ShadingPoint,
-        rng: &mut Rng,
-        rays: &mut RayCounts,
-    ) -> Rgb {
+        // One light sample when the only light is a delta light (all samples are alike).
+        let first_light_samples = if scene.lights.all_delta() && scene.lights.len() == 1 {
+            1
+        } else {
+            self.params.direct_samples.max(1)
+        };
+        let settings = PathSettings {
+            max_depth: self.params.bounces + 2,
+            rr_depth: RR_DEPTH,
+            first_light_samples,
+        };
+        let start = PathStart {
+            ray: *ray,
+            depth: 0,
+            beta: Rgb::ONE,
+            arrival: Arrival::Camera {
+                hide_emitters: self.hide_emitters,
+            },
+        };
         let fresh;
         let cache = match &self.cache {
             Some(c) => c.as_ref(),
@@ -229,20 +185,54 @@ impl IcIntegrator {
                 &fresh
             }
         };
-        let store = &cache.levels[0];
+        let mut source = PixelLookup { ic: self, cache };
+        let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
+        trace_path(scene, start, first, &mut source, &settings, rng, rays)
+    }
+}
+
+/// Russian roulette depth of camera paths (Mitsuba's default).
+const RR_DEPTH: u32 = 5;
+
+/// The pixel pass's lookups: the cache of the vertex's depth, interpolated at the accuracy `a`,
+/// else from records up to 4a away (pixel samples off the pre-pass's pixel centres); else, at
+/// depth 0, from a record gathered for this sample alone, and deeper (surfaces seen in glossy
+/// reflections, which the pre-pass does not visit) by tracing.
+struct PixelLookup<'a> {
+    ic: &'a IcIntegrator,
+    cache: &'a IrradianceCache,
+}
+
+impl IndirectSource for PixelLookup<'_> {
+    fn irradiance(
+        &mut self,
+        scene: &Scene,
+        sp: &ShadingPoint,
+        depth: u32,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Option<Rgb> {
+        let cache = self.cache;
+        if cache.is_excluded(sp.it.shape) {
+            return Some(cache.ambient * std::f32::consts::PI);
+        }
+        let store = cache.levels.get(depth as usize)?;
         for threshold in [1.0, 2.0, 4.0] {
             if let Some(i) =
-                store.interpolate(sp.it.p, sp.n, sp.n_bump, threshold, self.params.gradients)
+                store.interpolate(sp.it.p, sp.n, sp.n_bump, threshold, cache.params.gradients)
             {
-                return i.e;
+                return Some(i.e);
             }
         }
-        self.uncached_samples.fetch_add(1, Ordering::Relaxed);
+        if depth > 0 {
+            return None;
+        }
+        self.ic.uncached_samples.fetch_add(1, Ordering::Relaxed);
         let g = Gatherer {
             scene,
             cache,
-            seed: self.seed,
-            deeper: Deeper::Cache,
+            seed: self.ic.seed,
+            deeper: cache.params.deeper,
         };
         let mut st = WorkState::new(cache.levels.len());
         let key = mix(
@@ -250,10 +240,14 @@ impl IcIntegrator {
             u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()),
         );
         // It serves this sample alone (thin or newly seen geometry): a quarter of the divisions.
-        let strata = Stratification::from_divisions((self.params.divisions / 4).max(16));
+        let strata = Stratification::from_divisions((self.ic.params.divisions / 4).max(16));
         let rec = g.record_with(&mut st, sp, 0, key, strata);
         rays.gather += st.counts.gather_rays;
         rays.shadow += st.counts.shadow_rays;
-        rec.e
+        Some(rec.e)
+    }
+
+    fn ambient(&self) -> Rgb {
+        self.cache.ambient
     }
 }

@@ -5,7 +5,9 @@
 
 pub mod direct;
 pub mod ic;
+pub mod light_sampling;
 pub mod path;
+pub mod path_continuation;
 
 use crate::scene::Scene;
 use ircache_embree::Hit;

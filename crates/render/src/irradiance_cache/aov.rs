@@ -26,7 +26,7 @@ pub fn irradiance_image(
                 ((i / width) as f32 + 0.5) / height as f32,
             );
             let ray = scene.camera.generate_ray(film);
-            first_diffuse_point(scene, &ray)
+            first_diffuse_point(scene, &ray, 1)
                 .and_then(|sp| {
                     [1.0, 2.0].into_iter().find_map(|m| {
                         cache.levels[0].interpolate(

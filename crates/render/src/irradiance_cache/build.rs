@@ -13,7 +13,7 @@
 use super::gather::{mix, GatherCounts, Gatherer, IrradianceCache, ShadingPoint, WorkState};
 use super::record::Record;
 use crate::scene::Scene;
-use ircache_math::{Ray, Vec2};
+use ircache_math::{Ray, Vec2, Vec3};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -50,25 +50,63 @@ impl CacheStats {
     }
 }
 
-/// Follows the camera ray through mirrors and glass to the first surface with a smooth BSDF
-/// component and a diffuse part (where the cache is used).
+/// Most record sites one camera ray yields.
+const MAX_SITES: usize = 8;
+
+/// The surfaces a camera ray reaches whose Lambertian part the cache serves, each with its depth
+/// (the cache level the pixel pass looks up there): the first surface; through mirrors and glass
+/// every lobe (reflection and refraction); and one central direction of each glossy lobe; down to
+/// depth `levels` − 1. The pre-pass places records at these points, so that the pixel pass, which
+/// follows the same paths, finds them.
 #[must_use]
-pub fn first_diffuse_point(scene: &Scene, ray: &Ray) -> Option<ShadingPoint> {
-    let mut ray = *ray;
-    for _ in 0..8 {
-        let it = scene.intersect(&ray)?;
+pub fn record_sites(scene: &Scene, ray: &Ray, levels: u32) -> Vec<(u32, ShadingPoint)> {
+    let mut sites = Vec::new();
+    // Depth-first, reflection before refraction: a fixed order, so the same sites every time.
+    let mut stack = vec![(*ray, 0u32, 0.0f32)];
+    while let Some((ray, depth, travelled)) = stack.pop() {
+        if depth >= levels || sites.len() >= MAX_SITES {
+            continue;
+        }
+        let Some(it) = scene.intersect(&ray) else {
+            continue;
+        };
         let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
         let wo = -ray.d;
-        if bsdf.has_smooth() {
-            let wo_local = it.frame.to_local(wo);
-            return (!bsdf.lambertian_albedo(wo_local).is_black())
-                .then(|| ShadingPoint::facing(it, wo));
+        let wo_local = it.frame.to_local(wo);
+        let travelled = travelled + it.t;
+        if bsdf.has_smooth() && !bsdf.lambertian_albedo(wo_local).is_black() {
+            let mut sp = ShadingPoint::facing(it, wo);
+            sp.travelled = travelled;
+            sites.push((depth, sp));
         }
-        // Deterministic continuation through the specular surface: its first lobe.
-        let bs = bsdf.sample(it.frame.to_local(wo), 0.0, Vec2::splat(0.5))?;
-        ray = scene.spawn_ray(&it, it.frame.from_local(bs.wi));
+        if depth + 1 >= levels || !bsdf.has_glossy() {
+            continue;
+        }
+        // Delta lobes: each one (u_lobe picks reflection or transmission); glossy lobes: the
+        // sample at the centre of the unit square.
+        let mut next: Vec<Vec3> = Vec::with_capacity(2);
+        for u_lobe in [0.999, 0.0] {
+            if let Some(bs) = bsdf.sample_glossy(wo_local, u_lobe, Vec2::splat(0.5)) {
+                let d = it.frame.from_local(bs.wi);
+                if !next.iter().any(|n| n.dot(d) > 0.9999) {
+                    next.push(d);
+                }
+            }
+        }
+        for d in next {
+            stack.push((scene.spawn_ray(&it, d), depth + 1, travelled));
+        }
     }
-    None
+    sites
+}
+
+/// The first record site of a camera ray (see [`record_sites`]).
+#[must_use]
+pub fn first_diffuse_point(scene: &Scene, ray: &Ray, levels: u32) -> Option<ShadingPoint> {
+    record_sites(scene, ray, levels)
+        .into_iter()
+        .min_by_key(|(depth, _)| *depth)
+        .map(|(_, sp)| sp)
 }
 
 /// Hooks around each batch of the pre-pass; a cache file shared with other processes uses them
@@ -97,12 +135,12 @@ fn take_in(cache: &mut IrradianceCache, records: Vec<Record>, stats: &mut CacheS
     }
 }
 
-/// Runs one batch: `points[i] = (key, point)`; hands the new records to `sink`.
+/// Runs one batch: `points[i] = (key, level, point)`; hands the new records to `sink`.
 pub fn run_batch(
     scene: &Scene,
     cache: &mut IrradianceCache,
     seed: u64,
-    points: &[(u64, ShadingPoint)],
+    points: &[(u64, u32, ShadingPoint)],
     stats: &mut CacheStats,
     hook: &mut (dyn BatchHook + Send),
 ) {
@@ -112,19 +150,19 @@ pub fn run_batch(
             scene,
             cache,
             seed,
-            deeper: super::gather::Deeper::Cache,
+            deeper: cache.params.deeper,
         };
         // Small pieces: the points that need records cluster (edges, corners), and rayon
         // cannot steal from inside a piece a thread has started.
         points
             .par_iter()
             .with_max_len(4)
-            .map(|(key, sp)| {
-                if cache.levels[0].covers(sp.it.p, sp.n) {
+            .map(|&(key, level, ref sp)| {
+                if cache.levels[level as usize].covers(sp.it.p, sp.n) {
                     return None;
                 }
                 let mut st = WorkState::new(cache.levels.len());
-                let rec = g.record_at(&mut st, sp, 0, *key);
+                let rec = g.record_at(&mut st, sp, level, key);
                 Some((rec, st))
             })
             .collect()
@@ -186,14 +224,18 @@ pub fn fill_for_image(
                             || ((x / stride) % 2 == px && (y / stride) % 2 == py))
                 })
                 .collect();
-            let points: Vec<(u64, ShadingPoint)> = pixels
+            let levels = cache.levels.len() as u32;
+            let points: Vec<(u64, u32, ShadingPoint)> = pixels
                 .par_iter()
-                .filter_map(|&(x, y)| {
+                .flat_map_iter(|&(x, y)| {
                     let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) * inv;
                     let ray = scene.camera.generate_ray(film);
-                    first_diffuse_point(scene, &ray)
-                        .filter(|sp| !cache.is_excluded(sp.it.shape))
-                        .map(|sp| (mix(0x0070_7265_7061_7373, (y * width + x) as u64), sp))
+                    let key = mix(0x0070_7265_7061_7373, (y * width + x) as u64);
+                    record_sites(scene, &ray, levels)
+                        .into_iter()
+                        .enumerate()
+                        .filter(|(_, (_, sp))| !cache.is_excluded(sp.it.shape))
+                        .map(move |(i, (level, sp))| (mix(key, i as u64), level, sp))
                 })
                 .collect();
             run_batch(scene, cache, seed, &points, &mut stats, hook);
@@ -217,11 +259,11 @@ pub fn fill_for_points(
     let mut stats = CacheStats::default();
     let mut stride = 64usize;
     while stride >= 1 {
-        let batch: Vec<(u64, ShadingPoint)> = points
+        let batch: Vec<(u64, u32, ShadingPoint)> = points
             .iter()
             .enumerate()
             .filter(|(i, _)| i % stride == 0 && (stride == 64 || i % (2 * stride) != 0))
-            .map(|(i, sp)| (mix(0x706f_696e_7473, i as u64), *sp))
+            .map(|(i, sp)| (mix(0x706f_696e_7473, i as u64), 0, *sp))
             .collect();
         run_batch(scene, cache, seed, &batch, &mut stats, &mut ());
         stride /= 2;

@@ -9,11 +9,16 @@
 //! private overlay of the work item, so the batch's result does not depend on thread timing.
 
 use super::hemisphere::{largest_eigenvalue, to_world, HemisphereSamples, Stratification};
+pub use super::params::Deeper;
 use super::params::{IcParams, TranslationalFormula};
 use super::record::{ErrorMetric, Record};
 use super::store::RecordStore;
+use crate::integrators::path_continuation::{
+    trace_path, Arrival, IndirectSource, PathSettings, PathStart,
+};
+use crate::integrators::RayCounts;
 use crate::scene::{Interaction, Scene};
-use ircache_math::{sampling, Frame, Ray, Rgb, Rng, Vec2, Vec3, INV_PI};
+use ircache_math::{Frame, Ray, Rgb, Rng, Vec2, Vec3};
 
 /// The records of every bounce level, and the settings they were made with.
 #[derive(Clone, Debug)]
@@ -168,6 +173,8 @@ pub struct GatherCounts {
     pub shadow_rays: u64,
     /// Records computed.
     pub records: u64,
+    /// Cells adaptive super-sampling refined (three more rays each).
+    pub supersampled_cells: u64,
 }
 
 impl GatherCounts {
@@ -176,6 +183,7 @@ impl GatherCounts {
         self.gather_rays += o.gather_rays;
         self.shadow_rays += o.shadow_rays;
         self.records += o.records;
+        self.supersampled_cells += o.supersampled_cells;
     }
 }
 
@@ -202,15 +210,6 @@ impl WorkState {
     }
 }
 
-/// How the surfaces found by gather rays get their own indirect light.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Deeper {
-    /// From the next level's cache (the irradiance cache proper).
-    Cache,
-    /// By path tracing one cosine-sampled ray per level (brute force, for validation).
-    PathTraced,
-}
-
 /// Computes records and shades gather rays for one cache.
 pub struct Gatherer<'a> {
     /// The scene.
@@ -234,6 +233,11 @@ pub struct ShadingPoint {
     /// Shading normal after the normal or bump map, on the same side: interpolation turns the
     /// records' irradiance towards it through the rotational gradient.
     pub n_bump: Vec3,
+    /// Cosine between the viewing direction and `n` (1 for query points).
+    pub cos_view: f32,
+    /// Length of the whole path from the camera to this point (0 when not reached from the
+    /// camera): with the viewing angle, it gives the pixel footprint (000 eq. 3.60).
+    pub travelled: f32,
 }
 
 impl ShadingPoint {
@@ -246,6 +250,8 @@ impl ShadingPoint {
             it,
             n: it.base_n * s,
             n_bump: it.frame.n * s,
+            cos_view: it.base_n.dot(wo).abs(),
+            travelled: it.t,
         }
     }
 }
@@ -327,16 +333,19 @@ impl Gatherer<'_> {
         let ray = self.scene.spawn_ray(&sp.it, d);
         st.counts.gather_rays += 1;
         let hit = self.scene.intersect(&ray)?;
-        let l = self.outgoing(st, &ray, &hit, level, key, rng, 0);
-        Some((l, hit.t, frame.to_local(hit.ng)))
+        let (t, n_hit) = (hit.t, frame.to_local(hit.ng));
+        let l = self.radiance(st, ray, Some(hit), level, key, rng);
+        Some((l, t, n_hit))
     }
 
     /// Adaptive super-sampling (003 item 2): the cells whose neighbours differ most among
-    /// themselves get three more rays each (`extra` / 3 cells), placed with the first sample on
-    /// a 2×2 lattice shifted by that sample's jitter, so the cell stays stratified; it keeps the
-    /// mean of its four samples and the nearest of their distances. The choice never looks at
-    /// the cell's own sample, which keeps
-    /// the estimate unbiased (see [`HemisphereSamples::neighbour_spread`]).
+    /// themselves get three more rays each, as many cells as the record needs to bring its
+    /// predicted relative error to the target ([`HemisphereSamples::cells_to_refine`]; every
+    /// cell up to `extra` / 3 when the target is 0), placed with the first sample on a 2×2
+    /// lattice shifted by that sample's jitter, so the cell stays stratified; it keeps the mean
+    /// of its four samples and the nearest of their distances. The choice of cells never looks
+    /// at a cell's own sample, which keeps the estimate unbiased (see
+    /// [`HemisphereSamples::neighbour_spread`]).
     #[allow(clippy::too_many_arguments)]
     fn supersample(
         &self,
@@ -352,12 +361,10 @@ impl Gatherer<'_> {
         rng: &mut Rng,
     ) {
         let strata = h.strata;
-        let spread = h.neighbour_spread();
-        let mut order: Vec<usize> = (0..strata.cells()).filter(|&i| spread[i] > 0.0).collect();
-        // Largest spread first; ties by index, so the choice is deterministic.
-        order.sort_by(|&a, &b| spread[b].total_cmp(&spread[a]).then(a.cmp(&b)));
+        let target = self.cache.params.record_error * self.cache.params.accuracy;
+        let (cells, _, _) = h.cells_to_refine(target, extra / 3);
         const LATTICE: [(f32, f32); 3] = [(0.5, 0.5), (0.5, 0.0), (0.0, 0.5)];
-        for (n, &idx) in order.iter().take(extra / 3).enumerate() {
+        for (n, &idx) in cells.iter().enumerate() {
             let (j, k) = (idx / strata.azimuthal, idx % strata.azimuthal);
             let v = jitter[idx];
             let mut sum = h.radiance[idx];
@@ -378,6 +385,7 @@ impl Gatherer<'_> {
             }
             h.radiance[idx] = sum * 0.25;
         }
+        st.counts.supersampled_cells += cells.len() as u64;
     }
 
     /// A record at `sp` for bounce `level`: gather, then limit the radius.
@@ -411,10 +419,16 @@ impl Gatherer<'_> {
         let mut r = match params.error_metric {
             ErrorMetric::Ward => h.harmonic_mean_distance(),
             ErrorMetric::Tabellion => {
-                if level == 0 && self.cache.pixel_angle > 0.0 && sp.it.t > 0.0 {
-                    let cos = sp.n.dot(sp.it.frame.n).abs().max(0.05);
-                    let footprint = self.cache.pixel_angle * sp.it.t / cos.sqrt();
-                    (r_min, r_max) = (1.5 * footprint, 10.0 * footprint);
+                // R₋ and R₊ are 1.5 and 10 times the square root of the pixel's area projected
+                // onto the surface at the end of the camera path (000 eq. 3.60). The
+                // resolution bounds the distance R as in Radiance, so R/2 ≥ size/(2·ar).
+                r_min *= 0.5;
+                r_max *= 0.5;
+                if self.cache.pixel_angle > 0.0 && sp.travelled > 0.0 {
+                    let cos = sp.cos_view.max(0.05);
+                    let footprint = self.cache.pixel_angle * sp.travelled / cos.sqrt();
+                    r_min = r_min.max(1.5 * footprint);
+                    r_max = r_max.min(10.0 * footprint).max(r_min);
                 }
                 0.5 * h.distance.iter().copied().fold(f32::INFINITY, f32::min)
             }
@@ -497,94 +511,86 @@ impl Gatherer<'_> {
         rec.e
     }
 
-    /// Radiance leaving the surface `hit` towards the gather ray's origin, emission excluded.
-    #[allow(clippy::too_many_arguments)]
-    fn outgoing(
+    /// Radiance arriving along the gather ray `ray` from a record at `level` whose first hit is
+    /// `hit`, emission at that hit excluded (the direct term samples the lights): the path is
+    /// continued by [`trace_path`] to the cache's depth, the Lambertian parts of deeper vertices
+    /// served by the next levels' caches or traced ([`DeeperBounces`]).
+    fn radiance(
         &self,
         st: &mut WorkState,
-        ray: &Ray,
-        hit: &Interaction,
+        ray: Ray,
+        hit: Option<Interaction>,
         level: u32,
         key: u64,
         rng: &mut Rng,
-        specular_chain: u32,
     ) -> Rgb {
-        let scene = self.scene;
-        let wo = -ray.d;
-        let shape = &scene.shapes[hit.shape as usize];
-        let bsdf = scene.materials[shape.material].at(hit.uv);
-        let wo_local = hit.frame.to_local(wo);
-        if !bsdf.has_smooth() {
-            // A mirror or glass: follow it (what it shows, emitters included, is not sampled by
-            // the record's direct term).
-            if specular_chain >= 8 {
-                return Rgb::ZERO;
-            }
-            let (u_lobe, u) = (rng.next_f32(), rng.next_2d());
-            let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
-                return Rgb::ZERO;
-            };
-            let wi = hit.frame.from_local(bs.wi);
-            let next = scene.spawn_ray(hit, wi);
-            st.counts.gather_rays += 1;
-            return match scene.intersect(&next) {
-                None => bs.weight * scene.lights.environment_radiance(wi),
-                Some(h2) => {
-                    let mut l = Rgb::ZERO;
-                    if let Some(light) = scene.shapes[h2.shape as usize].area_light {
-                        l += scene.lights.area_radiance(light, h2.frame.n, -wi);
-                    }
-                    l += self.outgoing(st, &next, &h2, level, key, rng, specular_chain + 1);
-                    bs.weight * l
-                }
-            };
-        }
-        let mut l = Rgb::ZERO;
-        // Direct light: one light sample.
-        let (u_sel, u) = (rng.next_f32(), rng.next_2d());
-        if let Some(ls) = scene.lights.sample(hit.p, u_sel, u) {
-            if ls.pdf > 0.0 {
-                let f = bsdf.eval(wo_local, hit.frame.to_local(ls.wi));
-                if !f.is_black() {
-                    st.counts.shadow_rays += 1;
-                    if !scene
-                        .accel
-                        .occluded(&scene.shadow_ray(hit, ls.wi, ls.distance))
-                    {
-                        l += f * ls.radiance / ls.pdf;
-                    }
-                }
-            }
-        }
-        // Indirect light.
-        let albedo = bsdf.lambertian_albedo(wo_local);
-        if albedo.is_black() {
-            return l;
-        }
         let params = &self.cache.params;
-        if level + 1 < params.bounces && !self.cache.is_excluded(hit.shape) {
-            let sp = ShadingPoint::facing(*hit, wo);
-            match self.deeper {
-                Deeper::Cache => {
-                    l += albedo * self.irradiance(st, &sp, level + 1, key) * INV_PI;
-                }
-                Deeper::PathTraced => {
-                    // ρ/π · E with E ≈ π L(ω), ω cosine-distributed.
-                    let frame = Frame::from_z(sp.n);
-                    let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
-                    if d.dot(hit.ng) * sp.n.dot(hit.ng) > 0.0 {
-                        let next = scene.spawn_ray(hit, d);
-                        st.counts.gather_rays += 1;
-                        if let Some(h2) = scene.intersect(&next) {
-                            l += albedo * self.outgoing(st, &next, &h2, level + 1, key, rng, 0);
-                        }
-                    }
-                }
-            }
-        } else {
-            l += albedo * self.cache.ambient;
-        }
+        let settings = PathSettings {
+            max_depth: params.bounces + 2,
+            // Roulette from the first continuation beyond the gather hit: gathers are many
+            // and each path's throughput is already a reflectance.
+            rr_depth: level + 2,
+            first_light_samples: 1,
+        };
+        let start = PathStart {
+            ray,
+            depth: level + 1,
+            beta: Rgb::ONE,
+            arrival: Arrival::Gather,
+        };
+        let mut rays = RayCounts::default();
+        let l = {
+            let mut source = GatherSource {
+                gatherer: self,
+                st: &mut *st,
+                key,
+            };
+            trace_path(
+                self.scene,
+                start,
+                Some(hit),
+                &mut source,
+                &settings,
+                rng,
+                &mut rays,
+            )
+        };
+        st.counts.gather_rays += rays.bounce + rays.gather;
+        st.counts.shadow_rays += rays.shadow;
         l
+    }
+}
+
+/// The Lambertian indirect light at the vertices of a gather's paths.
+struct GatherSource<'g, 'a> {
+    gatherer: &'g Gatherer<'a>,
+    st: &'g mut WorkState,
+    key: u64,
+}
+
+impl IndirectSource for GatherSource<'_, '_> {
+    fn irradiance(
+        &mut self,
+        _: &Scene,
+        sp: &ShadingPoint,
+        depth: u32,
+        _: &mut Rng,
+        _: &mut RayCounts,
+    ) -> Option<Rgb> {
+        let g = self.gatherer;
+        if g.cache.is_excluded(sp.it.shape) {
+            return Some(g.cache.ambient * std::f32::consts::PI);
+        }
+        match g.deeper {
+            Deeper::Cache if (depth as usize) < g.cache.levels.len() => {
+                Some(g.irradiance(self.st, sp, depth, self.key))
+            }
+            _ => None,
+        }
+    }
+
+    fn ambient(&self) -> Rgb {
+        self.gatherer.cache.ambient
     }
 }
 

@@ -148,6 +148,38 @@ impl HemisphereSamples {
         out
     }
 
+    /// The cells to super-sample, largest neighbour spread first, and the relative standard error
+    /// of the irradiance predicted before and after: the fewest cells (at most `max_cells`) whose
+    /// refinement with three more rays each brings the predicted error to `target` or below.
+    ///
+    /// The error model: E = π/(MN) Σ Lᵢ with one sample per cell, so Var(E)/E² = Σ σᵢ² / (Σ Yᵢ)²
+    /// with σᵢ the spread of radiance within cell i, estimated from its neighbours'
+    /// ([`Self::neighbour_spread`], a range, taken as σᵢ ≈ range/3 — the standard deviation of
+    /// a range's two ends is range/2, of a uniform spread range/√12); four samples divide a
+    /// cell's variance by four.
+    #[must_use]
+    pub fn cells_to_refine(&self, target: f32, max_cells: usize) -> (Vec<usize>, f32, f32) {
+        let spread = self.neighbour_spread();
+        let total: f64 = self.radiance.iter().map(|c| f64::from(c.luminance())).sum();
+        if total <= 0.0 {
+            return (Vec::new(), 0.0, 0.0);
+        }
+        let var = |i: usize| (f64::from(spread[i]) / 3.0).powi(2);
+        let mut v: f64 = (0..spread.len()).map(var).sum();
+        let before = (v.sqrt() / total) as f32;
+        let mut order: Vec<usize> = (0..spread.len()).filter(|&i| spread[i] > 0.0).collect();
+        // Largest spread first; ties by index, so the choice is deterministic.
+        order.sort_by(|&a, &b| spread[b].total_cmp(&spread[a]).then(a.cmp(&b)));
+        let goal = (f64::from(target) * total).powi(2);
+        let mut n = 0;
+        while n < order.len().min(max_cells) && v > goal {
+            v -= 0.75 * var(order[n]);
+            n += 1;
+        }
+        order.truncate(n);
+        (order, before, (v.max(0.0).sqrt() / total) as f32)
+    }
+
     /// Irradiance, π/(MN) Σ L (3.4).
     #[must_use]
     pub fn irradiance(&self) -> Rgb {

@@ -10,7 +10,7 @@ pub const CORNELL_BOX_BENCH: &[(&str, &str)] = &[
     ("error_metric", "tabellion"),
     ("accuracy", "0.5"),
     ("divisions", "512"),
-    ("resolution", "256"),
+    ("resolution", "0"),
     ("direct_samples", "4"),
 ];
 
@@ -20,7 +20,7 @@ pub const SPONZA_BENCH: &[(&str, &str)] = &[
     ("accuracy", "0.5"),
     ("divisions", "1024"),
     ("supersamples", "512"),
-    ("resolution", "64"),
+    ("resolution", "0"),
 ];
 
 /// How far the pre-pass (the overture: 002, Mitsuba's irrcache) fills the cache before the
@@ -44,6 +44,39 @@ impl Overture {
             Overture::Full => 1,
             Overture::Coarse => 4,
             Overture::Off => 0,
+        }
+    }
+}
+
+/// How the surfaces that a record's gather rays find get their own indirect light (the bounces
+/// beyond the record's level).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Deeper {
+    /// From the next level's cache (Ward's per-bounce caches, 004): one cache per bounce.
+    Cache,
+    /// By path tracing on from the gather hit (one path per gather ray, Russian roulette):
+    /// only surfaces the camera reaches take records. Chosen by measurement (ARCHITECTURE.md):
+    /// the per-level caches multiply records with depth.
+    #[default]
+    PathTraced,
+}
+
+impl Deeper {
+    /// Parses `cache` or `traced`.
+    pub fn parse(s: &str) -> Result<Deeper, String> {
+        match s {
+            "cache" | "cached" => Ok(Deeper::Cache),
+            "traced" | "path" => Ok(Deeper::PathTraced),
+            v => Err(format!("expected cache or traced, found \"{v}\"")),
+        }
+    }
+
+    /// The name [`Self::parse`] reads.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Deeper::Cache => "cache",
+            Deeper::PathTraced => "traced",
         }
     }
 }
@@ -89,9 +122,16 @@ pub struct IcParams {
     /// Weight of `ambient_value` in a running average with the irradiance the cache computes
     /// (`-aw`, 003 item 1); 0 keeps the ambient value fixed.
     pub ambient_weight: u32,
-    /// Adaptive super-samples per record (`-as`): extra gather rays for the cells whose
-    /// neighbours differ most (003 item 2); 0: none.
+    /// Most adaptive super-samples per record (`-as`): extra gather rays for the cells whose
+    /// neighbours differ most (003 item 2), as many as the record needs to reach
+    /// `record_error`; 0: none.
     pub supersamples: usize,
+    /// Target relative standard error of a record's irradiance, as a fraction of the accuracy:
+    /// super-sampling stops once the gather's own error estimate is below
+    /// `record_error × accuracy`; 0 spends every super-sample.
+    pub record_error: f32,
+    /// Where the bounces beyond a record's own level come from (`--deeper-bounces`).
+    pub deeper: Deeper,
     /// Light samples per pixel sample for the direct term (stratified over the light when a
     /// square number): shadow rays are cheaper than pixel samples.
     pub direct_samples: u32,
@@ -102,13 +142,16 @@ impl Default for IcParams {
         IcParams {
             accuracy: 0.4,
             divisions: 512,
-            resolution: 128.0,
+            // Radiance's 128 would floor Tabellion's footprint radii at size/256 (4× Sponza's
+            // error, measured); the floor stays for records the camera does not see.
+            resolution: 1024.0,
             bounces: 1,
             ambient_value: Rgb::ZERO,
             gradients: GradientMode::Full,
             formula: TranslationalFormula::WardHeckbert,
             direct_samples: 4,
-            supersamples: 256,
+            supersamples: 1536,
+            record_error: 0.1,
             ambient_weight: 0,
             // Chosen by measurement (BENCHMARKS.md): at equal time Tabellion–Lamorlette's metric
             // reaches about half Ward's error on Sponza and two thirds on the Cornell box.
@@ -116,6 +159,7 @@ impl Default for IcParams {
             overture: Overture::Full,
             spatial_order: false,
             neighbour_clamp: false,
+            deeper: Deeper::PathTraced,
         }
     }
 }
@@ -168,6 +212,15 @@ impl IcParams {
                     .ok_or_else(|| {
                         format!("{name}: expected 0 to 1000000 super-samples, found \"{value}\"")
                     })?;
+            }
+            "record_error" | "record-error" => {
+                let e = float(value)?;
+                if !(0.0..=10.0).contains(&e) {
+                    return Err(format!(
+                        "{name}: expected 0 to 10 (a fraction of the accuracy), found {e}"
+                    ));
+                }
+                self.record_error = e;
             }
             "resolution" | "ar" => {
                 let r = float(value)?;
@@ -249,6 +302,9 @@ impl IcParams {
                     "off" | "false" | "0" => false,
                     v => return Err(format!("{name}: expected on or off, found \"{v}\"")),
                 }
+            }
+            "deeper_bounces" | "deeper-bounces" => {
+                self.deeper = Deeper::parse(value.trim()).map_err(|e| format!("{name}: {e}"))?
             }
             "gradients" => self.gradients = GradientMode::parse(value.trim())?,
             "gradient_formula" | "gradient-formula" => {

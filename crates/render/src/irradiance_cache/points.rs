@@ -53,6 +53,8 @@ pub fn query_point(p: Vec3, n: Vec3) -> ShadingPoint {
         },
         n,
         n_bump: n,
+        cos_view: 1.0,
+        travelled: 0.0,
     }
 }
 

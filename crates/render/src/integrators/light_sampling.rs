@@ -1,0 +1,108 @@
+//! Next-event estimation: the one light-sampling estimator that every integrator and every cache
+//! uses. Light samples are combined with the BSDF sampling of the same vertex by the power
+//! heuristic (Veach 1997 §9.2), weighted by the sample counts; where the path continues through
+//! only part of the BSDF (the glossy part, when a cache serves the Lambertian part), the rest of
+//! the BSDF has no second strategy and the light samples estimate it alone.
+
+use super::{mis_weight, RayCounts};
+use crate::bsdf::{Bsdf, BsdfSample};
+use crate::scene::{Interaction, Scene};
+use ircache_math::{Rgb, Rng, Vec2, Vec3};
+
+/// The part of the BSDF that the vertex's BSDF sample draws from (the MIS partner of the light
+/// samples).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BsdfStrategy {
+    /// The whole BSDF (path tracing).
+    All,
+    /// The glossy part only: a cache serves the Lambertian part (see [`Bsdf::lambertian_albedo`]).
+    Glossy,
+}
+
+impl BsdfStrategy {
+    /// `f · |cos θ_i|` of the sampled part.
+    #[inline]
+    #[must_use]
+    pub fn eval(self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> Rgb {
+        match self {
+            BsdfStrategy::All => bsdf.eval(wo, wi),
+            BsdfStrategy::Glossy => bsdf.eval_glossy(wo, wi),
+        }
+    }
+
+    /// Solid-angle density of the sampled part.
+    #[inline]
+    #[must_use]
+    pub fn pdf(self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            BsdfStrategy::All => bsdf.pdf(wo, wi),
+            BsdfStrategy::Glossy => bsdf.pdf_glossy(wo, wi),
+        }
+    }
+
+    /// A sample of the part.
+    #[inline]
+    #[must_use]
+    pub fn sample(self, bsdf: &Bsdf, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            BsdfStrategy::All => bsdf.sample(wo, u_lobe, u),
+            BsdfStrategy::Glossy => bsdf.sample_glossy(wo, u_lobe, u),
+        }
+    }
+}
+
+/// Direct light reflected at `it` towards `wo` (local frame) by `ne` light samples (jittered over
+/// a √ne × √ne grid when `ne` > 1 is a square). Each is weighted against `nb` samples of
+/// `strategy` at the same vertex (`nb` = 0: the light samples estimate everything): a light
+/// sample contributes `L/(ne·p_l) · (f − f_s·(1 − w))` with `f_s` the strategy's part of the BSDF
+/// and `w = w_power(ne·p_l, nb·p_s)`; the BSDF samples that find an emitter add the rest.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_lights(
+    scene: &Scene,
+    it: &Interaction,
+    bsdf: &Bsdf,
+    wo: Vec3,
+    ne: u32,
+    strategy: BsdfStrategy,
+    nb: u32,
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> Rgb {
+    let mut l = Rgb::ZERO;
+    if ne == 0 || !bsdf.has_smooth() || scene.lights.is_empty() {
+        return l;
+    }
+    let (fe, fb) = (ne as f32, nb as f32);
+    let side = (ne as f32).sqrt() as u32;
+    let grid = ne > 1 && side * side == ne;
+    for i in 0..ne {
+        let u_sel = rng.next_f32();
+        let mut u = rng.next_2d();
+        if grid {
+            u = (Vec2::new((i % side) as f32, (i / side) as f32) + u) / side as f32;
+        }
+        let Some(ls) = scene.lights.sample(it.p, u_sel, u) else {
+            continue;
+        };
+        let wi = it.frame.to_local(ls.wi);
+        let f = bsdf.eval(wo, wi);
+        if f.is_black() || ls.pdf <= 0.0 {
+            continue;
+        }
+        rays.shadow += 1;
+        if scene
+            .accel
+            .occluded(&scene.shadow_ray(it, ls.wi, ls.distance))
+        {
+            continue;
+        }
+        let weighted = if ls.is_delta || nb == 0 {
+            f
+        } else {
+            let w = mis_weight(fe * ls.pdf, fb * strategy.pdf(bsdf, wo, wi));
+            f - strategy.eval(bsdf, wo, wi) * (1.0 - w)
+        };
+        l += weighted * ls.radiance / (fe * ls.pdf);
+    }
+    l.max(Rgb::ZERO)
+}

@@ -1,0 +1,273 @@
+//! The one path-continuation routine: every integrator (`path`, `ic`) and every cache's gather
+//! follows a path with it. At each vertex: emission found by the previous sample (with MIS),
+//! light samples (see [`super::light_sampling`]), and the continuation through the BSDF, as
+//! Mitsuba 3's `path` integrator does, with `max_depth` counting vertices the same way (so a
+//! cached render with N bounces is path tracing at `max_depth` N + 2 with parts looked up).
+//!
+//! A cache plugs in through [`IndirectSource`]: at a vertex whose BSDF has a Lambertian part, it
+//! may serve that part's indirect light as `k(wo) E / π` (E the cached irradiance); the path then
+//! continues through the glossy part alone, and light samples are weighted against that part
+//! only. Where it declines, the whole BSDF is sampled, as in path tracing.
+
+use super::light_sampling::{sample_lights, BsdfStrategy};
+use super::{mis_weight, RayCounts};
+use crate::irradiance_cache::gather::ShadingPoint;
+use crate::scene::{Interaction, Scene};
+use ircache_math::{Ray, Rgb, Rng, Vec3, INV_PI};
+
+/// Where the Lambertian part of a vertex's indirect light may come from.
+pub trait IndirectSource {
+    /// Irradiance arriving at `sp` by indirect paths, for a vertex at `depth` (0: the first
+    /// surface of a camera path), or `None` to trace it. Only asked where indirect light exists
+    /// (`depth + 2 < max_depth`).
+    fn irradiance(
+        &mut self,
+        scene: &Scene,
+        sp: &ShadingPoint,
+        depth: u32,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Option<Rgb>;
+
+    /// Radiance assumed beyond the last bounce (Radiance's ambient value): what the Lambertian
+    /// part reflects at a vertex where the depth runs out.
+    fn ambient(&self) -> Rgb {
+        Rgb::ZERO
+    }
+}
+
+/// No cache: plain path tracing.
+pub struct Traced;
+
+impl IndirectSource for Traced {
+    fn irradiance(
+        &mut self,
+        _: &Scene,
+        _: &ShadingPoint,
+        _: u32,
+        _: &mut Rng,
+        _: &mut RayCounts,
+    ) -> Option<Rgb> {
+        None
+    }
+}
+
+/// Path settings.
+#[derive(Clone, Copy, Debug)]
+pub struct PathSettings {
+    /// Longest path in vertices as Mitsuba counts them (1: emitters seen directly, 2: direct
+    /// light, 3: one indirect bounce); `u32::MAX` for unbounded.
+    pub max_depth: u32,
+    /// Depth from which Russian roulette runs.
+    pub rr_depth: u32,
+    /// Light samples at the first vertex (one at later vertices).
+    pub first_light_samples: u32,
+}
+
+/// How the path arrived at the vertex it is about to find: this decides the weight of the
+/// emission found there.
+#[derive(Clone, Copy, Debug)]
+pub enum Arrival {
+    /// A camera ray: emission counts fully, or not at all when emitters are hidden.
+    Camera {
+        /// Hide emitters seen directly.
+        hide_emitters: bool,
+    },
+    /// A cache's gather ray: emission is left out (the direct term samples the lights).
+    Gather,
+    /// A BSDF sample from `p` with density `pdf` (`delta` for a delta lobe), made beside
+    /// `light_samples` light samples: emission is weighted by MIS.
+    Bsdf {
+        /// The vertex the sample left.
+        p: Vec3,
+        /// Its density.
+        pdf: f32,
+        /// From a delta lobe.
+        delta: bool,
+        /// Light samples taken at that vertex.
+        light_samples: u32,
+    },
+}
+
+/// A path about to find its next vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct PathStart {
+    /// The ray.
+    pub ray: Ray,
+    /// Depth of the vertex it will find (0 for a camera ray).
+    pub depth: u32,
+    /// Throughput so far.
+    pub beta: Rgb,
+    /// How it arrives.
+    pub arrival: Arrival,
+}
+
+/// Radiance arriving along `start.ray`, whose first intersection the caller may have traced
+/// already (`first`, which is then used as the first vertex).
+pub fn trace_path(
+    scene: &Scene,
+    start: PathStart,
+    first: Option<Option<Interaction>>,
+    source: &mut dyn IndirectSource,
+    settings: &PathSettings,
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> Rgb {
+    let PathStart {
+        mut ray,
+        mut depth,
+        mut beta,
+        mut arrival,
+    } = start;
+    // Distance from the camera along a camera path (caches size records by the pixel
+    // footprint at its end); 0 on other paths.
+    let from_camera = matches!(arrival, Arrival::Camera { .. });
+    let mut travelled = 0.0f32;
+    // Several light samples at the path's first vertex only (later vertices weigh less).
+    let max_depth = settings.max_depth;
+    let mut l = Rgb::ZERO;
+    let mut eta = 1.0f32;
+    let mut first = first;
+    loop {
+        if depth >= max_depth {
+            break;
+        }
+        let hit = match first.take() {
+            Some(h) => h,
+            None => scene.intersect(&ray),
+        };
+        let Some(it) = hit else {
+            if scene.lights.has_environment() {
+                let w = match arrival {
+                    Arrival::Camera { hide_emitters } => f32::from(u8::from(!hide_emitters)),
+                    Arrival::Gather => 0.0,
+                    Arrival::Bsdf {
+                        pdf,
+                        delta,
+                        light_samples,
+                        ..
+                    } => {
+                        if delta {
+                            1.0
+                        } else {
+                            mis_weight(
+                                pdf,
+                                light_samples as f32 * scene.lights.pdf_environment(ray.d),
+                            )
+                        }
+                    }
+                };
+                if w > 0.0 {
+                    l += beta * scene.lights.environment_radiance(ray.d) * w;
+                }
+            }
+            break;
+        };
+        let wo = -ray.d;
+        let shape = &scene.shapes[it.shape as usize];
+        if let Some(light) = shape.area_light {
+            let w = match arrival {
+                Arrival::Camera { hide_emitters } => f32::from(u8::from(!hide_emitters)),
+                Arrival::Gather => 0.0,
+                Arrival::Bsdf {
+                    p,
+                    pdf,
+                    delta,
+                    light_samples,
+                } => {
+                    if delta {
+                        1.0
+                    } else {
+                        let pdf_l = scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n);
+                        mis_weight(pdf, light_samples as f32 * pdf_l)
+                    }
+                }
+            };
+            if w > 0.0 {
+                l += beta * scene.lights.area_radiance(light, it.frame.n, wo) * w;
+            }
+        }
+        if depth + 1 >= max_depth {
+            break;
+        }
+        travelled += it.t;
+        let bsdf = scene.materials[shape.material].at(it.uv);
+        let wo_local = it.frame.to_local(wo);
+
+        // The Lambertian part's indirect light from the cache, where it serves; the beyond-last
+        // bounce ambient value where the depth runs out.
+        let mut strategy = BsdfStrategy::All;
+        if bsdf.has_smooth() {
+            let k = bsdf.lambertian_albedo(wo_local);
+            if !k.is_black() {
+                if depth + 2 < max_depth {
+                    let mut sp = ShadingPoint::facing(it, wo);
+                    sp.travelled = if from_camera { travelled } else { 0.0 };
+                    if let Some(e) = source.irradiance(scene, &sp, depth, rng, rays) {
+                        l += beta * k * e * INV_PI;
+                        strategy = BsdfStrategy::Glossy;
+                    }
+                } else {
+                    l += beta * k * source.ambient();
+                }
+            }
+        }
+
+        // Light samples.
+        let ne = if depth == start.depth {
+            settings.first_light_samples.max(1)
+        } else {
+            1
+        };
+        let continues = depth + 2 < max_depth || scene.has_hittable_emitters;
+        l += beta
+            * sample_lights(
+                scene,
+                &it,
+                &bsdf,
+                wo_local,
+                ne,
+                strategy,
+                u32::from(continues),
+                rng,
+                rays,
+            );
+        if !continues || (strategy == BsdfStrategy::Glossy && !bsdf.has_glossy()) {
+            break;
+        }
+
+        // The BSDF sample that continues the path.
+        let (u_lobe, u) = (rng.next_f32(), rng.next_2d());
+        let Some(bs) = strategy.sample(&bsdf, wo_local, u_lobe, u) else {
+            break;
+        };
+        let wi = it.frame.from_local(bs.wi);
+        // Reject samples whose geometric and shading hemispheres disagree (light leaks).
+        if (wi.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
+            break;
+        }
+        beta *= bs.weight;
+        eta *= bs.eta;
+        arrival = Arrival::Bsdf {
+            p: it.p,
+            pdf: bs.pdf,
+            delta: bs.delta,
+            light_samples: ne,
+        };
+        ray = scene.spawn_ray(&it, wi);
+        rays.bounce += 1;
+        depth += 1;
+        let beta_max = beta.max_channel();
+        if beta_max <= 0.0 || !beta_max.is_finite() {
+            break;
+        }
+        if depth >= settings.rr_depth {
+            let q = (beta_max * eta * eta).min(0.95);
+            if rng.next_f32() >= q {
+                break;
+            }
+            beta /= q;
+        }
+    }
+    l
+}
