@@ -4,65 +4,19 @@
 
 use anyhow::{bail, Result};
 use clap::Args;
+use ircache_render::irradiance_cache::params::{param, PARAMS};
 use ircache_render::irradiance_cache::IcParams;
 
-/// Irradiance cache settings from the command line.
+/// Irradiance cache options: one per entry of the parameter table
+/// ([`ircache_render::irradiance_cache::params::PARAMS`]), plus the cache file and the
+/// exclusion lists.
 #[derive(Args, Debug, Clone, Default)]
 pub struct CacheArgs {
-    /// Accuracy a (Radiance -aa; default 0.4): with --error-metric ward a record serves where
-    /// its split-sphere error ε ≤ a; with tabellion (the default) κ = 0.2/a.
-    #[arg(long, visible_alias = "aa", help_heading = "Irradiance cache")]
-    pub accuracy: Option<String>,
-    /// Hemisphere divisions per record (Radiance -ad; default 512).
-    #[arg(long, visible_alias = "ad", help_heading = "Irradiance cache")]
-    pub divisions: Option<String>,
-    /// Resolution (Radiance -ar; default 1024): smallest record radius = scene size / resolution;
-    /// 0: none.
-    #[arg(long, visible_alias = "ar", help_heading = "Irradiance cache")]
-    pub resolution: Option<String>,
-    /// Indirect bounces (Radiance -ab; default max_depth − 2); equals path tracing with
-    /// max_depth N + 2.
-    #[arg(long, visible_alias = "ab", help_heading = "Irradiance cache")]
-    pub bounces: Option<String>,
-    /// Radiance beyond the last bounce, "v" or "r,g,b" (Radiance -av r g b; default 0).
-    #[arg(
-        long = "ambient-value",
-        visible_alias = "av",
-        help_heading = "Irradiance cache"
-    )]
-    pub ambient_value: Option<String>,
-    /// Adaptive super-samples per record (Radiance -as; default 256): extra rays where
-    /// neighbours differ most.
-    #[arg(long, visible_alias = "as", help_heading = "Irradiance cache")]
-    pub supersamples: Option<String>,
-    /// Light samples per pixel sample for the direct term (default 4).
-    #[arg(long = "direct-samples", help_heading = "Irradiance cache")]
-    pub direct_samples: Option<String>,
-    /// Weight of the ambient value in a running average with computed irradiance (Radiance -aw).
-    #[arg(
-        long = "ambient-weight",
-        visible_alias = "aw",
-        help_heading = "Irradiance cache"
-    )]
-    pub ambient_weight: Option<String>,
-    /// The pre-pass that fills the cache before the pixels: full (every pixel centre), coarse
-    /// (every fourth), off.
-    #[arg(long, help_heading = "Irradiance cache")]
-    pub overture: Option<String>,
-    /// Record order in memory after the pre-pass: insertion or spatial (Morton order).
-    #[arg(long = "record-order", help_heading = "Irradiance cache")]
-    pub record_order: Option<String>,
-    /// Record error metric: ward (split sphere), tabellion (Tabellion–Lamorlette, default) or
-    /// hessian (second-order radius from the gather's Hessian).
-    #[arg(long = "error-metric", help_heading = "Irradiance cache")]
-    pub error_metric: Option<String>,
-    /// Neighbour clamping (on/off): a record's radius never exceeds a neighbour's plus their distance.
-    #[arg(long = "neighbour-clamp", help_heading = "Irradiance cache")]
-    pub neighbour_clamp: Option<String>,
-    /// Gradients used in interpolation: none, rotation, full (default).
-    #[arg(long, help_heading = "Irradiance cache")]
-    pub gradients: Option<String>,
-    /// Persistent cache file (Radiance -af): records are read from it first and new ones appended.
+    /// The table's options that were given, as (name, value).
+    #[command(flatten)]
+    pub params: ParamArgs,
+    /// Persistent cache file (Radiance -af): records are read from it first and new ones
+    /// appended batch by batch; several processes may share it.
     #[arg(
         long,
         visible_alias = "af",
@@ -70,15 +24,16 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub cache: Option<std::path::PathBuf>,
-    /// A cache file made for another scene or other settings: check (refuse it) or force (use it).
+    /// check (default): a file made for another scene, view or settings is refused with the
+    /// reason; force: used anyway.
     #[arg(
         long = "cache-reuse",
         value_name = "check|force",
         help_heading = "Irradiance cache"
     )]
     pub cache_reuse: Option<String>,
-    /// Surfaces (shape id in XML, material in OBJ) that take no records but the ambient value
-    /// instead (Radiance -ae); repeatable.
+    /// Surface (shape id in XML, material name in OBJ) that takes no records and gets the
+    /// ambient value as its indirect light (Radiance -ae); repeatable.
     #[arg(
         long = "ambient-exclude",
         visible_alias = "ae",
@@ -86,7 +41,7 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub ambient_exclude: Vec<String>,
-    /// A file of names to exclude, one per line (Radiance -aE).
+    /// File listing surfaces to exclude, one name per line (Radiance -aE).
     #[arg(
         long = "ambient-exclude-file",
         visible_alias = "aE",
@@ -94,7 +49,7 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub ambient_exclude_file: Vec<std::path::PathBuf>,
-    /// Only these surfaces take records (Radiance -ai); repeatable.
+    /// Only this surface takes records (Radiance -ai); repeatable.
     #[arg(
         long = "ambient-include",
         visible_alias = "ai",
@@ -102,7 +57,7 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub ambient_include: Vec<String>,
-    /// A file of names to include, one per line (Radiance -aI).
+    /// File listing the only surfaces that take records (Radiance -aI).
     #[arg(
         long = "ambient-include-file",
         visible_alias = "aI",
@@ -110,38 +65,70 @@ pub struct CacheArgs {
         help_heading = "Irradiance cache"
     )]
     pub ambient_include_file: Vec<std::path::PathBuf>,
-    /// Translational gradient formula: ward-heckbert (000 eq. 3.48) or krivanek (3.47).
-    #[arg(long = "gradient-formula", help_heading = "Irradiance cache")]
-    pub gradient_formula: Option<String>,
+}
+
+/// The options made from the parameter table, in the order given.
+#[derive(Debug, Clone, Default)]
+pub struct ParamArgs {
+    /// (name in the table, value text) for each option given.
+    pub given: Vec<(&'static str, String)>,
+}
+
+impl clap::FromArgMatches for ParamArgs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let mut given = Vec::new();
+        for spec in PARAMS {
+            if let Some(v) = m.get_one::<String>(spec.name) {
+                given.push((spec.name, v.clone()));
+            }
+        }
+        Ok(ParamArgs { given })
+    }
+
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+impl clap::Args for ParamArgs {
+    fn augment_args(mut cmd: clap::Command) -> clap::Command {
+        let defaults = IcParams::default();
+        for spec in PARAMS {
+            let radiance: Vec<&'static str> = spec
+                .aliases
+                .iter()
+                .copied()
+                .filter(|a| a.len() == 2)
+                .collect();
+            let dashed = spec.name.replace('_', "-");
+            let mut help = format!("{} [default: {}]", spec.help, (spec.get)(&defaults));
+            if let Some(r) = radiance.first() {
+                help = format!("(Radiance -{r}) {help}");
+            }
+            let mut arg = clap::Arg::new(spec.name)
+                .long(dashed)
+                .value_name(spec.value)
+                .help(help)
+                .help_heading("Irradiance cache");
+            for r in radiance {
+                arg = arg.visible_alias(r);
+            }
+            cmd = cmd.arg(arg);
+        }
+        cmd
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
 }
 
 impl CacheArgs {
-    fn pairs(&self) -> Vec<(&'static str, &String)> {
-        [
-            ("accuracy", &self.accuracy),
-            ("divisions", &self.divisions),
-            ("resolution", &self.resolution),
-            ("bounces", &self.bounces),
-            ("ambient_value", &self.ambient_value),
-            ("gradients", &self.gradients),
-            ("direct_samples", &self.direct_samples),
-            ("supersamples", &self.supersamples),
-            ("ambient_weight", &self.ambient_weight),
-            ("error_metric", &self.error_metric),
-            ("overture", &self.overture),
-            ("record_order", &self.record_order),
-            ("neighbour_clamp", &self.neighbour_clamp),
-            ("gradient_formula", &self.gradient_formula),
-        ]
-        .into_iter()
-        .filter_map(|(n, v)| v.as_ref().map(|v| (n, v)))
-        .collect()
-    }
-
-    /// True when any option was given.
+    /// True when any cache option was given.
     #[must_use]
     pub fn any(&self) -> bool {
-        !self.pairs().is_empty()
+        !self.params.given.is_empty()
             || self.cache.is_some()
             || self.cache_reuse.is_some()
             || !self.ambient_exclude.is_empty()
@@ -194,9 +181,11 @@ impl CacheArgs {
 
     /// Applies the options given to `params`.
     pub fn apply(&self, params: &mut IcParams) -> Result<()> {
-        for (name, value) in self.pairs() {
-            if let Err(e) = params.set(name, value) {
-                bail!("--{}: {e}", name.replace('_', "-"));
+        for (name, value) in &self.params.given {
+            if let Some(spec) = param(name) {
+                if let Err(e) = (spec.set)(params, value) {
+                    bail!("--{}: {e}", name.replace('_', "-"));
+                }
             }
         }
         Ok(())
@@ -212,8 +201,7 @@ pub fn rewrite_radiance_options(args: Vec<String>) -> Vec<String> {
     while i < args.len() {
         let a = &args[i];
         match a.as_str() {
-            "-aa" | "-ad" | "-ar" | "-ab" | "-as" | "-af" | "-aw" | "-ae" | "-aE" | "-ai"
-            | "-aI" => out.push(format!("-{a}")),
+            "-af" | "-ae" | "-aE" | "-ai" | "-aI" => out.push(format!("-{a}")),
             "-av" => {
                 out.push("--av".into());
                 let three: Vec<&String> = args.iter().skip(i + 1).take(3).collect();
@@ -222,6 +210,9 @@ pub fn rewrite_radiance_options(args: Vec<String>) -> Vec<String> {
                     i += 4;
                     continue;
                 }
+            }
+            r if r.len() == 3 && r.starts_with("-a") && param(&r[1..]).is_some() => {
+                out.push(format!("-{a}"))
             }
             _ => out.push(a.clone()),
         }

@@ -2,7 +2,7 @@
 //!
 //! Input: lines `x y z nx ny nz` (file or standard input; blank lines and `#` comments are
 //! skipped). Output, one line per point: irradiance `R G B` in W/m² (or with `--lux` the
-//! illuminance 179 · (0.265 R + 0.670 G + 0.065 B) lm/m²); with `--gradients`, then the
+//! illuminance 179 · (0.265 R + 0.670 G + 0.065 B) lm/m²); with `--print-gradients`, then the
 //! world-space translational gradient of the indirect part (x y z for R, then G, then B: 9
 //! numbers) and its rotational gradient (9 numbers).
 
@@ -35,9 +35,6 @@ pub struct IrradianceArgs {
     /// Hemisphere samples per point for --integrator path.
     #[arg(long, default_value_t = 4096)]
     pub samples: usize,
-    /// Light samples per point for the direct part.
-    #[arg(long, default_value_t = 256)]
-    pub direct_samples: u32,
     /// Print only the indirect part (what the cache holds).
     #[arg(long)]
     pub indirect_only: bool,
@@ -46,34 +43,17 @@ pub struct IrradianceArgs {
     pub lux: bool,
     /// Append the translational and rotational gradients of the indirect part (18 numbers).
     #[arg(long)]
-    pub gradients: bool,
-    /// Gradients used by the cache's interpolation: none, rotation, full.
-    #[arg(long = "gradient-mode")]
-    pub gradient_mode: Option<String>,
+    pub print_gradients: bool,
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Worker threads (default: all cores).
     #[arg(long, short = 't')]
     pub threads: Option<usize>,
-    /// Irradiance cache accuracy (Radiance -aa).
-    #[arg(long, visible_alias = "aa")]
-    pub accuracy: Option<String>,
-    /// Hemisphere divisions per record (Radiance -ad).
-    #[arg(long, visible_alias = "ad")]
-    pub divisions: Option<String>,
-    /// Adaptive super-samples per record (Radiance -as).
-    #[arg(long, visible_alias = "as")]
-    pub supersamples: Option<String>,
-    /// Resolution (Radiance -ar).
-    #[arg(long, visible_alias = "ar")]
-    pub resolution: Option<String>,
-    /// Indirect bounces (Radiance -ab, default 1).
-    #[arg(long, visible_alias = "ab")]
-    pub bounces: Option<String>,
-    /// Radiance beyond the last bounce (Radiance -av).
-    #[arg(long = "ambient-value", visible_alias = "av")]
-    pub ambient_value: Option<String>,
+    /// Irradiance cache settings (`--direct-samples` here: light samples per point for the
+    /// direct part, default 256).
+    #[command(flatten)]
+    pub cache: CacheArgs,
 }
 
 fn parse_points(text: &str, name: &str) -> Result<Vec<(Vec3, Vec3)>> {
@@ -154,36 +134,19 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
     };
     let scene = Scene::build(&desc).context("building the scene")?;
     let mut params = IcParams::default();
-    let cache_args = CacheArgs {
-        accuracy: args.accuracy.clone(),
-        divisions: args.divisions.clone(),
-        resolution: args.resolution.clone(),
-        bounces: args.bounces.clone(),
-        ambient_value: args.ambient_value.clone(),
-        gradients: args.gradient_mode.clone(),
-        gradient_formula: None,
-        direct_samples: None,
-        supersamples: args.supersamples.clone(),
-        cache: None,
-        cache_reuse: None,
-        ambient_weight: None,
-        error_metric: None,
-        overture: None,
-        record_order: None,
-        neighbour_clamp: None,
-        ambient_exclude: Vec::new(),
-        ambient_exclude_file: Vec::new(),
-        ambient_include: Vec::new(),
-        ambient_include_file: Vec::new(),
-    };
-    cache_args.apply(&mut params)?;
+    if args.cache.cache.is_some() || args.cache.exclusions()? != Default::default() {
+        bail!("--cache and the exclusion lists apply to `ircache render` only");
+    }
+    // Light samples per point: many, unless given (points are few; pixels are many).
+    params.direct_samples = 256;
+    args.cache.apply(&mut params)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()?;
     let direct_samples = if args.indirect_only {
         0
     } else {
-        args.direct_samples.max(1)
+        params.direct_samples.max(1)
     };
     let (results, stats) = pool.install(|| {
         irradiance_at_points(&scene, &params, &queries, method, direct_samples, args.seed)
@@ -196,7 +159,7 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         } else {
             format!("{:e} {:e} {:e}", e.r, e.g, e.b)
         };
-        if args.gradients {
+        if args.print_gradients {
             for g in r.grad_t.iter().chain(&r.grad_r) {
                 line.push_str(&format!(" {:e} {:e} {:e}", g.x, g.y, g.z));
             }

@@ -38,7 +38,8 @@ pub struct RenderArgs {
     /// Seed of the random streams: the same seed gives the same image, bit for bit.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Integrator (overrides the scene's): path, direct.
+    /// Integrator (overrides the scene's): path, direct, or ic (the irradiance cache; also
+    /// irrcache).
     #[arg(long)]
     pub integrator: Option<String>,
     /// Maximum path depth (overrides the scene's; Mitsuba's meaning: 2 = direct light only).
@@ -259,6 +260,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         ProgressBar::hidden()
     };
     let out = render(&scene, &integrator, &settings, &|n| bar.set_position(n))?;
+    // What the loaders and the cache changed is said even with --quiet.
+    let cache_notes = out.cache.iter().flat_map(|c| c.stats.notes.iter());
+    for note in desc.notes.iter().chain(cache_notes) {
+        eprintln!("note: {note}");
+    }
     bar.finish_and_clear();
     ircache_image::write_image(&output, &out.image, args.exposure)?;
     if let Some(report) = &out.cache {
@@ -386,13 +392,13 @@ fn write_stats(
             "gather_seconds": st.gather_seconds,
             "pixel_seconds": c.pixel_seconds,
             "uncached_samples": c.uncached_samples,
-            "accuracy": p.accuracy,
-            "divisions": p.divisions,
-            "resolution": p.resolution,
-            "bounces": p.bounces,
-            "gradients": p.gradients.name(),
-            "error_metric": p.error_metric.name(),
-            "supersamples": p.supersamples,
+            "supersampled_cells": st.supersampled_cells,
+            // Every cache parameter, from the parameter table.
+            "cache_params": p
+                .to_pairs()
+                .into_iter()
+                .map(|(n, v)| (n.to_string(), serde_json::Value::String(v)))
+                .collect::<serde_json::Map<_, _>>(),
         });
         if let (Some(a), Some(b)) = (json.as_object_mut(), extra.as_object()) {
             a.extend(b.clone());

@@ -231,13 +231,23 @@ fn prepare_cache(
     let header = Header {
         version: file::VERSION,
         scene_hash: scene.content_hash ^ ic.exclusions.hash(),
+        view_hash: view_hash(scene, &ic.params, settings.width),
         params: ic.params.clone(),
     };
     let mut loaded = 0u64;
+    let mut notes = Vec::new();
     let mut shared = match &ic.cache_file {
         None => None,
         Some(path) => {
             let (f, contents) = CacheFile::open(path, &header, ic.force_reuse)?;
+            notes.extend(contents.header.view_note(&header));
+            if contents.damaged > 0 {
+                notes.push(format!(
+                    "{}: {} damaged records skipped",
+                    path.display(),
+                    contents.damaged
+                ));
+            }
             for r in &contents.records {
                 if let Some(store) = cache.levels.get_mut(r.level as usize) {
                     store.insert(*r);
@@ -280,8 +290,23 @@ fn prepare_cache(
         }
     }
     stats.records_loaded = loaded;
+    stats.notes = notes;
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     Ok((cache, stats))
+}
+
+/// What records' radii depend on besides the scene and settings: with Tabellion's metric the
+/// pixel footprint, so the camera and the film width; otherwise nothing (0).
+fn view_hash(scene: &Scene, params: &crate::irradiance_cache::IcParams, width: usize) -> u64 {
+    use crate::irradiance_cache::record::ErrorMetric;
+    use std::fmt::Write;
+    if params.error_metric != ErrorMetric::Tabellion {
+        return 0;
+    }
+    let mut h = file::Fnv::default();
+    let c = &scene.camera;
+    let _ = write!(h, "{:?} {} {width}", c.to_world, c.tan_half_x);
+    h.0
 }
 
 /// The pre-pass's link to a cache file shared with other processes: their records come in

@@ -112,37 +112,55 @@ pub struct Scene {
     pub content_hash: u64,
 }
 
-/// FNV-1a of the scene's geometry (raw bytes), materials and emitters (their descriptions).
+/// FNV-1a of what light transport depends on: the geometry (positions, indices, normals, uvs),
+/// materials and emitters (their descriptions, with every image's texels, each image once), not
+/// where the files lie.
 fn content_hash(desc: &SceneDesc) -> u64 {
     use crate::irradiance_cache::file::Fnv;
     use std::fmt::Write;
     let mut h = Fnv::default();
+    let floats = |h: &mut Fnv, v: &mut dyn Iterator<Item = f32>| {
+        for c in v {
+            h.bytes(&c.to_le_bytes());
+        }
+    };
+    let mut images: Vec<*const ircache_scene::BitmapDesc> = Vec::new();
     for s in &desc.shapes {
         match &s.geometry {
             Geometry::Mesh(m) => {
                 h.bytes(b"mesh");
-                for p in &m.positions {
-                    for c in p.to_array() {
-                        h.bytes(&c.to_le_bytes());
-                    }
-                }
+                floats(&mut h, &mut m.positions.iter().flat_map(|p| p.to_array()));
                 for t in &m.indices {
                     for i in t {
                         h.bytes(&i.to_le_bytes());
                     }
                 }
-                let _ = write!(
-                    h,
-                    "{:?}{:?}",
-                    m.normals.is_some(),
-                    m.uvs.as_ref().map(Vec::len)
-                );
+                h.bytes(b"normals");
+                if let Some(n) = &m.normals {
+                    floats(&mut h, &mut n.iter().flat_map(|p| p.to_array()));
+                }
+                h.bytes(b"uvs");
+                if let Some(uv) = &m.uvs {
+                    floats(&mut h, &mut uv.iter().flat_map(|p| p.to_array()));
+                }
             }
             g => {
                 let _ = write!(h, "{g:?}");
             }
         }
         let _ = write!(h, "{:?}{:?}", s.bsdf, s.emitter);
+        s.bsdf.for_each_bitmap(&mut |b| {
+            if !images.contains(&std::sync::Arc::as_ptr(b)) {
+                images.push(std::sync::Arc::as_ptr(b));
+                h.words(
+                    b.image
+                        .pixels
+                        .iter()
+                        .flat_map(|p| [p.r, p.g, p.b])
+                        .map(f32::to_bits),
+                );
+            }
+        });
     }
     let _ = write!(h, "{:?}", desc.emitters);
     h.0
@@ -320,10 +338,29 @@ impl Scene {
                     phi / (2.0 * ircache_math::PI),
                     local.y.clamp(-1.0, 1.0).acos() / ircache_math::PI,
                 );
+                // Normal and bump maps: p(u, v) = c + R (sin πv cos 2πu, cos πv, sin πv sin 2πu)
+                // gives dp/du = 2πR (−z, 0, x) and dp/dv = πR (cos πv cos 2πu, −sin πv,
+                // cos πv sin 2πu) in the local direction's terms.
+                let mut frame = Frame::from_z(n);
+                if let Some(perturb) = self.materials[shape.material].perturbation() {
+                    let tau = 2.0 * ircache_math::PI;
+                    let dpdu = Vec3::new(-local.z, 0.0, local.x) * (tau * radius);
+                    let sin_t = (1.0 - local.y * local.y).max(0.0).sqrt();
+                    let (cos_p, sin_p) = if sin_t > 0.0 {
+                        (local.x / sin_t, local.z / sin_t)
+                    } else {
+                        (1.0, 0.0)
+                    };
+                    let dpdv =
+                        Vec3::new(local.y * cos_p, -sin_t, local.y * sin_p) * (0.5 * tau * radius);
+                    if dpdu.length_squared() > 0.0 {
+                        frame = Frame::from_normal_tangent(perturb.normal(uv, n, dpdu, dpdv), dpdu);
+                    }
+                }
                 Interaction {
                     p,
                     ng: n,
-                    frame: Frame::from_z(n),
+                    frame,
                     base_n: n,
                     uv,
                     shape: hit.geom_id,

@@ -68,6 +68,7 @@ pub fn scene(
         integrator,
         shapes,
         emitters,
+        notes: Vec::new(),
     }
 }
 
@@ -136,6 +137,7 @@ pub fn light_scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>) -> SceneD
         integrator: IntegratorDesc::default(),
         shapes,
         emitters,
+        notes: Vec::new(),
     }
 }
 

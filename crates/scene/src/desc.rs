@@ -24,6 +24,9 @@ pub struct SceneDesc {
     pub shapes: Vec<ShapeDesc>,
     /// Emitters that are not attached to a shape (point, spot, directional, constant, envmap).
     pub emitters: Vec<EmitterDesc>,
+    /// What the loaders changed and a user should hear of (degenerate triangles dropped, with
+    /// where the first one was).
+    pub notes: Vec<String>,
 }
 
 /// A perspective pinhole camera (Mitsuba's `perspective` sensor).
@@ -209,12 +212,13 @@ pub struct BitmapDesc {
     pub to_uv: ircache_math::Mat3,
 }
 
-/// The file, the size and the lookup settings, not the texels (which would be millions of
-/// numbers; scene content hashes use this too).
+/// The file's name (not its folder: the same scene opened from elsewhere prints the same), the
+/// size and the lookup settings, not the texels (which would be millions of numbers; scene
+/// content hashes hash them apart, see [`BsdfDesc::for_each_bitmap`]).
 impl std::fmt::Debug for BitmapDesc {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("BitmapDesc")
-            .field("path", &self.path)
+            .field("file", &self.path.file_name().unwrap_or_default())
             .field("width", &self.image.width)
             .field("height", &self.image.height)
             .field("filter", &self.filter)
@@ -418,4 +422,43 @@ pub enum EmitterDesc {
         /// Radiance scale.
         scale: f32,
     },
+}
+
+impl BsdfDesc {
+    /// Calls `f` with every image this BSDF uses (nested models included).
+    pub fn for_each_bitmap(&self, f: &mut dyn FnMut(&Arc<BitmapDesc>)) {
+        let tex = |t: &TextureDesc, f: &mut dyn FnMut(&Arc<BitmapDesc>)| {
+            if let TextureDesc::Bitmap(b) = t {
+                f(b);
+            }
+        };
+        match self {
+            BsdfDesc::Diffuse { reflectance: t }
+            | BsdfDesc::Plastic {
+                diffuse_reflectance: t,
+                ..
+            }
+            | BsdfDesc::RoughPlastic {
+                diffuse_reflectance: t,
+                ..
+            }
+            | BsdfDesc::ObjPhong { diffuse: t, .. } => tex(t, f),
+            BsdfDesc::TwoSided { front, back } => {
+                front.for_each_bitmap(f);
+                if let Some(b) = back {
+                    b.for_each_bitmap(f);
+                }
+            }
+            BsdfDesc::NormalMap {
+                normals: b, nested, ..
+            }
+            | BsdfDesc::BumpMap {
+                height: b, nested, ..
+            } => {
+                f(b);
+                nested.for_each_bitmap(f);
+            }
+            _ => {}
+        }
+    }
 }

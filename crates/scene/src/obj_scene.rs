@@ -138,6 +138,9 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
         integrator: IntegratorDesc::default(),
         shapes,
         emitters,
+        notes: crate::mesh::obj::degenerate_note(&data)
+            .into_iter()
+            .collect(),
     })
 }
 

@@ -40,6 +40,10 @@ pub struct CacheStats {
     pub records_loaded: u64,
     /// Records other processes sharing the cache file made during the pre-pass.
     pub records_from_others: u64,
+    /// Hemisphere cells adaptive super-sampling refined (three more rays each).
+    pub supersampled_cells: u64,
+    /// What a user should hear of (a cache file made for another view, damaged records).
+    pub notes: Vec<String>,
 }
 
 impl CacheStats {
@@ -182,6 +186,7 @@ pub fn run_batch(
         }
     }
     stats.records_computed += counts.records;
+    stats.supersampled_cells += counts.supersampled_cells;
     stats.gather_rays += counts.gather_rays;
     stats.shadow_rays += counts.shadow_rays;
     stats.batches += 1;

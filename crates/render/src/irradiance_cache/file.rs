@@ -4,16 +4,16 @@
 //! opens with every record that was written completely (003 item 7's file, without its races).
 //!
 //! Layout (little-endian):
-//! - header, 64 bytes: magic `IRCACHE\0`, format version (u32), bounces (u32), scene hash (u64),
-//!   accuracy, resolution, ambient value r g b (f32 × 5), divisions, super-samples (u32 × 2),
-//!   gradient mode (u8), formula | metric << 1 | neighbour clamping << 3 (u8), ambient weight (u16), header checksum (u64: FNV-1a of the
-//!   bytes before it);
+//! - header, 1024 bytes: magic `IRCACHE\0`, format version (u32), 0 (u32), scene hash (u64),
+//!   view hash (u64), length (u32) and text of the record-shaping settings as `name=value` lines
+//!   (from the parameter table, [`super::params::PARAMS`]), zeros, header checksum (u64: FNV-1a
+//!   of the bytes before it);
 //! - records, 124 bytes each: level (u8), 3 bytes zero, position, normal, irradiance (f32 × 9),
 //!   radius (f32), translational then rotational gradient (f32 × 18), checksum (u64: FNV-1a of
 //!   the 116 bytes before it).
 
-use super::params::{IcParams, TranslationalFormula};
-use super::record::{ErrorMetric, GradientMode, Record};
+use super::params::{IcParams, PARAMS};
+use super::record::Record;
 use ircache_math::{Rgb, Vec3};
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -22,9 +22,9 @@ use std::path::{Path, PathBuf};
 /// Bytes that open every cache file.
 pub const MAGIC: &[u8; 8] = b"IRCACHE\0";
 /// The format version this build reads and writes.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 /// Header size in bytes.
-pub const HEADER_BYTES: usize = 64;
+pub const HEADER_BYTES: usize = 1024;
 /// Record size in bytes (payload and checksum).
 pub const RECORD_BYTES: usize = 124;
 const PAYLOAD_BYTES: usize = RECORD_BYTES - 8;
@@ -75,6 +75,12 @@ impl Fnv {
             self.0 = (self.0 ^ u64::from(x)).wrapping_mul(0x0100_0000_01b3);
         }
     }
+    /// Feeds 32-bit words (one multiply each: four times faster than their bytes, for texels).
+    pub fn words(&mut self, w: impl Iterator<Item = u32>) {
+        for x in w {
+            self.0 = (self.0 ^ u64::from(x)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
     /// The hash of `b`.
     #[must_use]
     pub fn of(b: &[u8]) -> u64 {
@@ -98,114 +104,93 @@ pub struct Header {
     pub version: u32,
     /// Content hash of the scene (geometry, materials, emitters; not the camera).
     pub scene_hash: u64,
-    /// The settings the records were made with.
+    /// Hash of the view (camera and film width) where records' radii depend on it (Tabellion's
+    /// pixel-footprint limits); 0 where they do not.
+    pub view_hash: u64,
+    /// The settings the records were made with (those that shape records are stored).
     pub params: IcParams,
 }
 
-fn mode_code(m: GradientMode) -> u8 {
-    match m {
-        GradientMode::None => 0,
-        GradientMode::Rotation => 1,
-        GradientMode::Full => 2,
-    }
-}
+/// Offset of the header checksum (the header's last 8 bytes).
+const HEADER_SUM_AT: usize = HEADER_BYTES - 8;
+/// Offset of the settings text.
+const HEADER_TEXT_AT: usize = 8 + 4 + 4 + 8 + 8 + 4;
 
 impl Header {
+    /// The settings that shape records, as `name=value` lines in table order.
+    fn settings_text(params: &IcParams) -> String {
+        PARAMS
+            .iter()
+            .filter(|s| s.shapes_records)
+            .map(|s| format!("{}={}\n", s.name, (s.get)(params)))
+            .collect()
+    }
+
     fn encode(&self) -> [u8; HEADER_BYTES] {
-        let p = &self.params;
+        let mut out = [0u8; HEADER_BYTES];
+        let text = Self::settings_text(&self.params);
         let mut b = Vec::with_capacity(HEADER_BYTES);
         b.extend_from_slice(MAGIC);
         b.extend_from_slice(&self.version.to_le_bytes());
-        b.extend_from_slice(&p.bounces.to_le_bytes());
+        b.extend_from_slice(&0u32.to_le_bytes());
         b.extend_from_slice(&self.scene_hash.to_le_bytes());
-        for f in [
-            p.accuracy,
-            p.resolution,
-            p.ambient_value.r,
-            p.ambient_value.g,
-            p.ambient_value.b,
-        ] {
-            b.extend_from_slice(&f.to_le_bytes());
-        }
-        b.extend_from_slice(&(p.divisions as u32).to_le_bytes());
-        b.extend_from_slice(&(p.supersamples as u32).to_le_bytes());
-        b.push(mode_code(p.gradients));
-        // Formula (bit 0), error metric (bit 1), neighbour clamping (bit 2).
-        b.push(
-            match p.formula {
-                TranslationalFormula::WardHeckbert => 0,
-                TranslationalFormula::Krivanek => 1,
-            } | (match p.error_metric {
-                ErrorMetric::Ward => 0,
-                ErrorMetric::Tabellion => 1,
-                ErrorMetric::Hessian => 2,
-            } << 1)
-                | (u8::from(p.neighbour_clamp) << 3),
-        );
-        b.extend_from_slice(&(p.ambient_weight.min(65535) as u16).to_le_bytes());
-        let sum = Fnv::of(&b);
-        b.extend_from_slice(&sum.to_le_bytes());
-        let mut out = [0u8; HEADER_BYTES];
+        b.extend_from_slice(&self.view_hash.to_le_bytes());
+        // The table's values are short: the text fits with room to spare (tested).
+        let len = text.len().min(HEADER_SUM_AT - HEADER_TEXT_AT);
+        b.extend_from_slice(&(len as u32).to_le_bytes());
+        b.extend_from_slice(&text.as_bytes()[..len]);
         out[..b.len()].copy_from_slice(&b);
+        let sum = Fnv::of(&out[..HEADER_SUM_AT]);
+        out[HEADER_SUM_AT..].copy_from_slice(&sum.to_le_bytes());
         out
     }
 
     fn decode(b: &[u8; HEADER_BYTES], path: &Path) -> Result<Header, CacheFileError> {
-        let invalid = |why: &str| CacheFileError::Invalid {
+        let invalid = |why: String| CacheFileError::Invalid {
             path: path.to_path_buf(),
-            why: why.to_string(),
+            why,
         };
         if &b[..8] != MAGIC {
-            return Err(invalid("not an ircache cache file (bad magic bytes)"));
+            return Err(invalid(
+                "not an ircache cache file (bad magic bytes)".into(),
+            ));
         }
         let u32_at = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap_or([0; 4]));
-        let f32_at = |i: usize| f32::from_le_bytes(b[i..i + 4].try_into().unwrap_or([0; 4]));
+        let u64_at = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap_or([0; 8]));
         let version = u32_at(8);
         if version != VERSION {
-            return Err(invalid(&format!(
+            return Err(invalid(format!(
                 "format version {version}; this ircache reads version {VERSION}"
             )));
         }
-        let body = 8 + 4 + 4 + 8 + 20 + 8 + 4;
-        let sum = u64::from_le_bytes(b[body..body + 8].try_into().unwrap_or([0; 8]));
-        if Fnv::of(&b[..body]) != sum {
-            return Err(invalid("damaged header (checksum mismatch)"));
+        if Fnv::of(&b[..HEADER_SUM_AT]) != u64_at(HEADER_SUM_AT) {
+            return Err(invalid("damaged header (checksum mismatch)".into()));
         }
-        let params = IcParams {
-            bounces: u32_at(12),
-            accuracy: f32_at(24),
-            resolution: f32_at(28),
-            ambient_value: Rgb::new(f32_at(32), f32_at(36), f32_at(40)),
-            divisions: u32_at(44) as usize,
-            supersamples: u32_at(48) as usize,
-            gradients: match b[52] {
-                0 => GradientMode::None,
-                1 => GradientMode::Rotation,
-                _ => GradientMode::Full,
-            },
-            ambient_weight: u32::from(u16::from_le_bytes([b[54], b[55]])),
-            error_metric: match (b[53] >> 1) & 3 {
-                1 => ErrorMetric::Tabellion,
-                2 => ErrorMetric::Hessian,
-                _ => ErrorMetric::Ward,
-            },
-            neighbour_clamp: b[53] & 8 != 0,
-            formula: if b[53] & 1 == 1 {
-                TranslationalFormula::Krivanek
-            } else {
-                TranslationalFormula::WardHeckbert
-            },
-            ..IcParams::default()
-        };
+        let len = (u32_at(HEADER_TEXT_AT - 4) as usize).min(HEADER_SUM_AT - HEADER_TEXT_AT);
+        let text = std::str::from_utf8(&b[HEADER_TEXT_AT..HEADER_TEXT_AT + len])
+            .map_err(|_| invalid("damaged header (settings are not text)".into()))?;
+        let mut params = IcParams::default();
+        for line in text.lines() {
+            let (name, value) = line
+                .split_once('=')
+                .ok_or_else(|| invalid(format!("damaged header: \"{line}\"")))?;
+            params
+                .set(name, value)
+                .map_err(|e| invalid(format!("header setting {e}")))?;
+        }
         Ok(Header {
             version,
-            scene_hash: u64::from_le_bytes(b[16..24].try_into().unwrap_or([0; 8])),
+            scene_hash: u64_at(16),
+            view_hash: u64_at(24),
             params,
         })
     }
 
-    /// Why records made under `self` cannot serve `other` (`None`: they can). Settings that only
-    /// affect the pixel pass (light samples) do not matter.
+    /// Why records made under `self` cannot serve `other` (`None`: they can). Settings that do
+    /// not shape records (the pre-pass's extent, light samples) do not matter, nor does the
+    /// view: records serve any view (Radiance's workflow of one file for many views), though
+    /// under Tabellion's metric they keep radii sized for the view they were made for, which
+    /// [`Header::view_note`] says.
     #[must_use]
     pub fn mismatch(&self, other: &Header) -> Option<String> {
         if self.scene_hash != other.scene_hash {
@@ -214,46 +199,24 @@ impl Header {
                 self.scene_hash, other.scene_hash
             ));
         }
-        let (a, b) = (&self.params, &other.params);
-        let diffs: Vec<String> = [
-            ("accuracy", a.accuracy.to_string(), b.accuracy.to_string()),
-            (
-                "divisions",
-                a.divisions.to_string(),
-                b.divisions.to_string(),
-            ),
-            (
-                "resolution",
-                a.resolution.to_string(),
-                b.resolution.to_string(),
-            ),
-            ("bounces", a.bounces.to_string(), b.bounces.to_string()),
-            (
-                "ambient value",
-                format!("{:?}", a.ambient_value.to_array()),
-                format!("{:?}", b.ambient_value.to_array()),
-            ),
-            (
-                "super-samples",
-                a.supersamples.to_string(),
-                b.supersamples.to_string(),
-            ),
-            (
-                "gradients",
-                a.gradients.name().into(),
-                b.gradients.name().into(),
-            ),
-            (
-                "gradient formula",
-                format!("{:?}", a.formula),
-                format!("{:?}", b.formula),
-            ),
-        ]
-        .into_iter()
-        .filter(|(_, x, y)| x != y)
-        .map(|(n, x, y)| format!("{n} {x} (now {y})"))
-        .collect();
+        let diffs: Vec<String> = PARAMS
+            .iter()
+            .filter(|s| s.shapes_records)
+            .map(|s| (s.name, (s.get)(&self.params), (s.get)(&other.params)))
+            .filter(|(_, x, y)| x != y)
+            .map(|(n, x, y)| format!("{n} {x} (now {y})"))
+            .collect();
         (!diffs.is_empty()).then(|| format!("with other settings: {}", diffs.join(", ")))
+    }
+
+    /// A note when the file's records were sized for another view than `other`'s.
+    #[must_use]
+    pub fn view_note(&self, other: &Header) -> Option<String> {
+        (self.view_hash != other.view_hash).then(|| {
+            "the cache file's records were made for another view (camera or film width): \
+             their radii keep that view's pixel footprints"
+                .to_string()
+        })
     }
 }
 
@@ -311,6 +274,8 @@ pub struct Contents {
     pub header: Header,
     /// Every complete, intact record, in file order.
     pub records: Vec<Record>,
+    /// Damaged records between intact ones (skipped).
+    pub damaged: u64,
     /// Bytes after the last intact record (a torn tail or damage), ignored.
     pub torn_bytes: u64,
 }
@@ -342,17 +307,47 @@ pub fn read(path: &Path) -> Result<Contents, CacheFileError> {
                 why: "short header".into(),
             })?;
     let header = Header::decode(&header_bytes, path)?;
-    let mut records = Vec::new();
-    let mut at = HEADER_BYTES;
-    while let Some(r) = bytes.get(at..at + RECORD_BYTES).and_then(decode_record) {
-        records.push(r);
-        at += RECORD_BYTES;
-    }
+    let scan = scan_records(&bytes[HEADER_BYTES..]);
     Ok(Contents {
         header,
-        records,
-        torn_bytes: (bytes.len() - at) as u64,
+        records: scan.records,
+        damaged: scan.damaged,
+        torn_bytes: (bytes.len() - HEADER_BYTES - scan.end) as u64,
     })
+}
+
+/// The records in a run of record slots.
+struct Scan {
+    /// Every intact record, in order.
+    records: Vec<Record>,
+    /// Damaged slots followed by an intact one (skipped).
+    damaged: u64,
+    /// Bytes up to the end of the last intact record (what follows is a torn tail).
+    end: usize,
+}
+
+/// Reads record slots: a damaged slot (checksum or value) is skipped, so one bad record in the
+/// middle loses only itself; damage after the last intact record is the torn tail of a write
+/// that did not finish.
+fn scan_records(bytes: &[u8]) -> Scan {
+    let mut scan = Scan {
+        records: Vec::new(),
+        damaged: 0,
+        end: 0,
+    };
+    let mut bad_run = 0u64;
+    for (i, slot) in bytes.chunks_exact(RECORD_BYTES).enumerate() {
+        match decode_record(slot) {
+            Some(r) => {
+                scan.records.push(r);
+                scan.damaged += bad_run;
+                bad_run = 0;
+                scan.end = (i + 1) * RECORD_BYTES;
+            }
+            None => bad_run += 1,
+        }
+    }
+    scan
 }
 
 /// A cache file shared with other processes: every access holds an advisory lock on the file
@@ -416,6 +411,7 @@ impl CacheFile {
             Contents {
                 header: header.clone(),
                 records: Vec::new(),
+                damaged: 0,
                 torn_bytes: 0,
             }
         } else {
@@ -430,7 +426,7 @@ impl CacheFile {
             }
             contents
         };
-        let end = (HEADER_BYTES + contents.records.len() * RECORD_BYTES) as u64;
+        let end = len.max(HEADER_BYTES as u64) - contents.torn_bytes;
         if contents.torn_bytes > 0 {
             this.file.set_len(end).map_err(this.io())?;
         }
@@ -451,12 +447,9 @@ impl CacheFile {
                 .read_to_end(&mut bytes)
                 .map_err(self.io())?;
         }
-        let records: Vec<Record> = bytes
-            .chunks_exact(RECORD_BYTES)
-            .map_while(decode_record)
-            .collect();
-        let end = self.read_pos + (records.len() * RECORD_BYTES) as u64;
-        Ok((records, end, len))
+        let scan = scan_records(&bytes);
+        let end = self.read_pos + scan.end as u64;
+        Ok((scan.records, end, len))
     }
 
     /// Records other processes appended since this one last looked.
@@ -521,6 +514,7 @@ mod tests {
                 ambient_value: Rgb::new(0.1, 0.2, 0.3),
                 ..IcParams::default()
             },
+            view_hash: 0,
         }
     }
 
@@ -562,18 +556,43 @@ mod tests {
         assert!(why.contains("divisions 512 (now 256)"), "{why}");
         other.scene_hash ^= 1;
         assert!(c.header.mismatch(&other).unwrap().contains("another scene"));
-        // Every metric and the clamping flag survive the header.
-        for (metric, clamp) in [
-            (ErrorMetric::Ward, true),
-            (ErrorMetric::Tabellion, false),
-            (ErrorMetric::Hessian, true),
-        ] {
+        // Every record-shaping setting of the table survives the header and, when changed, is
+        // named as the reason a file is refused: set each to a value other than the default.
+        let changed: &[(&str, &str)] = &[
+            ("accuracy", "0.25"),
+            ("divisions", "300"),
+            ("supersamples", "100"),
+            ("record_error", "0.5"),
+            ("resolution", "64"),
+            ("bounces", "5"),
+            ("deeper_bounces", "cache"),
+            ("ambient_value", "1,2,3"),
+            ("ambient_weight", "7"),
+            ("error_metric", "hessian"),
+            ("neighbour_clamp", "on"),
+            ("gradients", "rotation"),
+            ("gradient_formula", "krivanek"),
+        ];
+        for spec in crate::irradiance_cache::params::PARAMS {
+            let listed = changed.iter().find(|(n, _)| *n == spec.name);
+            assert_eq!(listed.is_some(), spec.shapes_records, "{}", spec.name);
+            let Some((name, value)) = listed else {
+                continue;
+            };
             let mut h = header();
-            h.params.error_metric = metric;
-            h.params.neighbour_clamp = clamp;
+            h.params.set(name, value).unwrap();
+            assert_ne!(h.params, header().params, "{name}");
             let bytes = h.encode();
-            assert_eq!(Header::decode(&bytes, &path).unwrap(), h);
+            assert_eq!(Header::decode(&bytes, &path).unwrap(), h, "{name}");
+            let why = header().mismatch(&h).expect(name);
+            assert!(why.contains(name), "{why}");
         }
+        // Another view is no reason to refuse the file, but it is said.
+        let mut h = header();
+        h.view_hash = 5;
+        assert!(header().mismatch(&h).is_none());
+        assert!(header().view_note(&h).unwrap().contains("another view"));
+        assert!(header().view_note(&header()).is_none());
         let _ = std::fs::remove_file(path);
     }
 
@@ -608,6 +627,24 @@ mod tests {
         bad[last + 10] ^= 4;
         std::fs::write(&cut, &bad).unwrap();
         assert_eq!(read(&cut).unwrap().records, recs[..5]);
+        // A flipped bit in a record in the middle loses only that record; opening keeps the
+        // rest, and a new record is appended after the last intact one.
+        let mut bad = full.clone();
+        bad[HEADER_BYTES + 2 * RECORD_BYTES + 20] ^= 1;
+        std::fs::write(&cut, &bad).unwrap();
+        let c = read(&cut).unwrap();
+        let mut expect = recs.clone();
+        expect.remove(2);
+        assert_eq!(
+            (c.records.clone(), c.damaged, c.torn_bytes),
+            (expect.clone(), 1, 0)
+        );
+        let (mut f, c2) = CacheFile::open(&cut, &header(), false).unwrap();
+        assert_eq!(c2.records, expect);
+        f.append(&[record(9)]).unwrap();
+        drop(f);
+        expect.push(record(9));
+        assert_eq!(read(&cut).unwrap().records, expect);
         // Not a cache file, a short file, a damaged header: clear errors.
         std::fs::write(&cut, b"hello").unwrap();
         assert!(read(&cut).unwrap_err().to_string().contains("too short"));

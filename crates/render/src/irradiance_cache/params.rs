@@ -1,27 +1,16 @@
-//! Parameters of the irradiance cache, named for users, with Radiance's names accepted too
-//! (`-aa`, `-ad`, `-ar`, `-ab`, `-av`).
+//! Parameters of the irradiance cache: the settings ([`IcParams`]) and the one table
+//! ([`PARAMS`]) that names, documents, parses and prints each of them, with Radiance's names
+//! (`-aa`, `-ad`, `-as`, `-ar`, `-ab`, `-av`, `-aw`) as aliases.
 
 use super::record::{ErrorMetric, GradientMode};
 use ircache_math::Rgb;
 
-/// The settings `ircache bench` times on the Cornell box (at 16 spp), and the reference test
-/// checks: they reach Radiance's "high" error there.
-pub const CORNELL_BOX_BENCH: &[(&str, &str)] = &[
-    ("error_metric", "tabellion"),
-    ("accuracy", "0.5"),
-    ("divisions", "512"),
-    ("resolution", "0"),
-    ("direct_samples", "4"),
-];
+/// The settings `ircache bench` times on the Cornell box, and the reference test checks: the
+/// defaults (they reach Radiance's "high" error there).
+pub const CORNELL_BOX_BENCH: &[(&str, &str)] = &[];
 
-/// The settings `ircache bench` times on Sponza (at 8 spp).
-pub const SPONZA_BENCH: &[(&str, &str)] = &[
-    ("error_metric", "tabellion"),
-    ("accuracy", "0.5"),
-    ("divisions", "1024"),
-    ("supersamples", "512"),
-    ("resolution", "0"),
-];
+/// The settings `ircache bench` times on Sponza: the defaults.
+pub const SPONZA_BENCH: &[(&str, &str)] = &[];
 
 /// How far the pre-pass (the overture: 002, Mitsuba's irrcache) fills the cache before the
 /// pixels are rendered.
@@ -155,7 +144,7 @@ impl Default for IcParams {
             ambient_weight: 0,
             // Chosen by measurement (BENCHMARKS.md): at equal time Tabellion–Lamorlette's metric
             // reaches about half Ward's error on Sponza and two thirds on the Cornell box.
-            error_metric: ErrorMetric::Tabellion,
+            error_metric: ErrorMetric::default(),
             overture: Overture::Full,
             spatial_order: false,
             neighbour_clamp: false,
@@ -164,163 +153,298 @@ impl Default for IcParams {
     }
 }
 
+/// One cache parameter. Every place a parameter appears is made from its entry here: the
+/// `render` and `irradiance` command-line options (`--name`, and Radiance's `-xx` where it has
+/// one), the XML `<integrator type="irrcache">` parameters, the cache file's header and its
+/// staleness check (entries that shape records), and the `--stats` JSON.
+pub struct ParamSpec {
+    /// Name in XML and the stats (snake case); the command-line option is `--` + the name with
+    /// dashes.
+    pub name: &'static str,
+    /// Radiance's option without its dash (`aa` for `-aa`), or other accepted names.
+    pub aliases: &'static [&'static str],
+    /// What the value looks like, for the help (`A`, `none|rotation|full`).
+    pub value: &'static str,
+    /// What it means (the default is added from [`IcParams::default`]).
+    pub help: &'static str,
+    /// Records made under other values cannot serve (part of a cache file's identity).
+    pub shapes_records: bool,
+    /// The value as text that [`ParamSpec::set`] reads back.
+    pub get: fn(&IcParams) -> String,
+    /// Sets the value from text (the error names what was expected).
+    pub set: fn(&mut IcParams, &str) -> Result<(), String>,
+}
+
+impl std::fmt::Debug for ParamSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
+fn number<T: std::str::FromStr + PartialOrd + std::fmt::Display>(
+    v: &str,
+    lo: T,
+    hi: T,
+    what: &str,
+) -> Result<T, String> {
+    v.trim()
+        .parse::<T>()
+        .ok()
+        .filter(|x| *x >= lo && *x <= hi)
+        .ok_or_else(|| format!("expected {what} from {lo} to {hi}, found \"{}\"", v.trim()))
+}
+
+fn on_off(v: &str) -> Result<bool, String> {
+    match v.trim() {
+        "on" | "true" | "1" => Ok(true),
+        "off" | "false" | "0" => Ok(false),
+        v => Err(format!("expected on or off, found \"{v}\"")),
+    }
+}
+
+fn choice<T: Copy>(v: &str, options: &[(&str, T)]) -> Result<T, String> {
+    options
+        .iter()
+        .find(|(n, _)| *n == v.trim())
+        .map(|(_, t)| *t)
+        .ok_or_else(|| {
+            let names: Vec<&str> = options.iter().map(|(n, _)| *n).collect();
+            format!("expected {}, found \"{}\"", names.join(" or "), v.trim())
+        })
+}
+
+fn name_of<T: Copy + PartialEq>(t: T, options: &[(&'static str, T)]) -> String {
+    options
+        .iter()
+        .find(|(_, o)| *o == t)
+        .map_or("?", |(n, _)| *n)
+        .to_string()
+}
+
+const OVERTURES: &[(&str, Overture)] = &[
+    ("full", Overture::Full),
+    ("coarse", Overture::Coarse),
+    ("off", Overture::Off),
+];
+const FORMULAS: &[(&str, TranslationalFormula)] = &[
+    ("ward-heckbert", TranslationalFormula::WardHeckbert),
+    ("krivanek", TranslationalFormula::Krivanek),
+];
+const ORDERS: &[(&str, bool)] = &[("insertion", false), ("spatial", true)];
+
+/// Every cache parameter, in the order the help lists them.
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "accuracy",
+        aliases: &["aa"],
+        value: "A",
+        help: "with --error-metric ward a record serves where its split-sphere error \
+               ‖x − xᵢ‖/Rᵢ + √(1 − n·nᵢ) ≤ A (Radiance's meaning); with tabellion κ = 0.2/A",
+        shapes_records: true,
+        get: |p| p.accuracy.to_string(),
+        set: |p, v| {
+            let a: f32 = number(v, 0.0, 2.0, "an accuracy")?;
+            if a <= 0.0 {
+                return Err(format!("expected an accuracy above 0, found {a}"));
+            }
+            p.accuracy = a;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "divisions",
+        aliases: &["ad"],
+        value: "N",
+        help: "gather rays per record, split polar × azimuthal ≈ π × polar",
+        shapes_records: true,
+        get: |p| p.divisions.to_string(),
+        set: |p, v| Ok(p.divisions = number(v, 4, 1_000_000, "a whole number of divisions")?),
+    },
+    ParamSpec {
+        name: "supersamples",
+        aliases: &["as"],
+        value: "N",
+        help: "most extra gather rays per record, three to a cell, in the cells whose \
+               neighbours differ most, until the record's estimated error reaches --record-error",
+        shapes_records: true,
+        get: |p| p.supersamples.to_string(),
+        set: |p, v| Ok(p.supersamples = number(v, 0, 1_000_000, "super-samples")?),
+    },
+    ParamSpec {
+        name: "record_error",
+        aliases: &[],
+        value: "F",
+        help: "target relative standard error of a record's irradiance as a fraction of the \
+               accuracy (estimated from the spread of the gather's strata); 0 spends every \
+               super-sample",
+        shapes_records: true,
+        get: |p| p.record_error.to_string(),
+        set: |p, v| Ok(p.record_error = number(v, 0.0, 10.0, "a fraction of the accuracy")?),
+    },
+    ParamSpec {
+        name: "resolution",
+        aliases: &["ar"],
+        value: "R",
+        help: "smallest record radius = scene size / R, largest 64× that (with tabellion they \
+               bound the nearest distance: R/2 ≥ size/2R, inside the pixel-footprint limits); \
+               0: no minimum",
+        shapes_records: true,
+        get: |p| p.resolution.to_string(),
+        set: |p, v| Ok(p.resolution = number(v, 0.0, f32::MAX, "a resolution")?),
+    },
+    ParamSpec {
+        name: "bounces",
+        aliases: &["ab"],
+        value: "N",
+        help: "indirect bounces: the image equals path tracing at max_depth N + 2 \
+               (default: the scene's max_depth − 2)",
+        shapes_records: true,
+        get: |p| p.bounces.to_string(),
+        set: |p, v| Ok(p.bounces = number(v, 0, 64, "bounces")?),
+    },
+    ParamSpec {
+        name: "deeper_bounces",
+        aliases: &[],
+        value: "traced|cache",
+        help: "the bounces beyond a record's own: path-traced from its gather hits, or from \
+               one cache per bounce level (Ward's)",
+        shapes_records: true,
+        get: |p| p.deeper.name().to_string(),
+        set: |p, v| Ok(p.deeper = Deeper::parse(v.trim())?),
+    },
+    ParamSpec {
+        name: "ambient_value",
+        aliases: &["av"],
+        value: "V|r,g,b",
+        help: "radiance assumed beyond the last bounce",
+        shapes_records: true,
+        get: |p| {
+            let c = p.ambient_value;
+            format!("{},{},{}", c.r, c.g, c.b)
+        },
+        set: |p, v| {
+            let parts: Vec<&str> = v
+                .split(|c: char| c == ',' || c.is_whitespace())
+                .filter(|t| !t.is_empty())
+                .collect();
+            let f = |x: &str| number(x, 0.0, f32::MAX, "a radiance");
+            p.ambient_value = match parts[..] {
+                [x] => Rgb::splat(f(x)?),
+                [r, g, b] => Rgb::new(f(r)?, f(g)?, f(b)?),
+                _ => {
+                    return Err(format!(
+                        "expected one value or three (r g b), found \"{v}\""
+                    ))
+                }
+            };
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "ambient_weight",
+        aliases: &["aw"],
+        value: "N",
+        help: "replace the ambient value by the running average (N·av + n·ρ̄Ē/π)/(N + n) over \
+               the last level's n records; 0: fixed",
+        shapes_records: true,
+        get: |p| p.ambient_weight.to_string(),
+        set: |p, v| Ok(p.ambient_weight = number(v, 0, 65535, "a whole weight")?),
+    },
+    ParamSpec {
+        name: "error_metric",
+        aliases: &[],
+        value: "tabellion|ward|hessian",
+        help: "how a record's error is measured: Tabellion–Lamorlette (000 eqs. 3.59–3.62, \
+               radii within 1.5–10 pixel footprints), Ward's split sphere (3.10), or a Hessian \
+               radius (½λR² = aE)",
+        shapes_records: true,
+        get: |p| p.error_metric.name().to_string(),
+        set: |p, v| Ok(p.error_metric = ErrorMetric::parse(v.trim())?),
+    },
+    ParamSpec {
+        name: "neighbour_clamp",
+        aliases: &["neighbor_clamp"],
+        value: "on|off",
+        help: "a record's radius never exceeds a neighbour's radius plus their distance",
+        shapes_records: true,
+        get: |p| if p.neighbour_clamp { "on" } else { "off" }.to_string(),
+        set: |p, v| Ok(p.neighbour_clamp = on_off(v)?),
+    },
+    ParamSpec {
+        name: "gradients",
+        aliases: &[],
+        value: "full|rotation|none",
+        help: "gradients used in interpolation (000 eq. 3.15)",
+        shapes_records: true,
+        get: |p| p.gradients.name().to_string(),
+        set: |p, v| Ok(p.gradients = GradientMode::parse(v.trim())?),
+    },
+    ParamSpec {
+        name: "gradient_formula",
+        aliases: &[],
+        value: "ward-heckbert|krivanek",
+        help: "translational gradient as 000 eq. 3.48 or 3.47 (equal)",
+        shapes_records: true,
+        get: |p| name_of(p.formula, FORMULAS),
+        set: |p, v| Ok(p.formula = choice(v, FORMULAS)?),
+    },
+    ParamSpec {
+        name: "overture",
+        aliases: &[],
+        value: "full|coarse|off",
+        help: "how far the pre-pass fills the cache before the pixels: every pixel centre, \
+               every fourth, or not at all",
+        shapes_records: false,
+        get: |p| name_of(p.overture, OVERTURES),
+        set: |p, v| Ok(p.overture = choice(v, OVERTURES)?),
+    },
+    ParamSpec {
+        name: "record_order",
+        aliases: &[],
+        value: "insertion|spatial",
+        help: "reorder records along a Morton curve after the pre-pass (003 item 8)",
+        shapes_records: false,
+        get: |p| name_of(p.spatial_order, ORDERS),
+        set: |p, v| Ok(p.spatial_order = choice(v, ORDERS)?),
+    },
+    ParamSpec {
+        name: "direct_samples",
+        aliases: &[],
+        value: "N",
+        help: "light samples per pixel sample at the first surface (one when the only light \
+               is a delta light)",
+        shapes_records: false,
+        get: |p| p.direct_samples.to_string(),
+        set: |p, v| Ok(p.direct_samples = number(v, 1, 4096, "light samples")?),
+    },
+];
+
+/// The entry named `name` (its name, with dashes or underscores, or an alias).
+#[must_use]
+pub fn param(name: &str) -> Option<&'static ParamSpec> {
+    let n = name.replace('-', "_");
+    PARAMS
+        .iter()
+        .find(|s| s.name == n || s.aliases.contains(&n.as_str()))
+}
+
 impl IcParams {
-    /// Sets a parameter by its user name or Radiance name; `value` is the text given.
+    /// Sets a parameter by its name or an alias (Radiance's); `value` is the text given.
     pub fn set(&mut self, name: &str, value: &str) -> Result<(), String> {
-        let float = |v: &str| -> Result<f32, String> {
-            v.trim()
-                .parse::<f32>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| format!("{name}: expected a number, found \"{v}\""))
-        };
-        match name {
-            "accuracy" | "aa" => {
-                let a = float(value)?;
-                if !(a > 0.0 && a <= 2.0) {
-                    return Err(format!("{name}: expected 0 < accuracy ≤ 2, found {a}"));
-                }
-                self.accuracy = a;
-            }
-            "divisions" | "ad" => {
-                let d = value.trim().parse::<usize>().map_err(|_| {
-                    format!("{name}: expected a whole number of divisions, found \"{value}\"")
-                })?;
-                if !(4..=1_000_000).contains(&d) {
-                    return Err(format!(
-                        "{name}: expected 4 to 1000000 divisions, found {d}"
-                    ));
-                }
-                self.divisions = d;
-            }
-            "ambient_weight" | "ambient-weight" | "aw" => {
-                self.ambient_weight = value
-                    .trim()
-                    .parse::<u32>()
-                    .ok()
-                    .filter(|n| *n <= 65535)
-                    .ok_or_else(|| {
-                        format!("{name}: expected a whole weight 0 to 65535, found \"{value}\"")
-                    })?;
-            }
-            "supersamples" | "as" => {
-                self.supersamples = value
-                    .trim()
-                    .parse::<usize>()
-                    .ok()
-                    .filter(|n| *n <= 1_000_000)
-                    .ok_or_else(|| {
-                        format!("{name}: expected 0 to 1000000 super-samples, found \"{value}\"")
-                    })?;
-            }
-            "record_error" | "record-error" => {
-                let e = float(value)?;
-                if !(0.0..=10.0).contains(&e) {
-                    return Err(format!(
-                        "{name}: expected 0 to 10 (a fraction of the accuracy), found {e}"
-                    ));
-                }
-                self.record_error = e;
-            }
-            "resolution" | "ar" => {
-                let r = float(value)?;
-                if r < 0.0 {
-                    return Err(format!("{name}: expected a resolution ≥ 0, found {r}"));
-                }
-                self.resolution = r;
-            }
-            "bounces" | "ab" => {
-                self.bounces = value
-                    .trim()
-                    .parse::<u32>()
-                    .ok()
-                    .filter(|b| *b <= 64)
-                    .ok_or_else(|| {
-                        format!("{name}: expected 0 to 64 bounces, found \"{value}\"")
-                    })?;
-            }
-            "ambient_value" | "ambient-value" | "av" => {
-                let parts: Vec<&str> = value
-                    .split(|c: char| c == ',' || c.is_whitespace())
-                    .filter(|t| !t.is_empty())
-                    .collect();
-                let v = match parts[..] {
-                    [x] => Rgb::splat(float(x)?),
-                    [r, g, b] => Rgb::new(float(r)?, float(g)?, float(b)?),
-                    _ => {
-                        return Err(format!(
-                            "{name}: expected one value or three (r g b), found \"{value}\""
-                        ))
-                    }
-                };
-                if !v.is_valid_radiance() {
-                    return Err(format!(
-                        "{name}: expected a radiance ≥ 0, found \"{value}\""
-                    ));
-                }
-                self.ambient_value = v;
-            }
-            "direct_samples" | "direct-samples" => {
-                self.direct_samples = value
-                    .trim()
-                    .parse::<u32>()
-                    .ok()
-                    .filter(|n| (1..=4096).contains(n))
-                    .ok_or_else(|| {
-                        format!("{name}: expected 1 to 4096 light samples, found \"{value}\"")
-                    })?;
-            }
-            "record_order" | "record-order" => {
-                self.spatial_order = match value.trim() {
-                    "spatial" => true,
-                    "insertion" => false,
-                    v => {
-                        return Err(format!(
-                            "{name}: expected insertion or spatial, found \"{v}\""
-                        ))
-                    }
-                }
-            }
-            "overture" => {
-                self.overture = match value.trim() {
-                    "full" | "on" => Overture::Full,
-                    "coarse" => Overture::Coarse,
-                    "off" => Overture::Off,
-                    v => {
-                        return Err(format!(
-                            "{name}: expected full, coarse or off, found \"{v}\""
-                        ))
-                    }
-                }
-            }
-            "error_metric" | "error-metric" => {
-                self.error_metric = ErrorMetric::parse(value.trim())?
-            }
-            "neighbour_clamp" | "neighbour-clamp" | "neighbor_clamp" => {
-                self.neighbour_clamp = match value.trim() {
-                    "on" | "true" | "1" => true,
-                    "off" | "false" | "0" => false,
-                    v => return Err(format!("{name}: expected on or off, found \"{v}\"")),
-                }
-            }
-            "deeper_bounces" | "deeper-bounces" => {
-                self.deeper = Deeper::parse(value.trim()).map_err(|e| format!("{name}: {e}"))?
-            }
-            "gradients" => self.gradients = GradientMode::parse(value.trim())?,
-            "gradient_formula" | "gradient-formula" => {
-                self.formula = match value.trim() {
-                    "ward-heckbert" | "3.48" => TranslationalFormula::WardHeckbert,
-                    "krivanek" | "3.47" => TranslationalFormula::Krivanek,
-                    v => {
-                        return Err(format!(
-                            "{name}: expected ward-heckbert or krivanek, found \"{v}\""
-                        ))
-                    }
-                }
-            }
-            _ => return Err(format!("unknown irradiance cache parameter \"{name}\"")),
-        }
-        Ok(())
+        let spec = param(name).ok_or_else(|| {
+            let names: Vec<&str> = PARAMS.iter().map(|s| s.name).collect();
+            format!(
+                "unknown irradiance cache parameter \"{name}\" (known: {})",
+                names.join(", ")
+            )
+        })?;
+        (spec.set)(self, value).map_err(|e| format!("{name}: {e}"))
+    }
+
+    /// Every parameter as (name, value text), in table order.
+    #[must_use]
+    pub fn to_pairs(&self) -> Vec<(&'static str, String)> {
+        PARAMS.iter().map(|s| (s.name, (s.get)(self))).collect()
     }
 
     /// The smallest and largest record radius R for a scene of size `scene_size` (Radiance's

@@ -64,11 +64,12 @@ impl GradientMode {
 pub enum ErrorMetric {
     /// Ward's split sphere (000 eq. 3.10): ε = ‖x − xᵢ‖/Rᵢ + √(1 − n·nᵢ), valid where ε ≤ a,
     /// weight 1/ε; R is the harmonic mean distance.
-    #[default]
     Ward,
     /// Tabellion and Lamorlette (000 eqs. 3.59–3.62): ε = κ max(‖x − xᵢ‖/Rᵢ,
     /// √(1 − n·nᵢ)/√(1 − cos 10°)), valid where ε < 1, weight 1 − ε; R is half the closest
     /// distance clamped to [1.5, 10] pixel footprints; κ = 0.2/a (1 at the default accuracy).
+    /// The cache's default (chosen by measurement, BENCHMARKS.md).
+    #[default]
     Tabellion,
     /// Second-order error control after Schwarzhaupt, Jensen and Jarosz (2012): R is the
     /// distance at which ½ λ R² = a E, λ the largest eigenvalue of the translational Hessian of

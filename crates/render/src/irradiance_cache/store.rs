@@ -179,6 +179,40 @@ impl RecordStore {
         }
     }
 
+    /// Calls `f(record index)` once for every record whose validity sphere grown `threshold`
+    /// times may hold `p`. A record at grid level L has ρ ≤ the level's cell size s and is
+    /// filed in every cell its ρ-sphere overlaps; if ‖p − xᵢ‖ ≤ tρ, the point of that sphere
+    /// nearest p lies within (t − 1)s of p, so the cells overlapping p ± (t − 1)s hold it.
+    pub fn for_each_near_within(&self, p: Vec3, threshold: f32, mut f: impl FnMut(u32)) {
+        if threshold <= 1.0 {
+            return self.for_each_near(p, f);
+        }
+        let mut ids = Vec::new();
+        let mut used = self.levels_used;
+        while used != 0 {
+            let level = used.trailing_zeros() as u8;
+            used &= used - 1;
+            let size = self.cell_size(level);
+            let reach = Vec3::splat((threshold - 1.0) * size);
+            let lo = Self::cell_of(p - reach, size);
+            let hi = Self::cell_of(p + reach, size);
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        if let Some(c) = self.cells.get(&(level, [x, y, z])) {
+                            ids.extend_from_slice(c);
+                        }
+                    }
+                }
+            }
+        }
+        ids.sort_unstable();
+        ids.dedup();
+        for id in ids {
+            f(id);
+        }
+    }
+
     /// Interpolates at (p, n) from the records whose normalised error is at most `threshold`
     /// (1: the accuracy; more: relaxed) and that are not in front of p (000 eq. 3.15). Weights
     /// use the normal `n`; the rotational gradient turns each record towards `n_rot` (a bump-
@@ -195,7 +229,7 @@ impl RecordStore {
         let mut sum = Rgb::ZERO;
         let mut wsum = 0.0f32;
         let mut count = 0;
-        self.for_each_near(p, |id| {
+        self.for_each_near_within(p, threshold, |id| {
             let rec = &self.records[id as usize];
             if let Some(err) = self.metric.error(rec, p, n, self.accuracy) {
                 if err <= threshold {
@@ -221,7 +255,7 @@ impl RecordStore {
         threshold: f32,
         mut f: impl FnMut(&Record, f32),
     ) {
-        self.for_each_near(p, |id| {
+        self.for_each_near_within(p, threshold, |id| {
             let rec = &self.records[id as usize];
             if let Some(err) = self.metric.error(rec, p, n, self.accuracy) {
                 if err <= threshold {
@@ -261,6 +295,54 @@ mod tests {
             grad_t: [Vec3::ZERO; 3],
             grad_r: [Vec3::ZERO; 3],
             level: 0,
+        }
+    }
+
+    #[test]
+    fn relaxed_lookups_find_every_record_in_reach_whatever_the_grid_alignment() {
+        // One record at many offsets from the grid; queries at 1.9ρ and 3.7ρ in 14 directions
+        // must find it with thresholds 2 and 4 (every metric), and not beyond.
+        for metric in [
+            ErrorMetric::Ward,
+            ErrorMetric::Tabellion,
+            ErrorMetric::Hessian,
+        ] {
+            for i in 0..50 {
+                let f = i as f32 / 50.0;
+                let p = Vec3::new(0.37 * f, 0.71 * f, 0.13 * f) + Vec3::splat(3.0);
+                let mut s = RecordStore::new(0.05, 0.4, metric, false);
+                s.insert(rec(p, 0.3));
+                let rho = metric.validity_radius(&s.records()[0], 0.4);
+                let dirs = [
+                    Vec3::X,
+                    -Vec3::X,
+                    Vec3::Y,
+                    -Vec3::Y,
+                    Vec3::new(1.0, 1.0, 0.0).normalize(),
+                    Vec3::new(-1.0, 1.0, 0.0).normalize(),
+                    Vec3::new(1.0, -1.0, 0.0).normalize(),
+                    Vec3::new(-1.0, -1.0, 0.0).normalize(),
+                    Vec3::new(0.6, 0.8, 0.0),
+                    Vec3::new(-0.8, 0.6, 0.0),
+                    Vec3::new(0.28, -0.96, 0.0),
+                    Vec3::new(-0.96, -0.28, 0.0),
+                    Vec3::new(0.0, 1.0, 0.0),
+                    Vec3::new(1.0, 0.0, 0.0),
+                ];
+                for d in dirs {
+                    for (t, dist) in [(2.0, 1.9), (4.0, 3.7)] {
+                        let q = p + d * (dist * rho);
+                        let found = s.interpolate(q, Vec3::Z, Vec3::Z, t, GradientMode::None);
+                        assert!(found.is_some(), "{metric:?} offset {f} dir {d} t {t}");
+                        let far = p + d * ((t + 0.2) * rho);
+                        assert!(
+                            s.interpolate(far, Vec3::Z, Vec3::Z, t, GradientMode::None)
+                                .is_none(),
+                            "{metric:?} beyond reach"
+                        );
+                    }
+                }
+            }
         }
     }
 

@@ -565,6 +565,27 @@ impl Parser {
     }
 }
 
+/// The note a loader passes on when triangles were dropped as degenerate: how many, and where
+/// the first one is.
+#[must_use]
+pub fn degenerate_note(data: &ObjData) -> Option<String> {
+    (data.degenerate_dropped > 0).then(|| {
+        let at = data
+            .first_degenerate
+            .as_ref()
+            .map_or(String::new(), |l| format!(" (the first at {l})"));
+        format!(
+            "{} degenerate (zero-area) triangle{} dropped{at}",
+            data.degenerate_dropped,
+            if data.degenerate_dropped == 1 {
+                ""
+            } else {
+                "s"
+            }
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

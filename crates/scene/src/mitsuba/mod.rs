@@ -112,6 +112,7 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, Scen
         integrator: integrator.unwrap_or_default(),
         shapes,
         emitters,
+        notes: ctx.notes.take(),
     })
 }
 
@@ -121,6 +122,8 @@ pub(crate) struct Ctx {
     pub ids: Ids,
     /// The main scene file's folder (fallback for relative file names).
     pub scene_dir: PathBuf,
+    /// What the builders changed and a user should hear of ([`SceneDesc::notes`]).
+    pub notes: RefCell<Vec<String>>,
     /// Built BSDFs by plugin, so `<ref>`s share one `Arc`.
     pub bsdfs: RefCell<HashMap<*const Plugin, Arc<BsdfDesc>>>,
     /// Built bitmap textures by plugin.
@@ -136,6 +139,7 @@ impl Ctx {
         Ctx {
             ids,
             scene_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
+            notes: RefCell::default(),
             bsdfs: RefCell::default(),
             bitmaps: RefCell::default(),
             images: RefCell::default(),

@@ -64,7 +64,8 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
             let face_normals = p.boolean("face_normals", false)?;
             let mut mesh = if p.ty == "obj" {
                 let flip_tex = p.boolean("flip_tex_coords", true)?;
-                let mut m = read_obj_mesh(&path).map_err(|e| attach_location(e, &loc, &path))?;
+                let mut m =
+                    read_obj_mesh(ctx, &path).map_err(|e| attach_location(e, &loc, &path))?;
                 // The reader gives Mitsuba's default (u, 1 − v); undo it when asked not to flip.
                 if !flip_tex {
                     if let Some(uvs) = &mut m.uvs {
@@ -206,8 +207,11 @@ fn attach_location(e: SceneError, loc: &crate::error::SourceLocation, path: &Pat
 
 /// Reads an OBJ file as Mitsuba's `obj` shape sees it: every group of the file in one mesh
 /// (materials ignored; the shape's BSDF applies), texture coordinates already `(u, 1 − v)`.
-fn read_obj_mesh(path: &Path) -> Result<TriangleMesh, SceneError> {
+fn read_obj_mesh(ctx: &Ctx, path: &Path) -> Result<TriangleMesh, SceneError> {
     let data = crate::mesh::obj::read_obj(path)?;
+    if let Some(note) = crate::mesh::obj::degenerate_note(&data) {
+        ctx.notes.borrow_mut().push(note);
+    }
     Ok(crate::mesh::obj::obj_to_mesh(&data))
 }
 
