@@ -529,14 +529,16 @@ fn four_processes_share_one_cache_file_on_disjoint_tiles() {
                 .unwrap()
         })
         .collect();
-    let mut computed = 0;
+    let (mut computed, mut from_others) = (0, 0);
     for (i, c) in children.into_iter().enumerate() {
         let o = c.wait_with_output().unwrap();
         assert!(o.status.success(), "{}", stderr(&o));
-        computed += stats_of(&d, &format!("t{i}.json"))["records_computed"]
-            .as_u64()
-            .unwrap();
+        let s = stats_of(&d, &format!("t{i}.json"));
+        computed += s["records_computed"].as_u64().unwrap();
+        from_others += s["records_from_others"].as_u64().unwrap();
     }
+    // The processes took in each other's records while they ran.
+    assert!(from_others > 0, "no process read another's records");
     // The file holds every record, none torn or corrupt.
     let o = ircache(&["cache", "info", "shared.icc"], &d);
     let info = String::from_utf8_lossy(&o.stdout).into_owned();

@@ -134,7 +134,7 @@ pub fn irradiance_at_points(
 }
 
 /// Weighted mean of the records' extrapolated values and of their gradients.
-fn interpolate_with_gradients(
+pub fn interpolate_with_gradients(
     cache: &IrradianceCache,
     sp: &ShadingPoint,
 ) -> (Rgb, [Vec3; 3], [Vec3; 3]) {
