@@ -93,8 +93,8 @@ fn direct_integrator_equals_path_at_max_depth_2() {
     // their images agree exactly.
     let d = temp_dir("direct");
     for (out, extra) in [
-        ("d.exr", ["--integrator", "direct"]),
-        ("p.exr", ["--max-depth", "2"]),
+        ("d.exr", &["--integrator", "direct"][..]),
+        ("p.exr", &["--integrator", "path", "--max-depth", "2"][..]),
     ] {
         let mut args = vec![
             "render", "--spp", "4", "--width", "48", "--height", "48", "-o", out, "-q",
