@@ -8,9 +8,9 @@
 //!   view hash (u64), length (u32) and text of the record-shaping settings as `name=value` lines
 //!   (from the parameter table, [`super::params::PARAMS`]), zeros, header checksum (u64: FNV-1a
 //!   of the bytes before it);
-//! - records, 124 bytes each: level (u8), 3 bytes zero, position, normal, irradiance (f32 × 9),
-//!   radius (f32), translational then rotational gradient (f32 × 18), checksum (u64: FNV-1a of
-//!   the 116 bytes before it).
+//! - records, 128 bytes each: level (u8), 3 bytes zero, position, normal, irradiance (f32 × 9),
+//!   radius (f32), translational then rotational gradient (f32 × 18), variance per ray (f32),
+//!   checksum (u64: FNV-1a of the 120 bytes before it).
 
 use super::params::{IcParams, PARAMS};
 use super::record::Record;
@@ -26,7 +26,7 @@ pub const VERSION: u32 = 2;
 /// Header size in bytes.
 pub const HEADER_BYTES: usize = 1024;
 /// Record size in bytes (payload and checksum).
-pub const RECORD_BYTES: usize = 124;
+pub const RECORD_BYTES: usize = 128;
 const PAYLOAD_BYTES: usize = RECORD_BYTES - 8;
 
 /// Problems with a cache file.
@@ -223,7 +223,7 @@ impl Header {
 fn encode_record(r: &Record) -> [u8; RECORD_BYTES] {
     let mut b = [0u8; RECORD_BYTES];
     b[0] = r.level;
-    let mut floats = Vec::with_capacity(28);
+    let mut floats = Vec::with_capacity(29);
     for v in [r.p, r.n] {
         floats.extend_from_slice(&v.to_array());
     }
@@ -232,6 +232,7 @@ fn encode_record(r: &Record) -> [u8; RECORD_BYTES] {
     for g in r.grad_t.iter().chain(&r.grad_r) {
         floats.extend_from_slice(&g.to_array());
     }
+    floats.push(r.ray_variance);
     for (i, f) in floats.iter().enumerate() {
         b[4 + 4 * i..8 + 4 * i].copy_from_slice(&f.to_le_bytes());
     }
@@ -249,7 +250,7 @@ fn decode_record(b: &[u8]) -> Option<Record> {
     if Fnv::of(&b[..PAYLOAD_BYTES]) != sum {
         return None;
     }
-    let f: Vec<f32> = (0..28)
+    let f: Vec<f32> = (0..29)
         .map(|i| f32::from_le_bytes(b[4 + 4 * i..8 + 4 * i].try_into().unwrap_or([0; 4])))
         .collect();
     if f.iter().any(|x| !x.is_finite()) {
@@ -264,6 +265,7 @@ fn decode_record(b: &[u8]) -> Option<Record> {
         r: f[9],
         grad_t: [v(10), v(13), v(16)],
         grad_r: [v(19), v(22), v(25)],
+        ray_variance: f[28],
     })
 }
 
@@ -501,6 +503,7 @@ mod tests {
             grad_t: [Vec3::X * f, Vec3::Y, Vec3::Z],
             grad_r: [Vec3::ONE, Vec3::X, Vec3::Y * f],
             level: (i % 3) as u8,
+            ray_variance: 0.5 * f,
         }
     }
 

@@ -192,8 +192,8 @@ impl GatherCounts {
 #[derive(Debug)]
 pub struct WorkState {
     overlay: Vec<Option<RecordStore>>,
-    /// Records made, in order.
-    pub new_records: Vec<Record>,
+    /// Records made, in order, with the points they were gathered at.
+    pub new_records: Vec<(Record, ShadingPoint)>,
     /// Counters.
     pub counts: GatherCounts,
 }
@@ -481,6 +481,7 @@ impl Gatherer<'_> {
             grad_t,
             grad_r,
             level: level as u8,
+            ray_variance: h.relative_variance(),
         }
     }
 
@@ -507,7 +508,7 @@ impl Gatherer<'_> {
         let rec = self.record_at(st, sp, level, key);
         let store = st.overlay[lvl].get_or_insert_with(|| self.cache.empty_store());
         store.insert(rec);
-        st.new_records.push(rec);
+        st.new_records.push((rec, *sp));
         rec.e
     }
 

@@ -21,6 +21,10 @@ pub struct Record {
     /// Bounce level: 0 for irradiance seen by the camera's surfaces, 1 for the surfaces seen by
     /// level-0 gather rays, ...
     pub level: u8,
+    /// Relative variance of the irradiance estimate per gather ray, estimated from the gather's
+    /// own strata ([`super::hemisphere::HemisphereSamples::relative_variance`]): the rays a
+    /// gather here needs for a relative standard error t are about this / t².
+    pub ray_variance: f32,
 }
 
 /// Which gradients interpolation uses (`--gradients`).

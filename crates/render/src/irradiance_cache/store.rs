@@ -265,6 +265,24 @@ impl RecordStore {
         });
     }
 
+    /// Indices of the records serving (p, n) within `threshold`, in index order.
+    #[must_use]
+    pub fn serving(&self, p: Vec3, n: Vec3, threshold: f32) -> Vec<u32> {
+        let mut ids = Vec::new();
+        self.for_each_near_within(p, threshold, |id| {
+            let rec = &self.records[id as usize];
+            if self
+                .metric
+                .error(rec, p, n, self.accuracy)
+                .is_some_and(|e| e <= threshold)
+            {
+                ids.push(id);
+            }
+        });
+        ids.sort_unstable();
+        ids
+    }
+
     /// True when some record covers (p, n) at the store's accuracy.
     #[must_use]
     pub fn covers(&self, p: Vec3, n: Vec3) -> bool {
@@ -295,6 +313,7 @@ mod tests {
             grad_t: [Vec3::ZERO; 3],
             grad_r: [Vec3::ZERO; 3],
             level: 0,
+            ray_variance: 0.0,
         }
     }
 
@@ -414,6 +433,7 @@ mod order_tests {
                 grad_t: [Vec3::X * 0.1; 3],
                 grad_r: [Vec3::ZERO; 3],
                 level: 0,
+                ray_variance: 0.0,
             });
         }
         let queries: Vec<Vec3> = (0..200)

@@ -11,6 +11,8 @@
 //!   relMSE_trim against the references, with gradient variants, next to Mitsuba 3's path
 //!   tracer run at the spp its error law says reaches the same error (and checked).
 
+mod cache_vs_path;
+
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use ircache_math::{sampling, Frame, Ray, Rng, Vec2};
@@ -38,7 +40,8 @@ pub struct BenchArgs {
     /// Skip the Mitsuba 3 comparison.
     #[arg(long)]
     pub no_mitsuba: bool,
-    /// Which parts: all, rays, path, gather, ic.
+    /// Which parts: all, rays, path, gather, ic, cache (the cache against path tracing by
+    /// rendering, and the cost of depth).
     #[arg(long, default_value = "all")]
     pub only: String,
 }
@@ -91,6 +94,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "ic" {
         ic(&shared, args)?;
+    }
+    if args.only == "all" || args.only == "cache" {
+        cache_vs_path::run_all(&shared)?;
     }
     Ok(())
 }

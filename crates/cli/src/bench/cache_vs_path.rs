@@ -1,0 +1,200 @@
+//! `ircache bench --only cache`: the cache against the path tracer on each scene, by rendering.
+//!
+//! For each scene and depth: `ic` at its defaults (16 spp), then `path` at 4, 8, 16, … spp until
+//! it reaches the cache's error both unblurred and blurred (σ = 2 px, the low-frequency error:
+//! blotches, leaks, bias), or runs 30 times as long. Times to equal error are interpolated
+//! between the two renders that bracket it (log error against log time); nothing is extrapolated
+//! from an error law. Then the cost of depth: `-ab 8` against `-ab 1` with the deeper bounces
+//! path-traced (the default) and with one cache per bounce level.
+
+use anyhow::{Context, Result};
+use ircache_image::blur::gaussian_blur;
+use ircache_image::compare::compare;
+use ircache_image::Image;
+use ircache_render::film::Filter;
+use ircache_render::integrators::Integrator;
+use ircache_render::render::{render, RenderOutput, RenderSettings};
+use ircache_render::scene::Scene;
+use ircache_scene::obj_scene::ObjCamera;
+use std::path::Path;
+
+/// One render's figures.
+#[derive(Clone, Copy, Debug)]
+struct Point {
+    seconds: f64,
+    error: f64,
+    blurred: f64,
+    lum: f64,
+}
+
+fn measure(out: &RenderOutput, reference: &Image) -> Result<Point> {
+    let m = compare(&out.image, reference)?;
+    let b = compare(
+        &gaussian_blur(&out.image, 2.0),
+        &gaussian_blur(reference, 2.0),
+    )?;
+    Ok(Point {
+        seconds: out.seconds,
+        error: m.rel_mse_trim,
+        blurred: b.rel_mse_trim,
+        lum: m.lum_ratio,
+    })
+}
+
+/// Renders `scene` with `integrator` at `spp` (cache parameters `params`).
+fn run(
+    scene: &Scene,
+    desc: &ircache_scene::SceneDesc,
+    integrator: &str,
+    spp: u32,
+    params: &[(&str, &str)],
+) -> Result<RenderOutput> {
+    let mut d = desc.integrator.clone();
+    d.kind = integrator.into();
+    let mut integ = Integrator::from_desc(&d).map_err(anyhow::Error::msg)?;
+    if let Integrator::Ic(ic) = &mut integ {
+        for (k, v) in params {
+            ic.params.set(k, v).map_err(anyhow::Error::msg)?;
+        }
+    }
+    let settings = RenderSettings {
+        width: desc.sensor.film.width as usize,
+        height: desc.sensor.film.height as usize,
+        spp,
+        seed: 0,
+        threads: 0,
+        filter: Filter::from_desc(&desc.sensor.film.filter),
+        band: None,
+    };
+    Ok(render(scene, &integ, &settings, &|_| {})?)
+}
+
+/// The time at which the path-tracing series reaches `target` (by `key`), interpolated in
+/// log–log between the bracketing renders; `None` when no render reached it.
+fn time_to(series: &[Point], target: f64, key: fn(&Point) -> f64) -> Option<f64> {
+    let first = series.first()?;
+    if key(first) <= target {
+        return Some(first.seconds);
+    }
+    series.windows(2).find_map(|w| {
+        let (a, b) = (&w[0], &w[1]);
+        (key(b) <= target).then(|| {
+            let (la, lb, lt) = (key(a).ln(), key(b).ln(), target.ln());
+            let f = if (la - lb).abs() > 0.0 {
+                (la - lt) / (la - lb)
+            } else {
+                1.0
+            };
+            (a.seconds.ln() + f * (b.seconds.ln() - a.seconds.ln())).exp()
+        })
+    })
+}
+
+/// The path tracer's error at `seconds`, interpolated in log–log.
+fn error_at(series: &[Point], seconds: f64, key: fn(&Point) -> f64) -> Option<f64> {
+    series.windows(2).find_map(|w| {
+        let (a, b) = (&w[0], &w[1]);
+        (a.seconds <= seconds && seconds <= b.seconds).then(|| {
+            let f = (seconds.ln() - a.seconds.ln()) / (b.seconds.ln() - a.seconds.ln());
+            (key(a).ln() + f * (key(b).ln() - key(a).ln())).exp()
+        })
+    })
+}
+
+fn fmt_time(t: Option<f64>, cap: f64) -> String {
+    t.map_or(format!("> {cap:.0} s"), |t| format!("{t:.1} s"))
+}
+
+/// Runs the comparison.
+pub fn run_all(shared: &Path) -> Result<()> {
+    let cases = [
+        ("cornell-box", 3, "cornell-box-d3"),
+        ("cornell-box", 10, "cornell-box-d10"),
+        ("sponza-sun", 3, "sponza-sun-d3"),
+        ("sponza-sun", 10, "sponza-sun-d10"),
+        ("cornell-glossy", 3, "cornell-glossy-d3"),
+        ("cornell-glossy", 5, "cornell-glossy-d5"),
+    ];
+    println!("\nThe cache against path tracing (ic defaults at 16 spp; path until it reaches the cache's error)");
+    println!(
+        "  {:<24} {:>7} {:>10} {:>10} {:>7} | {:>10} {:>10} | {:>11} {:>11}",
+        "scene",
+        "ic s",
+        "ic err",
+        "ic blur2",
+        "ic lum",
+        "path err*",
+        "path blur*",
+        "path→err",
+        "path→blur"
+    );
+    for (name, depth, reference) in cases {
+        let scene_path = shared.join(format!("scenes/{name}/scene.xml"));
+        let reference =
+            ircache_image::read_image(&shared.join(format!("references/{reference}.exr")))
+                .with_context(|| format!("reading the {reference} reference"))?;
+        let defines = vec![("max_depth".to_string(), depth.to_string())];
+        let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
+        let scene = Scene::build(&desc)?;
+        let ic = measure(&run(&scene, &desc, "ic", 16, &[])?, &reference)?;
+        let cap = 30.0 * ic.seconds;
+        let mut series = Vec::new();
+        let mut spp = 4;
+        loop {
+            let p = measure(&run(&scene, &desc, "path", spp, &[])?, &reference)?;
+            series.push(p);
+            if (p.error <= ic.error && p.blurred <= ic.blurred) || p.seconds > cap || spp >= 4096 {
+                break;
+            }
+            spp *= 2;
+        }
+        let at = |key: fn(&Point) -> f64| {
+            error_at(&series, ic.seconds, key).map_or("-".to_string(), |e| format!("{e:.3e}"))
+        };
+        println!(
+            "  {:<24} {:>7.2} {:>10.3e} {:>10.3e} {:>7.4} | {:>10} {:>10} | {:>11} {:>11}",
+            format!("{name} d{depth}"),
+            ic.seconds,
+            ic.error,
+            ic.blurred,
+            ic.lum,
+            at(|p| p.error),
+            at(|p| p.blurred),
+            fmt_time(time_to(&series, ic.error, |p| p.error), cap),
+            fmt_time(time_to(&series, ic.blurred, |p| p.blurred), cap),
+        );
+    }
+    println!("  * the path tracer's error at the cache's time (interpolated between its renders)");
+
+    println!("\nThe cost of depth: -ab 8 against -ab 1 (16 spp)");
+    for name in ["cornell-glossy", "sponza-sun"] {
+        let scene_path = shared.join(format!("scenes/{name}/scene.xml"));
+        let desc = ircache_scene::load_scene(&scene_path, &[], &ObjCamera::default())?;
+        let scene = Scene::build(&desc)?;
+        for (deeper, bounces) in [("traced", &["1", "8"][..]), ("cache", &["1", "2", "3"][..])] {
+            let mut line = format!("  {name:<16} deeper bounces {deeper:<7}");
+            let mut first = 0.0;
+            for b in bounces {
+                let out = run(
+                    &scene,
+                    &desc,
+                    "ic",
+                    16,
+                    &[("bounces", b), ("deeper_bounces", deeper)],
+                )?;
+                let c = out.cache.as_ref().context("cache report")?;
+                if first == 0.0 {
+                    first = out.seconds;
+                }
+                line += &format!(
+                    "  -ab {b}: {:.2} s ({:.2}×, {} records)",
+                    out.seconds,
+                    out.seconds / first,
+                    c.stats.records()
+                );
+            }
+            println!("{line}");
+        }
+    }
+    Ok(())
+}
