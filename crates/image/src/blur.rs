@@ -10,7 +10,7 @@ use ircache_math::Rgb;
 /// the image (no darkening at the edges). `sigma` ≤ 0 returns a copy.
 #[must_use]
 pub fn gaussian_blur(img: &Image, sigma: f64) -> Image {
-    if !(sigma > 0.0) || img.width == 0 || img.height == 0 {
+    if sigma.is_nan() || sigma <= 0.0 || img.width == 0 || img.height == 0 {
         return img.clone();
     }
     let radius = (3.0 * sigma).ceil() as isize;

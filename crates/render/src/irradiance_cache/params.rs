@@ -258,7 +258,10 @@ pub const PARAMS: &[ParamSpec] = &[
         help: "gather rays per record, split polar × azimuthal ≈ π × polar",
         shapes_records: true,
         get: |p| p.divisions.to_string(),
-        set: |p, v| Ok(p.divisions = number(v, 4, 1_000_000, "a whole number of divisions")?),
+        set: |p, v| {
+            p.divisions = number(v, 4, 1_000_000, "a whole number of divisions")?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "supersamples",
@@ -268,7 +271,10 @@ pub const PARAMS: &[ParamSpec] = &[
                neighbours differ most, until the record's estimated error reaches --record-error",
         shapes_records: true,
         get: |p| p.supersamples.to_string(),
-        set: |p, v| Ok(p.supersamples = number(v, 0, 1_000_000, "super-samples")?),
+        set: |p, v| {
+            p.supersamples = number(v, 0, 1_000_000, "super-samples")?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "record_error",
@@ -279,7 +285,10 @@ pub const PARAMS: &[ParamSpec] = &[
                super-sample",
         shapes_records: true,
         get: |p| p.record_error.to_string(),
-        set: |p, v| Ok(p.record_error = number(v, 0.0, 10.0, "a fraction of the accuracy")?),
+        set: |p, v| {
+            p.record_error = number(v, 0.0, 10.0, "a fraction of the accuracy")?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "resolution",
@@ -290,7 +299,10 @@ pub const PARAMS: &[ParamSpec] = &[
                0: no minimum",
         shapes_records: true,
         get: |p| p.resolution.to_string(),
-        set: |p, v| Ok(p.resolution = number(v, 0.0, f32::MAX, "a resolution")?),
+        set: |p, v| {
+            p.resolution = number(v, 0.0, f32::MAX, "a resolution")?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "bounces",
@@ -300,7 +312,10 @@ pub const PARAMS: &[ParamSpec] = &[
                (default: the scene's max_depth − 2)",
         shapes_records: true,
         get: |p| p.bounces.to_string(),
-        set: |p, v| Ok(p.bounces = number(v, 0, 64, "bounces")?),
+        set: |p, v| {
+            p.bounces = number(v, 0, 64, "bounces")?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "deeper_bounces",
@@ -310,7 +325,10 @@ pub const PARAMS: &[ParamSpec] = &[
                one cache per bounce level (Ward's)",
         shapes_records: true,
         get: |p| p.deeper.name().to_string(),
-        set: |p, v| Ok(p.deeper = Deeper::parse(v.trim())?),
+        set: |p, v| {
+            p.deeper = Deeper::parse(v.trim())?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "ambient_value",
@@ -348,7 +366,10 @@ pub const PARAMS: &[ParamSpec] = &[
                the last level's n records; 0: fixed",
         shapes_records: true,
         get: |p| p.ambient_weight.to_string(),
-        set: |p, v| Ok(p.ambient_weight = number(v, 0, 65535, "a whole weight")?),
+        set: |p, v| {
+            p.ambient_weight = number(v, 0, 65535, "a whole weight")?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "error_metric",
@@ -359,7 +380,10 @@ pub const PARAMS: &[ParamSpec] = &[
                radius (½λR² = aE)",
         shapes_records: true,
         get: |p| p.error_metric.name().to_string(),
-        set: |p, v| Ok(p.error_metric = ErrorMetric::parse(v.trim())?),
+        set: |p, v| {
+            p.error_metric = ErrorMetric::parse(v.trim())?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "neighbour_clamp",
@@ -368,7 +392,10 @@ pub const PARAMS: &[ParamSpec] = &[
         help: "a record's radius never exceeds a neighbour's radius plus their distance",
         shapes_records: true,
         get: |p| if p.neighbour_clamp { "on" } else { "off" }.to_string(),
-        set: |p, v| Ok(p.neighbour_clamp = on_off(v)?),
+        set: |p, v| {
+            p.neighbour_clamp = on_off(v)?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "gradients",
@@ -377,7 +404,10 @@ pub const PARAMS: &[ParamSpec] = &[
         help: "gradients used in interpolation (000 eq. 3.15)",
         shapes_records: true,
         get: |p| p.gradients.name().to_string(),
-        set: |p, v| Ok(p.gradients = GradientMode::parse(v.trim())?),
+        set: |p, v| {
+            p.gradients = GradientMode::parse(v.trim())?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "gradient_formula",
@@ -386,7 +416,10 @@ pub const PARAMS: &[ParamSpec] = &[
         help: "translational gradient as 000 eq. 3.48 or 3.47 (equal)",
         shapes_records: true,
         get: |p| name_of(p.formula, FORMULAS),
-        set: |p, v| Ok(p.formula = choice(v, FORMULAS)?),
+        set: |p, v| {
+            p.formula = choice(v, FORMULAS)?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "overture",
@@ -396,7 +429,10 @@ pub const PARAMS: &[ParamSpec] = &[
                every fourth, or not at all",
         shapes_records: false,
         get: |p| name_of(p.overture, OVERTURES),
-        set: |p, v| Ok(p.overture = choice(v, OVERTURES)?),
+        set: |p, v| {
+            p.overture = choice(v, OVERTURES)?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "record_order",
@@ -405,7 +441,10 @@ pub const PARAMS: &[ParamSpec] = &[
         help: "reorder records along a Morton curve after the pre-pass (003 item 8)",
         shapes_records: false,
         get: |p| name_of(p.spatial_order, ORDERS),
-        set: |p, v| Ok(p.spatial_order = choice(v, ORDERS)?),
+        set: |p, v| {
+            p.spatial_order = choice(v, ORDERS)?;
+            Ok(())
+        },
     },
     ParamSpec {
         name: "direct_samples",
@@ -415,7 +454,10 @@ pub const PARAMS: &[ParamSpec] = &[
                is a delta light)",
         shapes_records: false,
         get: |p| p.direct_samples.to_string(),
-        set: |p, v| Ok(p.direct_samples = number(v, 1, 4096, "light samples")?),
+        set: |p, v| {
+            p.direct_samples = number(v, 1, 4096, "light samples")?;
+            Ok(())
+        },
     },
 ];
 
