@@ -3,10 +3,7 @@
 //! seed whatever the thread count or the order in which tiles finish.
 
 use crate::film::Filter;
-use crate::integrators::ic::IcIntegrator;
 use crate::integrators::{Integrator, RayCounts};
-use crate::irradiance_cache::build::{fill_for_image, BatchHook};
-use crate::irradiance_cache::file::{self, CacheFile, Header};
 use crate::irradiance_cache::{CacheStats, IrradianceCache};
 use crate::scene::{RenderError, Scene};
 use ircache_image::Image;
@@ -94,21 +91,9 @@ pub fn render(
         .build()?;
     let done = AtomicU64::new(0);
     let start = Instant::now();
-    // The irradiance cache is filled by its own parallel pre-pass before any pixel.
-    let prepared;
-    let mut cache_stats = None;
-    let integrator = match integrator {
-        Integrator::Ic(ic) if ic.cache.is_none() => {
-            let (cache, stats) = prepare_cache(scene, ic, settings, &pool)?;
-            let mut ic = ic.clone();
-            ic.cache = Some(Arc::new(cache));
-            ic.seed = settings.seed;
-            cache_stats = Some(stats);
-            prepared = Integrator::Ic(ic);
-            &prepared
-        }
-        other => other,
-    };
+    // What an integrator does once before the pixels (the cache's pre-pass).
+    let (prepared, cache_stats) = integrator.prepare(scene, settings, &pool)?;
+    let integrator = &prepared;
     let pixel_start = Instant::now();
     let results: Vec<(Vec<Rgb>, RayCounts, u64)> = pool.install(|| {
         (0..tiles_x * tiles_y)
@@ -155,14 +140,14 @@ pub fn render(
         invalid_samples += bad;
     }
     let pixel_seconds = pixel_start.elapsed().as_secs_f64();
-    let cache = match (integrator, cache_stats) {
-        (Integrator::Ic(ic), Some(stats)) => {
+    let cache = match (integrator.cache(), cache_stats) {
+        (Some((cache, uncached_samples)), Some(stats)) => {
             rays.gather += stats.gather_rays;
             rays.shadow += stats.shadow_rays;
             Some(CacheReport {
-                cache: ic.cache.clone().expect("filled above"),
+                cache,
                 stats,
-                uncached_samples: ic.uncached_samples.load(Ordering::Relaxed),
+                uncached_samples,
                 pixel_seconds,
             })
         }
@@ -215,128 +200,4 @@ fn render_pixel(
         done += n as u32;
     }
     (sum / settings.spp.max(1) as f32, invalid)
-}
-
-/// Fills the irradiance cache for the image: records from the cache file first (if any), then
-/// the pre-pass, whose new records are appended to the file batch by batch.
-fn prepare_cache(
-    scene: &Scene,
-    ic: &IcIntegrator,
-    settings: &RenderSettings,
-    pool: &rayon::ThreadPool,
-) -> Result<(IrradianceCache, CacheStats), RenderError> {
-    let mut cache = IrradianceCache::new(scene, &ic.params);
-    cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
-    cache.pixel_angle = 2.0 * scene.camera.tan_half_x / settings.width.max(1) as f32;
-    let header = Header {
-        version: file::VERSION,
-        scene_hash: scene.content_hash ^ ic.exclusions.hash(),
-        view_hash: view_hash(scene, &ic.params, settings.width),
-        params: ic.params.clone(),
-    };
-    let mut loaded = 0u64;
-    let mut notes = Vec::new();
-    let mut shared = match &ic.cache_file {
-        None => None,
-        Some(path) => {
-            let (f, contents) = CacheFile::open(path, &header, ic.force_reuse)?;
-            notes.extend(contents.header.view_note(&header));
-            if contents.damaged > 0 {
-                notes.push(format!(
-                    "{}: {} damaged records skipped",
-                    path.display(),
-                    contents.damaged
-                ));
-            }
-            for r in &contents.records {
-                if let Some(store) = cache.levels.get_mut(r.level as usize) {
-                    store.insert(*r);
-                    loaded += 1;
-                }
-            }
-            Some(SharedFile {
-                file: f,
-                failure: None,
-            })
-        }
-    };
-    let mut stats = if ic.params.bounces > 0 {
-        let mut none = ();
-        let hook: &mut (dyn BatchHook + Send) = match shared.as_mut() {
-            Some(s) => s,
-            None => &mut none,
-        };
-        let stats = pool.install(|| {
-            fill_for_image(
-                scene,
-                &mut cache,
-                settings.width,
-                settings.height,
-                settings.rows(),
-                settings.seed,
-                hook,
-            )
-        });
-        if let Some(e) = shared.and_then(|s| s.failure) {
-            return Err(e.into());
-        }
-        stats
-    } else {
-        CacheStats::default()
-    };
-    if ic.params.spatial_order {
-        for store in &mut cache.levels {
-            store.sort_spatially();
-        }
-    }
-    stats.records_loaded = loaded;
-    stats.notes = notes;
-    stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
-    Ok((cache, stats))
-}
-
-/// What records' radii depend on besides the scene and settings: with Tabellion's metric the
-/// pixel footprint, so the camera and the film width; otherwise nothing (0).
-fn view_hash(scene: &Scene, params: &crate::irradiance_cache::IcParams, width: usize) -> u64 {
-    use crate::irradiance_cache::record::ErrorMetric;
-    use std::fmt::Write;
-    if params.error_metric != ErrorMetric::Tabellion {
-        return 0;
-    }
-    let mut h = file::Fnv::default();
-    let c = &scene.camera;
-    let _ = write!(h, "{:?} {} {width}", c.to_world, c.tan_half_x);
-    h.0
-}
-
-/// The pre-pass's link to a cache file shared with other processes: their records come in
-/// before and after each batch, this process's go out after it.
-struct SharedFile {
-    file: CacheFile,
-    failure: Option<file::CacheFileError>,
-}
-
-impl BatchHook for SharedFile {
-    fn before(&mut self) -> Vec<crate::irradiance_cache::Record> {
-        if self.failure.is_some() {
-            return Vec::new();
-        }
-        self.file.read_new().unwrap_or_else(|e| {
-            self.failure = Some(e);
-            Vec::new()
-        })
-    }
-
-    fn after(
-        &mut self,
-        added: &[crate::irradiance_cache::Record],
-    ) -> Vec<crate::irradiance_cache::Record> {
-        if self.failure.is_some() {
-            return Vec::new();
-        }
-        self.file.append(added).unwrap_or_else(|e| {
-            self.failure = Some(e);
-            Vec::new()
-        })
-    }
 }

@@ -490,7 +490,9 @@ fn cache_render_is_deterministic_and_finite() {
 
 #[test]
 fn hessian_by_reprojection_matches_second_differences() {
-    use ircache_render::irradiance_cache::gather::{Deeper, Gatherer, IrradianceCache, WorkState};
+    use ircache_render::irradiance_cache::gather::{
+        Deeper, Gatherer, IrradianceCache, SceneRadiance, WorkState,
+    };
     use ircache_render::irradiance_cache::hemisphere::Stratification;
     use ircache_render::irradiance_cache::points::query_point;
     // The box with the opening, without the occluder (whose silhouette would uncover surfaces
@@ -514,11 +516,14 @@ fn hessian_by_reprojection_matches_second_differences() {
         let seeds = 8;
         let mut frame = None;
         for seed in 0..seeds {
-            let g = Gatherer {
+            let light = SceneRadiance {
                 scene: &scene,
+                deeper: Deeper::PathTraced,
+            };
+            let g = Gatherer {
+                light: &light,
                 cache: &cache,
                 seed,
-                deeper: Deeper::PathTraced,
             };
             let mut st = WorkState::new(1);
             let (h, f) = g.gather(&mut st, &sp, Stratification::from_divisions(16384), 0, 1);

@@ -9,7 +9,7 @@
 
 use super::path_continuation::{trace_path, Arrival, IndirectSource, PathSettings, PathStart};
 use super::RayCounts;
-use crate::irradiance_cache::gather::{mix, Gatherer, ShadingPoint, WorkState};
+use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, ShadingPoint, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::{IcParams, IrradianceCache};
 use crate::scene::Scene;
@@ -228,11 +228,14 @@ impl IndirectSource for PixelLookup<'_> {
             return None;
         }
         self.ic.uncached_samples.fetch_add(1, Ordering::Relaxed);
-        let g = Gatherer {
+        let light = SceneRadiance {
             scene,
+            deeper: cache.params.deeper,
+        };
+        let g = Gatherer {
+            light: &light,
             cache,
             seed: self.ic.seed,
-            deeper: cache.params.deeper,
         };
         let mut st = WorkState::new(cache.levels.len());
         let key = mix(

@@ -78,6 +78,49 @@ impl Integrator {
         }
     }
 
+    /// What the integrator does once before the pixels: the cache's pre-pass for `ic` (run in
+    /// `pool`), nothing for the others. Returns the integrator ready for the pixels and the
+    /// pre-pass's figures.
+    pub fn prepare(
+        &self,
+        scene: &Scene,
+        settings: &crate::render::RenderSettings,
+        pool: &rayon::ThreadPool,
+    ) -> Result<(Integrator, Option<crate::irradiance_cache::CacheStats>), crate::scene::RenderError>
+    {
+        match self {
+            Integrator::Ic(ic) if ic.cache.is_none() => {
+                let (cache, stats) =
+                    crate::irradiance_cache::prepare::prepare_cache(scene, ic, settings, pool)?;
+                let mut ic = ic.clone();
+                ic.cache = Some(std::sync::Arc::new(cache));
+                ic.seed = settings.seed;
+                Ok((Integrator::Ic(ic), Some(stats)))
+            }
+            other => Ok((other.clone(), None)),
+        }
+    }
+
+    /// The filled cache and the pixel samples that no record reached, for integrators with one.
+    #[must_use]
+    pub fn cache(
+        &self,
+    ) -> Option<(
+        std::sync::Arc<crate::irradiance_cache::IrradianceCache>,
+        u64,
+    )> {
+        match self {
+            Integrator::Ic(ic) => ic.cache.clone().map(|c| {
+                (
+                    c,
+                    ic.uncached_samples
+                        .load(std::sync::atomic::Ordering::Relaxed),
+                )
+            }),
+            _ => None,
+        }
+    }
+
     /// Radiance arriving along the camera ray `ray`, whose closest hit `first_hit` the caller
     /// traced (camera rays go to Embree in coherent packets; see [`crate::render`]).
     #[inline]

@@ -10,7 +10,9 @@
 //! during a batch), tiles do not exist here so no border duplicates, and the result depends only
 //! on the seed.
 
-use super::gather::{mix, GatherCounts, Gatherer, IrradianceCache, ShadingPoint, WorkState};
+use super::gather::{
+    mix, GatherCounts, Gatherer, IrradianceCache, SceneRadiance, ShadingPoint, WorkState,
+};
 use super::record::Record;
 use crate::scene::Scene;
 use ircache_math::{Ray, Vec2, Vec3};
@@ -168,11 +170,14 @@ pub fn run_batch(
 ) {
     take_in(cache, hook.before(), stats);
     let results: Vec<Option<((Record, ShadingPoint), WorkState)>> = {
-        let g = Gatherer {
+        let light = SceneRadiance {
             scene,
+            deeper: cache.params.deeper,
+        };
+        let g = Gatherer {
+            light: &light,
             cache,
             seed,
-            deeper: cache.params.deeper,
         };
         // Small pieces: the points that need records cluster (edges, corners), and rayon
         // cannot steal from inside a piece a thread has started.
@@ -354,11 +359,14 @@ pub fn regather_noisy(
         if jobs.is_empty() {
             continue;
         }
-        let g = Gatherer {
+        let light = SceneRadiance {
             scene,
+            deeper: params.deeper,
+        };
+        let g = Gatherer {
+            light: &light,
             cache,
             seed,
-            deeper: params.deeper,
         };
         let fresh: Vec<(usize, Record, GatherCounts)> = jobs
             .par_iter()

@@ -18,7 +18,7 @@ use crate::integrators::path_continuation::{
 };
 use crate::integrators::RayCounts;
 use crate::scene::{Interaction, Scene};
-use ircache_math::{Frame, Ray, Rgb, Rng, Vec2, Vec3};
+use ircache_math::{Frame, Rgb, Rng, Vec2, Vec3};
 
 /// The records of every bounce level, and the settings they were made with.
 #[derive(Clone, Debug)]
@@ -50,7 +50,19 @@ impl IrradianceCache {
     /// An empty cache for `scene`.
     #[must_use]
     pub fn new(scene: &Scene, params: &IcParams) -> IrradianceCache {
-        let size = scene_size(scene);
+        let mut cache = IrradianceCache::for_size(scene_size(scene), params);
+        // Only the ambient running average needs it.
+        if params.ambient_weight > 0 {
+            cache.mean_albedo = mean_albedo(scene);
+        }
+        cache.excluded = vec![false; scene.shapes.len()];
+        cache
+    }
+
+    /// An empty cache for a scene of size `size` (no shape excluded, no mean albedo): what
+    /// records need besides the light they gather.
+    #[must_use]
+    pub fn for_size(size: f32, params: &IcParams) -> IrradianceCache {
         let (r_min, r_max) = params.radius_limits(size);
         let mut cache = IrradianceCache {
             params: params.clone(),
@@ -65,13 +77,8 @@ impl IrradianceCache {
                 size * 1e-4
             },
             ambient: params.ambient_value,
-            // Only the ambient running average needs it.
-            mean_albedo: if params.ambient_weight > 0 {
-                mean_albedo(scene)
-            } else {
-                0.0
-            },
-            excluded: vec![false; scene.shapes.len()],
+            mean_albedo: 0.0,
+            excluded: Vec::new(),
             pixel_angle: 0.0,
         };
         cache.levels = (0..params.bounces.max(1))
@@ -210,14 +217,55 @@ impl WorkState {
     }
 }
 
-/// Computes records and shades gather rays for one cache.
+/// What a gather ray finds: the radiance arriving along it, the distance to the surface it
+/// comes from and that surface's geometric normal (world space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Incident {
+    /// Radiance arriving (emission of the surface found left out: direct terms sample lights).
+    pub radiance: Rgb,
+    /// Distance to the surface.
+    pub distance: f32,
+    /// Its geometric normal.
+    pub normal: Vec3,
+}
+
+/// The narrow interface through which a cache's gather asks for light: the radiance arriving at
+/// a point from a direction. [`SceneRadiance`] traces the scene; a test can answer in closed
+/// form, so records are checked without a ray tracer.
+pub trait IncidentRadiance: Sync {
+    /// What arrives at `sp` from the unit world direction `d` (above the surface), for a record
+    /// at bounce `level` of `cache` (`key` keys the random streams of records made on the way);
+    /// `None` when the ray escapes (no radiance, infinitely far).
+    #[allow(clippy::too_many_arguments)]
+    fn incident(
+        &self,
+        cache: &IrradianceCache,
+        seed: u64,
+        st: &mut WorkState,
+        sp: &ShadingPoint,
+        d: Vec3,
+        level: u32,
+        key: u64,
+        rng: &mut Rng,
+    ) -> Option<Incident>;
+}
+
+/// Computes records for one cache from the light an [`IncidentRadiance`] reports.
 pub struct Gatherer<'a> {
-    /// The scene.
-    pub scene: &'a Scene,
+    /// Where the light comes from.
+    pub light: &'a dyn IncidentRadiance,
     /// The cache (read-only during a batch).
     pub cache: &'a IrradianceCache,
     /// Seed of all random streams.
     pub seed: u64,
+}
+
+/// Incident radiance by tracing the scene: a gather ray's path is continued by [`trace_path`]
+/// to the cache's depth, the Lambertian parts of deeper vertices served by the next levels'
+/// caches or traced ([`Deeper`]).
+pub struct SceneRadiance<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
     /// Where deeper indirect light comes from.
     pub deeper: Deeper,
 }
@@ -330,12 +378,11 @@ impl Gatherer<'_> {
         if d.dot(ng) <= 0.0 {
             return None; // below the geometric surface: nothing arrives
         }
-        let ray = self.scene.spawn_ray(&sp.it, d);
         st.counts.gather_rays += 1;
-        let hit = self.scene.intersect(&ray)?;
-        let (t, n_hit) = (hit.t, frame.to_local(hit.ng));
-        let l = self.radiance(st, ray, Some(hit), level, key, rng);
-        Some((l, t, n_hit))
+        let inc = self
+            .light
+            .incident(self.cache, self.seed, st, sp, d, level, key, rng)?;
+        Some((inc.radiance, inc.distance, frame.to_local(inc.normal)))
     }
 
     /// Adaptive super-sampling (003 item 2): the cells whose neighbours differ most among
@@ -511,21 +558,24 @@ impl Gatherer<'_> {
         st.new_records.push((rec, *sp));
         rec.e
     }
+}
 
-    /// Radiance arriving along the gather ray `ray` from a record at `level` whose first hit is
-    /// `hit`, emission at that hit excluded (the direct term samples the lights): the path is
-    /// continued by [`trace_path`] to the cache's depth, the Lambertian parts of deeper vertices
-    /// served by the next levels' caches or traced ([`DeeperBounces`]).
-    fn radiance(
+impl IncidentRadiance for SceneRadiance<'_> {
+    fn incident(
         &self,
+        cache: &IrradianceCache,
+        seed: u64,
         st: &mut WorkState,
-        ray: Ray,
-        hit: Option<Interaction>,
+        sp: &ShadingPoint,
+        d: Vec3,
         level: u32,
         key: u64,
         rng: &mut Rng,
-    ) -> Rgb {
-        let params = &self.cache.params;
+    ) -> Option<Incident> {
+        let ray = self.scene.spawn_ray(&sp.it, d);
+        let hit = self.scene.intersect(&ray)?;
+        let (distance, normal) = (hit.t, hit.ng);
+        let params = &cache.params;
         let settings = PathSettings {
             max_depth: params.bounces + 2,
             // Roulette from the first continuation beyond the gather hit: gathers are many
@@ -540,16 +590,22 @@ impl Gatherer<'_> {
             arrival: Arrival::Gather,
         };
         let mut rays = RayCounts::default();
-        let l = {
+        let gatherer = Gatherer {
+            light: self,
+            cache,
+            seed,
+        };
+        let radiance = {
             let mut source = GatherSource {
-                gatherer: self,
+                gatherer: &gatherer,
+                deeper: self.deeper,
                 st: &mut *st,
                 key,
             };
             trace_path(
                 self.scene,
                 start,
-                Some(hit),
+                Some(Some(hit)),
                 &mut source,
                 &settings,
                 rng,
@@ -558,13 +614,18 @@ impl Gatherer<'_> {
         };
         st.counts.gather_rays += rays.bounce + rays.gather;
         st.counts.shadow_rays += rays.shadow;
-        l
+        Some(Incident {
+            radiance,
+            distance,
+            normal,
+        })
     }
 }
 
 /// The Lambertian indirect light at the vertices of a gather's paths.
 struct GatherSource<'g, 'a> {
     gatherer: &'g Gatherer<'a>,
+    deeper: Deeper,
     st: &'g mut WorkState,
     key: u64,
 }
@@ -582,7 +643,7 @@ impl IndirectSource for GatherSource<'_, '_> {
         if g.cache.is_excluded(sp.it.shape) {
             return Some(g.cache.ambient * std::f32::consts::PI);
         }
-        match g.deeper {
+        match self.deeper {
             Deeper::Cache if (depth as usize) < g.cache.levels.len() => {
                 Some(g.irradiance(self.st, sp, depth, self.key))
             }
@@ -603,4 +664,80 @@ pub fn mix(key: u64, i: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::irradiance_cache::points::query_point;
+
+    /// A dome far away whose radiance is linear in the direction: L(d) = c₀ + a·d.
+    struct Dome {
+        c0: f32,
+        a: Vec3,
+    }
+
+    impl IncidentRadiance for Dome {
+        fn incident(
+            &self,
+            _: &IrradianceCache,
+            _: u64,
+            _: &mut WorkState,
+            _: &ShadingPoint,
+            d: Vec3,
+            _: u32,
+            _: u64,
+            _: &mut Rng,
+        ) -> Option<Incident> {
+            Some(Incident {
+                radiance: Rgb::splat(self.c0 + self.a.dot(d)),
+                distance: 1e6,
+                normal: -d,
+            })
+        }
+    }
+
+    #[test]
+    fn a_record_of_closed_form_light_has_its_irradiance_and_gradients() {
+        // E(n) = π c₀ + (2π/3) a·n; turning n changes it by (2π/3) a·δn, so the rotational
+        // gradient is (2π/3) n × a (E(n') ≈ E + (n × n')·∇ᵣE); the dome is at infinity, so the
+        // translational gradient vanishes. No ray tracer involved.
+        let mut params = IcParams::default();
+        params.set("divisions", "4096").unwrap();
+        params.set("supersamples", "0").unwrap();
+        let cache = IrradianceCache::for_size(10.0, &params);
+        let dome = Dome {
+            c0: 1.0,
+            a: Vec3::new(0.3, -0.2, 0.5),
+        };
+        let g = Gatherer {
+            light: &dome,
+            cache: &cache,
+            seed: 4,
+        };
+        for n in [
+            Vec3::Z,
+            Vec3::new(0.6, 0.0, 0.8),
+            Vec3::new(-0.36, 0.48, 0.8),
+        ] {
+            let mut st = WorkState::new(1);
+            let rec = g.record_at(&mut st, &query_point(Vec3::ONE, n), 0, 7);
+            let pi = std::f32::consts::PI;
+            let e = pi * dome.c0 + 2.0 * pi / 3.0 * dome.a.dot(n);
+            assert!(
+                (rec.e.g - e).abs() < 2e-3 * e,
+                "n {n}: E {} vs {e}",
+                rec.e.g
+            );
+            let grad_r = n.cross(dome.a) * (2.0 * pi / 3.0);
+            assert!(
+                (rec.grad_r[1] - grad_r).length() < 0.02 * grad_r.length(),
+                "n {n}: rotational gradient {} vs {grad_r}",
+                rec.grad_r[1]
+            );
+            assert!(rec.grad_t[1].length() < 1e-5 * e, "{}", rec.grad_t[1]);
+            let cells = super::super::hemisphere::Stratification::from_divisions(4096).cells();
+            assert_eq!(st.counts.gather_rays, cells as u64);
+        }
+    }
 }

@@ -249,19 +249,26 @@ impl HemisphereSamples {
         }
     }
 
-    /// Rotational gradient (3.29) with the tangent taken at each cell's centre, signed so that
-    /// E(n) ≈ E + (n_i × n)·∇_r E.
+    /// Rotational gradient (3.29), signed so that E(n) ≈ E + (n_i × n)·∇_r E. Each cell's
+    /// weight is the mean of tan θ and of the azimuthal direction over the cell, not their
+    /// values at its centre: a cell is uniform in u = sin²θ, where tan θ = √(u/(1−u)) has the
+    /// antiderivative asin √u − √(u(1−u)); at the horizon ring the centre value is 1/√2 of
+    /// the mean, which took 6 % off the gradient at 512 divisions (a closed-form test found it).
     #[must_use]
     pub fn rotational_gradient(&self) -> LocalGradient {
         let (m, n) = (self.strata.polar, self.strata.azimuthal);
+        let anti = |u: f64| u.sqrt().asin() - (u * (1.0 - u)).max(0.0).sqrt();
+        let tan_mean: Vec<f64> = (0..m)
+            .map(|j| (anti((j + 1) as f64 / m as f64) - anti(j as f64 / m as f64)) * m as f64)
+            .collect();
+        let dphi = 2.0 * PI / n as f64;
         let mut g = [[0.0f64; 2]; 3];
         for k in 0..n {
-            let phi = 2.0 * PI * (k as f64 + 0.5) / n as f64;
-            let v = [-phi.sin(), phi.cos()];
+            let (p0, p1) = (k as f64 * dphi, (k + 1) as f64 * dphi);
+            // Means of −sin φ and cos φ over the sector.
+            let v = [(p1.cos() - p0.cos()) / dphi, (p1.sin() - p0.sin()) / dphi];
             let mut sum = [0.0f64; 3];
-            for j in 0..m {
-                let s2 = (j as f64 + 0.5) / m as f64;
-                let tan = (s2 / (1.0 - s2)).sqrt();
+            for (j, &tan) in tan_mean.iter().enumerate() {
                 let l = self.l(j, k);
                 for c in 0..3 {
                     sum[c] += l[c] * tan;

@@ -13,6 +13,7 @@
 //! - [`build`]: the coarse-to-fine pre-pass that fills the cache in parallel batches.
 //! - [`aov`]: the irradiance image and the record-position overlay.
 //! - [`points`]: irradiance at given points (Radiance's `rtrace -I`), by the cache or brute force.
+//! - [`prepare`]: filling the cache for an image, with the cache file.
 //!
 //! The integrator that renders with it is [`crate::integrators::ic`].
 
@@ -23,6 +24,7 @@ pub mod gather;
 pub mod hemisphere;
 pub mod params;
 pub mod points;
+pub mod prepare;
 pub mod record;
 pub mod store;
 

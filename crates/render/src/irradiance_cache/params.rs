@@ -501,3 +501,49 @@ impl IcParams {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_parameter_reads_back_what_it_prints_and_names_its_errors() {
+        // Defaults and a changed value of each survive get → set → get; bad text is refused
+        // with the parameter's name; names with dashes and Radiance's aliases find the entry.
+        let mut p = IcParams::default();
+        for spec in PARAMS {
+            let text = (spec.get)(&p);
+            (spec.set)(&mut p, &text).unwrap_or_else(|e| panic!("{}: {e}", spec.name));
+            assert_eq!((spec.get)(&p), text, "{}", spec.name);
+            let e = p.set(spec.name, "nonsense").unwrap_err();
+            assert!(e.starts_with(spec.name), "{e}");
+            assert!(param(&spec.name.replace('_', "-")).is_some());
+            for a in spec.aliases {
+                assert_eq!(param(a).map(|s| s.name), Some(spec.name));
+            }
+        }
+        assert_eq!(p, IcParams::default());
+        assert!(p
+            .set("acuracy", "0.3")
+            .unwrap_err()
+            .contains("known: accuracy"));
+        // Names are unique.
+        for (i, a) in PARAMS.iter().enumerate() {
+            for b in &PARAMS[i + 1..] {
+                assert_ne!(a.name, b.name);
+                assert!(!b.aliases.contains(&a.name) && !a.aliases.contains(&b.name));
+            }
+        }
+    }
+
+    #[test]
+    fn the_readme_documents_every_parameter() {
+        let readme =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md"))
+                .expect("README.md beside the workspace");
+        for spec in PARAMS {
+            let option = format!("`--{} ", spec.name.replace('_', "-"));
+            assert!(readme.contains(&option), "README lacks {option}");
+        }
+    }
+}

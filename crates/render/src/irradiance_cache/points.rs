@@ -4,7 +4,9 @@
 //! indirect part's gradients either way.
 
 use super::build::{fill_for_points, CacheStats};
-use super::gather::{mix, Deeper, Gatherer, IrradianceCache, ShadingPoint, WorkState};
+use super::gather::{
+    mix, Deeper, Gatherer, IrradianceCache, SceneRadiance, ShadingPoint, WorkState,
+};
 use super::hemisphere::{to_world, Stratification};
 use super::params::{IcParams, TranslationalFormula};
 use crate::scene::{Interaction, Scene};
@@ -58,26 +60,27 @@ pub fn query_point(p: Vec3, n: Vec3) -> ShadingPoint {
     }
 }
 
-/// Direct irradiance at `sp` from `samples` light samples.
+/// Direct irradiance at `sp` from `samples` light samples: π times the radiance a white
+/// Lambertian surface there reflects, by the one light-sampling estimator.
 fn direct_irradiance(scene: &Scene, sp: &ShadingPoint, samples: u32, rng: &mut Rng) -> Rgb {
-    let mut e = Rgb::ZERO;
-    for _ in 0..samples {
-        let (u_sel, u) = (rng.next_f32(), rng.next_2d());
-        let Some(ls) = scene.lights.sample(sp.it.p, u_sel, u) else {
-            continue;
-        };
-        let cos = sp.n.dot(ls.wi);
-        if cos <= 0.0 || ls.pdf <= 0.0 {
-            continue;
-        }
-        if !scene
-            .accel
-            .occluded(&scene.shadow_ray(&sp.it, ls.wi, ls.distance))
-        {
-            e += ls.radiance * (cos / ls.pdf);
-        }
-    }
-    e / samples.max(1) as f32
+    use crate::bsdf::{Bsdf, Diffuse, Lobe};
+    use crate::integrators::light_sampling::{sample_lights, BsdfStrategy};
+    let white = Bsdf::Single(Lobe::Diffuse(Diffuse {
+        reflectance: Rgb::ONE,
+    }));
+    let mut rays = crate::integrators::RayCounts::default();
+    let wo = sp.it.frame.to_local(sp.n);
+    sample_lights(
+        scene,
+        &sp.it,
+        &white,
+        wo,
+        samples,
+        BsdfStrategy::All,
+        0,
+        rng,
+        &mut rays,
+    ) * std::f32::consts::PI
 }
 
 /// Irradiance at each `(p, n)`; `direct_samples` = 0 leaves the direct part out.
@@ -169,11 +172,14 @@ fn brute_force(
     samples: usize,
     key: u64,
 ) -> (Rgb, [Vec3; 3], [Vec3; 3]) {
-    let g = Gatherer {
+    let light = SceneRadiance {
         scene,
+        deeper: Deeper::PathTraced,
+    };
+    let g = Gatherer {
+        light: &light,
         cache,
         seed: key,
-        deeper: Deeper::PathTraced,
     };
     let mut st = WorkState::new(cache.levels.len());
     let (h, frame) = g.gather(&mut st, sp, Stratification::from_divisions(samples), 0, key);

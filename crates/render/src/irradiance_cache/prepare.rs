@@ -1,0 +1,131 @@
+//! Filling the cache for an image before its pixels: records from a cache file first (shared
+//! with other processes), then the pre-pass ([`super::build::fill_for_image`]), whose new records
+//! go to the file batch by batch.
+
+use super::build::{fill_for_image, BatchHook};
+use super::file::{self, CacheFile, Header};
+use super::{CacheStats, IrradianceCache, Record};
+use crate::integrators::ic::IcIntegrator;
+use crate::render::RenderSettings;
+use crate::scene::{RenderError, Scene};
+
+/// Fills the irradiance cache for the image: records from the cache file first (if any), then
+/// the pre-pass, whose new records are appended to the file batch by batch.
+pub fn prepare_cache(
+    scene: &Scene,
+    ic: &IcIntegrator,
+    settings: &RenderSettings,
+    pool: &rayon::ThreadPool,
+) -> Result<(IrradianceCache, CacheStats), RenderError> {
+    let mut cache = IrradianceCache::new(scene, &ic.params);
+    cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
+    cache.pixel_angle = 2.0 * scene.camera.tan_half_x / settings.width.max(1) as f32;
+    let header = Header {
+        version: file::VERSION,
+        scene_hash: scene.content_hash ^ ic.exclusions.hash(),
+        view_hash: view_hash(scene, &ic.params, settings.width),
+        params: ic.params.clone(),
+    };
+    let mut loaded = 0u64;
+    let mut notes = Vec::new();
+    let mut shared = match &ic.cache_file {
+        None => None,
+        Some(path) => {
+            let (f, contents) = CacheFile::open(path, &header, ic.force_reuse)?;
+            notes.extend(contents.header.view_note(&header));
+            if contents.damaged > 0 {
+                notes.push(format!(
+                    "{}: {} damaged records skipped",
+                    path.display(),
+                    contents.damaged
+                ));
+            }
+            for r in &contents.records {
+                if let Some(store) = cache.levels.get_mut(r.level as usize) {
+                    store.insert(*r);
+                    loaded += 1;
+                }
+            }
+            Some(SharedFile {
+                file: f,
+                failure: None,
+            })
+        }
+    };
+    let mut stats = if ic.params.bounces > 0 {
+        let mut none = ();
+        let hook: &mut (dyn BatchHook + Send) = match shared.as_mut() {
+            Some(s) => s,
+            None => &mut none,
+        };
+        let stats = pool.install(|| {
+            fill_for_image(
+                scene,
+                &mut cache,
+                settings.width,
+                settings.height,
+                settings.rows(),
+                settings.seed,
+                hook,
+            )
+        });
+        if let Some(e) = shared.and_then(|s| s.failure) {
+            return Err(e.into());
+        }
+        stats
+    } else {
+        CacheStats::default()
+    };
+    if ic.params.spatial_order {
+        for store in &mut cache.levels {
+            store.sort_spatially();
+        }
+    }
+    stats.records_loaded = loaded;
+    stats.notes = notes;
+    stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
+    Ok((cache, stats))
+}
+
+/// What records' radii depend on besides the scene and settings: with Tabellion's metric the
+/// pixel footprint, so the camera and the film width; otherwise nothing (0).
+fn view_hash(scene: &Scene, params: &super::IcParams, width: usize) -> u64 {
+    use super::record::ErrorMetric;
+    use std::fmt::Write;
+    if params.error_metric != ErrorMetric::Tabellion {
+        return 0;
+    }
+    let mut h = file::Fnv::default();
+    let c = &scene.camera;
+    let _ = write!(h, "{:?} {} {width}", c.to_world, c.tan_half_x);
+    h.0
+}
+
+/// The pre-pass's link to a cache file shared with other processes: their records come in
+/// before and after each batch, this process's go out after it.
+struct SharedFile {
+    file: CacheFile,
+    failure: Option<file::CacheFileError>,
+}
+
+impl BatchHook for SharedFile {
+    fn before(&mut self) -> Vec<Record> {
+        if self.failure.is_some() {
+            return Vec::new();
+        }
+        self.file.read_new().unwrap_or_else(|e| {
+            self.failure = Some(e);
+            Vec::new()
+        })
+    }
+
+    fn after(&mut self, added: &[Record]) -> Vec<Record> {
+        if self.failure.is_some() {
+            return Vec::new();
+        }
+        self.file.append(added).unwrap_or_else(|e| {
+            self.failure = Some(e);
+            Vec::new()
+        })
+    }
+}
