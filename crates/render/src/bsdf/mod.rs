@@ -61,6 +61,25 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
+impl BsdfSample {
+    /// A sample `wi` of a smooth reflection lobe with density `pdf` and `f · cos θ_i` = `eval`:
+    /// weight `eval / pdf`; `None` below the surface or where the density vanishes.
+    #[inline]
+    #[must_use]
+    pub fn smooth_reflection(wi: Vec3, pdf: f32, eval: impl FnOnce() -> Rgb) -> Option<Self> {
+        if wi.z <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            pdf,
+            weight: eval() / pdf,
+            delta: false,
+            eta: 1.0,
+        })
+    }
+}
+
 /// One BSDF model evaluated at a surface point (textures already looked up).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Lobe {

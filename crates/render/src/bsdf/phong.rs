@@ -87,17 +87,7 @@ impl Phong {
             return None;
         }
         let wi = self.sample_lobe(wo, u);
-        let pdf = self.pdf_specular(wo, wi);
-        if wi.z <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            pdf,
-            weight: self.eval_specular(wo, wi) / pdf,
-            delta: false,
-            eta: 1.0,
-        })
+        BsdfSample::smooth_reflection(wi, self.pdf_specular(wo, wi), || self.eval_specular(wo, wi))
     }
 
     /// A direction around the mirror direction with density ∝ cos^n α.
@@ -136,19 +126,6 @@ impl Phong {
         } else {
             sampling::square_to_cosine_hemisphere(u)
         };
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let pdf = self.pdf(wo, wi);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            pdf,
-            weight: self.eval(wo, wi) / pdf,
-            delta: false,
-            eta: 1.0,
-        })
+        BsdfSample::smooth_reflection(wi, self.pdf(wo, wi), || self.eval(wo, wi))
     }
 }

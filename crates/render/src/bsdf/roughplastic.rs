@@ -272,17 +272,7 @@ impl RoughPlastic {
             return None;
         }
         let wi = reflect_about(wo, self.distr.sample_visible(wo, u)).normalize();
-        let pdf = self.pdf_specular(wo, wi);
-        if wi.z <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            pdf,
-            weight: self.eval_specular(wo, wi) / pdf,
-            delta: false,
-            eta: 1.0,
-        })
+        BsdfSample::smooth_reflection(wi, self.pdf_specular(wo, wi), || self.eval_specular(wo, wi))
     }
 
     /// Mixture density of the two lobes.
@@ -314,21 +304,7 @@ impl RoughPlastic {
         } else {
             sampling::square_to_cosine_hemisphere(u)
         };
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let pdf = self.pdf(wo, wi);
-        if pdf.is_nan() || pdf <= 0.0 {
-            return None;
-        }
-        let weight = self.eval(wo, wi) / pdf;
-        Some(BsdfSample {
-            wi,
-            pdf,
-            weight,
-            delta: false,
-            eta: 1.0,
-        })
+        BsdfSample::smooth_reflection(wi, self.pdf(wo, wi), || self.eval(wo, wi))
     }
 }
 

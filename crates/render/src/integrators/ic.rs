@@ -7,7 +7,7 @@
 //! hold is traced. The cache is filled before the pixels are rendered (see
 //! [`crate::irradiance_cache::build`]).
 
-use super::path_continuation::{trace_path, Arrival, IndirectSource, PathSettings, PathStart};
+use super::path_continuation::{trace_path, IndirectSource, PathSettings, PathStart};
 use super::RayCounts;
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, ShadingPoint, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
@@ -169,14 +169,7 @@ impl IcIntegrator {
             rr_depth: RR_DEPTH,
             first_light_samples,
         };
-        let start = PathStart {
-            ray: *ray,
-            depth: 0,
-            beta: Rgb::ONE,
-            arrival: Arrival::Camera {
-                hide_emitters: self.hide_emitters,
-            },
-        };
+        let start = PathStart::camera(*ray, self.hide_emitters);
         let fresh;
         let cache = match &self.cache {
             Some(c) => c.as_ref(),

@@ -4,7 +4,7 @@
 //! directly, 2: direct light, 3: one indirect bounce). The loop itself is
 //! [`super::path_continuation::trace_path`] with no cache.
 
-use super::path_continuation::{trace_path, Arrival, PathSettings, PathStart, Traced};
+use super::path_continuation::{trace_path, PathSettings, PathStart, Traced};
 use super::RayCounts;
 use crate::scene::Scene;
 use ircache_embree::Hit;
@@ -36,14 +36,7 @@ impl PathIntegrator {
             rr_depth: self.rr_depth,
             first_light_samples: 1,
         };
-        let start = PathStart {
-            ray: *ray,
-            depth: 0,
-            beta: Rgb::ONE,
-            arrival: Arrival::Camera {
-                hide_emitters: self.hide_emitters,
-            },
-        };
+        let start = PathStart::camera(*ray, self.hide_emitters);
         let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
         trace_path(scene, start, first, &mut Traced, &settings, rng, rays)
     }

@@ -89,6 +89,26 @@ pub enum Arrival {
     },
 }
 
+impl Arrival {
+    /// The weight of emission found by this arrival: 1 or 0 for camera rays (emitters shown or
+    /// hidden), 0 for gather rays, 1 after a delta lobe, else the power heuristic against the
+    /// light samples taken at the vertex left, `light_pdf(that vertex)` being their density.
+    #[inline]
+    fn emission_weight(&self, light_pdf: impl FnOnce(Vec3) -> f32) -> f32 {
+        match *self {
+            Arrival::Camera { hide_emitters } => f32::from(u8::from(!hide_emitters)),
+            Arrival::Gather => 0.0,
+            Arrival::Bsdf { delta: true, .. } => 1.0,
+            Arrival::Bsdf {
+                p,
+                pdf,
+                light_samples,
+                ..
+            } => mis_weight(pdf, light_samples as f32 * light_pdf(p)),
+        }
+    }
+}
+
 /// A path about to find its next vertex.
 #[derive(Clone, Copy, Debug)]
 pub struct PathStart {
@@ -100,6 +120,19 @@ pub struct PathStart {
     pub beta: Rgb,
     /// How it arrives.
     pub arrival: Arrival,
+}
+
+impl PathStart {
+    /// A camera ray, about to find the path's first vertex.
+    #[must_use]
+    pub fn camera(ray: Ray, hide_emitters: bool) -> PathStart {
+        PathStart {
+            ray,
+            depth: 0,
+            beta: Rgb::ONE,
+            arrival: Arrival::Camera { hide_emitters },
+        }
+    }
 }
 
 /// Radiance arriving along `start.ray`, whose first intersection the caller may have traced
@@ -138,25 +171,7 @@ pub fn trace_path(
         };
         let Some(it) = hit else {
             if scene.lights.has_environment() {
-                let w = match arrival {
-                    Arrival::Camera { hide_emitters } => f32::from(u8::from(!hide_emitters)),
-                    Arrival::Gather => 0.0,
-                    Arrival::Bsdf {
-                        pdf,
-                        delta,
-                        light_samples,
-                        ..
-                    } => {
-                        if delta {
-                            1.0
-                        } else {
-                            mis_weight(
-                                pdf,
-                                light_samples as f32 * scene.lights.pdf_environment(ray.d),
-                            )
-                        }
-                    }
-                };
+                let w = arrival.emission_weight(|_| scene.lights.pdf_environment(ray.d));
                 if w > 0.0 {
                     l += beta * scene.lights.environment_radiance(ray.d) * w;
                 }
@@ -166,23 +181,8 @@ pub fn trace_path(
         let wo = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
         if let Some(light) = shape.area_light {
-            let w = match arrival {
-                Arrival::Camera { hide_emitters } => f32::from(u8::from(!hide_emitters)),
-                Arrival::Gather => 0.0,
-                Arrival::Bsdf {
-                    p,
-                    pdf,
-                    delta,
-                    light_samples,
-                } => {
-                    if delta {
-                        1.0
-                    } else {
-                        let pdf_l = scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n);
-                        mis_weight(pdf, light_samples as f32 * pdf_l)
-                    }
-                }
-            };
+            let w = arrival
+                .emission_weight(|p| scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n));
             if w > 0.0 {
                 l += beta * scene.lights.area_radiance(light, it.frame.n, wo) * w;
             }
