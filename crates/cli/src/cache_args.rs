@@ -188,7 +188,7 @@ impl CacheArgs {
                 }
             }
         }
-        Ok(())
+        params.check().map_err(anyhow::Error::msg)
     }
 }
 

@@ -166,6 +166,7 @@ pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
     }
     if let Some(i) = &args.integrator {
         desc.integrator.kind = i.clone();
+        desc.integrator.unusable = None;
     }
     if let Some(d) = args.max_depth {
         desc.integrator.max_depth = d;

@@ -691,3 +691,49 @@ fn normal_maps_reach_the_cache_through_the_rotation_gradient_not_more_records() 
         "the irradiance did not follow the bumps: {ediff} of {esum}"
     );
 }
+
+#[test]
+fn unbounded_depth_and_other_renderers_integrators() {
+    let d = temp_dir("unbounded");
+    let small = [
+        "render", "--spp", "2", "--width", "24", "--height", "24", "-q", "-o",
+    ];
+    // max_depth -1 with the cache: unbounded bounces, the deeper ones path-traced (an OBJ scene
+    // has no max_depth either).
+    let o = ircache(&[&small[..], &["u.exr", "-D", "max_depth=-1"]].concat(), &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = ircache_image::read_image(&d.join("u.exr")).unwrap();
+    assert!(img.pixels.iter().all(|p| p.is_valid_radiance()));
+    // … but not with one cache per bounce level: said, not silently one bounce.
+    let o = ircache(
+        &[
+            &small[..],
+            &["c.exr", "-D", "max_depth=-1", "--deeper-bounces", "cache"],
+        ]
+        .concat(),
+        &d,
+    );
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("unbounded"), "{}", stderr(&o));
+    // A scene naming another renderer's integrator loads; rendering with it is the error, with
+    // where it was written, and naming ours on the command line renders.
+    let o = ircache(
+        &[&small[..], &["f.exr", "-D", "integrator=foo"]].concat(),
+        &d,
+    );
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("\"foo\" not found") && stderr(&o).contains(".xml:"),
+        "{}",
+        stderr(&o)
+    );
+    let o = ircache(
+        &[
+            &small[..],
+            &["p.exr", "-D", "integrator=foo", "--integrator", "path"],
+        ]
+        .concat(),
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+}

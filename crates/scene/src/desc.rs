@@ -112,6 +112,9 @@ pub struct IntegratorDesc {
     pub bsdf_samples: u32,
     /// Any further parameters of other integrator types, by name, with where they were written.
     pub extra: Vec<(String, ParamValue, SourceLocation)>,
+    /// Why the scene's own integrator cannot be used (an unknown plugin, with where it was
+    /// written): an error when it is rendered, nothing when the command line names another.
+    pub unusable: Option<String>,
 }
 
 impl Default for IntegratorDesc {
@@ -124,6 +127,7 @@ impl Default for IntegratorDesc {
             emitter_samples: 1,
             bsdf_samples: 1,
             extra: Vec::new(),
+            unusable: None,
         }
     }
 }

@@ -111,19 +111,11 @@ impl IcIntegrator {
     /// `bounces` is given; further parameters are [`IcParams::set`]'s names.
     pub fn from_desc(desc: &IntegratorDesc) -> Result<IcIntegrator, String> {
         let mut params = IcParams::default();
-        if desc.max_depth >= 0 {
-            params.bounces = (desc.max_depth - 2).max(0) as u32;
-        } else if !desc
-            .extra
-            .iter()
-            .any(|(n, _, _)| n == "bounces" || n == "ab")
-        {
-            return Err(format!(
-                "the irradiance cache needs a finite depth, found max_depth {} (unbounded): give \
-                 max_depth ≥ 2 or bounces (max_depth = bounces + 2)",
-                desc.max_depth
-            ));
-        }
+        params.bounces = if desc.max_depth >= 0 {
+            (desc.max_depth - 2).max(0) as u32
+        } else {
+            crate::irradiance_cache::params::UNBOUNDED
+        };
         for (name, value, loc) in &desc.extra {
             let text = match value {
                 ParamValue::Integer(v) => v.to_string(),
@@ -134,6 +126,7 @@ impl IcIntegrator {
             };
             params.set(name, &text).map_err(|e| format!("{loc}: {e}"))?;
         }
+        params.check()?;
         Ok(IcIntegrator {
             params,
             hide_emitters: desc.hide_emitters,
@@ -165,7 +158,7 @@ impl IcIntegrator {
             self.params.direct_samples.max(1)
         };
         let settings = PathSettings {
-            max_depth: self.params.bounces + 2,
+            max_depth: self.params.max_depth(),
             rr_depth: RR_DEPTH,
             first_light_samples,
         };

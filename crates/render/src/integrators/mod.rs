@@ -59,6 +59,9 @@ pub const INTEGRATOR_NAMES: &[&str] = &["path", "direct", "ic (irrcache)"];
 impl Integrator {
     /// Builds the integrator named in `desc`.
     pub fn from_desc(desc: &IntegratorDesc) -> Result<Integrator, String> {
+        if let Some(why) = &desc.unusable {
+            return Err(why.clone());
+        }
         match desc.kind.as_str() {
             "path" => Ok(Integrator::Path(path::PathIntegrator {
                 max_depth: desc.max_depth,

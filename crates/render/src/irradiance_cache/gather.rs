@@ -81,7 +81,7 @@ impl IrradianceCache {
             excluded: Vec::new(),
             pixel_angle: 0.0,
         };
-        cache.levels = (0..params.bounces.max(1))
+        cache.levels = (0..params.bounces.clamp(1, super::params::MAX_STORED_LEVELS))
             .map(|_| cache.empty_store())
             .collect();
         cache
@@ -577,7 +577,7 @@ impl IncidentRadiance for SceneRadiance<'_> {
         let (distance, normal) = (hit.t, hit.ng);
         let params = &cache.params;
         let settings = PathSettings {
-            max_depth: params.bounces + 2,
+            max_depth: params.max_depth(),
             // Roulette from the first continuation beyond the gather hit: gathers are many
             // and each path's throughput is already a reflectance.
             rr_depth: level + 2,

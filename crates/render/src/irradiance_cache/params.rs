@@ -80,6 +80,13 @@ pub enum TranslationalFormula {
     Krivanek,
 }
 
+/// `bounces` without a bound: paths end by Russian roulette alone.
+pub const UNBOUNDED: u32 = u32::MAX;
+
+/// Most bounce levels that keep a record store (records sit at the depth where camera paths
+/// meet a surface; deeper, the pixel pass traces).
+pub const MAX_STORED_LEVELS: u32 = 16;
+
 /// Irradiance cache settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct IcParams {
@@ -307,13 +314,24 @@ pub const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "bounces",
         aliases: &["ab"],
-        value: "N",
-        help: "indirect bounces: the image equals path tracing at max_depth N + 2 \
+        value: "N|-1",
+        help: "indirect bounces: the image equals path tracing at max_depth N + 2; -1: unbounded \
+               (Russian roulette ends the paths; needs --deeper-bounces traced) \
                (default: the scene's max_depth − 2)",
         shapes_records: true,
-        get: |p| p.bounces.to_string(),
+        get: |p| {
+            if p.bounces == UNBOUNDED {
+                "-1".to_string()
+            } else {
+                p.bounces.to_string()
+            }
+        },
         set: |p, v| {
-            p.bounces = number(v, 0, 64, "bounces")?;
+            p.bounces = if v.trim() == "-1" {
+                UNBOUNDED
+            } else {
+                number(v, 0, 64, "bounces (or -1: unbounded)")?
+            };
             Ok(())
         },
     },
@@ -487,6 +505,25 @@ impl IcParams {
     #[must_use]
     pub fn to_pairs(&self) -> Vec<(&'static str, String)> {
         PARAMS.iter().map(|s| (s.name, (s.get)(self))).collect()
+    }
+
+    /// Settings that cannot go together: unbounded bounces need the deeper bounces traced (one
+    /// cache per bounce level would be endless).
+    pub fn check(&self) -> Result<(), String> {
+        if self.bounces == UNBOUNDED && self.deeper == Deeper::Cache {
+            return Err(
+                "unbounded bounces (max_depth -1) need --deeper-bounces traced: give \
+                 max_depth ≥ 2 or bounces for one cache per bounce level"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
+
+    /// The path's `max_depth` (Mitsuba's count: bounces + 2; `u32::MAX` when unbounded).
+    #[must_use]
+    pub fn max_depth(&self) -> u32 {
+        self.bounces.saturating_add(2)
     }
 
     /// The smallest and largest record radius R for a scene of size `scene_size` (Radiance's

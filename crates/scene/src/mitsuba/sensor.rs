@@ -258,7 +258,15 @@ fn build_sampler(p: &Plugin) -> Result<(String, u32), SceneError> {
 
 /// The integrator: `path`, `direct`, or `irrcache` (whose extra parameters are kept).
 pub(crate) fn build_integrator(p: &Plugin) -> Result<IntegratorDesc, SceneError> {
-    p.expect_type(INTEGRATORS)?;
+    // An integrator this renderer lacks (another renderer's plugin) does not stop the scene from
+    // loading: the command line may name another; rendering with it is the error.
+    if let Err(e) = p.expect_type(INTEGRATORS) {
+        return Ok(IntegratorDesc {
+            kind: p.ty.clone(),
+            unusable: Some(e.to_string()),
+            ..IntegratorDesc::default()
+        });
+    }
     let mut d = IntegratorDesc {
         kind: p.ty.clone(),
         ..IntegratorDesc::default()
