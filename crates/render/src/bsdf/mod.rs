@@ -224,60 +224,64 @@ fn flip(w: Vec3) -> Vec3 {
     Vec3::new(w.x, w.y, -w.z)
 }
 
+/// Whether directions are mirrored through the surface to reach the model seen from `wo`.
+#[derive(Clone, Copy)]
+struct Side(bool);
+
+impl Side {
+    #[inline]
+    fn apply(self, w: Vec3) -> Vec3 {
+        if self.0 {
+            flip(w)
+        } else {
+            w
+        }
+    }
+}
+
 impl Bsdf {
-    /// `f(wo, wi) · |cos θ_i|` in the local frame; zero for delta lobes.
-    #[must_use]
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    /// The model seen from `wo`: one-sided models as they are (they are black from below on
+    /// their own); `twosided` the front above, the back (directions mirrored) below, none on the
+    /// surface itself.
+    #[inline]
+    fn facing(&self, wo: Vec3) -> Option<(&Lobe, Side)> {
         match self {
-            Bsdf::Single(l) => l.eval(wo, wi),
+            Bsdf::Single(l) => Some((l, Side(false))),
             Bsdf::TwoSided { front, back } => {
                 if wo.z > 0.0 {
-                    front.eval(wo, wi)
+                    Some((front, Side(false)))
                 } else if wo.z < 0.0 {
-                    back.eval(flip(wo), flip(wi))
+                    Some((back, Side(true)))
                 } else {
-                    Rgb::ZERO
+                    None
                 }
             }
         }
     }
 
+    /// `f(wo, wi) · |cos θ_i|` in the local frame; zero for delta lobes.
+    #[must_use]
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        self.facing(wo)
+            .map_or(Rgb::ZERO, |(l, f)| l.eval(f.apply(wo), f.apply(wi)))
+    }
+
     /// Solid-angle density with which [`Self::sample`] produces `wi` through its smooth lobes.
     #[must_use]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match self {
-            Bsdf::Single(l) => l.pdf(wo, wi),
-            Bsdf::TwoSided { front, back } => {
-                if wo.z > 0.0 {
-                    front.pdf(wo, wi)
-                } else if wo.z < 0.0 {
-                    back.pdf(flip(wo), flip(wi))
-                } else {
-                    0.0
-                }
-            }
-        }
+        self.facing(wo)
+            .map_or(0.0, |(l, f)| l.pdf(f.apply(wo), f.apply(wi)))
     }
 
     /// Samples `wi` given `wo`: `u_lobe` chooses among lobes, `u` samples the chosen one. `None`
     /// when no direction could be produced (wrong side, below the horizon, zero density).
     #[must_use]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        match self {
-            Bsdf::Single(l) => l.sample(wo, u_lobe, u),
-            Bsdf::TwoSided { front, back } => {
-                if wo.z > 0.0 {
-                    front.sample(wo, u_lobe, u)
-                } else if wo.z < 0.0 {
-                    back.sample(flip(wo), u_lobe, u).map(|mut s| {
-                        s.wi = flip(s.wi);
-                        s
-                    })
-                } else {
-                    None
-                }
-            }
-        }
+        let (l, f) = self.facing(wo)?;
+        l.sample(f.apply(wo), u_lobe, u).map(|mut s| {
+            s.wi = f.apply(s.wi);
+            s
+        })
     }
 
     /// True when the BSDF has a non-delta component (next-event estimation is worthwhile).
@@ -324,56 +328,26 @@ impl Bsdf {
     /// The glossy part alone, `f_glossy(wo, wi) · |cos θ_i|` (zero for delta lobes).
     #[must_use]
     pub fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb {
-        match self {
-            Bsdf::Single(l) => l.eval_glossy(wo, wi),
-            Bsdf::TwoSided { front, back } => {
-                if wo.z > 0.0 {
-                    front.eval_glossy(wo, wi)
-                } else if wo.z < 0.0 {
-                    back.eval_glossy(flip(wo), flip(wi))
-                } else {
-                    Rgb::ZERO
-                }
-            }
-        }
+        self.facing(wo)
+            .map_or(Rgb::ZERO, |(l, f)| l.eval_glossy(f.apply(wo), f.apply(wi)))
     }
 
     /// Solid-angle density with which [`Self::sample_glossy`] produces `wi` (smooth lobes).
     #[must_use]
     pub fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match self {
-            Bsdf::Single(l) => l.pdf_glossy(wo, wi),
-            Bsdf::TwoSided { front, back } => {
-                if wo.z > 0.0 {
-                    front.pdf_glossy(wo, wi)
-                } else if wo.z < 0.0 {
-                    back.pdf_glossy(flip(wo), flip(wi))
-                } else {
-                    0.0
-                }
-            }
-        }
+        self.facing(wo)
+            .map_or(0.0, |(l, f)| l.pdf_glossy(f.apply(wo), f.apply(wi)))
     }
 
     /// Samples the glossy part alone, weight `f_glossy · |cos θ_i| / pdf` (for delta lobes the
     /// delta's weight over the probability of its choice among the glossy lobes).
     #[must_use]
     pub fn sample_glossy(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        match self {
-            Bsdf::Single(l) => l.sample_glossy(wo, u_lobe, u),
-            Bsdf::TwoSided { front, back } => {
-                if wo.z > 0.0 {
-                    front.sample_glossy(wo, u_lobe, u)
-                } else if wo.z < 0.0 {
-                    back.sample_glossy(flip(wo), u_lobe, u).map(|mut s| {
-                        s.wi = flip(s.wi);
-                        s
-                    })
-                } else {
-                    None
-                }
-            }
-        }
+        let (l, f) = self.facing(wo)?;
+        l.sample_glossy(f.apply(wo), u_lobe, u).map(|mut s| {
+            s.wi = f.apply(s.wi);
+            s
+        })
     }
 
     /// True when the BSDF has a glossy (non-Lambertian) part.
