@@ -27,6 +27,39 @@ pub struct Record {
     pub ray_variance: f32,
 }
 
+/// What a record store and the error metrics need of any kind of record (irradiance records
+/// today; radiance, photon and media records later): where it sits, which side it serves, and the
+/// radius R by which the metrics scale distances.
+pub trait CachedRecord: Copy + Send + Sync {
+    /// Position.
+    fn position(&self) -> Vec3;
+    /// Unit normal of the side it serves.
+    fn normal(&self) -> Vec3;
+    /// The metric's radius R.
+    fn radius(&self) -> f32;
+    /// Sets R (neighbour clamping shrinks it).
+    fn set_radius(&mut self, r: f32);
+}
+
+impl CachedRecord for Record {
+    #[inline]
+    fn position(&self) -> Vec3 {
+        self.p
+    }
+    #[inline]
+    fn normal(&self) -> Vec3 {
+        self.n
+    }
+    #[inline]
+    fn radius(&self) -> f32 {
+        self.r
+    }
+    #[inline]
+    fn set_radius(&mut self, r: f32) {
+        self.r = r;
+    }
+}
+
 /// Which gradients interpolation uses (`--gradients`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum GradientMode {
@@ -113,21 +146,22 @@ impl ErrorMetric {
     /// tangent plane as seen from p.
     #[inline]
     #[must_use]
-    pub fn error(self, rec: &Record, p: Vec3, n: Vec3, accuracy: f32) -> Option<f32> {
-        let d = p - rec.p;
+    pub fn error<R: CachedRecord>(self, rec: &R, p: Vec3, n: Vec3, accuracy: f32) -> Option<f32> {
+        let (rp, rn, rr) = (rec.position(), rec.normal(), rec.radius());
+        let d = p - rp;
         let dist = d.length();
-        if d.dot(n + rec.n) < -0.1 * dist {
+        if d.dot(n + rn) < -0.1 * dist {
             return None;
         }
-        let normal = (1.0 - n.dot(rec.n).min(1.0)).max(0.0).sqrt();
+        let normal = (1.0 - n.dot(rn).min(1.0)).max(0.0).sqrt();
         Some(match self {
-            ErrorMetric::Ward => (dist / rec.r + normal) / accuracy,
+            ErrorMetric::Ward => (dist / rr + normal) / accuracy,
             ErrorMetric::Tabellion => {
                 // √(1 − cos 10°)
                 const NORMAL_SCALE: f32 = 0.123_257_4;
-                (0.2 / accuracy) * (dist / rec.r).max(normal / NORMAL_SCALE)
+                (0.2 / accuracy) * (dist / rr).max(normal / NORMAL_SCALE)
             }
-            ErrorMetric::Hessian => dist / rec.r + normal / accuracy,
+            ErrorMetric::Hessian => dist / rr + normal / accuracy,
         })
     }
 
@@ -144,11 +178,12 @@ impl ErrorMetric {
     /// Distance from the record beyond which it never serves (at threshold 1).
     #[inline]
     #[must_use]
-    pub fn validity_radius(self, rec: &Record, accuracy: f32) -> f32 {
+    pub fn validity_radius<R: CachedRecord>(self, rec: &R, accuracy: f32) -> f32 {
+        let r = rec.radius();
         match self {
-            ErrorMetric::Ward => accuracy * rec.r,
-            ErrorMetric::Tabellion => rec.r * accuracy / 0.2,
-            ErrorMetric::Hessian => rec.r,
+            ErrorMetric::Ward => accuracy * r,
+            ErrorMetric::Tabellion => r * accuracy / 0.2,
+            ErrorMetric::Hessian => r,
         }
     }
 }

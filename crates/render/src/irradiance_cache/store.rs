@@ -2,16 +2,18 @@
 //! playing the role of Radiance's octree. A record whose validity radius is ρ = a·R lives at the
 //! level whose cell size is the first ≥ ρ, in every cell its sphere overlaps (at most 8), so a
 //! query visits one cell per level in use. Records are only ever appended, in an order decided by
-//! the caller, which keeps lookups deterministic.
+//! the caller, which keeps lookups deterministic. The store holds any kind of record
+//! ([`CachedRecord`]: position, normal, radius); interpolating irradiance is the irradiance
+//! record's own.
 
-use super::record::{extrapolate, ErrorMetric, GradientMode, Record};
+use super::record::{extrapolate, CachedRecord, ErrorMetric, GradientMode, Record};
 use ircache_math::{Rgb, Vec3};
 use rustc_hash::FxHashMap;
 
-/// Records of one bounce level with their index.
+/// Records of one bounce level with their index, for any kind of record.
 #[derive(Clone, Debug)]
-pub struct RecordStore {
-    records: Vec<Record>,
+pub struct RecordStore<R: CachedRecord = Record> {
+    records: Vec<R>,
     /// Cell size of grid level 0 (the smallest validity radius expected).
     base_cell: f32,
     /// Accuracy `a`.
@@ -39,7 +41,7 @@ pub struct Interpolated {
 
 const MAX_GRID_LEVEL: u8 = 40;
 
-impl RecordStore {
+impl<R: CachedRecord> RecordStore<R> {
     /// An empty store; `min_validity_radius` sets the finest grid (any positive value works,
     /// close to the smallest a·R keeps cells small).
     #[must_use]
@@ -48,7 +50,7 @@ impl RecordStore {
         accuracy: f32,
         metric: ErrorMetric,
         clamp_neighbours: bool,
-    ) -> RecordStore {
+    ) -> RecordStore<R> {
         RecordStore {
             records: Vec::new(),
             base_cell: min_validity_radius.max(f32::MIN_POSITIVE),
@@ -62,7 +64,7 @@ impl RecordStore {
 
     /// The records, in insertion order.
     #[must_use]
-    pub fn records(&self) -> &[Record] {
+    pub fn records(&self) -> &[R] {
         &self.records
     }
 
@@ -91,18 +93,19 @@ impl RecordStore {
     /// records whose validity sphere holds the new one's position and the new one bound each
     /// other's radius by their own plus their distance; records are only ever shrunk, and
     /// in insertion order, so the result does not depend on timing.
-    pub fn insert(&mut self, mut rec: Record) {
+    pub fn insert(&mut self, mut rec: R) {
+        let p = rec.position();
         if self.clamp_neighbours {
             let mut near = Vec::new();
-            self.for_each_near(rec.p, |id| near.push(id));
+            self.for_each_near(p, |id| near.push(id));
             near.sort_unstable();
             near.dedup();
             for id in near {
                 let other = &mut self.records[id as usize];
-                let d = other.p.distance(rec.p);
+                let d = other.position().distance(p);
                 if d <= self.metric.validity_radius(other, self.accuracy) {
-                    rec.r = rec.r.min(other.r + d);
-                    other.r = other.r.min(rec.r + d);
+                    rec.set_radius(rec.radius().min(other.radius() + d));
+                    other.set_radius(other.radius().min(rec.radius() + d));
                 }
             }
         }
@@ -112,8 +115,8 @@ impl RecordStore {
             level += 1;
         }
         let size = self.cell_size(level);
-        let lo = Self::cell_of(rec.p - Vec3::splat(rho), size);
-        let hi = Self::cell_of(rec.p + Vec3::splat(rho), size);
+        let lo = Self::cell_of(p - Vec3::splat(rho), size);
+        let hi = Self::cell_of(p + Vec3::splat(rho), size);
         let id = self.records.len() as u32;
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
@@ -135,8 +138,8 @@ impl RecordStore {
         }
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for r in &self.records {
-            lo = lo.min(r.p);
-            hi = hi.max(r.p);
+            lo = lo.min(r.position());
+            hi = hi.max(r.position());
         }
         let scale = 1023.0 / (hi - lo).max_element().max(f32::MIN_POSITIVE);
         let spread = |v: u32| -> u64 {
@@ -147,8 +150,8 @@ impl RecordStore {
             x = (x | (x << 4)) & 0x030c_30c3;
             (x | (x << 2)) & 0x0924_9249
         };
-        let key = |r: &Record| {
-            let q = ((r.p - lo) * scale).round();
+        let key = |r: &R| {
+            let q = ((r.position() - lo) * scale).round();
             spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2)
         };
         let mut records = std::mem::take(&mut self.records);
@@ -213,48 +216,8 @@ impl RecordStore {
         }
     }
 
-    /// Interpolates at (p, n) from the records whose normalised error is at most `threshold`
-    /// (1: the accuracy; more: relaxed) and that are not in front of p (000 eq. 3.15). Weights
-    /// use the normal `n`; the rotational gradient turns each record towards `n_rot` (a bump-
-    /// or normal-mapped normal, 003 item 5; `n` itself otherwise).
-    #[must_use]
-    pub fn interpolate(
-        &self,
-        p: Vec3,
-        n: Vec3,
-        n_rot: Vec3,
-        threshold: f32,
-        mode: GradientMode,
-    ) -> Option<Interpolated> {
-        let mut sum = Rgb::ZERO;
-        let mut wsum = 0.0f32;
-        let mut count = 0;
-        self.for_each_near_within(p, threshold, |id| {
-            let rec = &self.records[id as usize];
-            if let Some(err) = self.metric.error(rec, p, n, self.accuracy) {
-                if err <= threshold {
-                    let w = self.metric.weight(err, threshold);
-                    sum += extrapolate(rec, p, n_rot, mode) * w;
-                    wsum += w;
-                    count += 1;
-                }
-            }
-        });
-        (count > 0).then(|| Interpolated {
-            e: (sum / wsum).max(Rgb::ZERO),
-            weight_sum: wsum,
-            count,
-        })
-    }
-
     /// The records serving (p, n) within `threshold`, with their weights.
-    pub fn for_each_serving(
-        &self,
-        p: Vec3,
-        n: Vec3,
-        threshold: f32,
-        mut f: impl FnMut(&Record, f32),
-    ) {
+    pub fn for_each_serving(&self, p: Vec3, n: Vec3, threshold: f32, mut f: impl FnMut(&R, f32)) {
         self.for_each_near_within(p, threshold, |id| {
             let rec = &self.records[id as usize];
             if let Some(err) = self.metric.error(rec, p, n, self.accuracy) {
@@ -297,6 +260,42 @@ impl RecordStore {
             }
         });
         hit
+    }
+}
+
+impl RecordStore<Record> {
+    /// Interpolates at (p, n) from the records whose normalised error is at most `threshold`
+    /// (1: the accuracy; more: relaxed) and that are not in front of p (000 eq. 3.15). Weights
+    /// use the normal `n`; the rotational gradient turns each record towards `n_rot` (a bump-
+    /// or normal-mapped normal, 003 item 5; `n` itself otherwise).
+    #[must_use]
+    pub fn interpolate(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        n_rot: Vec3,
+        threshold: f32,
+        mode: GradientMode,
+    ) -> Option<Interpolated> {
+        let mut sum = Rgb::ZERO;
+        let mut wsum = 0.0f32;
+        let mut count = 0;
+        self.for_each_near_within(p, threshold, |id| {
+            let rec = &self.records[id as usize];
+            if let Some(err) = self.metric.error(rec, p, n, self.accuracy) {
+                if err <= threshold {
+                    let w = self.metric.weight(err, threshold);
+                    sum += extrapolate(rec, p, n_rot, mode) * w;
+                    wsum += w;
+                    count += 1;
+                }
+            }
+        });
+        (count > 0).then(|| Interpolated {
+            e: (sum / wsum).max(Rgb::ZERO),
+            weight_sum: wsum,
+            count,
+        })
     }
 }
 
@@ -363,6 +362,57 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn the_store_serves_any_kind_of_record() {
+        // Another record kind (as radiance or photon records will be): the index, the metrics
+        // and neighbour clamping work on its position, normal and radius alone.
+        #[derive(Clone, Copy)]
+        struct Probe {
+            p: Vec3,
+            r: f32,
+            tag: u32,
+        }
+        impl CachedRecord for Probe {
+            fn position(&self) -> Vec3 {
+                self.p
+            }
+            fn normal(&self) -> Vec3 {
+                Vec3::Z
+            }
+            fn radius(&self) -> f32 {
+                self.r
+            }
+            fn set_radius(&mut self, r: f32) {
+                self.r = r;
+            }
+        }
+        let mut s: RecordStore<Probe> = RecordStore::new(0.01, 0.5, ErrorMetric::Ward, true);
+        s.insert(Probe {
+            p: Vec3::ZERO,
+            r: 10.0,
+            tag: 1,
+        });
+        s.insert(Probe {
+            p: Vec3::X,
+            r: 0.2,
+            tag: 2,
+        });
+        // Clamped as irradiance records are: 0.2 + 1.
+        assert!((s.records()[0].r - 1.2).abs() < 1e-5);
+        // Ward: each serves within a·R (0.6 and 0.1).
+        let tags = |x: f32, t: f32| -> Vec<u32> {
+            s.serving(Vec3::new(x, 0.0, 0.0), Vec3::Z, t)
+                .iter()
+                .map(|&i| s.records()[i as usize].tag)
+                .collect()
+        };
+        assert_eq!(tags(0.55, 1.0), [1]);
+        assert_eq!(tags(0.95, 1.0), [2]);
+        assert_eq!(tags(0.95, 2.0), [1, 2]);
+        assert!(s.covers(Vec3::new(0.3, 0.0, 0.0), Vec3::Z));
+        assert!(!s.covers(Vec3::new(5.0, 0.0, 0.0), Vec3::Z));
     }
 
     #[test]
