@@ -57,6 +57,7 @@ impl BsdfStrategy {
 /// sample contributes `L/(ne·p_l) · (f − f_s·(1 − w))` with `f_s` the strategy's part of the BSDF
 /// and `w = w_power(ne·p_l, nb·p_s)`; the BSDF samples that find an emitter add the rest.
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub fn sample_lights(
     scene: &Scene,
     it: &Interaction,
@@ -100,9 +101,13 @@ pub fn sample_lights(
             f
         } else {
             let w = mis_weight(fe * ls.pdf, fb * strategy.pdf(bsdf, wo, wi));
-            f - strategy.eval(bsdf, wo, wi) * (1.0 - w)
+            match strategy {
+                // The strategy's part is the whole BSDF: f·w, without evaluating it twice.
+                BsdfStrategy::All => f * w,
+                BsdfStrategy::Glossy => (f - bsdf.eval_glossy(wo, wi) * (1.0 - w)).max(Rgb::ZERO),
+            }
         };
         l += weighted * ls.radiance / (fe * ls.pdf);
     }
-    l.max(Rgb::ZERO)
+    l
 }

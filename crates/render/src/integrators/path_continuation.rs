@@ -34,6 +34,11 @@ pub trait IndirectSource {
     fn ambient(&self) -> Rgb {
         Rgb::ZERO
     }
+
+    /// False when it never serves anything (plain path tracing skips the Lambertian split).
+    fn serves(&self) -> bool {
+        true
+    }
 }
 
 /// No cache: plain path tracing.
@@ -49,6 +54,10 @@ impl IndirectSource for Traced {
         _: &mut RayCounts,
     ) -> Option<Rgb> {
         None
+    }
+
+    fn serves(&self) -> bool {
+        false
     }
 }
 
@@ -181,10 +190,14 @@ pub fn trace_path(
         let wo = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
         if let Some(light) = shape.area_light {
-            let w = arrival
-                .emission_weight(|p| scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n));
-            if w > 0.0 {
-                l += beta * scene.lights.area_radiance(light, it.frame.n, wo) * w;
+            let le = scene.lights.area_radiance(light, it.frame.n, wo);
+            if !le.is_black() {
+                let w = arrival.emission_weight(|p| {
+                    scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n)
+                });
+                if w > 0.0 {
+                    l += beta * le * w;
+                }
             }
         }
         if depth + 1 >= max_depth {
@@ -197,7 +210,7 @@ pub fn trace_path(
         // The Lambertian part's indirect light from the cache, where it serves; the beyond-last
         // bounce ambient value where the depth runs out.
         let mut strategy = BsdfStrategy::All;
-        if bsdf.has_smooth() {
+        if source.serves() && bsdf.has_smooth() {
             let k = bsdf.lambertian_albedo(wo_local);
             if !k.is_black() {
                 if depth + 2 < max_depth {
