@@ -20,16 +20,6 @@ pub enum BsdfStrategy {
 }
 
 impl BsdfStrategy {
-    /// `f · |cos θ_i|` of the sampled part.
-    #[inline]
-    #[must_use]
-    pub fn eval(self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> Rgb {
-        match self {
-            BsdfStrategy::All => bsdf.eval(wo, wi),
-            BsdfStrategy::Glossy => bsdf.eval_glossy(wo, wi),
-        }
-    }
-
     /// Solid-angle density of the sampled part.
     #[inline]
     #[must_use]

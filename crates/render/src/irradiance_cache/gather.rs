@@ -409,7 +409,7 @@ impl Gatherer<'_> {
     ) {
         let strata = h.strata;
         let target = self.cache.params.record_error * self.cache.params.accuracy;
-        let (cells, _, _) = h.cells_to_refine(target, extra / 3);
+        let cells = h.cells_to_refine(target, extra / 3);
         const LATTICE: [(f32, f32); 3] = [(0.5, 0.5), (0.5, 0.0), (0.0, 0.5)];
         for (n, &idx) in cells.iter().enumerate() {
             let (j, k) = (idx / strata.azimuthal, idx % strata.azimuthal);

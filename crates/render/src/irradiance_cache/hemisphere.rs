@@ -148,9 +148,9 @@ impl HemisphereSamples {
         out
     }
 
-    /// The cells to super-sample, largest neighbour spread first, and the relative standard error
-    /// of the irradiance predicted before and after: the fewest cells (at most `max_cells`) whose
-    /// refinement with three more rays each brings the predicted error to `target` or below.
+    /// The cells to super-sample, largest neighbour spread first: the fewest (at most
+    /// `max_cells`) whose refinement with three more rays each brings the irradiance's predicted
+    /// relative standard error to `target` or below.
     ///
     /// The error model: E = π/(MN) Σ Lᵢ with one sample per cell, so Var(E)/E² = Σ σᵢ² / (Σ Yᵢ)²
     /// with σᵢ the spread of radiance within cell i, estimated from its neighbours'
@@ -158,15 +158,14 @@ impl HemisphereSamples {
     /// a range's two ends is range/2, of a uniform spread range/√12); four samples divide a
     /// cell's variance by four.
     #[must_use]
-    pub fn cells_to_refine(&self, target: f32, max_cells: usize) -> (Vec<usize>, f32, f32) {
+    pub fn cells_to_refine(&self, target: f32, max_cells: usize) -> Vec<usize> {
         let spread = self.neighbour_spread();
         let total: f64 = self.radiance.iter().map(|c| f64::from(c.luminance())).sum();
         if total <= 0.0 {
-            return (Vec::new(), 0.0, 0.0);
+            return Vec::new();
         }
         let var = |i: usize| (f64::from(spread[i]) / 3.0).powi(2);
         let mut v: f64 = (0..spread.len()).map(var).sum();
-        let before = (v.sqrt() / total) as f32;
         let mut order: Vec<usize> = (0..spread.len()).filter(|&i| spread[i] > 0.0).collect();
         // Largest spread first; ties by index, so the choice is deterministic.
         order.sort_by(|&a, &b| spread[b].total_cmp(&spread[a]).then(a.cmp(&b)));
@@ -177,7 +176,7 @@ impl HemisphereSamples {
             n += 1;
         }
         order.truncate(n);
-        (order, before, (v.max(0.0).sqrt() / total) as f32)
+        order
     }
 
     /// The relative variance of the irradiance estimate times the number of cells (so per

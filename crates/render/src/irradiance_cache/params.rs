@@ -5,13 +5,6 @@
 use super::record::{ErrorMetric, GradientMode};
 use ircache_math::Rgb;
 
-/// The settings `ircache bench` times on the Cornell box, and the reference test checks: the
-/// defaults (they reach Radiance's "high" error there).
-pub const CORNELL_BOX_BENCH: &[(&str, &str)] = &[];
-
-/// The settings `ircache bench` times on Sponza: the defaults.
-pub const SPONZA_BENCH: &[(&str, &str)] = &[];
-
 /// How far the pre-pass (the overture: 002, Mitsuba's irrcache) fills the cache before the
 /// pixels are rendered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
