@@ -7,7 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ircache_math::Vec3;
 use ircache_render::film::Filter;
 use ircache_render::integrators::Integrator;
-use ircache_render::render::{render, RenderOutput, RenderSettings};
+use ircache_render::render::{render, RenderOutput, RenderSettings, Sampling};
 use ircache_render::scene::Scene;
 use ircache_scene::obj_scene::ObjCamera;
 use ircache_scene::SceneDesc;
@@ -35,9 +35,14 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long, short = 't')]
     pub threads: Option<usize>,
-    /// Seed of the random streams: the same seed gives the same image, bit for bit.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    /// Seed of the samples (overrides the sampler's `seed`): the same seed gives the same
+    /// image, bit for bit, whatever the thread count.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Sampler (overrides the scene's): independent, stratified, multijitter, orthogonal,
+    /// ldsampler (Mitsuba 3's) or sobol (Owen-scrambled Sobol' along a Morton curve, the best).
+    #[arg(long)]
+    pub sampler: Option<String>,
     /// Integrator (overrides the scene's): path, direct, or ic (the irradiance cache; also
     /// irrcache).
     #[arg(long)]
@@ -161,6 +166,9 @@ pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
     if let Some(spp) = args.spp {
         desc.sensor.spp = spp;
     }
+    if let Some(s) = &args.sampler {
+        desc.sensor.sampler = s.clone();
+    }
     if desc.sensor.spp == 0 {
         bail!("--spp must be at least 1");
     }
@@ -242,11 +250,21 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         width: desc.sensor.film.width as usize,
         height: desc.sensor.film.height as usize,
         spp: desc.sensor.spp,
-        seed: args.seed,
+        seed: args.seed.unwrap_or(desc.sensor.sampler_seed),
         threads: args.threads.unwrap_or(0),
         filter: Filter::from_desc(&desc.sensor.film.filter),
         band: args.tile,
+        sampling: Sampling::from_desc(&desc.sensor).map_err(anyhow::Error::msg)?,
     };
+    let rounded = settings.sampler().spp;
+    if rounded != settings.spp {
+        // Said even with --quiet: the render costs more than asked.
+        eprintln!(
+            "note: the {} sampler takes {rounded} samples per pixel for the {} asked",
+            settings.sampling.sampler.name(),
+            settings.spp
+        );
+    }
     let show = !args.quiet && std::io::stderr().is_terminal();
     let bar = if show {
         let b = ProgressBar::new((settings.width * settings.height) as u64);
@@ -315,11 +333,12 @@ fn check_writable(path: &Path) -> Result<()> {
 fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Path, wall: f64) {
     let rays = out.rays.total();
     eprintln!(
-        "{}: {}×{} at {} spp ({}) in {:.2} s (render {:.2} s): {:.1} M rays, {:.2} Mrays/s -> {}",
+        "{}: {}×{} at {} spp ({}, {}) in {:.2} s (render {:.2} s): {:.1} M rays, {:.2} Mrays/s -> {}",
         desc.source.display(),
         s.width,
         s.height,
-        s.spp,
+        s.sampler().spp,
+        s.sampling.sampler.name(),
         desc.integrator.kind,
         wall,
         out.seconds,
@@ -373,7 +392,8 @@ fn write_stats(
         "mrays_per_second": out.rays.total() as f64 * 1e-6 / out.seconds.max(1e-9),
         "width": s.width,
         "height": s.height,
-        "spp": s.spp,
+        "spp": s.sampler().spp,
+        "sampler": s.sampling.sampler.name(),
         "seed": s.seed,
         "threads": if s.threads == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { s.threads },
         "invalid_samples": out.invalid_samples,

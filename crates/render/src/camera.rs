@@ -108,6 +108,8 @@ mod tests {
             },
             spp: 1,
             sampler: "independent".into(),
+            sampler_seed: 0,
+            jitter: true,
         }
     }
 

@@ -15,6 +15,7 @@ pub mod integrators;
 pub mod irradiance_cache;
 pub mod lights;
 pub mod render;
+pub mod sampler;
 pub mod scene;
 pub mod testing;
 pub mod texture;

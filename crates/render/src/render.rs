@@ -1,13 +1,15 @@
-//! The tile loop: all cores render 16×16-pixel tiles; every pixel draws its random numbers from
-//! its own stream keyed by (seed, pixel index), so the image is the same bit for bit for a given
-//! seed whatever the thread count or the order in which tiles finish.
+//! The tile loop: all cores render 16×16-pixel tiles; every pixel draws its sample coordinates
+//! from the sampler as a function of (seed, pixel, sample, dimension) (see [`crate::sampler`]),
+//! so the image is the same bit for bit for a given seed whatever the thread count or the order
+//! in which tiles finish.
 
 use crate::film::Filter;
 use crate::integrators::{Integrator, RayCounts};
 use crate::irradiance_cache::{CacheStats, IrradianceCache};
+use crate::sampler::{dims, Sampler, SamplerKind, SamplerSettings};
 use crate::scene::{RenderError, Scene};
 use ircache_image::Image;
-use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
+use ircache_math::{Ray, Rgb, Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -23,8 +25,11 @@ pub struct RenderSettings {
     pub width: usize,
     /// Image height.
     pub height: usize,
-    /// Samples per pixel.
+    /// Samples per pixel as requested (the sampler may round it up:
+    /// [`SamplerKind::sample_count`]).
     pub spp: u32,
+    /// How pixel samples are placed.
+    pub sampling: Sampling,
     /// Seed of all random streams.
     pub seed: u64,
     /// Worker threads (0: all cores).
@@ -36,7 +41,62 @@ pub struct RenderSettings {
     pub band: Option<(usize, usize)>,
 }
 
+/// How a pixel's samples are placed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sampling {
+    /// The sampler.
+    pub sampler: SamplerKind,
+    /// Jitter within strata (Mitsuba's `jitter`).
+    pub jitter: bool,
+}
+
+impl Sampling {
+    /// The sampler a scene's sensor names.
+    ///
+    /// # Errors
+    /// An unknown sampler name.
+    pub fn from_desc(sensor: &ircache_scene::SensorDesc) -> Result<Sampling, String> {
+        let sampler = SamplerKind::from_name(&sensor.sampler).ok_or_else(|| {
+            let names: Vec<&str> = SamplerKind::ALL.iter().map(|(_, n)| *n).collect();
+            format!(
+                "unknown sampler \"{}\": expected one of {}",
+                sensor.sampler,
+                names.join(", ")
+            )
+        })?;
+        Ok(Sampling {
+            sampler,
+            jitter: sensor.jitter,
+        })
+    }
+}
+
+impl Default for Sampling {
+    /// Correlated multi-jittered samples: the lowest per-pixel error of the samplers at equal
+    /// time on the shared scenes (BENCHMARKS.md; `sobol` is lower after a blur).
+    fn default() -> Self {
+        Sampling {
+            sampler: SamplerKind::MultiJitter,
+            jitter: true,
+        }
+    }
+}
+
 impl RenderSettings {
+    /// The sampler of this render's pixels.
+    #[must_use]
+    pub fn sampler(&self) -> SamplerSettings {
+        let mut s = SamplerSettings::new(
+            self.sampling.sampler,
+            self.spp,
+            self.seed,
+            self.width as u32,
+            self.height as u32,
+        );
+        s.jitter = self.sampling.jitter;
+        s
+    }
+
     /// The rows this render covers.
     #[must_use]
     pub fn rows(&self) -> std::ops::Range<usize> {
@@ -94,6 +154,7 @@ pub fn render(
     // What an integrator does once before the pixels (the cache's pre-pass).
     let (prepared, cache_stats) = integrator.prepare(scene, settings, &pool)?;
     let integrator = &prepared;
+    let sampler = settings.sampler();
     let pixel_start = Instant::now();
     let results: Vec<(Vec<Rgb>, RayCounts, u64)> = pool.install(|| {
         (0..tiles_x * tiles_y)
@@ -113,7 +174,8 @@ pub fn render(
                             pixels.push(Rgb::ZERO);
                             continue;
                         }
-                        let (c, bad) = render_pixel(scene, integrator, settings, x, y, &mut rays);
+                        let (c, bad) =
+                            render_pixel(scene, integrator, settings, &sampler, x, y, &mut rays);
                         invalid += bad;
                         pixels.push(c);
                     }
@@ -162,17 +224,19 @@ pub fn render(
     })
 }
 
-/// One pixel: the mean of `spp` filter-importance-sampled estimates. Returns the value and the
-/// number of samples dropped as invalid (NaN, infinite or negative), as Mitsuba does.
+/// One pixel: the mean of the sampler's filter-importance-sampled estimates. Returns the value
+/// and the number of samples dropped as invalid (NaN, infinite or negative), as Mitsuba does.
 fn render_pixel(
     scene: &Scene,
     integrator: &Integrator,
     settings: &RenderSettings,
+    samplers: &SamplerSettings,
     x: usize,
     y: usize,
     rays: &mut RayCounts,
 ) -> (Rgb, u64) {
-    let mut rng = Rng::keyed(settings.seed, &[(y * settings.width + x) as u64]);
+    let mut sampler = samplers.pixel(x as u32, y as u32);
+    let spp = samplers.spp;
     let mut sum = Rgb::ZERO;
     let mut invalid = 0;
     let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
@@ -180,17 +244,20 @@ fn render_pixel(
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
     let mut hits = [None; 16];
     let mut done = 0;
-    while done < settings.spp {
-        let n = (settings.spp - done).min(16) as usize;
-        for ray in &mut camera[..n] {
-            let offset = settings.filter.sample(rng.next_2d());
+    while done < spp {
+        let n = (spp - done).min(16);
+        for (k, ray) in (done..done + n).zip(&mut camera) {
+            sampler.set_sample(k, dims::FILM);
+            let offset = settings.filter.sample(sampler.next_2d());
             let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
             *ray = scene.camera.generate_ray(film);
         }
+        let n = n as usize;
         scene.accel.intersect16(&camera[..n], &mut hits[..n]);
         rays.camera += n as u64;
-        for (ray, hit) in camera[..n].iter().zip(&hits[..n]) {
-            let l = integrator.li(scene, ray, hit.as_ref(), &mut rng, rays);
+        for ((k, ray), hit) in (done..).zip(&camera[..n]).zip(&hits[..n]) {
+            sampler.set_sample(k, dims::vertex(0, 0));
+            let l = integrator.li(scene, ray, hit.as_ref(), &mut sampler, rays);
             if l.is_valid_radiance() {
                 sum += l;
             } else {
@@ -199,5 +266,5 @@ fn render_pixel(
         }
         done += n as u32;
     }
-    (sum / settings.spp.max(1) as f32, invalid)
+    (sum / spp.max(1) as f32, invalid)
 }

@@ -45,6 +45,8 @@ pub fn sensor(eye: Vec3, target: Vec3, fov: f32, size: u32, spp: u32) -> SensorD
         },
         spp,
         sampler: "independent".into(),
+        sampler_seed: 0,
+        jitter: true,
     }
 }
 
@@ -133,6 +135,8 @@ pub fn light_scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>) -> SceneD
             },
             spp: 1,
             sampler: "independent".into(),
+            sampler_seed: 0,
+            jitter: true,
         },
         integrator: IntegratorDesc::default(),
         shapes,

@@ -49,6 +49,10 @@ pub struct SensorDesc {
     pub spp: u32,
     /// Sampler type name as written (`independent`, `stratified`, ...).
     pub sampler: String,
+    /// The sampler's `seed`.
+    pub sampler_seed: u64,
+    /// The sampler's `jitter` (stratified kinds).
+    pub jitter: bool,
 }
 
 /// Mitsuba's `fov_axis`.

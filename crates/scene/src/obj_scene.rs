@@ -336,6 +336,8 @@ fn sensor(shapes: &[ShapeDesc], camera: &ObjCamera) -> SensorDesc {
             filter: FilterDesc::Box,
         },
         spp: DEFAULT_SPP,
-        sampler: "independent".into(),
+        sampler: "multijitter".into(),
+        sampler_seed: 0,
+        jitter: true,
     }
 }

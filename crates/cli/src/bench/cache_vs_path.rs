@@ -13,7 +13,7 @@ use ircache_image::compare::compare;
 use ircache_image::Image;
 use ircache_render::film::Filter;
 use ircache_render::integrators::Integrator;
-use ircache_render::render::{render, RenderOutput, RenderSettings};
+use ircache_render::render::{render, RenderOutput, RenderSettings, Sampling};
 use ircache_render::scene::Scene;
 use ircache_scene::obj_scene::ObjCamera;
 use std::path::Path;
@@ -65,6 +65,7 @@ fn run(
         threads: 0,
         filter: Filter::from_desc(&desc.sensor.film.filter),
         band: None,
+        sampling: Sampling::default(),
     };
     Ok(render(scene, &integ, &settings, &|_| {})?)
 }

@@ -18,7 +18,7 @@ use clap::Args;
 use ircache_math::{sampling, Frame, Ray, Rng, Vec2};
 use ircache_render::film::Filter;
 use ircache_render::integrators::Integrator;
-use ircache_render::render::{render, RenderSettings};
+use ircache_render::render::{render, RenderSettings, Sampling};
 use ircache_render::scene::{Interaction, Scene};
 use ircache_scene::obj_scene::ObjCamera;
 use rayon::prelude::*;
@@ -301,6 +301,7 @@ fn path_scene(scene_path: &Path, args: &BenchArgs) -> Result<()> {
             threads,
             filter: Filter::from_desc(&desc.sensor.film.filter),
             band: None,
+            sampling: Sampling::default(),
         };
         let out = render(&scene, &integrator, &settings, &|_| {})?;
         println!(
@@ -606,6 +607,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
                     threads: t,
                     filter: Filter::from_desc(&desc.sensor.film.filter),
                     band: None,
+                    sampling: Sampling::default(),
                 };
                 let out = render(&scene, &integrator, &settings, &|_| {})?;
                 let m = ircache_image::compare::compare(&out.image, &reference)?;

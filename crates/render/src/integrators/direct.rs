@@ -5,9 +5,10 @@
 use super::light_sampling::{sample_lights, BsdfStrategy};
 use super::{mis_weight, RayCounts};
 use crate::bsdf::Bsdf;
+use crate::sampler::{dims, Sampler};
 use crate::scene::{Interaction, Scene};
 use ircache_embree::Hit;
-use ircache_math::{Ray, Rgb, Rng, Vec3};
+use ircache_math::{Ray, Rgb, Vec3};
 
 /// Parameters of the direct-illumination integrator.
 #[derive(Clone, Debug)]
@@ -27,7 +28,7 @@ impl DirectIntegrator {
         scene: &Scene,
         ray: &Ray,
         first_hit: Option<&Hit>,
-        rng: &mut Rng,
+        sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Rgb {
         let Some(it) = first_hit.map(|h| scene.interaction(ray, h)) else {
@@ -52,7 +53,7 @@ impl DirectIntegrator {
             wo_local,
             self.emitter_samples,
             self.bsdf_samples,
-            rng,
+            sampler,
             rays,
         )
     }
@@ -70,7 +71,7 @@ pub fn estimate_direct(
     wo_local: Vec3,
     ne: u32,
     nb: u32,
-    rng: &mut Rng,
+    sampler: &mut dyn Sampler,
     rays: &mut RayCounts,
 ) -> Rgb {
     let mut l = sample_lights(
@@ -81,14 +82,20 @@ pub fn estimate_direct(
         ne,
         BsdfStrategy::All,
         nb,
-        rng,
+        0,
+        sampler,
         rays,
     );
     let (fe, fb) = (ne as f32, nb as f32);
     let p_ref = it.p;
-    for _ in 0..nb {
-        let u_lobe = rng.next_f32();
-        let u = rng.next_2d();
+    for i in 0..nb {
+        sampler.set_dimension(if i == 0 {
+            dims::vertex(0, dims::BSDF)
+        } else {
+            dims::extra(0, dims::EXTRA_BSDF + i)
+        });
+        let u_lobe = sampler.next_1d();
+        let u = sampler.next_2d();
         let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
             continue;
         };

@@ -12,9 +12,10 @@ use super::RayCounts;
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, ShadingPoint, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::{IcParams, IrradianceCache};
+use crate::sampler::Sampler;
 use crate::scene::Scene;
 use ircache_embree::Hit;
-use ircache_math::{Ray, Rgb, Rng};
+use ircache_math::{Ray, Rgb};
 use ircache_scene::{IntegratorDesc, ParamValue};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -148,7 +149,7 @@ impl IcIntegrator {
         scene: &Scene,
         ray: &Ray,
         first_hit: Option<&Hit>,
-        rng: &mut Rng,
+        sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Rgb {
         // One light sample when the only light is a delta light (all samples are alike).
@@ -173,7 +174,7 @@ impl IcIntegrator {
         };
         let mut source = PixelLookup { ic: self, cache };
         let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
-        trace_path(scene, start, first, &mut source, &settings, rng, rays)
+        trace_path(scene, start, first, &mut source, &settings, sampler, rays)
     }
 }
 
@@ -195,7 +196,7 @@ impl IndirectSource for PixelLookup<'_> {
         scene: &Scene,
         sp: &ShadingPoint,
         depth: u32,
-        rng: &mut Rng,
+        sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Option<Rgb> {
         let cache = self.cache;
@@ -224,10 +225,7 @@ impl IndirectSource for PixelLookup<'_> {
             seed: self.ic.seed,
         };
         let mut st = WorkState::new(cache.levels.len());
-        let key = mix(
-            0x0070_6978_656c,
-            u64::from(rng.next_u32()) << 32 | u64::from(rng.next_u32()),
-        );
+        let key = mix(0x0070_6978_656c, sampler.next_key());
         // It serves this sample alone (thin or newly seen geometry): a quarter of the divisions.
         let strata = Stratification::from_divisions((self.ic.params.divisions / 4).max(16));
         let rec = g.record_with(&mut st, sp, 0, key, strata);

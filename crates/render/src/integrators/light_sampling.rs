@@ -6,8 +6,9 @@
 
 use super::{mis_weight, RayCounts};
 use crate::bsdf::{Bsdf, BsdfSample};
+use crate::sampler::{dims, Sampler};
 use crate::scene::{Interaction, Scene};
-use ircache_math::{Rgb, Rng, Vec2, Vec3};
+use ircache_math::{Rgb, Vec2, Vec3};
 
 /// The part of the BSDF that the vertex's BSDF sample draws from (the MIS partner of the light
 /// samples).
@@ -46,6 +47,7 @@ impl BsdfStrategy {
 /// `strategy` at the same vertex (`nb` = 0: the light samples estimate everything): a light
 /// sample contributes `L/(ne·p_l) · (f − f_s·(1 − w))` with `f_s` the strategy's part of the BSDF
 /// and `w = w_power(ne·p_l, nb·p_s)`; the BSDF samples that find an emitter add the rest.
+/// `depth` is the vertex's depth in the path (which of the sampler's dimensions it draws).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn sample_lights(
@@ -56,7 +58,8 @@ pub fn sample_lights(
     ne: u32,
     strategy: BsdfStrategy,
     nb: u32,
-    rng: &mut Rng,
+    depth: u32,
+    sampler: &mut dyn Sampler,
     rays: &mut RayCounts,
 ) -> Rgb {
     let mut l = Rgb::ZERO;
@@ -67,8 +70,13 @@ pub fn sample_lights(
     let side = (ne as f32).sqrt() as u32;
     let grid = ne > 1 && side * side == ne;
     for i in 0..ne {
-        let u_sel = rng.next_f32();
-        let mut u = rng.next_2d();
+        sampler.set_dimension(if i == 0 {
+            dims::vertex(depth, dims::LIGHT)
+        } else {
+            dims::extra(depth, i)
+        });
+        let u_sel = sampler.next_1d();
+        let mut u = sampler.next_2d();
         if grid {
             u = (Vec2::new((i % side) as f32, (i / side) as f32) + u) / side as f32;
         }

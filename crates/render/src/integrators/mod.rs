@@ -9,9 +9,10 @@ pub mod light_sampling;
 pub mod path;
 pub mod path_continuation;
 
+use crate::sampler::Sampler;
 use crate::scene::Scene;
 use ircache_embree::Hit;
-use ircache_math::{Ray, Rgb, Rng};
+use ircache_math::{Ray, Rgb};
 use ircache_scene::IntegratorDesc;
 
 /// Rays traced, by kind.
@@ -132,21 +133,27 @@ impl Integrator {
         scene: &Scene,
         ray: &Ray,
         first_hit: Option<&Hit>,
-        rng: &mut Rng,
+        sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Rgb {
         match self {
-            Integrator::Direct(d) => d.li(scene, ray, first_hit, rng, rays),
-            Integrator::Path(p) => p.li(scene, ray, first_hit, rng, rays),
-            Integrator::Ic(c) => c.li(scene, ray, first_hit, rng, rays),
+            Integrator::Direct(d) => d.li(scene, ray, first_hit, sampler, rays),
+            Integrator::Path(p) => p.li(scene, ray, first_hit, sampler, rays),
+            Integrator::Ic(c) => c.li(scene, ray, first_hit, sampler, rays),
         }
     }
 
     /// Radiance arriving along `ray`, tracing its first hit too.
-    pub fn li_ray(&self, scene: &Scene, ray: &Ray, rng: &mut Rng, rays: &mut RayCounts) -> Rgb {
+    pub fn li_ray(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut dyn Sampler,
+        rays: &mut RayCounts,
+    ) -> Rgb {
         rays.camera += 1;
         let hit = scene.accel.intersect(ray);
-        self.li(scene, ray, hit.as_ref(), rng, rays)
+        self.li(scene, ray, hit.as_ref(), sampler, rays)
     }
 }
 

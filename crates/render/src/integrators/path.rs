@@ -6,9 +6,10 @@
 
 use super::path_continuation::{trace_path, PathSettings, PathStart, Traced};
 use super::RayCounts;
+use crate::sampler::Sampler;
 use crate::scene::Scene;
 use ircache_embree::Hit;
-use ircache_math::{Ray, Rgb, Rng};
+use ircache_math::{Ray, Rgb};
 
 /// Parameters of the path tracer.
 #[derive(Clone, Debug)]
@@ -28,7 +29,7 @@ impl PathIntegrator {
         scene: &Scene,
         ray: &Ray,
         first_hit: Option<&Hit>,
-        rng: &mut Rng,
+        sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Rgb {
         let settings = PathSettings {
@@ -38,6 +39,6 @@ impl PathIntegrator {
         };
         let start = PathStart::camera(*ray, self.hide_emitters);
         let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
-        trace_path(scene, start, first, &mut Traced, &settings, rng, rays)
+        trace_path(scene, start, first, &mut Traced, &settings, sampler, rays)
     }
 }

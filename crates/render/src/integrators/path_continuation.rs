@@ -12,8 +12,9 @@
 use super::light_sampling::{sample_lights, BsdfStrategy};
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::gather::ShadingPoint;
+use crate::sampler::{dims, Sampler};
 use crate::scene::{Interaction, Scene};
-use ircache_math::{Ray, Rgb, Rng, Vec3, INV_PI};
+use ircache_math::{Ray, Rgb, Vec3, INV_PI};
 
 /// Where the Lambertian part of a vertex's indirect light may come from.
 pub trait IndirectSource {
@@ -25,7 +26,7 @@ pub trait IndirectSource {
         scene: &Scene,
         sp: &ShadingPoint,
         depth: u32,
-        rng: &mut Rng,
+        sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Option<Rgb>;
 
@@ -50,7 +51,7 @@ impl IndirectSource for Traced {
         _: &Scene,
         _: &ShadingPoint,
         _: u32,
-        _: &mut Rng,
+        _: &mut dyn Sampler,
         _: &mut RayCounts,
     ) -> Option<Rgb> {
         None
@@ -152,7 +153,7 @@ pub fn trace_path(
     first: Option<Option<Interaction>>,
     source: &mut dyn IndirectSource,
     settings: &PathSettings,
-    rng: &mut Rng,
+    sampler: &mut dyn Sampler,
     rays: &mut RayCounts,
 ) -> Rgb {
     let PathStart {
@@ -216,7 +217,8 @@ pub fn trace_path(
                 if depth + 2 < max_depth {
                     let mut sp = ShadingPoint::facing(it, wo);
                     sp.travelled = if from_camera { travelled } else { 0.0 };
-                    if let Some(e) = source.irradiance(scene, &sp, depth, rng, rays) {
+                    sampler.set_dimension(dims::vertex(depth, dims::CACHE));
+                    if let Some(e) = source.irradiance(scene, &sp, depth, sampler, rays) {
                         l += beta * k * e * INV_PI;
                         strategy = BsdfStrategy::Glossy;
                     }
@@ -242,7 +244,8 @@ pub fn trace_path(
                 ne,
                 strategy,
                 u32::from(continues),
-                rng,
+                depth,
+                sampler,
                 rays,
             );
         if !continues || (strategy == BsdfStrategy::Glossy && !bsdf.has_glossy()) {
@@ -250,7 +253,8 @@ pub fn trace_path(
         }
 
         // The BSDF sample that continues the path.
-        let (u_lobe, u) = (rng.next_f32(), rng.next_2d());
+        sampler.set_dimension(dims::vertex(depth, dims::BSDF));
+        let (u_lobe, u) = (sampler.next_1d(), sampler.next_2d());
         let Some(bs) = strategy.sample(&bsdf, wo_local, u_lobe, u) else {
             break;
         };
@@ -269,6 +273,7 @@ pub fn trace_path(
         };
         ray = scene.spawn_ray(&it, wi);
         rays.bounce += 1;
+        sampler.set_dimension(dims::vertex(depth, dims::ROULETTE));
         depth += 1;
         let beta_max = beta.max_channel();
         if beta_max <= 0.0 || !beta_max.is_finite() {
@@ -276,7 +281,7 @@ pub fn trace_path(
         }
         if depth >= settings.rr_depth {
             let q = (beta_max * eta * eta).min(0.95);
-            if rng.next_f32() >= q {
+            if sampler.next_1d() >= q {
                 break;
             }
             beta /= q;

@@ -636,7 +636,7 @@ impl IndirectSource for GatherSource<'_, '_> {
         _: &Scene,
         sp: &ShadingPoint,
         depth: u32,
-        _: &mut Rng,
+        _: &mut dyn crate::sampler::Sampler,
         _: &mut RayCounts,
     ) -> Option<Rgb> {
         let g = self.gatherer;

@@ -78,6 +78,7 @@ fn direct_irradiance(scene: &Scene, sp: &ShadingPoint, samples: u32, rng: &mut R
         samples,
         BsdfStrategy::All,
         0,
+        0,
         rng,
         &mut rays,
     ) * std::f32::consts::PI

@@ -628,11 +628,6 @@ impl Plugin {
         }
     }
 
-    /// An integer with a default.
-    pub fn integer(&self, name: &str, default: i64) -> Result<i64, SceneError> {
-        Ok(self.integer_opt(name)?.map_or(default, |(v, _)| v))
-    }
-
     /// A boolean with a default.
     pub fn boolean(&self, name: &str, default: bool) -> Result<bool, SceneError> {
         match self.get(name) {

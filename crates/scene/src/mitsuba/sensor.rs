@@ -16,6 +16,7 @@ const SAMPLERS: &[&str] = &[
     "multijitter",
     "ldsampler",
     "orthogonal",
+    "sobol",
 ];
 const INTEGRATORS: &[&str] = &["path", "direct", "irrcache"];
 
@@ -47,9 +48,9 @@ pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneErr
             "a sensor can have only one <sampler>",
         ));
     }
-    let (sampler, spp) = match samplers.first() {
+    let sampler = match samplers.first() {
         Some((s, _)) => build_sampler(s)?,
-        None => ("independent".to_string(), 4),
+        None => SamplerParams::default(),
     };
     // Any other nested object is unused and reported by check_unused below.
     for (obj, prop) in p.objects(&ctx.ids)? {
@@ -132,8 +133,10 @@ pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneErr
         near_clip,
         far_clip,
         film,
-        spp,
-        sampler,
+        spp: sampler.spp,
+        sampler: sampler.kind,
+        sampler_seed: sampler.seed,
+        jitter: sampler.jitter,
     })
 }
 
@@ -229,7 +232,27 @@ fn build_filter(p: &Plugin) -> Result<FilterDesc, SceneError> {
     Ok(f)
 }
 
-fn build_sampler(p: &Plugin) -> Result<(String, u32), SceneError> {
+/// A `<sampler>`'s parameters.
+struct SamplerParams {
+    kind: String,
+    spp: u32,
+    seed: u64,
+    jitter: bool,
+}
+
+impl Default for SamplerParams {
+    /// Mitsuba's: `independent`, 4 samples.
+    fn default() -> Self {
+        SamplerParams {
+            kind: "independent".into(),
+            spp: 4,
+            seed: 0,
+            jitter: true,
+        }
+    }
+}
+
+fn build_sampler(p: &Plugin) -> Result<SamplerParams, SceneError> {
     p.expect_type(SAMPLERS)?;
     let spp = match p.integer_opt("sample_count")? {
         None => 4,
@@ -241,19 +264,33 @@ fn build_sampler(p: &Plugin) -> Result<(String, u32), SceneError> {
             ))
         }
     };
-    // Parameters that change only which random numbers are drawn.
-    let _ = p.integer("seed", 0)?;
-    match p.ty.as_str() {
-        "stratified" | "multijitter" | "orthogonal" => {
-            let _ = p.boolean("jitter", true)?;
-        }
-        _ => {}
-    }
+    let seed = match p.integer_opt("seed")? {
+        None => 0,
+        Some((v, prop)) => u64::try_from(v).map_err(|_| {
+            SceneError::at(prop.loc.clone(), format!("seed {v} must not be negative"))
+        })?,
+    };
+    let jitter = match p.ty.as_str() {
+        "stratified" | "multijitter" | "orthogonal" => p.boolean("jitter", true)?,
+        _ => true,
+    };
     if p.ty == "orthogonal" {
-        let _ = p.integer("strength", 2)?;
+        if let Some((v, prop)) = p.integer_opt("strength")? {
+            if v != 2 {
+                return Err(SceneError::at(
+                    prop.loc.clone(),
+                    format!("orthogonal strength {v}: only strength 2 is supported"),
+                ));
+            }
+        }
     }
     p.check_unused()?;
-    Ok((p.ty.clone(), spp))
+    Ok(SamplerParams {
+        kind: p.ty.clone(),
+        spp,
+        seed,
+        jitter,
+    })
 }
 
 /// The integrator: `path`, `direct`, or `irrcache` (whose extra parameters are kept).

@@ -1,0 +1,495 @@
+//! The pixel samplers. Each turns (pixel, sample index, dimension) into a coordinate:
+//! - `independent`: hashed uniform numbers;
+//! - `stratified`: N = n² samples; each 1-D dimension in N strata, each 2-D pair on an n × n grid,
+//!   the strata shuffled independently per dimension (Mitsuba 3's `stratified`);
+//! - `multijitter`: correlated multi-jittered sampling (Kensler 2013): each 2-D pair is jittered
+//!   on an m × n grid and a Latin hypercube at once;
+//! - `orthogonal`: orthogonal-array Latin hypercubes (Jarosz et al. 2019), Bush's construction of
+//!   strength 2 with N = s², s prime: every 1-D projection is a Latin hypercube and every 2-D
+//!   projection of two dimensions is stratified on an s × s grid;
+//! - `ldsampler`: Kollig and Keller's (0, 2)-sequence (first two Sobol' dimensions) with random
+//!   digit scrambling, the sample order shuffled per dimension (Mitsuba 3's `ldsampler`);
+//! - `sobol`: Owen-scrambled Sobol' points indexed along a Morton curve over the image with
+//!   hashed base-4 digit permutations (pbrt-v4's `ZSobolSampler`, Ahmed and Wonka 2020), so that
+//!   neighbouring pixels' samples are stratified together; each 2-D pair is a (0, 2)-sequence.
+
+use super::permute::{hash32, hash64, owen_scramble, permute, sobol_0, sobol_1, to_unit};
+use super::Sampler;
+use ircache_math::Vec2;
+
+/// A sampler plugin.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Independent uniform numbers.
+    Independent,
+    /// Jittered strata, shuffled per dimension.
+    Stratified,
+    /// Correlated multi-jittered.
+    MultiJitter,
+    /// Orthogonal-array Latin hypercubes.
+    Orthogonal,
+    /// Scrambled (0, 2)-sequence.
+    LowDiscrepancy,
+    /// Owen-scrambled Sobol' along a Morton curve.
+    Sobol,
+}
+
+impl SamplerKind {
+    /// Every kind with its plugin name.
+    pub const ALL: [(SamplerKind, &'static str); 6] = [
+        (SamplerKind::Independent, "independent"),
+        (SamplerKind::Stratified, "stratified"),
+        (SamplerKind::MultiJitter, "multijitter"),
+        (SamplerKind::Orthogonal, "orthogonal"),
+        (SamplerKind::LowDiscrepancy, "ldsampler"),
+        (SamplerKind::Sobol, "sobol"),
+    ];
+
+    /// The kind named `name` (Mitsuba's plugin names, and `sobol`).
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<SamplerKind> {
+        SamplerKind::ALL
+            .iter()
+            .find(|(_, n)| *n == name)
+            .map(|(k, _)| *k)
+    }
+
+    /// The plugin name.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        SamplerKind::ALL
+            .iter()
+            .find(|(k, _)| *k == self)
+            .map_or("independent", |(_, n)| n)
+    }
+
+    /// The sample count this kind uses for a requested one (rounded up to what its construction
+    /// needs: a square, a product of two near-equal factors, the square of a prime, a power of two).
+    #[must_use]
+    pub fn sample_count(self, requested: u32) -> u32 {
+        let n = requested.max(1);
+        match self {
+            SamplerKind::Independent => n,
+            SamplerKind::Stratified => {
+                let r = ceil_sqrt(n);
+                r * r
+            }
+            SamplerKind::MultiJitter => {
+                let (m, k) = multijitter_grid(n);
+                m * k
+            }
+            SamplerKind::Orthogonal => {
+                let s = orthogonal_base(n);
+                s * s
+            }
+            SamplerKind::LowDiscrepancy | SamplerKind::Sobol => n.next_power_of_two(),
+        }
+    }
+}
+
+fn ceil_sqrt(n: u32) -> u32 {
+    let mut r = (f64::from(n)).sqrt() as u32;
+    while r * r < n {
+        r += 1;
+    }
+    while r > 1 && (r - 1) * (r - 1) >= n {
+        r -= 1;
+    }
+    r.max(1)
+}
+
+/// The m × k grid of multi-jittered sampling: k = ⌈√n⌉ rows, m = ⌈n/k⌉ columns.
+pub(super) fn multijitter_grid(n: u32) -> (u32, u32) {
+    let k = ceil_sqrt(n);
+    (n.div_ceil(k), k)
+}
+
+/// The smallest prime s with s² ≥ n.
+pub(super) fn orthogonal_base(n: u32) -> u32 {
+    let mut s = ceil_sqrt(n).max(2);
+    while !(2..s).take_while(|d| d * d <= s).all(|d| !s.is_multiple_of(d)) {
+        s += 1;
+    }
+    s
+}
+
+/// A sampler for a whole image: its kind, sample count, seed and image size.
+#[derive(Clone, Debug)]
+pub struct SamplerSettings {
+    /// Which construction.
+    pub kind: SamplerKind,
+    /// Samples per pixel after rounding ([`SamplerKind::sample_count`]).
+    pub spp: u32,
+    /// Seed of every pixel's samples.
+    pub seed: u64,
+    /// Jitter within strata (`false`: stratum centres), for the stratified kinds.
+    pub jitter: bool,
+    /// Image width (the Sobol' sampler's Morton curve).
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// The construction's grid, from `kind` and `spp`.
+    grid: Grid,
+}
+
+/// Constants of a construction, computed once.
+#[derive(Clone, Copy, Debug, Default)]
+struct Grid {
+    /// `stratified`: n of the n × n grid; `multijitter`: columns m; `orthogonal`: the prime s.
+    a: u32,
+    /// `multijitter`: rows k.
+    b: u32,
+    /// `sobol`: log₂ spp.
+    log2_spp: u32,
+    /// `sobol`: base-4 digits of the Morton-ordered sample index.
+    digits: u32,
+}
+
+impl SamplerSettings {
+    /// Settings for `kind` at `requested` samples per pixel (rounded up as the kind needs).
+    #[must_use]
+    pub fn new(kind: SamplerKind, requested: u32, seed: u64, width: u32, height: u32) -> Self {
+        let spp = kind.sample_count(requested);
+        let grid = match kind {
+            SamplerKind::Independent | SamplerKind::LowDiscrepancy => Grid::default(),
+            SamplerKind::Stratified => Grid {
+                a: ceil_sqrt(spp),
+                ..Grid::default()
+            },
+            SamplerKind::MultiJitter => {
+                let (m, k) = multijitter_grid(spp);
+                Grid {
+                    a: m,
+                    b: k,
+                    ..Grid::default()
+                }
+            }
+            SamplerKind::Orthogonal => Grid {
+                a: orthogonal_base(spp),
+                ..Grid::default()
+            },
+            SamplerKind::Sobol => {
+                let log2_spp = spp.trailing_zeros();
+                let log2_res = width.max(height).max(1).next_power_of_two().trailing_zeros();
+                Grid {
+                    log2_spp,
+                    digits: log2_res + log2_spp.div_ceil(2),
+                    ..Grid::default()
+                }
+            }
+        };
+        SamplerSettings {
+            kind,
+            spp,
+            seed,
+            jitter: true,
+            width,
+            height,
+            grid,
+        }
+    }
+
+    /// The sampler of pixel (x, y), positioned at sample 0, dimension 0.
+    #[must_use]
+    pub fn pixel(&self, x: u32, y: u32) -> PixelSampler<'_> {
+        let pixel_seed = hash64(self.seed, u64::from(y) << 32 | u64::from(x));
+        let morton = if self.kind == SamplerKind::Sobol {
+            morton2(x, y)
+        } else {
+            0
+        };
+        let row_seed = hash32(pixel_seed, 0x0a7e_0a7e);
+        PixelSampler {
+            s: self,
+            pixel_seed,
+            morton,
+            row_seed,
+            index: 0,
+            dim: 0,
+            high_digits: [u64::MAX; HIGH_DIGIT_CACHE],
+            dim_hashes: [0; HIGH_DIGIT_CACHE],
+        }
+    }
+}
+
+/// Interleaves the bits of x and y (x in the even bits).
+fn morton2(x: u32, y: u32) -> u64 {
+    fn spread(v: u32) -> u64 {
+        let mut v = u64::from(v);
+        v = (v | v << 16) & 0x0000_ffff_0000_ffff;
+        v = (v | v << 8) & 0x00ff_00ff_00ff_00ff;
+        v = (v | v << 4) & 0x0f0f_0f0f_0f0f_0f0f;
+        v = (v | v << 2) & 0x3333_3333_3333_3333;
+        (v | v << 1) & 0x5555_5555_5555_5555
+    }
+    spread(x) | spread(y) << 1
+}
+
+/// The 24 permutations of four base-4 digits.
+const DIGIT_PERMUTATIONS: [[u8; 4]; 24] = [
+    [0, 1, 2, 3],
+    [0, 1, 3, 2],
+    [0, 2, 1, 3],
+    [0, 2, 3, 1],
+    [0, 3, 2, 1],
+    [0, 3, 1, 2],
+    [1, 0, 2, 3],
+    [1, 0, 3, 2],
+    [1, 2, 0, 3],
+    [1, 2, 3, 0],
+    [1, 3, 2, 0],
+    [1, 3, 0, 2],
+    [2, 1, 0, 3],
+    [2, 1, 3, 0],
+    [2, 0, 1, 3],
+    [2, 0, 3, 1],
+    [2, 3, 0, 1],
+    [2, 3, 1, 0],
+    [3, 1, 2, 0],
+    [3, 1, 0, 2],
+    [3, 2, 1, 0],
+    [3, 2, 0, 1],
+    [3, 0, 2, 1],
+    [3, 0, 1, 2],
+];
+
+/// One pixel's samples.
+#[derive(Clone, Debug)]
+pub struct PixelSampler<'a> {
+    s: &'a SamplerSettings,
+    pixel_seed: u64,
+    morton: u64,
+    row_seed: u32,
+    index: u32,
+    dim: u32,
+    /// `sobol`: per dimension, the permuted digits of the pixel's part of the sample index (the
+    /// same for all the pixel's samples); `u64::MAX` until computed.
+    high_digits: [u64; HIGH_DIGIT_CACHE],
+    /// Per dimension, the pixel's hash of it (0 until computed).
+    dim_hashes: [u64; HIGH_DIGIT_CACHE],
+}
+
+/// Dimensions whose Sobol' pixel digits a pixel sampler keeps.
+const HIGH_DIGIT_CACHE: usize = 48;
+
+impl PixelSampler<'_> {
+    /// Moves to sample `index` (< the sample count), dimension `dim`.
+    #[inline]
+    pub fn set_sample(&mut self, index: u32, dim: u32) {
+        debug_assert!(index < self.s.spp);
+        self.index = index;
+        self.dim = dim;
+    }
+
+    #[inline]
+    fn dim_seed(&mut self, dim: u32, salt: u64) -> u32 {
+        // The pixel's hash of the dimension is the same for all its samples: kept.
+        let h = match self.dim_hashes.get_mut(dim as usize) {
+            Some(&mut h) if h != 0 => h,
+            Some(slot) => {
+                *slot = hash64(self.pixel_seed, u64::from(dim)) | 1;
+                *slot
+            }
+            None => hash64(self.pixel_seed, u64::from(dim)) | 1,
+        };
+        // Salts pick independent 32-bit words of the hash (salt ≥ 2 rehashes).
+        match salt {
+            0 => h as u32,
+            1 => (h >> 32) as u32,
+            _ => hash32(h, salt),
+        }
+    }
+
+    /// Two jitter offsets from one hash.
+    #[inline]
+    fn jitter2(&self, dim: u32) -> (f32, f32) {
+        if self.s.jitter {
+            let h = hash64(
+                self.pixel_seed,
+                u64::from(self.index) << 32 | u64::from(dim),
+            );
+            (to_unit(h as u32), to_unit((h >> 32) as u32))
+        } else {
+            (0.5, 0.5)
+        }
+    }
+
+    #[inline]
+    fn random(&self, dim: u32, salt: u64) -> u32 {
+        hash32(
+            self.pixel_seed ^ (u64::from(self.index) << 32 | u64::from(dim)),
+            salt,
+        )
+    }
+
+    /// The Sobol' sample index of this pixel's current sample for dimension `dim`: the Morton
+    /// index with each base-4 digit permuted by a hash of the digits above it (pbrt-v4's
+    /// `ZSobolSampler::GetSampleIndex`), so that the pixels' blocks of indices, and the points
+    /// they give, are shuffled independently per dimension.
+    ///
+    /// The digits above the sample's own depend on the pixel alone; they are computed once per
+    /// dimension and pixel.
+    fn sobol_index(&mut self, dim: u32) -> u64 {
+        let Grid {
+            log2_spp, digits, ..
+        } = self.s.grid;
+        let odd = log2_spp & 1 == 1;
+        let morton = self.morton << log2_spp | u64::from(self.index);
+        let salt = (0x5555_5555u64).wrapping_mul(u64::from(dim)) ^ self.s.seed;
+        let last = u32::from(odd);
+        // Digits from this one up lie wholly in the pixel's Morton code.
+        let first_pixel_digit = log2_spp.div_ceil(2).max(last);
+        let permuted = |from: u32, to: u32| {
+            let mut index = 0u64;
+            for i in from..to {
+                let shift = 2 * i - u32::from(odd);
+                let digit = (morton >> shift) & 3;
+                let higher = morton >> (shift + 2);
+                let p = (hash64(higher, salt) >> 40) % 24;
+                index |= u64::from(DIGIT_PERMUTATIONS[p as usize][digit as usize]) << shift;
+            }
+            index
+        };
+        let high = match self.high_digits.get_mut(dim as usize) {
+            Some(&mut h) if h != u64::MAX => h,
+            Some(slot) => {
+                *slot = permuted(first_pixel_digit, digits);
+                *slot
+            }
+            None => permuted(first_pixel_digit, digits),
+        };
+        let mut index = high | permuted(last, first_pixel_digit);
+        if odd {
+            index |= (morton & 1) ^ (hash64(morton >> 1, salt) & 1);
+        }
+        index
+    }
+
+    fn sample_1d(&mut self, dim: u32) -> f32 {
+        let s = self.s;
+        let n = s.spp;
+        match s.kind {
+            SamplerKind::Independent => to_unit(self.random(dim, 1)),
+            SamplerKind::Stratified | SamplerKind::MultiJitter => {
+                let p = permute(self.index, n, self.dim_seed(dim, 0));
+                (p as f32 + self.jitter2(dim).0) / n as f32
+            }
+            SamplerKind::Orthogonal => self.orthogonal(dim),
+            SamplerKind::LowDiscrepancy => {
+                let p = permute(self.index, n, self.dim_seed(dim, 0));
+                to_unit(sobol_0(p) ^ self.dim_seed(dim, 1))
+            }
+            SamplerKind::Sobol => {
+                let i = self.sobol_index(dim);
+                to_unit(owen_scramble(
+                    sobol_0(i as u32),
+                    hash32(s.seed, u64::from(dim)),
+                ))
+            }
+        }
+    }
+
+    fn sample_2d(&mut self, dim: u32) -> Vec2 {
+        let s = self.s;
+        let n = s.spp;
+        match s.kind {
+            SamplerKind::Independent => {
+                let h = hash64(
+                    self.pixel_seed,
+                    u64::from(self.index) << 32 | u64::from(dim),
+                );
+                Vec2::new(to_unit(h as u32), to_unit((h >> 32) as u32))
+            }
+            SamplerKind::Stratified => {
+                let r = s.grid.a;
+                let p = permute(self.index, n, self.dim_seed(dim, 0));
+                let (jx, jy) = self.jitter2(dim);
+                Vec2::new(
+                    ((p % r) as f32 + jx) / r as f32,
+                    ((p / r) as f32 + jy) / r as f32,
+                )
+            }
+            SamplerKind::MultiJitter => {
+                // Kensler 2013, listing 5: stratum (p mod m, p div m), sub-strata from the
+                // permuted other coordinate.
+                let (m, k) = (s.grid.a, s.grid.b);
+                let seed = self.dim_seed(dim, 0);
+                let p = permute(self.index, n, seed);
+                let sx = permute(p % m, m, seed.wrapping_mul(0xa511_e9b3));
+                let sy = permute(p / m, k, seed.wrapping_mul(0x63d8_3595));
+                let (jx, jy) = self.jitter2(dim);
+                Vec2::new(
+                    ((p % m) as f32 + (sy as f32 + jx) / k as f32) / m as f32,
+                    ((p / m) as f32 + (sx as f32 + jy) / m as f32) / k as f32,
+                )
+                .min(Vec2::splat(ONE_MINUS_EPS))
+            }
+            SamplerKind::Orthogonal => Vec2::new(self.orthogonal(dim), self.orthogonal(dim + 1)),
+            SamplerKind::LowDiscrepancy => {
+                let p = permute(self.index, n, self.dim_seed(dim, 0));
+                Vec2::new(
+                    to_unit(sobol_0(p) ^ self.dim_seed(dim, 1)),
+                    to_unit(sobol_1(p) ^ self.dim_seed(dim, 2)),
+                )
+            }
+            SamplerKind::Sobol => {
+                let i = self.sobol_index(dim) as u32;
+                let h = hash64(s.seed, u64::from(dim));
+                Vec2::new(
+                    to_unit(owen_scramble(sobol_0(i), h as u32)),
+                    to_unit(owen_scramble(sobol_1(i), (h >> 32) as u32)),
+                )
+            }
+        }
+    }
+
+    /// Bush's orthogonal array of strength 2 over GF(s): row i = a₀ + a₁·s has in column j the
+    /// value a₀ + a₁·j mod s; any two columns take every pair of values once. The value picks
+    /// the stratum, a₁ the sub-stratum (distinct among the rows sharing a value), both shuffled
+    /// per column, so every column is also a Latin hypercube.
+    fn orthogonal(&mut self, dim: u32) -> f32 {
+        let n = self.s.spp;
+        let s = self.s.grid.a;
+        let row = permute(self.index, n, self.row_seed);
+        let (a0, a1) = (row % s, row / s);
+        let column = dim % s;
+        let value = (a0 + a1 * column) % s;
+        let stratum = permute(value, s, self.dim_seed(dim, 0));
+        let sub = permute(a1, s, self.dim_seed(dim, 1));
+        (stratum as f32 + (sub as f32 + self.jitter2(dim).0) / s as f32) / s as f32
+    }
+}
+
+/// The largest f32 below 1.
+const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
+
+impl Sampler for PixelSampler<'_> {
+    #[inline]
+    fn next_1d(&mut self) -> f32 {
+        let u = self.sample_1d(self.dim);
+        self.dim += 1;
+        u.min(ONE_MINUS_EPS)
+    }
+
+    #[inline]
+    fn next_2d(&mut self) -> Vec2 {
+        let u = self.sample_2d(self.dim);
+        self.dim += 2;
+        u.min(Vec2::splat(ONE_MINUS_EPS))
+    }
+
+    #[inline]
+    fn next_key(&mut self) -> u64 {
+        let k = hash64(
+            self.pixel_seed,
+            u64::from(self.index) << 32 | u64::from(self.dim),
+        );
+        self.dim += 1;
+        k
+    }
+
+    #[inline]
+    fn set_dimension(&mut self, dim: u32) {
+        self.dim = dim;
+    }
+}

@@ -1,0 +1,176 @@
+//! Hashes and permutations the pixel samplers are built from: Kensler's hashed permutation of
+//! `[0, n)` (Correlated Multi-Jittered Sampling, Pixar tech. memo 13-01, 2013, §3), Burley's
+//! hash-based Owen scrambling (Practical Hash-based Owen Scrambling, JCGT 9(4), 2020), and the
+//! first two Sobol' dimensions as generator matrices over 32 bits.
+
+use ircache_math::rng::mix64;
+
+/// A random permutation of `[0, n)` chosen by `seed`, evaluated at `i` (Kensler's `permute`:
+/// invertible operations on the bits under the smallest all-ones mask ≥ n − 1, with cycle
+/// walking until the value falls in range).
+#[inline]
+#[must_use]
+pub fn permute(mut i: u32, n: u32, seed: u32) -> u32 {
+    debug_assert!(i < n);
+    if n <= 1 {
+        return 0;
+    }
+    let mut w = n - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    let p = seed;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < n {
+            break;
+        }
+    }
+    (i.wrapping_add(p)) % n
+}
+
+/// 32 well-mixed bits from a key and a salt.
+#[inline]
+#[must_use]
+pub fn hash32(key: u64, salt: u64) -> u32 {
+    (mix64(key ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15)) >> 32) as u32
+}
+
+/// 64 well-mixed bits from a key and a salt.
+#[inline]
+#[must_use]
+pub fn hash64(key: u64, salt: u64) -> u64 {
+    mix64(key ^ salt.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+}
+
+/// A float in `[0, 1)` from the top 24 bits of `bits`.
+#[inline]
+#[must_use]
+pub fn to_unit(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// Burley's nested uniform scramble: an Owen scramble of the 32-bit fixed-point value `x` (each
+/// bit flipped by a hash of the bits above it), so every elementary interval of a net maps to one
+/// of the same size and a (t, m, s)-net stays one.
+#[inline]
+#[must_use]
+pub fn owen_scramble(x: u32, seed: u32) -> u32 {
+    let mut v = x.reverse_bits();
+    // Laine–Karras-style permutation: each operation only carries from low to high bits of the
+    // reversed value, that is from the high bits of x to its lower ones.
+    v = v.wrapping_add(seed);
+    v ^= v.wrapping_mul(0x6c50_b47c);
+    v ^= v.wrapping_mul(0xb82f_1e52);
+    v ^= v.wrapping_mul(0xc7af_e638);
+    v ^= v.wrapping_mul(0x8d22_f6e6);
+    v.reverse_bits()
+}
+
+/// The first Sobol' dimension (van der Corput in base 2) of point `i`, as 32-bit fixed point.
+#[inline]
+#[must_use]
+pub fn sobol_0(i: u32) -> u32 {
+    i.reverse_bits()
+}
+
+/// The second Sobol' dimension (primitive polynomial x + 1, direction numbers all 1: the generator
+/// matrix is Pascal's triangle mod 2) of point `i`, as 32-bit fixed point.
+#[inline]
+#[must_use]
+pub fn sobol_1(mut i: u32) -> u32 {
+    let mut v = 1u32 << 31;
+    let mut r = 0;
+    while i != 0 {
+        if i & 1 != 0 {
+            r ^= v;
+        }
+        i >>= 1;
+        v ^= v >> 1;
+    }
+    r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn permute_is_a_permutation_and_depends_on_the_seed() {
+        for n in [1u32, 2, 3, 7, 16, 17, 64, 100, 121, 1000] {
+            for seed in [0u32, 1, 0xdead_beef, 12345] {
+                let mut seen = vec![false; n as usize];
+                for i in 0..n {
+                    let j = permute(i, n, seed);
+                    assert!(j < n && !seen[j as usize], "n {n} seed {seed}");
+                    seen[j as usize] = true;
+                }
+            }
+        }
+        let a: Vec<u32> = (0..64).map(|i| permute(i, 64, 1)).collect();
+        let b: Vec<u32> = (0..64).map(|i| permute(i, 64, 2)).collect();
+        assert_ne!(a, b);
+    }
+
+    #[test]
+    fn sobol_matches_its_definition() {
+        // Direction numbers of dimension 1: v_k = v_{k-1} ^ (v_{k-1} >> 1), v_0 = 1/2; the point is
+        // the XOR of the v_k for the set bits of i (Bratley & Fox 1988).
+        let mut v = [0u32; 32];
+        v[0] = 1 << 31;
+        for k in 1..32 {
+            v[k] = v[k - 1] ^ (v[k - 1] >> 1);
+        }
+        for i in [0u32, 1, 2, 3, 5, 77, 1023, 0xffff_ffff] {
+            let want = (0..32)
+                .filter(|k| i >> k & 1 == 1)
+                .fold(0, |acc, k| acc ^ v[k]);
+            assert_eq!(sobol_1(i), want);
+        }
+        // First points of the 2-D sequence in index order: (0,0), (½,½), (¼,¾), (¾,¼).
+        let f = |x: u32| f64::from(x) / 4_294_967_296.0;
+        let pts: Vec<(f64, f64)> = (0..4).map(|i| (f(sobol_0(i)), f(sobol_1(i)))).collect();
+        assert_eq!(
+            pts,
+            vec![(0.0, 0.0), (0.5, 0.5), (0.25, 0.75), (0.75, 0.25)]
+        );
+    }
+
+    #[test]
+    fn owen_scramble_is_a_bijection_preserving_prefixes() {
+        // Values sharing their top k bits still share them after scrambling.
+        for seed in [0u32, 7, 0x1234_5678] {
+            for x in [0u32, 1 << 31, 0xffff_0000, 0x8000_1234] {
+                for k in 1..16 {
+                    let y = x ^ (1 << (31 - k)); // differs from x first at bit k (from the top)
+                    let (sx, sy) = (owen_scramble(x, seed), owen_scramble(y, seed));
+                    assert_eq!(sx >> (32 - k), sy >> (32 - k), "top {k} bits");
+                    assert_ne!(sx >> (31 - k), sy >> (31 - k), "bit {k} must differ");
+                }
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        for x in 0..4096u32 {
+            assert!(seen.insert(owen_scramble(x << 20, 99) >> 20));
+        }
+    }
+}
