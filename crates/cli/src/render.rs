@@ -7,7 +7,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ircache_math::Vec3;
 use ircache_render::film::Filter;
 use ircache_render::integrators::Integrator;
-use ircache_render::render::{render, RenderOutput, RenderSettings, Sampling};
+use ircache_render::render::{render, Adaptive, RenderOutput, RenderSettings, Sampling};
+use ircache_render::sampler::SamplerKind;
 use ircache_render::scene::Scene;
 use ircache_scene::obj_scene::ObjCamera;
 use ircache_scene::SceneDesc;
@@ -43,6 +44,14 @@ pub struct RenderArgs {
     /// ldsampler (Mitsuba 3's) or sobol (Owen-scrambled Sobol' along a Morton curve, the best).
     #[arg(long)]
     pub sampler: Option<String>,
+    /// Adaptive pixel sampling to this relative error per pixel (e.g. 0.02): a pixel takes
+    /// --spp samples in four passes, then more passes while the spread of its pass means says
+    /// its error is above the target, up to --max-spp.
+    #[arg(long, value_name = "REL_ERROR")]
+    pub adaptive: Option<f32>,
+    /// Most samples a pixel takes under --adaptive (default: 8 × --spp).
+    #[arg(long, requires = "adaptive")]
+    pub max_spp: Option<u32>,
     /// Integrator (overrides the scene's): path, direct, or ic (the irradiance cache; also
     /// irrcache).
     #[arg(long)]
@@ -216,6 +225,21 @@ fn default_output(args: &RenderArgs) -> PathBuf {
     PathBuf::from(format!("{stem}.exr"))
 }
 
+/// The adaptive sampling asked for, checked.
+fn adaptive(args: &RenderArgs, spp: u32) -> Result<Option<Adaptive>> {
+    let Some(target) = args.adaptive else {
+        return Ok(None);
+    };
+    if !(target > 0.0 && target.is_finite()) {
+        bail!("--adaptive {target}: expected a relative error above 0 (e.g. 0.02)");
+    }
+    let max_spp = args.max_spp.unwrap_or(spp.saturating_mul(8));
+    if max_spp < spp {
+        bail!("--max-spp {max_spp} is below --spp {spp}");
+    }
+    Ok(Some(Adaptive { target, max_spp }))
+}
+
 /// Runs `ircache render`.
 pub fn run(args: &RenderArgs) -> Result<()> {
     let t0 = Instant::now();
@@ -254,10 +278,20 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         threads: args.threads.unwrap_or(0),
         filter: Filter::from_desc(&desc.sensor.film.filter),
         band: args.tile,
-        sampling: Sampling::from_desc(&desc.sensor).map_err(anyhow::Error::msg)?,
+        sampling: Sampling {
+            adaptive: adaptive(args, desc.sensor.spp)?,
+            ..Sampling::from_desc(&desc.sensor).map_err(anyhow::Error::msg)?
+        },
     };
+    if settings.sampling.adaptive.is_some() && settings.sampling.sampler != SamplerKind::Sobol {
+        eprintln!(
+            "note: --adaptive draws its samples from the sobol sampler (its prefixes stay \
+             stratified as samples are added), not {}",
+            settings.sampling.sampler.name()
+        );
+    }
     let rounded = settings.sampler().spp;
-    if rounded != settings.spp {
+    if rounded != settings.spp && settings.sampling.adaptive.is_none() {
         // Said even with --quiet: the render costs more than asked.
         eprintln!(
             "note: the {} sampler takes {rounded} samples per pixel for the {} asked",
@@ -333,11 +367,11 @@ fn check_writable(path: &Path) -> Result<()> {
 fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Path, wall: f64) {
     let rays = out.rays.total();
     eprintln!(
-        "{}: {}×{} at {} spp ({}, {}) in {:.2} s (render {:.2} s): {:.1} M rays, {:.2} Mrays/s -> {}",
+        "{}: {}×{} at {:.1} spp ({}, {}) in {:.2} s (render {:.2} s): {:.1} M rays, {:.2} Mrays/s -> {}",
         desc.source.display(),
         s.width,
         s.height,
-        s.sampler().spp,
+        out.samples as f64 / (s.width * s.rows().len()).max(1) as f64,
         s.sampling.sampler.name(),
         desc.integrator.kind,
         wall,
@@ -392,7 +426,8 @@ fn write_stats(
         "mrays_per_second": out.rays.total() as f64 * 1e-6 / out.seconds.max(1e-9),
         "width": s.width,
         "height": s.height,
-        "spp": s.sampler().spp,
+        "spp": out.samples as f64 / (s.width * s.rows().len()).max(1) as f64,
+        "adaptive": s.sampling.adaptive.map(|a| a.target),
         "sampler": s.sampling.sampler.name(),
         "seed": s.seed,
         "threads": if s.threads == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { s.threads },

@@ -58,6 +58,7 @@ fn render_against_reference(
         threads: 0,
         filter: Filter::from_desc(&desc.sensor.film.filter),
         band: None,
+        sampling: ircache_render::render::Sampling::default(),
     };
     let out = render(&built, &integrator, &settings, &|_| {}).expect("render");
     let reference = ircache_image::read_image(&root.join(reference)).expect("reference reads");
@@ -196,6 +197,7 @@ fn render_cornell(
         threads: 0,
         filter: Filter::Box,
         band: None,
+        sampling: ircache_render::render::Sampling::default(),
     };
     render(&built, &integrator, &settings, &|_| {})
 }
@@ -467,6 +469,7 @@ fn small_against_reference(
         threads: 0,
         filter: Filter::from_desc(&desc.sensor.film.filter),
         band: None,
+        sampling: ircache_render::render::Sampling::default(),
     };
     let out = render(&built, &integ, &settings, &|_| {}).expect("render");
     let reference = downsample(
@@ -543,11 +546,12 @@ fn deep_bounces_match_the_max_depth_10_references() {
         let (e, blurred, lum, _) = small_against_reference(scene, reference, k, 10, 16, "ic", &[]);
         let (pe, pblurred, _, _) =
             small_against_reference(scene, reference, k, 10, 16, "path", &[]);
-        // Measured: 0.06–0.11 of the path tracer's error at equal samples, 0.31–0.52 blurred.
+        // Measured: 0.06–0.11 of the path tracer's error at equal samples; blurred, 0.5–0.8 of
+        // the path tracer's with multi-jittered samples (0.31–0.52 of it with independent ones).
         assert!((lum - 1.0).abs() < 0.01, "{scene}: lum ratio {lum}");
         assert!(e < 0.25 * pe, "{scene}: {e:.3e} vs path {pe:.3e}");
         assert!(
-            blurred < 0.75 * pblurred,
+            blurred < pblurred,
             "{scene}: blurred {blurred:.3e} vs path {pblurred:.3e}"
         );
     }

@@ -95,6 +95,7 @@ pub fn render_desc(desc: &SceneDesc, threads: usize, seed: u64) -> RenderOutput 
         threads,
         filter: Filter::from_desc(&desc.sensor.film.filter),
         band: None,
+        sampling: ircache_render::render::Sampling::default(),
     };
     render(&scene, &integrator, &settings, &|_| {}).expect("render")
 }

@@ -410,6 +410,7 @@ fn records_match_the_exact_irradiance_at_their_positions() {
             threads: 2,
             filter: ircache_render::film::Filter::Box,
             band: None,
+            sampling: ircache_render::render::Sampling::default(),
         },
         &|_| {},
     )

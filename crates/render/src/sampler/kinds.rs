@@ -107,7 +107,10 @@ pub(super) fn multijitter_grid(n: u32) -> (u32, u32) {
 /// The smallest prime s with s² ≥ n.
 pub(super) fn orthogonal_base(n: u32) -> u32 {
     let mut s = ceil_sqrt(n).max(2);
-    while !(2..s).take_while(|d| d * d <= s).all(|d| !s.is_multiple_of(d)) {
+    while !(2..s)
+        .take_while(|d| d * d <= s)
+        .all(|d| !s.is_multiple_of(d))
+    {
         s += 1;
     }
     s
@@ -170,7 +173,11 @@ impl SamplerSettings {
             },
             SamplerKind::Sobol => {
                 let log2_spp = spp.trailing_zeros();
-                let log2_res = width.max(height).max(1).next_power_of_two().trailing_zeros();
+                let log2_res = width
+                    .max(height)
+                    .max(1)
+                    .next_power_of_two()
+                    .trailing_zeros();
                 Grid {
                     log2_spp,
                     digits: log2_res + log2_spp.div_ceil(2),
