@@ -2,6 +2,7 @@
 //!
 //! - [`scene`]: the render-time scene: Embree geometry, materials and lights, surface interactions.
 //! - [`camera`], [`film`]: primary rays and pixel filters.
+//! - [`sampler`]: where a pixel sample's coordinates come from (Mitsuba 3's samplers, Sobol').
 //! - [`texture`], [`bsdf`]: materials with importance sampling (Mitsuba 3's models).
 //! - [`lights`]: emitters with importance sampling, for next-event estimation and MIS.
 //! - [`integrators`]: `direct` and `path` (the unbiased reference).

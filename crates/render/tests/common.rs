@@ -95,7 +95,7 @@ pub fn render_desc(desc: &SceneDesc, threads: usize, seed: u64) -> RenderOutput 
         threads,
         filter: Filter::from_desc(&desc.sensor.film.filter),
         band: None,
-        sampling: ircache_render::render::Sampling::default(),
+        sampling: ircache_render::render::Sampling::from_desc(&desc.sensor).expect("sampler"),
     };
     render(&scene, &integrator, &settings, &|_| {}).expect("render")
 }

@@ -20,14 +20,14 @@ use std::path::Path;
 
 /// One render's figures.
 #[derive(Clone, Copy, Debug)]
-struct Point {
-    seconds: f64,
-    error: f64,
-    blurred: f64,
-    lum: f64,
+pub(super) struct Point {
+    pub(super) seconds: f64,
+    pub(super) error: f64,
+    pub(super) blurred: f64,
+    pub(super) lum: f64,
 }
 
-fn measure(out: &RenderOutput, reference: &Image) -> Result<Point> {
+pub(super) fn measure(out: &RenderOutput, reference: &Image) -> Result<Point> {
     let m = compare(&out.image, reference)?;
     let b = compare(
         &gaussian_blur(&out.image, 2.0),
@@ -42,7 +42,7 @@ fn measure(out: &RenderOutput, reference: &Image) -> Result<Point> {
 }
 
 /// Renders `scene` with `integrator` at `spp` (cache parameters `params`).
-fn run(
+pub(super) fn run(
     scene: &Scene,
     desc: &ircache_scene::SceneDesc,
     integrator: &str,
@@ -72,7 +72,7 @@ fn run(
 
 /// The time at which the path-tracing series reaches `target` (by `key`), interpolated in
 /// log–log between the bracketing renders; `None` when no render reached it.
-fn time_to(series: &[Point], target: f64, key: fn(&Point) -> f64) -> Option<f64> {
+pub(super) fn time_to(series: &[Point], target: f64, key: fn(&Point) -> f64) -> Option<f64> {
     let first = series.first()?;
     if key(first) <= target {
         return Some(first.seconds);
@@ -92,7 +92,7 @@ fn time_to(series: &[Point], target: f64, key: fn(&Point) -> f64) -> Option<f64>
 }
 
 /// The path tracer's error at `seconds`, interpolated in log–log.
-fn error_at(series: &[Point], seconds: f64, key: fn(&Point) -> f64) -> Option<f64> {
+pub(super) fn error_at(series: &[Point], seconds: f64, key: fn(&Point) -> f64) -> Option<f64> {
     series.windows(2).find_map(|w| {
         let (a, b) = (&w[0], &w[1]);
         (a.seconds <= seconds && seconds <= b.seconds).then(|| {
@@ -102,7 +102,7 @@ fn error_at(series: &[Point], seconds: f64, key: fn(&Point) -> f64) -> Option<f6
     })
 }
 
-fn fmt_time(t: Option<f64>, cap: f64) -> String {
+pub(super) fn fmt_time(t: Option<f64>, cap: f64) -> String {
     t.map_or(format!("> {cap:.0} s"), |t| format!("{t:.1} s"))
 }
 

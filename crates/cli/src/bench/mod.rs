@@ -10,8 +10,11 @@
 //! - The irradiance cache (`ic`, one bounce) on the Cornell box and Sponza: time, records and
 //!   relMSE_trim against the references, with gradient variants, next to Mitsuba 3's path
 //!   tracer run at the spp its error law says reaches the same error (and checked).
+//! - `peers`: ircache's `path` and `ic` against Mitsuba 3 with `independent` and `multijitter`,
+//!   Mitsuba rendered at more samples until it reaches `ic`'s error (see [`peers`]).
 
 mod cache_vs_path;
+mod peers;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -40,8 +43,9 @@ pub struct BenchArgs {
     /// Skip the Mitsuba 3 comparison.
     #[arg(long)]
     pub no_mitsuba: bool,
-    /// Which parts: all, rays, path, gather, ic, cache (the cache against path tracing by
-    /// rendering, and the cost of depth).
+    /// Which parts: all, rays, path, gather, ic, peers (ircache against Mitsuba 3 with
+    /// multijitter, by rendering), cache (the cache against path tracing by rendering, and the
+    /// cost of depth).
     #[arg(long, default_value = "all")]
     pub only: String,
 }
@@ -94,6 +98,13 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "ic" {
         ic(&shared, args)?;
+    }
+    if args.only == "all" || args.only == "peers" {
+        if args.no_mitsuba {
+            println!("\nircache against Mitsuba 3: skipped (--no-mitsuba)");
+        } else {
+            peers::run_all(&shared)?;
+        }
     }
     if args.only == "all" || args.only == "cache" {
         cache_vs_path::run_all(&shared)?;
@@ -327,7 +338,7 @@ fn path_scene(scene_path: &Path, args: &BenchArgs) -> Result<()> {
 }
 
 /// Mitsuba's LLVM variants need libLLVM; Debian's packages put it here.
-fn llvm_path() -> Option<String> {
+pub(super) fn llvm_path() -> Option<String> {
     ["19", "18", "17", "16", "15", "14"]
         .iter()
         .map(|v| format!("/usr/lib/x86_64-linux-gnu/libLLVM-{v}.so"))
@@ -337,13 +348,21 @@ fn llvm_path() -> Option<String> {
 
 /// Times Mitsuba 3's render of the same scene (kernels compiled by a warm-up run first).
 fn mitsuba_time(scene: &Path, spp: u32) -> Result<f64> {
-    mitsuba_render(scene, spp, None)
+    mitsuba_render(scene, spp, None, 3, None)
 }
 
 /// Renders the scene with Mitsuba 3 at `spp` (in passes of at most 64 spp with different
 /// seeds, averaged, as the references were made), writing the image to `out` if given; returns
 /// the render time (kernels compiled by a warm-up run first).
-fn mitsuba_render(scene: &Path, spp: u32, out: Option<&Path>) -> Result<f64> {
+/// `sampler` overrides the scene's `$sampler` default.
+pub(super) fn mitsuba_render(
+    scene: &Path,
+    spp: u32,
+    out: Option<&Path>,
+    max_depth: u32,
+    sampler: Option<&str>,
+) -> Result<f64> {
+    let sampler = sampler.map_or(String::new(), |s| format!(", sampler={s:?}"));
     let save = match out {
         Some(p) => format!("mi.Bitmap(acc).write({:?})", p.display().to_string()),
         None => String::new(),
@@ -353,7 +372,7 @@ fn mitsuba_render(scene: &Path, spp: u32, out: Option<&Path>) -> Result<f64> {
 import os, time, mitsuba as mi
 mi.set_variant('llvm_ad_rgb')
 import drjit as dr
-s = mi.load_file({scene:?}, spp={spp}, max_depth=3)
+s = mi.load_file({scene:?}, spp={spp}, max_depth={max_depth}{sampler})
 img = mi.render(s, spp=4); dr.eval(img); dr.sync_thread()
 left, passes, acc = {spp}, 0, None
 t = time.time()
@@ -656,7 +675,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
         let m_spp = (c1 / (err - c0)).ceil() as u32;
         let tmp =
             std::env::temp_dir().join(format!("ircache-bench-{}-{name}.exr", std::process::id()));
-        match mitsuba_render(&scene_path, m_spp, Some(&tmp)) {
+        match mitsuba_render(&scene_path, m_spp, Some(&tmp), 3, None) {
             Ok(t) => {
                 let m = ircache_image::read_image(&tmp)
                     .map_err(anyhow::Error::from)

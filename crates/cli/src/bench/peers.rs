@@ -1,0 +1,115 @@
+//! `ircache bench --only peers`: ircache against Mitsuba 3 at its best, by rendering, in the
+//! same run.
+//!
+//! For each scene: Mitsuba 3 (`llvm_ad_rgb`, 2 threads) with its `independent` and
+//! `multijitter` samplers at 64 spp; ircache's path tracer (its default sampler) at 16, 32, 64
+//! spp; `ic` at its defaults. Then Mitsuba `multijitter` at 16, 32, 64, … spp until it reaches
+//! `ic`'s error (or 20 times `ic`'s time), each in a process of its own; the time to equal error is interpolated between the
+//! two renders that bracket it (log error against log time), never taken from an error law.
+//! Mitsuba renders more than 64 spp in passes of 64 with different seeds (its memory grows
+//! with the samples of one pass), as the references were made.
+
+use super::cache_vs_path::{error_at, fmt_time, measure, run, time_to, Point};
+use super::mitsuba_render;
+use anyhow::{Context, Result};
+use ircache_image::compare::compare;
+use ircache_image::Image;
+use ircache_render::scene::Scene;
+use ircache_scene::obj_scene::ObjCamera;
+use std::path::Path;
+
+/// Mitsuba 3 at `spp` with `sampler` (a process of its own, kernels compiled by a warm-up
+/// render first): the time and the image's figures against `reference`.
+fn mitsuba(scene: &Path, depth: u32, sampler: &str, spp: u32, reference: &Image) -> Result<Point> {
+    let tmp = std::env::temp_dir().join(format!("ircache-peers-{}.exr", std::process::id()));
+    let seconds = mitsuba_render(scene, spp, Some(&tmp), depth, Some(sampler))?;
+    let img =
+        ircache_image::read_image(&tmp).with_context(|| format!("reading {}", tmp.display()))?;
+    let _ = std::fs::remove_file(&tmp);
+    let m = compare(&img, reference)?;
+    let b = compare(
+        &ircache_image::blur::gaussian_blur(&img, 2.0),
+        &ircache_image::blur::gaussian_blur(reference, 2.0),
+    )?;
+    Ok(Point {
+        seconds,
+        error: m.rel_mse_trim,
+        blurred: b.rel_mse_trim,
+        lum: m.lum_ratio,
+    })
+}
+
+/// Runs the comparison.
+pub fn run_all(shared: &Path) -> Result<()> {
+    // (scene, max_depth of the reference and of `ic`, reference)
+    let cases = [
+        ("cornell-box", 3, "cornell-box-d3"),
+        ("sponza-sun", 3, "sponza-sun-d3"),
+        ("cornell-glossy", 5, "cornell-glossy-d5"),
+    ];
+    println!("\nircache against Mitsuba 3 at its best (2 threads, same run; relMSE_trim, blurred σ = 2 px)");
+    for (name, depth, reference) in cases {
+        let scene_path = shared.join(format!("scenes/{name}/scene.xml"));
+        let reference =
+            ircache_image::read_image(&shared.join(format!("references/{reference}.exr")))?;
+        let defines = vec![("max_depth".to_string(), depth.to_string())];
+        let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
+        let scene = Scene::build(&desc)?;
+        println!("\n{name}, max_depth {depth} (ic -ab {})", depth - 2);
+        let show = |label: &str, p: &Point| {
+            println!(
+                "  {label:<40} {:>8.2} s  relMSE_trim {:.3e}  blurred {:.3e}  lum {:.4}",
+                p.seconds, p.error, p.blurred, p.lum
+            );
+        };
+        let mut path = Vec::new();
+        for spp in [16, 32, 64] {
+            let p = measure(&run(&scene, &desc, "path", spp, &[])?, &reference)?;
+            show(&format!("ircache path, {spp} spp"), &p);
+            path.push(p);
+        }
+        let ic = measure(&run(&scene, &desc, "ic", 16, &[])?, &reference)?;
+        show("ircache ic, defaults, 16 spp", &ic);
+        let mut mi_series = Vec::new();
+        match mitsuba(&scene_path, depth, "independent", 64, &reference) {
+            Ok(p) => show("Mitsuba independent, 64 spp", &p),
+            Err(e) => {
+                println!("  Mitsuba 3 not measured: {e:#}");
+                continue;
+            }
+        }
+        let cap = 20.0 * ic.seconds;
+        let mut spp = 16;
+        loop {
+            let p = mitsuba(&scene_path, depth, "multijitter", spp, &reference)?;
+            show(&format!("Mitsuba multijitter, {spp} spp"), &p);
+            mi_series.push(p);
+            if (p.error <= ic.error && p.blurred <= ic.blurred) || p.seconds > cap || spp >= 8192 {
+                break;
+            }
+            spp *= 2;
+        }
+        let path64 = path[2];
+        match error_at(&mi_series, path64.seconds, |p| p.error) {
+            Some(e) => println!(
+                "  path at equal time: ircache 64 spp {:.3e} against Mitsuba multijitter {e:.3e} at {:.2} s ({})",
+                path64.error,
+                path64.seconds,
+                if path64.error <= e { "ircache lower" } else { "Mitsuba lower" }
+            ),
+            None => println!("  path at equal time: ircache's 64-spp time lies outside Mitsuba's series"),
+        }
+        let cap = mi_series.last().map_or(0.0, |p| p.seconds);
+        let t = time_to(&mi_series, ic.error, |p| p.error);
+        let tb = time_to(&mi_series, ic.blurred, |p| p.blurred);
+        println!(
+            "  Mitsuba multijitter to ic's error: {} ({}× ic's {:.2} s); blurred: {} ({}×)",
+            fmt_time(t, cap),
+            t.map_or("?".into(), |t| format!("{:.1}", t / ic.seconds)),
+            ic.seconds,
+            fmt_time(tb, cap),
+            tb.map_or("?".into(), |t| format!("{:.1}", t / ic.seconds)),
+        );
+    }
+    Ok(())
+}
