@@ -341,7 +341,7 @@ fn pixel_pass(
     lum: &mut (f64, f64),
     rays: &mut RayCounts,
 ) -> (Rgb, u64) {
-    let spp = range.end;
+    let end = range.end;
     let mut sum = Rgb::ZERO;
     let mut invalid = 0;
     let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
@@ -349,8 +349,8 @@ fn pixel_pass(
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
     let mut hits = [None; 16];
     let mut done = range.start;
-    while done < spp {
-        let n = (spp - done).min(16);
+    while done < end {
+        let n = (end - done).min(16);
         for (k, ray) in (done..done + n).zip(&mut camera) {
             sampler.set_sample(k, dims::FILM);
             let offset = settings.filter.sample(sampler.next_2d());

@@ -85,6 +85,17 @@ pub fn path(max_depth: i32) -> IntegratorDesc {
 
 /// Renders a description with `threads` threads and seed `seed`.
 pub fn render_desc(desc: &SceneDesc, threads: usize, seed: u64) -> RenderOutput {
+    let sampling = ircache_render::render::Sampling::from_desc(&desc.sensor).expect("sampler");
+    render_sampled(desc, sampling, threads, seed)
+}
+
+/// Renders a description with the pixel sampling `sampling`.
+pub fn render_sampled(
+    desc: &SceneDesc,
+    sampling: ircache_render::render::Sampling,
+    threads: usize,
+    seed: u64,
+) -> RenderOutput {
     let scene = Scene::build(desc).expect("scene builds");
     let integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
     let settings = RenderSettings {
@@ -95,7 +106,7 @@ pub fn render_desc(desc: &SceneDesc, threads: usize, seed: u64) -> RenderOutput 
         threads,
         filter: Filter::from_desc(&desc.sensor.film.filter),
         band: None,
-        sampling: ircache_render::render::Sampling::from_desc(&desc.sensor).expect("sampler"),
+        sampling,
     };
     render(&scene, &integrator, &settings, &|_| {}).expect("render")
 }

@@ -3,12 +3,10 @@
 //! light at equal samples on a scene whose answer is known in closed form.
 
 mod common;
-use common::{diffuse, emitting_shape, here, path, render_desc, scene, sensor};
+use common::{diffuse, emitting_shape, here, path, render_desc, render_sampled, scene, sensor};
 use ircache_math::{Rgb, Vec3, PI};
-use ircache_render::integrators::Integrator;
-use ircache_render::render::{render, Adaptive, RenderSettings, Sampling};
+use ircache_render::render::{Adaptive, Sampling};
 use ircache_render::sampler::SamplerKind;
-use ircache_render::scene::Scene;
 use ircache_scene::*;
 
 /// A diffuse floor (albedo 0.5) under a spherical emitter of radiance `L` and radius r whose
@@ -92,22 +90,7 @@ fn stratified_samples_lower_the_direct_lights_error_at_equal_samples() {
 }
 
 fn render_with(desc: &SceneDesc, sampling: Sampling, threads: usize) -> Vec<Rgb> {
-    let scene = Scene::build(desc).expect("scene");
-    let integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
-    let settings = RenderSettings {
-        width: desc.sensor.film.width as usize,
-        height: desc.sensor.film.height as usize,
-        spp: desc.sensor.spp,
-        seed: 9,
-        threads,
-        filter: ircache_render::film::Filter::from_desc(&desc.sensor.film.filter),
-        band: None,
-        sampling,
-    };
-    render(&scene, &integrator, &settings, &|_| {})
-        .expect("render")
-        .image
-        .pixels
+    render_sampled(desc, sampling, threads, 9).image.pixels
 }
 
 #[test]

@@ -28,13 +28,15 @@ pub(super) struct Point {
 }
 
 pub(super) fn measure(out: &RenderOutput, reference: &Image) -> Result<Point> {
-    let m = compare(&out.image, reference)?;
-    let b = compare(
-        &gaussian_blur(&out.image, 2.0),
-        &gaussian_blur(reference, 2.0),
-    )?;
+    measure_image(&out.image, out.seconds, reference)
+}
+
+/// An image made in `seconds`, against `reference`.
+pub(super) fn measure_image(image: &Image, seconds: f64, reference: &Image) -> Result<Point> {
+    let m = compare(image, reference)?;
+    let b = compare(&gaussian_blur(image, 2.0), &gaussian_blur(reference, 2.0))?;
     Ok(Point {
-        seconds: out.seconds,
+        seconds,
         error: m.rel_mse_trim,
         blurred: b.rel_mse_trim,
         lum: m.lum_ratio,

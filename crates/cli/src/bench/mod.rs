@@ -177,13 +177,7 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
                 p.install(|| rays.par_chunks(chunk).map(f).sum())
             });
         }
-        println!(
-            "{:<44} {:>10.2} {:>10.2} {:>8.2}",
-            name,
-            r[0],
-            r[1],
-            r[1] / r[0]
-        );
+        print_throughput(name, r);
         Ok(())
     };
     let raw_intersect = |rs: &[Ray]| {
@@ -256,13 +250,7 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
                 })
             });
         }
-        println!(
-            "{:<44} {:>10.2} {:>10.2} {:>8.2}",
-            name,
-            r[0],
-            r[1],
-            r[1] / r[0]
-        );
+        print_throughput(name, r);
     }
     Ok(())
 }
@@ -335,6 +323,17 @@ fn path_scene(scene_path: &Path, args: &BenchArgs) -> Result<()> {
         Err(e) => println!("  Mitsuba 3 not measured: {e:#}"),
     }
     Ok(())
+}
+
+/// A throughput row: rays per second with 1 and 2 threads and their ratio.
+fn print_throughput(name: &str, r: [f64; 2]) {
+    println!(
+        "{:<44} {:>10.2} {:>10.2} {:>8.2}",
+        name,
+        r[0],
+        r[1],
+        r[1] / r[0]
+    );
 }
 
 /// Mitsuba's LLVM variants need libLLVM; Debian's packages put it here.

@@ -9,10 +9,9 @@
 //! Mitsuba renders more than 64 spp in passes of 64 with different seeds (its memory grows
 //! with the samples of one pass), as the references were made.
 
-use super::cache_vs_path::{error_at, fmt_time, measure, run, time_to, Point};
+use super::cache_vs_path::{error_at, fmt_time, measure, measure_image, run, time_to, Point};
 use super::mitsuba_render;
 use anyhow::{Context, Result};
-use ircache_image::compare::compare;
 use ircache_image::Image;
 use ircache_render::scene::Scene;
 use ircache_scene::obj_scene::ObjCamera;
@@ -26,17 +25,7 @@ fn mitsuba(scene: &Path, depth: u32, sampler: &str, spp: u32, reference: &Image)
     let img =
         ircache_image::read_image(&tmp).with_context(|| format!("reading {}", tmp.display()))?;
     let _ = std::fs::remove_file(&tmp);
-    let m = compare(&img, reference)?;
-    let b = compare(
-        &ircache_image::blur::gaussian_blur(&img, 2.0),
-        &ircache_image::blur::gaussian_blur(reference, 2.0),
-    )?;
-    Ok(Point {
-        seconds,
-        error: m.rel_mse_trim,
-        blurred: b.rel_mse_trim,
-        lum: m.lum_ratio,
-    })
+    measure_image(&img, seconds, reference)
 }
 
 /// Runs the comparison.

@@ -213,8 +213,8 @@ impl SamplerSettings {
             row_seed,
             index: 0,
             dim: 0,
-            high_digits: [u64::MAX; HIGH_DIGIT_CACHE],
-            dim_hashes: [0; HIGH_DIGIT_CACHE],
+            high_digits: [u64::MAX; CACHED_DIMS],
+            dim_hashes: [0; CACHED_DIMS],
         }
     }
 }
@@ -271,13 +271,14 @@ pub struct PixelSampler<'a> {
     dim: u32,
     /// `sobol`: per dimension, the permuted digits of the pixel's part of the sample index (the
     /// same for all the pixel's samples); `u64::MAX` until computed.
-    high_digits: [u64; HIGH_DIGIT_CACHE],
+    high_digits: [u64; CACHED_DIMS],
     /// Per dimension, the pixel's hash of it (0 until computed).
-    dim_hashes: [u64; HIGH_DIGIT_CACHE],
+    dim_hashes: [u64; CACHED_DIMS],
 }
 
-/// Dimensions whose Sobol' pixel digits a pixel sampler keeps.
-const HIGH_DIGIT_CACHE: usize = 48;
+/// Dimensions whose per-pixel values (Sobol' pixel digits, dimension hashes) a pixel sampler
+/// keeps.
+const CACHED_DIMS: usize = 48;
 
 impl PixelSampler<'_> {
     /// Moves to sample `index` (< the sample count), dimension `dim`.
@@ -291,13 +292,15 @@ impl PixelSampler<'_> {
     #[inline]
     fn dim_seed(&mut self, dim: u32, salt: u64) -> u32 {
         // The pixel's hash of the dimension is the same for all its samples: kept.
-        let h = match self.dim_hashes.get_mut(dim as usize) {
-            Some(&mut h) if h != 0 => h,
-            Some(slot) => {
-                *slot = hash64(self.pixel_seed, u64::from(dim)) | 1;
-                *slot
+        let hash = || hash64(self.pixel_seed, u64::from(dim)) | 1;
+        let h = match self.dim_hashes.get(dim as usize) {
+            Some(&h) if h != 0 => h,
+            Some(_) => {
+                let h = hash();
+                self.dim_hashes[dim as usize] = h;
+                h
             }
-            None => hash64(self.pixel_seed, u64::from(dim)) | 1,
+            None => hash(),
         };
         // Salts pick independent 32-bit words of the hash (salt ≥ 2 rehashes).
         match salt {
@@ -307,14 +310,20 @@ impl PixelSampler<'_> {
         }
     }
 
+    /// 64 random bits of the current sample's dimension `dim`.
+    #[inline]
+    fn sample_hash(&self, dim: u32) -> u64 {
+        hash64(
+            self.pixel_seed,
+            u64::from(self.index) << 32 | u64::from(dim),
+        )
+    }
+
     /// Two jitter offsets from one hash.
     #[inline]
     fn jitter2(&self, dim: u32) -> (f32, f32) {
         if self.s.jitter {
-            let h = hash64(
-                self.pixel_seed,
-                u64::from(self.index) << 32 | u64::from(dim),
-            );
+            let h = self.sample_hash(dim);
             (to_unit(h as u32), to_unit((h >> 32) as u32))
         } else {
             (0.5, 0.5)
@@ -401,10 +410,7 @@ impl PixelSampler<'_> {
         let n = s.spp;
         match s.kind {
             SamplerKind::Independent => {
-                let h = hash64(
-                    self.pixel_seed,
-                    u64::from(self.index) << 32 | u64::from(dim),
-                );
+                let h = self.sample_hash(dim);
                 Vec2::new(to_unit(h as u32), to_unit((h >> 32) as u32))
             }
             SamplerKind::Stratified => {
@@ -487,10 +493,7 @@ impl Sampler for PixelSampler<'_> {
 
     #[inline]
     fn next_key(&mut self) -> u64 {
-        let k = hash64(
-            self.pixel_seed,
-            u64::from(self.index) << 32 | u64::from(self.dim),
-        );
+        let k = self.sample_hash(self.dim);
         self.dim += 1;
         k
     }
