@@ -379,21 +379,30 @@ impl Scene {
     }
 
     /// A shadow ray from `it` towards unit direction `wi` for a light at `distance` (may be
-    /// infinite), shortened relatively so that it does not reach the light's own surface.
+    /// infinite), shortened relatively so that it does not reach the light's own surface. A ray
+    /// to a point is aimed from the offset origin at the point itself: kept parallel to `wi`, it
+    /// would pass the point at the offset's distance, and near a curved light's silhouette hit
+    /// the light before it.
     #[inline]
     #[must_use]
     pub fn shadow_ray(&self, it: &Interaction, wi: Vec3, distance: f32) -> Ray {
         let o = offset_ray_origin(it.p, it.ng, wi, self.scale);
-        let t_max = if distance.is_finite() {
-            (it.p + wi * distance - o).length() * (1.0 - ircache_math::ray::SHADOW_EPSILON)
-        } else {
-            f32::INFINITY
-        };
+        if !distance.is_finite() {
+            return Ray {
+                o,
+                d: wi,
+                t_min: 0.0,
+                t_max: f32::INFINITY,
+            };
+        }
+        let to_light = it.p + wi * distance - o;
+        let length = to_light.length();
+        let d = if length > 0.0 { to_light / length } else { wi };
         Ray {
             o,
-            d: wi,
+            d,
             t_min: 0.0,
-            t_max,
+            t_max: length * (1.0 - ircache_math::ray::SHADOW_EPSILON),
         }
     }
 }

@@ -619,3 +619,94 @@ fn envmap_and_constant_irradiance() {
     expect *= 4.0 * std::f64::consts::PI / (2 * n_grid * n_grid) as f64;
     assert_estimate("envmap", irradiance(&lights, p, f.n, 1_000_000, 5), expect);
 }
+
+/// Every light sample taken from an unoccluded point on a floor reaches its light: the shadow ray
+/// towards it is not stopped by the light's own surface (spheres seen from near and far, a
+/// rectangle), at millimetre, metre and kilometre scales.
+#[test]
+fn light_samples_are_not_occluded_by_their_own_light() {
+    use ircache_math::ray::Ray;
+    use ircache_render::scene::Scene;
+    let floor = |s: f32| ShapeDesc {
+        id: None,
+        geometry: Geometry::Mesh(rectangle(
+            Vec3::new(-10.0 * s, -10.0 * s, 0.0),
+            Vec3::X,
+            Vec3::Y,
+            20.0 * s,
+            20.0 * s,
+            Vec3::Z,
+        )),
+        bsdf: common::diffuse(Rgb::splat(0.5)),
+        emitter: None,
+        location: common::here(),
+    };
+    let mut failures = Vec::new();
+    for scale in [1e-3f32, 1.0, 1e3] {
+        for (label, light) in [
+            (
+                "near sphere",
+                sphere(Vec3::new(0.1, 0.0, 0.5) * scale, 0.4 * scale, false, 1.0),
+            ),
+            (
+                "far sphere",
+                sphere(Vec3::new(2.0, 1.0, 1.5) * scale, 0.4 * scale, false, 1.0),
+            ),
+            (
+                "tiny sphere",
+                sphere(Vec3::new(0.0, 0.5, 3.0) * scale, 0.01 * scale, false, 1.0),
+            ),
+            (
+                "rectangle",
+                emitting_shape(
+                    Geometry::Mesh(rectangle(
+                        Vec3::new(-0.5, -0.3, 1.0) * scale,
+                        Vec3::new(1.0, 0.0, 0.2).normalize(),
+                        Vec3::Y,
+                        scale,
+                        0.6 * scale,
+                        Vec3::ZERO,
+                    )),
+                    Rgb::splat(1.0),
+                ),
+            ),
+        ] {
+            let scene = Scene::build(&light_scene(vec![floor(scale), light], vec![])).unwrap();
+            let mut rng = Rng::new(7, 1);
+            let (mut samples, mut occluded) = (0u32, 0u32);
+            for i in 0..16 {
+                let x = Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, 0.0) * scale;
+                // Looked at from above, from a different side for each point.
+                let eye = x + Vec3::new(0.01, 0.02, 0.05) * scale * (i as f32 + 1.0);
+                let down = Ray {
+                    o: eye,
+                    d: (x - eye).normalize(),
+                    t_min: 0.0,
+                    t_max: f32::INFINITY,
+                };
+                let it = scene.intersect(&down).expect("the floor");
+                for _ in 0..4000 {
+                    let Some(ls) = scene.lights.sample(it.p, rng.next_f32(), rng.next_2d()) else {
+                        continue;
+                    };
+                    if ls.wi.dot(it.ng) <= 0.0 {
+                        continue;
+                    }
+                    samples += 1;
+                    let shadow = scene.shadow_ray(&it, ls.wi, ls.distance);
+                    occluded += u32::from(scene.accel.occluded(&shadow));
+                }
+            }
+            assert!(
+                samples > 10_000,
+                "{label} at scale {scale}: {samples} samples"
+            );
+            if occluded != 0 {
+                failures.push(format!(
+                    "{label} at scale {scale}: {occluded} of {samples} light samples occluded"
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
