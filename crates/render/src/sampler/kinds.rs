@@ -87,6 +87,16 @@ impl SamplerKind {
     }
 }
 
+/// `(p / d, p % d)`, by shifts when `d` is a power of two (the usual grid sides).
+#[inline]
+fn div_rem(p: u32, d: u32) -> (u32, u32) {
+    if d.is_power_of_two() {
+        (p >> d.trailing_zeros(), p & (d - 1))
+    } else {
+        (p / d, p % d)
+    }
+}
+
 fn ceil_sqrt(n: u32) -> u32 {
     let mut r = (f64::from(n)).sqrt() as u32;
     while r * r < n {
@@ -416,11 +426,9 @@ impl PixelSampler<'_> {
             SamplerKind::Stratified => {
                 let r = s.grid.a;
                 let p = permute(self.index, n, self.dim_seed(dim, 0));
+                let (y_stratum, x_stratum) = div_rem(p, r);
                 let (jx, jy) = self.jitter2(dim);
-                Vec2::new(
-                    ((p % r) as f32 + jx) / r as f32,
-                    ((p / r) as f32 + jy) / r as f32,
-                )
+                Vec2::new((x_stratum as f32 + jx) / r as f32, (y_stratum as f32 + jy) / r as f32)
             }
             SamplerKind::MultiJitter => {
                 // Kensler 2013, listing 5: stratum (p mod m, p div m), sub-strata from the
@@ -428,12 +436,13 @@ impl PixelSampler<'_> {
                 let (m, k) = (s.grid.a, s.grid.b);
                 let seed = self.dim_seed(dim, 0);
                 let p = permute(self.index, n, seed);
-                let sx = permute(p % m, m, seed.wrapping_mul(0xa511_e9b3));
-                let sy = permute(p / m, k, seed.wrapping_mul(0x63d8_3595));
+                let (p_div_m, p_mod_m) = div_rem(p, m);
+                let sx = permute(p_mod_m, m, seed.wrapping_mul(0xa511_e9b3));
+                let sy = permute(p_div_m, k, seed.wrapping_mul(0x63d8_3595));
                 let (jx, jy) = self.jitter2(dim);
                 Vec2::new(
-                    ((p % m) as f32 + (sy as f32 + jx) / k as f32) / m as f32,
-                    ((p / m) as f32 + (sx as f32 + jy) / m as f32) / k as f32,
+                    (p_mod_m as f32 + (sy as f32 + jx) / k as f32) / m as f32,
+                    (p_div_m as f32 + (sx as f32 + jy) / m as f32) / k as f32,
                 )
                 .min(Vec2::splat(ONE_MINUS_EPS))
             }

@@ -45,7 +45,12 @@ pub fn permute(mut i: u32, n: u32, seed: u32) -> u32 {
             break;
         }
     }
-    (i.wrapping_add(p)) % n
+    // Powers of two (the usual sample counts and grid sides) skip the division.
+    if n.is_power_of_two() {
+        i.wrapping_add(p) & (n - 1)
+    } else {
+        i.wrapping_add(p) % n
+    }
 }
 
 /// 32 well-mixed bits from a key and a salt.
