@@ -52,18 +52,20 @@ pub struct Sampling {
     pub adaptive: Option<Adaptive>,
 }
 
-/// Adaptive pixel sampling: a pixel takes `spp` samples, then doubles them while its estimated
-/// relative error exceeds `target`, up to `max_spp`. The samples are the prefixes of one
-/// progressive sequence (the `sobol` sampler at `max_spp`: its prefixes stay stratified), so
-/// the added samples extend the stratification instead of starting another (independent
-/// extra passes of a multi-jittered set lose to one set of their total size: stratification
-/// is worth more than adaptivity there). The error is estimated from the variance of the
-/// samples' luminance, relative as the error measure is: √(var/n) / √(mean² + 0.01); for
-/// stratified samples this overestimates the error where the integrand is smooth, so it ranks
-/// pixels by how hard they are (edges, penumbrae, glossy highlights) rather than promising the
-/// target. (Judging by the difference of the two halves' means instead, an estimate that knows
-/// stratification, is too noisy with one degree of freedom: measured worse on the Cornell box.)
-/// Deterministic: each pixel's decision depends on its own samples alone.
+/// Adaptive pixel sampling: every pixel first takes `spp` samples (the pilot); then each pixel
+/// takes as many more as its neighbourhood's pilot says it needs, in powers of two up to
+/// `max_spp`: the counts that bring the image's root-mean-square relative error to `target`
+/// with the fewest samples (a pixel's count ∝ the standard deviation of its relative value). The samples are the prefixes of one progressive
+/// sequence (the `sobol` sampler at `max_spp`: its prefixes stay stratified), so the added
+/// samples extend the stratification instead of starting another.
+///
+/// Unbiased: a pixel's sample count is decided from its eight neighbours' pilot samples, never
+/// from its own, so the count is independent of the samples it averages. (Deciding from a
+/// pixel's own samples stops the pixels whose first samples happened to miss a small bright
+/// source, a bias towards dark measured on Sponza.) The error per sample is estimated from the
+/// variance of the samples' luminance, relative as the error measure is,
+/// `var / (mean² + (0.1 ȳ)²)` with ȳ the image's mean pilot luminance (scale-free).
+/// Deterministic: every decision is a function of the pilot, which is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Adaptive {
     /// Target relative error of a pixel.
@@ -192,54 +194,65 @@ pub fn render(
     let integrator = &prepared;
     let sampler = settings.sampler();
     let pixel_start = Instant::now();
-    let results: Vec<(Vec<Rgb>, RayCounts, u64, u64)> = pool.install(|| {
-        (0..tiles_x * tiles_y)
-            .into_par_iter()
-            .with_max_len(1)
-            .map(|tile| {
-                let (tx, ty) = (tile % tiles_x, tile / tiles_x);
-                let (x0, y0) = (tx * TILE, ty * TILE);
-                let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-                let mut pixels = Vec::with_capacity((x1 - x0) * (y1 - y0));
-                let mut rays = RayCounts::default();
-                let mut invalid = 0u64;
-                let mut samples = 0u64;
-                let rows = settings.rows();
-                for y in y0..y1 {
-                    for x in x0..x1 {
-                        if !rows.contains(&y) {
-                            pixels.push(Rgb::ZERO);
-                            continue;
-                        }
-                        let p =
-                            render_pixel(scene, integrator, settings, &sampler, x, y, &mut rays);
-                        invalid += p.invalid;
-                        samples += u64::from(p.samples);
-                        pixels.push(p.value);
-                    }
-                }
-                let n =
-                    done.fetch_add(pixels.len() as u64, Ordering::Relaxed) + pixels.len() as u64;
-                progress(n);
-                (pixels, rays, invalid, samples)
-            })
-            .collect()
-    });
-    let mut image = Image::new(w, h);
+    let rows = settings.rows();
+    let first = settings.first_samples();
+    // The pilot (every pixel, when not adaptive), then the adaptive pass; progress counts each
+    // pass as half of the pixels when there are two.
+    let passes = if settings.sampling.adaptive.is_some() { 2 } else { 1 };
+    let mut states = vec![PixelState::default(); w * h];
     let mut rays = RayCounts::default();
-    let mut invalid_samples = 0;
-    let mut samples = 0;
-    for (tile, (pixels, r, bad, n)) in results.into_iter().enumerate() {
-        let (tx, ty) = (tile % tiles_x, tile / tiles_x);
-        let (x0, y0) = (tx * TILE, ty * TILE);
-        let x1 = (x0 + TILE).min(w);
-        for (i, c) in pixels.into_iter().enumerate() {
-            let (x, y) = (x0 + i % (x1 - x0), y0 + i / (x1 - x0));
-            image.set(x, y, c);
+    for pass in 0..passes {
+        let targets: Vec<u32> = if pass == 0 {
+            (0..w * h)
+                .map(|i| if rows.contains(&(i / w)) { first } else { 0 })
+                .collect()
+        } else {
+            adaptive_targets(&states, w, h, first, sampler.spp, settings)
+        };
+        let before = done.load(Ordering::Relaxed);
+        let tiles: Vec<(Vec<PixelState>, RayCounts)> = pool.install(|| {
+            (0..tiles_x * tiles_y)
+                .into_par_iter()
+                .with_max_len(1)
+                .map(|tile| {
+                    let (x0, y0, x1, y1) = tile_bounds(tile, tiles_x, w, h);
+                    let mut rays = RayCounts::default();
+                    let mut out = Vec::with_capacity((x1 - x0) * (y1 - y0));
+                    for y in y0..y1 {
+                        for x in x0..x1 {
+                            let mut state = states[y * w + x];
+                            let to = targets[y * w + x];
+                            if to > state.samples {
+                                extend_pixel(
+                                    scene, integrator, settings, &sampler, x, y, &mut state, to,
+                                    &mut rays,
+                                );
+                            }
+                            out.push(state);
+                        }
+                    }
+                    let n = out.len() as u64;
+                    let total = done.fetch_add(n, Ordering::Relaxed) + n;
+                    progress(before / passes + (total - before) / passes);
+                    (out, rays)
+                })
+                .collect()
+        });
+        for (tile, (pixels, r)) in tiles.into_iter().enumerate() {
+            let (x0, y0, x1, _) = tile_bounds(tile, tiles_x, w, h);
+            for (i, state) in pixels.into_iter().enumerate() {
+                let (x, y) = (x0 + i % (x1 - x0), y0 + i / (x1 - x0));
+                states[y * w + x] = state;
+            }
+            rays.add(&r);
         }
-        rays.add(&r);
-        invalid_samples += bad;
-        samples += n;
+    }
+    let mut image = Image::new(w, h);
+    let (mut invalid_samples, mut samples) = (0, 0);
+    for (i, state) in states.iter().enumerate() {
+        image.set(i % w, i / w, state.value());
+        invalid_samples += state.invalid;
+        samples += u64::from(state.samples);
     }
     let pixel_seconds = pixel_start.elapsed().as_secs_f64();
     let cache = match (integrator.cache(), cache_stats) {
@@ -265,66 +278,139 @@ pub fn render(
     })
 }
 
-/// A rendered pixel.
-struct Pixel {
-    value: Rgb,
+/// Pixel `tile`'s bounds `(x0, y0, x1, y1)` in an image of `w × h` with `tiles_x` tiles a row.
+fn tile_bounds(tile: usize, tiles_x: usize, w: usize, h: usize) -> (usize, usize, usize, usize) {
+    let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
+    (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h))
+}
+
+/// A pixel's running sums over the samples taken so far.
+#[derive(Clone, Copy, Debug, Default)]
+struct PixelState {
+    /// Sum of the samples' values.
+    sum: Rgb,
+    /// Sums of the samples' luminance and its square.
+    lum: (f64, f64),
+    /// Samples taken (the prefix `0..samples` of the pixel's sequence).
     samples: u32,
+    /// Samples dropped as invalid (counted in `samples`, as zero).
     invalid: u64,
 }
 
-/// One pixel: the mean of the sampler's filter-importance-sampled estimates, doubled while
-/// needed under adaptive sampling (see [`Adaptive`]). Samples that the integrator returns as
-/// non-finite or negative count as zero and are counted (Mitsuba drops them too).
-fn render_pixel(
+impl PixelState {
+    /// The pixel's value: the mean of its samples.
+    fn value(&self) -> Rgb {
+        self.sum / self.samples.max(1) as f32
+    }
+
+    /// Mean and unbiased variance of one sample's luminance.
+    fn luminance_moments(&self) -> (f64, f64) {
+        let n = f64::from(self.samples.max(1));
+        let mean = self.lum.0 / n;
+        let var = ((self.lum.1 - self.lum.0 * mean) / (n - 1.0).max(1.0)).max(0.0);
+        (mean, var)
+    }
+}
+
+/// Each pixel's sample count for the adaptive pass (see [`Adaptive`]): from the pilot of its
+/// eight neighbours (not its own), the relative variance v of one sample; the counts n ∝ √v
+/// that bring the image's mean relative variance Σ (v / n) / P to target² with the fewest
+/// samples, rounded to a power of two within `[first, max_spp]`. Pixels outside the rendered
+/// rows stay at 0.
+fn adaptive_targets(
+    states: &[PixelState],
+    w: usize,
+    h: usize,
+    first: u32,
+    max_spp: u32,
+    settings: &RenderSettings,
+) -> Vec<u32> {
+    let Some(a) = settings.sampling.adaptive else {
+        return states.iter().map(|s| s.samples).collect();
+    };
+    let rows = settings.rows();
+    let rendered = states.iter().filter(|s| s.samples > 0);
+    let (total, count) = rendered.fold((0.0f64, 0u64), |(t, c), s| {
+        (t + s.luminance_moments().0, c + 1)
+    });
+    let floor = (0.1 * total / count.max(1) as f64).powi(2).max(f64::MIN_POSITIVE);
+    let relative_variance: Vec<f64> = states
+        .iter()
+        .map(|s| {
+            let (mean, var) = s.luminance_moments();
+            var / (mean * mean + floor)
+        })
+        .collect();
+    // Each rendered pixel's neighbourhood estimate of its relative variance per sample.
+    let neighbourhood: Vec<Option<f64>> = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            if !rows.contains(&y) {
+                return None;
+            }
+            let (mut sum, mut n) = (0.0, 0u32);
+            for ny in y.saturating_sub(1)..(y + 2).min(h) {
+                for nx in x.saturating_sub(1)..(x + 2).min(w) {
+                    if (nx, ny) != (x, y) && rows.contains(&ny) {
+                        sum += relative_variance[ny * w + nx];
+                        n += 1;
+                    }
+                }
+            }
+            Some(if n > 0 { sum / f64::from(n) } else { 0.0 })
+        })
+        .collect();
+    // The counts that minimise the mean relative variance Σ v/n for their total are n ∝ √v;
+    // scaled so that the mean reaches target², n = √v · Σ√v / (P · target²).
+    let (sum_sqrt, pixels) = neighbourhood
+        .iter()
+        .flatten()
+        .fold((0.0, 0u64), |(s, n), v| (s + v.sqrt(), n + 1));
+    let scale = sum_sqrt / (pixels.max(1) as f64 * f64::from(a.target).powi(2));
+    neighbourhood
+        .iter()
+        .map(|v| match v {
+            None => 0,
+            Some(v) => {
+                let want = (v.sqrt() * scale).max(1.0);
+                // The nearest power of two (in ratio): prefixes of the sequence stay nets.
+                let spp = 2f64.powf(want.log2().round()).min(f64::from(max_spp)) as u32;
+                spp.clamp(first, max_spp.max(first))
+            }
+        })
+        .collect()
+}
+
+/// Takes pixel (x, y)'s samples `state.samples..to`: filter-importance-sampled estimates.
+/// Samples that the integrator returns as non-finite or negative count as zero and are counted
+/// (Mitsuba drops them too).
+#[allow(clippy::too_many_arguments)]
+fn extend_pixel(
     scene: &Scene,
     integrator: &Integrator,
     settings: &RenderSettings,
     samplers: &SamplerSettings,
     x: usize,
     y: usize,
+    state: &mut PixelState,
+    to: u32,
     rays: &mut RayCounts,
-) -> Pixel {
-    let mut sum = Rgb::ZERO;
-    let mut invalid = 0;
-    // Sums of the samples' luminance and its square: their variance estimates the error.
-    let mut lum = (0.0f64, 0.0f64);
+) {
     let mut sampler = samplers.pixel(x as u32, y as u32);
-    let mut samples = 0u32;
-    let mut next = settings.first_samples();
-    loop {
-        let (s, bad) = pixel_pass(
-            scene,
-            integrator,
-            settings,
-            &mut sampler,
-            samples..next,
-            x,
-            y,
-            &mut lum,
-            rays,
-        );
-        sum += s;
-        invalid += bad;
-        samples = next;
-        let Some(a) = settings.sampling.adaptive else {
-            break;
-        };
-        if samples >= samplers.spp {
-            break;
-        }
-        let n = f64::from(samples);
-        let mean = lum.0 / n;
-        let var = ((lum.1 - lum.0 * mean) / (n - 1.0).max(1.0)).max(0.0);
-        if var / n / (mean * mean + 0.01) <= f64::from(a.target) * f64::from(a.target) {
-            break;
-        }
-        next = (samples * 2).min(samplers.spp);
-    }
-    Pixel {
-        value: sum / samples.max(1) as f32,
-        samples,
-        invalid,
-    }
+    let (sum, invalid) = pixel_pass(
+        scene,
+        integrator,
+        settings,
+        &mut sampler,
+        state.samples..to,
+        x,
+        y,
+        &mut state.lum,
+        rays,
+    );
+    state.sum += sum;
+    state.invalid += invalid;
+    state.samples = to;
 }
 
 /// The sum of the values of samples `range` at pixel (x, y), and the samples dropped as

@@ -381,7 +381,7 @@ while left > 0:
     acc = img if acc is None else acc + img
     dr.eval(acc); dr.sync_thread()
     left -= n; passes += 1
-print(time.time() - t)
+print("ircache-mitsuba-seconds", time.time() - t)
 {save}
 "#,
         scene = scene.display().to_string()
@@ -401,13 +401,15 @@ print(time.time() - t)
                 .unwrap_or("python3 failed")
         );
     }
+    // Mitsuba's log shares stdout (its warnings end in colour codes): find our line.
     let s = String::from_utf8_lossy(&out.stdout);
-    s.trim()
-        .lines()
-        .last()
+    s.lines()
+        .filter_map(|l| l.split_once("ircache-mitsuba-seconds "))
+        .next_back()
+        .map(|(_, t)| t.trim())
         .unwrap_or("")
         .parse::<f64>()
-        .context("parsing Mitsuba's time")
+        .with_context(|| format!("parsing Mitsuba's time from {s:?}"))
 }
 
 /// Gather-ray throughput of the irradiance cache on Sponza.
