@@ -198,7 +198,11 @@ pub fn render(
     let first = settings.first_samples();
     // The pilot (every pixel, when not adaptive), then the adaptive pass; progress counts each
     // pass as half of the pixels when there are two.
-    let passes = if settings.sampling.adaptive.is_some() { 2 } else { 1 };
+    let passes = if settings.sampling.adaptive.is_some() {
+        2
+    } else {
+        1
+    };
     let mut states = vec![PixelState::default(); w * h];
     let mut rays = RayCounts::default();
     for pass in 0..passes {
@@ -333,7 +337,9 @@ fn adaptive_targets(
     let (total, count) = rendered.fold((0.0f64, 0u64), |(t, c), s| {
         (t + s.luminance_moments().0, c + 1)
     });
-    let floor = (0.1 * total / count.max(1) as f64).powi(2).max(f64::MIN_POSITIVE);
+    let floor = (0.1 * total / count.max(1) as f64)
+        .powi(2)
+        .max(f64::MIN_POSITIVE);
     let relative_variance: Vec<f64> = states
         .iter()
         .map(|s| {

@@ -254,10 +254,12 @@ fn rectangle_area_light_with_a_point_light() {
         mesh_pdf(&lights, 0, &mesh, p, w)
     });
     r.assert_ok(ALPHA, TESTS, "rectangle + point");
-    // Half of the selections go to the delta light: ∫ pdf = 1/2.
+    // The delta light's selections carry no density: ∫ pdf = 1 − its selection probability.
+    let delta_share = f64::from(lights.selection_probability(p, 1));
+    assert!(delta_share > 0.0 && delta_share < 1.0);
     assert!(
-        (r.pdf_integral - 0.5).abs() < 2e-3,
-        "∫pdf = {}",
+        (r.pdf_integral - (1.0 - delta_share)).abs() < 2e-3,
+        "∫pdf = {} with the point light selected with probability {delta_share}",
         r.pdf_integral
     );
 }
@@ -354,9 +356,11 @@ fn sphere_case(p: Vec3, c: Vec3, radius: f32, flip: bool, label: &str) {
         sphere_pdf(&lights, 0, c, radius, flip, p, w)
     });
     r.assert_ok(ALPHA, TESTS, label);
+    // The point light's selections carry no density.
+    let sphere_share = f64::from(lights.selection_probability(p, 0));
     assert!(
-        (r.pdf_integral - 0.5).abs() < 2e-3,
-        "{label}: ∫pdf = {}",
+        (r.pdf_integral - sphere_share).abs() < 2e-3,
+        "{label}: ∫pdf = {} with the sphere selected with probability {sphere_share}",
         r.pdf_integral
     );
 }
@@ -420,7 +424,8 @@ fn env_rotation() -> Mat4 {
     Mat4::from_rotation_x(0.4) * Mat4::from_rotation_y(1.1)
 }
 
-fn env_case(emitters: Vec<EmitterDesc>, label: &str, delta_share: f64) {
+/// `delta`: the index of a delta light among the emitters, whose selections carry no density.
+fn env_case(emitters: Vec<EmitterDesc>, label: &str, delta: Option<u32>) {
     let d = light_scene(vec![], emitters);
     let lights = LightSet::new(&d, Vec3::ZERO, 1.0);
     assert!(lights.has_environment());
@@ -430,9 +435,10 @@ fn env_case(emitters: Vec<EmitterDesc>, label: &str, delta_share: f64) {
         p,
         &View::new(Vec3::Z, 1.0),
         ChiSquareTest::sphere().with_bins(36, 48),
-        |w| lights.pdf_environment(w),
+        |w| lights.pdf_environment(p, w),
     );
     r.assert_ok(ALPHA, TESTS, label);
+    let delta_share = delta.map_or(0.0, |i| f64::from(lights.selection_probability(p, i)));
     assert!(
         (r.pdf_integral - (1.0 - delta_share)).abs() < 2e-3,
         "{label}: ∫pdf = {}",
@@ -450,7 +456,7 @@ fn envmap_with_a_bright_spot() {
             scale: 1.5,
         }],
         "envmap",
-        0.0,
+        None,
     );
 }
 
@@ -461,14 +467,14 @@ fn constant_environment() {
             radiance: Rgb::new(0.2, 0.3, 0.4),
         }],
         "constant",
-        0.0,
+        None,
     );
 }
 
 #[test]
 fn constant_plus_envmap_plus_directional_mixture() {
     // Environment samples from either emitter report the mixture density; the directional light
-    // takes a third of the selections.
+    // takes its share of the selections.
     env_case(
         vec![
             EmitterDesc::Constant {
@@ -486,6 +492,6 @@ fn constant_plus_envmap_plus_directional_mixture() {
             },
         ],
         "constant + envmap",
-        1.0 / 3.0,
+        Some(1),
     );
 }

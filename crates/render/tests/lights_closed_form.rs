@@ -264,7 +264,7 @@ fn spot_light_on_axis_in_the_ramp_and_outside() {
 }
 
 #[test]
-fn mixed_set_sums_the_closed_forms_with_uniform_selection() {
+fn mixed_set_sums_the_closed_forms() {
     let (p, f) = receiver();
     let (r, h) = (0.4f32, 1.5f32);
     let (w, l, hr) = (1.0f32, 2.0f32, 0.8f32);
@@ -309,6 +309,42 @@ fn mixed_set_sums_the_closed_forms_with_uniform_selection() {
         "mixed set",
         irradiance(&lights, p, f.n, 4_000_000, 3),
         expect,
+    );
+}
+
+/// Two equal spheres, one near the receiver and one ten times farther: selection by estimated
+/// contribution picks the near one almost always, so one sample's relative standard deviation is
+/// far below uniform selection's (≈ 1: half the samples carry twice the near light, half next
+/// to nothing), and the estimate is still the closed-form sum.
+#[test]
+fn selection_follows_the_lights_contributions() {
+    let (p, f) = receiver();
+    let (r, near, far) = (0.1f32, 1.0f32, 10.0f32);
+    let lights = LightSet::new(
+        &light_scene(
+            vec![
+                sphere(p + near * f.n, r, false, 1.0),
+                sphere(p + far * (f.n + 0.2 * f.s).normalize(), r, false, 1.0),
+            ],
+            vec![],
+        ),
+        p,
+        20.0,
+    );
+    let near_share = lights.selection_probability(p, 0);
+    assert!(near_share > 0.9, "near light selected with {near_share}");
+    let total = lights.selection_probability(p, 0) + lights.selection_probability(p, 1);
+    assert!((total - 1.0).abs() < 1e-6, "{total}");
+    let far_e = sphere_irradiance(1.0, f64::from(r), f64::from(far))
+        * f64::from(f.n.dot((f.n + 0.2 * f.s).normalize()));
+    let expect = sphere_irradiance(1.0, f64::from(r), f64::from(near)) + far_e;
+    let samples = 200_000;
+    let (m, se) = irradiance(&lights, p, f.n, samples, 5);
+    assert_estimate("two spheres", (m, se), expect);
+    let relative_sd = se * (samples as f64).sqrt() / expect;
+    assert!(
+        relative_sd < 0.4,
+        "one sample's relative deviation {relative_sd}"
     );
 }
 
@@ -550,7 +586,7 @@ fn envmap_uses_mitsubas_lat_long_mapping() {
         assert_eq!(ls.distance, f32::INFINITY);
         assert!(!ls.is_delta);
         assert_eq!(ls.radiance, lights.environment_radiance(ls.wi));
-        assert_eq!(ls.pdf, lights.pdf_environment(ls.wi));
+        assert_eq!(ls.pdf, lights.pdf_environment(Vec3::ZERO, ls.wi));
     }
 }
 

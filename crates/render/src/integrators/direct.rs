@@ -109,7 +109,7 @@ pub fn estimate_direct(
                     let w = if bs.delta {
                         1.0 / fb
                     } else {
-                        mis_weight(fb * bs.pdf, fe * scene.lights.pdf_environment(wi)) / fb
+                        mis_weight(fb * bs.pdf, fe * scene.lights.pdf_environment(p_ref, wi)) / fb
                     };
                     l += bs.weight * le * w;
                 }

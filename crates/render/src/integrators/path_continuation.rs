@@ -181,7 +181,7 @@ pub fn trace_path(
         };
         let Some(it) = hit else {
             if scene.lights.has_environment() {
-                let w = arrival.emission_weight(|_| scene.lights.pdf_environment(ray.d));
+                let w = arrival.emission_weight(|p| scene.lights.pdf_environment(p, ray.d));
                 if w > 0.0 {
                     l += beta * scene.lights.environment_radiance(ray.d) * w;
                 }

@@ -43,6 +43,16 @@ pub struct MeshLight {
 }
 
 impl MeshLight {
+    /// A sphere bounding the mesh: `(centre of its bounding box, half its diagonal)`.
+    #[must_use]
+    pub fn bounding_sphere(&self) -> (Vec3, f32) {
+        let (lo, hi) = self.positions.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
+    }
+
     /// An area light on `mesh` emitting `radiance`; `None` if the mesh has no area.
     #[must_use]
     pub fn new(mesh: &TriangleMesh, radiance: Rgb) -> Option<MeshLight> {

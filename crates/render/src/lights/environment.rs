@@ -88,6 +88,12 @@ pub struct EnvmapLight {
 }
 
 impl EnvmapLight {
+    /// `∫ L dω` of the luminance over the sphere (as its sampling tabulates it).
+    #[must_use]
+    pub fn total_luminance(&self) -> f32 {
+        self.rows.integral
+    }
+
     /// Builds the emitter and its sampling distributions from the radiance image.
     #[must_use]
     pub fn new(image: &Image, to_world: Mat4, scale: f32) -> Option<EnvmapLight> {

@@ -9,12 +9,12 @@
 //! Conventions (Mitsuba 3):
 //! - Area emitters are one-sided: they emit on the side of the shading normal only
 //!   ([`LightSet::area_radiance`]); a sphere with `flip_normals` emits inwards.
-//! - Light selection is uniform over all emitters (each emitting shape is one emitter, as is each
-//!   point, spot, directional, constant and envmap emitter), like Mitsuba 3's default
-//!   `Scene::sample_emitter`: probability `1/N`.
+//! - Each emitting shape is one emitter, as is each point, spot, directional, constant and envmap
+//!   emitter. One is selected per sample in proportion to an estimate of its contribution at the
+//!   reference point ([`selection`]), not uniformly as Mitsuba 3's `Scene::sample_emitter` does.
 //! - All environment emitters (normally at most one) are treated as a single environment: a sample
 //!   drawn from any of them reports the *total* environment radiance along its direction and the
-//!   mixture density [`LightSet::pdf_environment`], which is exactly what a BSDF-sampled escaping
+//!   mixture density [`LightSet::pdf_environment`] (each weighted by its selection probability), which is exactly what a BSDF-sampled escaping
 //!   ray sees, so MIS weights agree on both sides.
 //! - Samples that cannot contribute (back side of a one-sided emitter, outside a spot's cone,
 //!   black environment direction, degenerate geometry) are reported as `None` rather than as a
@@ -26,6 +26,7 @@ pub mod area;
 pub mod directional;
 pub mod environment;
 pub mod point;
+pub mod selection;
 pub mod sphere;
 pub mod spot;
 
@@ -35,6 +36,7 @@ use environment::{ConstantLight, EnvmapLight};
 use ircache_math::{Rgb, Vec2, Vec3};
 use ircache_scene::{EmitterDesc, Geometry, SceneDesc};
 use point::PointLight;
+use selection::{light_pmf, selection_pmf, LightBound, MAX_ESTIMATED};
 use sphere::SphereLight;
 use spot::SpotLight;
 
@@ -84,16 +86,56 @@ enum Light {
     Envmap(EnvmapLight),
 }
 
-/// All emitters of a scene, with uniform light selection.
+impl Light {
+    /// What selection knows of the light (see [`selection`]); `point_radius2` floors the
+    /// distance of point and spot lights.
+    fn bound(&self, point_radius2: f32) -> LightBound {
+        let local = |center: Vec3, radius: f32, intensity: f32| LightBound::Local {
+            center,
+            radius2: (radius * radius).max(point_radius2),
+            intensity,
+        };
+        match self {
+            Light::Mesh(m) => {
+                let (center, radius) = m.bounding_sphere();
+                local(center, radius, m.radiance().luminance() * m.area())
+            }
+            Light::Sphere(s) => {
+                let (center, radius) = s.sphere();
+                local(
+                    center,
+                    radius,
+                    s.radiance().luminance() * std::f32::consts::PI * radius * radius,
+                )
+            }
+            Light::Point(l) => local(l.position, 0.0, l.intensity.luminance()),
+            Light::Spot(l) => {
+                let (position, intensity) = l.position_and_intensity();
+                local(position, 0.0, intensity.luminance())
+            }
+            Light::Directional(l) => LightBound::Distant {
+                irradiance: l.irradiance.luminance(),
+            },
+            Light::Constant(c) => LightBound::Distant {
+                irradiance: std::f32::consts::PI * c.radiance.luminance(),
+            },
+            Light::Envmap(e) => LightBound::Distant {
+                irradiance: 0.25 * e.total_luminance(),
+            },
+        }
+    }
+}
+
+/// All emitters of a scene, with their selection.
 #[derive(Clone, Debug)]
 pub struct LightSet {
     lights: Vec<Light>,
+    /// What selection knows of each light.
+    bounds: Vec<LightBound>,
     /// For each shape of the description, its area light.
     shape_light: Vec<Option<u32>>,
     /// Indices of the constant and envmap lights.
     env_lights: Vec<u32>,
-    /// Selection probability of each light, `1/N`.
-    select_prob: f32,
     scene_center: Vec3,
     scene_radius: f32,
 }
@@ -166,16 +208,14 @@ impl LightSet {
                 lights.push(light);
             }
         }
-        let select_prob = if lights.is_empty() {
-            0.0
-        } else {
-            1.0 / lights.len() as f32
-        };
+        // Point lights get a bound of a millionth of the scene's size (scale-free).
+        let point_radius2 = (scene_radius * 1e-6).powi(2).max(f32::MIN_POSITIVE);
+        let bounds = lights.iter().map(|l| l.bound(point_radius2)).collect();
         LightSet {
             lights,
+            bounds,
             shape_light,
             env_lights,
-            select_prob,
             scene_center,
             scene_radius,
         }
@@ -205,12 +245,10 @@ impl LightSet {
     #[inline]
     #[must_use]
     pub fn sample(&self, p: Vec3, u_select: f32, u: Vec2) -> Option<LightSample> {
-        let n = self.lights.len();
-        if n == 0 {
+        if self.lights.is_empty() {
             return None;
         }
-        let idx = ((u_select * n as f32) as usize).min(n - 1);
-        let sel = self.select_prob;
+        let (idx, sel) = self.select(p, u_select);
         let light = idx as u32;
         let area = |(wi, distance, radiance, pdf): (Vec3, f32, Rgb, f32)| LightSample {
             wi,
@@ -236,15 +274,55 @@ impl LightSet {
             Light::Directional(l) => {
                 (!l.irradiance.is_black()).then(|| delta((l.wi, f32::INFINITY, l.irradiance)))
             }
-            Light::Constant(c) => self.environment_sample(c.sample(u), light),
-            Light::Envmap(e) => self.environment_sample(e.sample(u)?, light),
+            Light::Constant(c) => self.environment_sample(p, c.sample(u), light),
+            Light::Envmap(e) => self.environment_sample(p, e.sample(u)?, light),
+        }
+    }
+
+    /// The light chosen by `u_select` at `p` and its selection probability.
+    #[inline]
+    fn select(&self, p: Vec3, u_select: f32) -> (usize, f32) {
+        let n = self.lights.len();
+        if n == 1 {
+            return (0, 1.0);
+        }
+        if n > MAX_ESTIMATED {
+            return (((u_select * n as f32) as usize).min(n - 1), 1.0 / n as f32);
+        }
+        let mut pmf = [0.0f32; MAX_ESTIMATED];
+        selection_pmf(&self.bounds, p, &mut pmf);
+        let mut cumulative = 0.0;
+        let mut last = 0;
+        for (i, &q) in pmf[..n].iter().enumerate() {
+            if q > 0.0 {
+                cumulative += q;
+                last = i;
+                if u_select < cumulative {
+                    return (i, q);
+                }
+            }
+        }
+        // Rounding left u_select beyond the sum: the last light that can be chosen.
+        (last, pmf[last])
+    }
+
+    /// The probability that [`LightSet::sample`] at `p` selects `light`.
+    #[inline]
+    #[must_use]
+    pub fn selection_probability(&self, p: Vec3, light: u32) -> f32 {
+        let n = self.lights.len();
+        match n {
+            0 => 0.0,
+            1 => 1.0,
+            _ if n > MAX_ESTIMATED => 1.0 / n as f32,
+            _ => light_pmf(&self.bounds, p, light as usize),
         }
     }
 
     /// A sample of the environment along `wi` with the total radiance and mixture density.
     #[inline]
-    fn environment_sample(&self, wi: Vec3, light: u32) -> Option<LightSample> {
-        let pdf = self.pdf_environment(wi);
+    fn environment_sample(&self, p: Vec3, wi: Vec3, light: u32) -> Option<LightSample> {
+        let pdf = self.pdf_environment(p, wi);
         let radiance = self.environment_radiance(wi);
         if !is_positive_finite(pdf) || radiance.is_black() {
             return None;
@@ -295,7 +373,7 @@ impl LightSet {
             Some(Light::Sphere(s)) => s.pdf(p, p_light),
             _ => return 0.0,
         };
-        pdf * self.select_prob
+        pdf * self.selection_probability(p, light)
     }
 
     /// Radiance from the environment (sum of the constant and envmap emitters) along the escaping
@@ -314,20 +392,21 @@ impl LightSet {
         l
     }
 
-    /// Solid-angle density (including selection) with which [`LightSet::sample`] produces the
-    /// environment direction `dir`: `Σ_env (1/N) p_env(dir)`.
+    /// Solid-angle density (including selection) with which [`LightSet::sample`] at `p` produces
+    /// the environment direction `dir`: `Σ_env P(env | p) p_env(dir)`.
     #[inline]
     #[must_use]
-    pub fn pdf_environment(&self, dir: Vec3) -> f32 {
+    pub fn pdf_environment(&self, p: Vec3, dir: Vec3) -> f32 {
         let mut pdf = 0.0;
         for &i in &self.env_lights {
-            match &self.lights[i as usize] {
-                Light::Constant(c) => pdf += c.pdf(),
-                Light::Envmap(e) => pdf += e.pdf(dir),
-                _ => {}
-            }
+            let own = match &self.lights[i as usize] {
+                Light::Constant(c) => c.pdf(),
+                Light::Envmap(e) => e.pdf(dir),
+                _ => 0.0,
+            };
+            pdf += own * self.selection_probability(p, i);
         }
-        pdf * self.select_prob
+        pdf
     }
 
     /// True when the scene has a constant or envmap emitter.

@@ -25,6 +25,12 @@ pub struct SphereLight {
 }
 
 impl SphereLight {
+    /// `(centre, radius)`.
+    #[must_use]
+    pub fn sphere(&self) -> (Vec3, f32) {
+        (self.center, self.radius)
+    }
+
     /// A sphere light; `None` for a non-positive or non-finite radius.
     #[must_use]
     pub fn new(

@@ -29,6 +29,12 @@ pub struct SpotLight {
 }
 
 impl SpotLight {
+    /// Position and intensity on the axis.
+    #[must_use]
+    pub fn position_and_intensity(&self) -> (Vec3, Rgb) {
+        (self.position, self.intensity)
+    }
+
     /// A spot light from Mitsuba's parameters (angles in degrees).
     #[must_use]
     pub fn new(

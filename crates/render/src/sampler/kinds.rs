@@ -428,7 +428,10 @@ impl PixelSampler<'_> {
                 let p = permute(self.index, n, self.dim_seed(dim, 0));
                 let (y_stratum, x_stratum) = div_rem(p, r);
                 let (jx, jy) = self.jitter2(dim);
-                Vec2::new((x_stratum as f32 + jx) / r as f32, (y_stratum as f32 + jy) / r as f32)
+                Vec2::new(
+                    (x_stratum as f32 + jx) / r as f32,
+                    (y_stratum as f32 + jy) / r as f32,
+                )
             }
             SamplerKind::MultiJitter => {
                 // Kensler 2013, listing 5: stratum (p mod m, p div m), sub-strata from the
