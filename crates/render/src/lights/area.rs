@@ -11,7 +11,11 @@
 //! (the true Jacobian of the surface, PBRT 3rd ed. §14.2.2):
 //!
 //! `p_ω = p_A · d² / |cos θ_light|`, `cos θ_light = n_g · ω`.
+//!
+//! A mesh that is one flat rectangle (Mitsuba's `rectangle` shape) is sampled uniformly by solid
+//! angle instead, where its solid angle allows ([`super::rectangle`]); the density is then `1/Ω`.
 
+use super::rectangle::{Rectangle, SphericalRectangle};
 use super::{is_positive_finite, solid_angle_pdf};
 use ircache_math::sampling::{square_to_uniform_triangle, Distribution1D};
 use ircache_math::{Rgb, Vec2, Vec3};
@@ -40,6 +44,9 @@ pub struct MeshLight {
     area: f32,
     /// Emitted radiance (front side only).
     radiance: Rgb,
+    /// The mesh as one flat rectangle, with the normal of its emitting side, when it is one:
+    /// sampled by solid angle ([`super::rectangle`]).
+    rectangle: Option<(Rectangle, Vec3)>,
 }
 
 impl MeshLight {
@@ -77,6 +84,25 @@ impl MeshLight {
             .as_ref()
             .filter(|n| n.len() == mesh.positions.len())
             .cloned();
+        // Solid-angle sampling needs one emitting side: both triangles wound alike and no
+        // vertex normal leaning off the plane.
+        let rectangle = Rectangle::from_triangles(&mesh.positions, &mesh.indices).and_then(|r| {
+            let winding = |&[a, b, c]: &[u32; 3]| {
+                let (a, b, c) = (
+                    mesh.positions[a as usize],
+                    mesh.positions[b as usize],
+                    mesh.positions[c as usize],
+                );
+                (b - a).cross(c - a).normalize_or_zero()
+            };
+            let n = winding(&mesh.indices[0]);
+            let flat = |v: Vec3| v.dot(n) > 1.0 - 1e-5;
+            (flat(winding(&mesh.indices[1]))
+                && normals
+                    .as_ref()
+                    .is_none_or(|ns| ns.iter().all(|&v| flat(v))))
+            .then_some((r, n))
+        });
         Some(MeshLight {
             positions: mesh.positions.clone(),
             normals,
@@ -84,7 +110,16 @@ impl MeshLight {
             tri_dist: Distribution1D::new(&areas),
             area,
             radiance,
+            rectangle,
         })
+    }
+
+    /// The spherical rectangle the light subtends at `p_ref` and its emitting normal, where it
+    /// is sampled by solid angle.
+    #[inline]
+    fn spherical(&self, p_ref: Vec3) -> Option<(SphericalRectangle, Vec3)> {
+        let (rect, n) = self.rectangle.as_ref()?;
+        Some((rect.spherical(p_ref)?, *n))
     }
 
     /// Emitted radiance on the front side.
@@ -138,6 +173,15 @@ impl MeshLight {
     #[inline]
     #[must_use]
     pub fn sample(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb, f32)> {
+        if let Some((sph, n)) = self.spherical(p_ref) {
+            let d = sph.sample(p_ref, u) - p_ref;
+            let dist = d.length();
+            let wi = d / dist;
+            if !is_positive_finite(dist) || n.dot(-wi) <= 0.0 {
+                return None;
+            }
+            return Some((wi, dist, self.radiance, 1.0 / sph.solid_angle));
+        }
         let sp = self.sample_position(u);
         let d = sp.p - p_ref;
         let dist2 = d.length_squared();
@@ -162,6 +206,9 @@ impl MeshLight {
     #[inline]
     #[must_use]
     pub fn pdf(&self, prim: u32, p_ref: Vec3, p_light: Vec3, n_fallback: Vec3) -> f32 {
+        if let Some((sph, _)) = self.spherical(p_ref) {
+            return 1.0 / sph.solid_angle;
+        }
         let ng = self.geometric_normal(prim).unwrap_or(n_fallback);
         let d = p_light - p_ref;
         let dist2 = d.length_squared();

@@ -26,6 +26,7 @@ pub mod area;
 pub mod directional;
 pub mod environment;
 pub mod point;
+pub mod rectangle;
 pub mod selection;
 pub mod sphere;
 pub mod spot;

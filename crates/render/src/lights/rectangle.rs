@@ -1,0 +1,304 @@
+//! Solid-angle sampling of rectangular emitters (Ureña, Fajardo and King 2013, "An
+//! Area-Preserving Parametrization for Spherical Rectangles", EGSR): a point uniform in the solid
+//! angle the rectangle subtends at the reference point, so that the estimator no longer carries
+//! area sampling's `cos θ_light / d²`, which varies most for points near a large light (walls
+//! beside a ceiling lamp, a desk under its lamp).
+//!
+//! A mesh light uses it when the mesh is one rectangle (two triangles, four corners, a right
+//! angle; Mitsuba's `rectangle` shape) without bent vertex normals, and only where the solid
+//! angle lies in `[MIN_SOLID_ANGLE, MAX_SOLID_ANGLE]`: below, the rectangle is small enough that
+//! area sampling is as good and the parametrisation loses precision; above (a point almost on
+//! the light), the angles it is built from do. The density follows the same rule at the same
+//! point, so sampling and MIS agree. The bounds are pbrt-v4's.
+
+use ircache_math::{Vec2, Vec3, PI};
+
+/// Smallest solid angle (sr) sampled by solid angle.
+pub const MIN_SOLID_ANGLE: f32 = 3e-4;
+/// Below this first guess of the solid angle (sr), area sampling is used: its variance differs
+/// from solid-angle sampling's by the spread of `cos θ_light / d²` over the light, small for a
+/// small solid angle, and it costs a quarter of the time.
+pub const SOLID_ANGLE_FROM: f32 = 0.1;
+/// Largest solid angle (sr) sampled by solid angle.
+pub const MAX_SOLID_ANGLE: f32 = 6.22;
+
+/// A rectangle `corner + [0, width]·ex + [0, height]·ey` emitting towards `normal = ex × ey`
+/// (or its opposite).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rectangle {
+    corner: Vec3,
+    ex: Vec3,
+    ey: Vec3,
+    width: f32,
+    height: f32,
+}
+
+/// The rectangle as seen from one reference point: what sampling needs (the paper's local
+/// frame, coordinates and internal angles).
+#[derive(Clone, Copy, Debug)]
+pub struct SphericalRectangle {
+    /// Local frame: x along the rectangle's first edge, y along the second, z away from it.
+    x: Vec3,
+    y: Vec3,
+    z: Vec3,
+    x0: f32,
+    x1: f32,
+    y0: f32,
+    y1: f32,
+    z0: f32,
+    b0: f32,
+    b1: f32,
+    /// `g2 + g3`: the paper's `k = 2π − g2 − g3` up to a full turn.
+    k: f32,
+    /// The solid angle.
+    pub solid_angle: f32,
+}
+
+/// The angle between unit vectors, accurate near 0 and π.
+#[inline]
+fn angle_between(a: Vec3, b: Vec3) -> f32 {
+    if a.dot(b) < 0.0 {
+        PI - 2.0 * ((a + b).length() * 0.5).min(1.0).asin()
+    } else {
+        2.0 * ((b - a).length() * 0.5).min(1.0).asin()
+    }
+}
+
+impl Rectangle {
+    /// The rectangle that the triangles `indices` over `positions` form, if they form one: four
+    /// distinct corners of which one pair of edges is at a right angle (relative tolerance
+    /// 10⁻⁴) and two triangles covering its area once.
+    #[must_use]
+    pub fn from_triangles(positions: &[Vec3], indices: &[[u32; 3]]) -> Option<Rectangle> {
+        if indices.len() != 2 {
+            return None;
+        }
+        let mut corners: Vec<Vec3> = Vec::with_capacity(4);
+        for &i in indices.iter().flatten() {
+            let p = *positions.get(i as usize)?;
+            if !corners.contains(&p) {
+                corners.push(p);
+            }
+        }
+        if corners.len() != 4 {
+            return None;
+        }
+        // The corner farthest from the first is the opposite one; the other two span the edges.
+        let c0 = corners[0];
+        let far = (1..4).max_by(|&a, &b| {
+            (corners[a] - c0)
+                .length_squared()
+                .total_cmp(&(corners[b] - c0).length_squared())
+        })?;
+        let others: Vec<Vec3> = (1..4).filter(|&i| i != far).map(|i| corners[i]).collect();
+        let (e1, e2) = (others[0] - c0, others[1] - c0);
+        let (width, height) = (e1.length(), e2.length());
+        let diagonal = (corners[far] - c0).length();
+        let tolerance = 1e-4 * diagonal;
+        let area: f32 = indices
+            .iter()
+            .map(|&[a, b, c]| {
+                let (a, b, c) = (
+                    positions[a as usize],
+                    positions[b as usize],
+                    positions[c as usize],
+                );
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum();
+        let is_rectangle = width > 0.0
+            && height > 0.0
+            && (c0 + e1 + e2 - corners[far]).length() <= tolerance
+            && e1.dot(e2).abs() <= 1e-4 * width * height
+            && (area - width * height).abs() <= 1e-4 * width * height;
+        is_rectangle.then(|| Rectangle {
+            corner: c0,
+            ex: e1 / width,
+            ey: e2 / height,
+            width,
+            height,
+        })
+    }
+
+    /// Unit normal `ex × ey`.
+    #[must_use]
+    pub fn normal(&self) -> Vec3 {
+        self.ex.cross(self.ey)
+    }
+
+    /// The rectangle seen from `p` when its solid angle there is within the bounds this module
+    /// samples by solid angle (`None` otherwise, and for a point in its plane).
+    #[must_use]
+    pub fn spherical(&self, p: Vec3) -> Option<SphericalRectangle> {
+        // A cheap first guess of the solid angle (the rectangle as a point at its centre): where
+        // it is small, area sampling is as good and costs less.
+        let to_centre = self.corner + 0.5 * (self.ex * self.width + self.ey * self.height) - p;
+        let d2 = to_centre.length_squared();
+        let guess =
+            self.width * self.height * self.normal().dot(to_centre).abs() / (d2 * d2.sqrt());
+        if guess.is_nan() || guess < SOLID_ANGLE_FROM {
+            return None;
+        }
+        let d = self.corner - p;
+        let mut z = self.normal();
+        let (x0, y0) = (d.dot(self.ex), d.dot(self.ey));
+        let mut z0 = d.dot(z);
+        if z0 > 0.0 {
+            z = -z;
+            z0 = -z0;
+        }
+        if z0.is_nan() || z0 >= 0.0 {
+            return None;
+        }
+        let (x1, y1) = (x0 + self.width, y0 + self.height);
+        let v00 = Vec3::new(x0, y0, z0);
+        let v01 = Vec3::new(x0, y1, z0);
+        let v10 = Vec3::new(x1, y0, z0);
+        let v11 = Vec3::new(x1, y1, z0);
+        let n0 = v00.cross(v10).try_normalize()?;
+        let n1 = v10.cross(v11).try_normalize()?;
+        let n2 = v11.cross(v01).try_normalize()?;
+        let n3 = v01.cross(v00).try_normalize()?;
+        let g0 = angle_between(-n0, n1);
+        let g1 = angle_between(-n1, n2);
+        let g2 = angle_between(-n2, n3);
+        let g3 = angle_between(-n3, n0);
+        let solid_angle = g0 + g1 + g2 + g3 - 2.0 * PI;
+        if !(MIN_SOLID_ANGLE..=MAX_SOLID_ANGLE).contains(&solid_angle) {
+            return None;
+        }
+        Some(SphericalRectangle {
+            x: self.ex,
+            y: self.ey,
+            z,
+            x0,
+            x1,
+            y0,
+            y1,
+            z0,
+            b0: n0.z,
+            b1: n2.z,
+            k: g2 + g3,
+            solid_angle,
+        })
+    }
+}
+
+impl SphericalRectangle {
+    /// The point on the rectangle in the direction `u` maps to, uniformly by solid angle from
+    /// `p` (the reference point this was made for).
+    #[must_use]
+    pub fn sample(&self, p: Vec3, u: Vec2) -> Vec3 {
+        // Azimuth: the area of the sub-rectangle left of the sample is u.x of the whole.
+        let au = u.x * self.solid_angle - self.k;
+        let fu = (au.cos() * self.b0 - self.b1) / au.sin();
+        let cu = (1.0 / (fu * fu + self.b0 * self.b0).sqrt())
+            .copysign(fu)
+            .clamp(-1.0 + f32::EPSILON, 1.0 - f32::EPSILON);
+        let xu = (-(cu * self.z0) / (1.0 - cu * cu).max(0.0).sqrt()).clamp(self.x0, self.x1);
+        // Elevation along the chosen line, uniform in the sine of the angle from it.
+        let dd = (xu * xu + self.z0 * self.z0).sqrt();
+        let h0 = self.y0 / (dd * dd + self.y0 * self.y0).sqrt();
+        let h1 = self.y1 / (dd * dd + self.y1 * self.y1).sqrt();
+        let hv = h0 + u.y * (h1 - h0);
+        let hv2 = hv * hv;
+        let yv = if hv2 < 1.0 - 1e-6 {
+            (hv * dd / (1.0 - hv2).sqrt()).clamp(self.y0, self.y1)
+        } else {
+            self.y1
+        };
+        p + self.x * xu + self.y * yv + self.z * self.z0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_square() -> Rectangle {
+        let positions = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
+        Rectangle::from_triangles(&positions, &[[0, 1, 2], [0, 2, 3]]).expect("a rectangle")
+    }
+
+    /// The solid angle of a rectangle seen from above one corner (Howell's B-3 / the
+    /// closed form Ω = atan(ab / (h √(a² + b² + h²)))).
+    #[test]
+    fn solid_angle_matches_the_closed_form() {
+        let r = unit_square();
+        for h in [0.1f32, 0.5, 1.0, 3.0] {
+            let s = r.spherical(Vec3::new(0.0, 0.0, h)).expect("in range");
+            let expect = (1.0 / (h * (2.0 + h * h).sqrt())).atan();
+            assert!(
+                (s.solid_angle - expect).abs() < 1e-4 * expect.max(1e-2),
+                "h {h}: {} vs {expect}",
+                s.solid_angle
+            );
+        }
+    }
+
+    #[test]
+    fn parallelograms_and_other_meshes_are_not_rectangles() {
+        let skew = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.5, 1.0, 0.0),
+            Vec3::new(0.5, 1.0, 0.0),
+        ];
+        assert!(Rectangle::from_triangles(&skew, &[[0, 1, 2], [0, 2, 3]]).is_none());
+        let square = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
+        // One triangle twice: not the rectangle's area.
+        assert!(Rectangle::from_triangles(&square, &[[0, 1, 2], [0, 1, 2]]).is_none());
+        assert!(Rectangle::from_triangles(&square, &[[0, 1, 2]]).is_none());
+    }
+
+    /// Uniform by solid angle: the fraction of samples falling on each quarter of the rectangle
+    /// is that quarter's share of the solid angle.
+    #[test]
+    fn samples_are_uniform_in_solid_angle() {
+        let r = unit_square();
+        let p = Vec3::new(0.2, 0.3, 0.4);
+        let s = r.spherical(p).expect("in range");
+        let quarters = [(0.0, 0.0), (0.5, 0.0), (0.0, 0.5), (0.5, 0.5)];
+        let mut counts = [0u32; 4];
+        let n = 256;
+        for i in 0..n {
+            for j in 0..n {
+                let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                let q = s.sample(p, u);
+                assert!(
+                    q.z.abs() < 1e-5 && (-1e-5..=1.0 + 1e-5).contains(&q.x),
+                    "{q}"
+                );
+                let k = usize::from(q.x >= 0.5) + 2 * usize::from(q.y >= 0.5);
+                counts[k] += 1;
+            }
+        }
+        for (k, &(qx, qy)) in quarters.iter().enumerate() {
+            let positions = [
+                Vec3::new(qx, qy, 0.0),
+                Vec3::new(qx + 0.5, qy, 0.0),
+                Vec3::new(qx + 0.5, qy + 0.5, 0.0),
+                Vec3::new(qx, qy + 0.5, 0.0),
+            ];
+            let quarter = Rectangle::from_triangles(&positions, &[[0, 1, 2], [0, 2, 3]])
+                .and_then(|r| r.spherical(p))
+                .expect("quarter");
+            let share = f64::from(counts[k]) / f64::from(n * n);
+            let expect = f64::from(quarter.solid_angle / s.solid_angle);
+            assert!(
+                (share - expect).abs() < 2e-3,
+                "quarter {k}: {share} vs {expect}"
+            );
+        }
+    }
+}
