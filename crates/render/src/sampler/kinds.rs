@@ -108,10 +108,11 @@ fn ceil_sqrt(n: u32) -> u32 {
     r.max(1)
 }
 
-/// The m × k grid of multi-jittered sampling: k = ⌈√n⌉ rows, m = ⌈n/k⌉ columns.
+/// The m × k grid of multi-jittered sampling as Mitsuba 3 sizes it: k = ⌊√n⌋ rows, m = ⌈n/k⌉
+/// columns (32 asked: 7 × 5 = 35; 8: 4 × 2).
 pub(super) fn multijitter_grid(n: u32) -> (u32, u32) {
-    let k = ceil_sqrt(n);
-    (n.div_ceil(k), k)
+    let k = f64::from(n.max(1)).sqrt().floor().max(1.0) as u32;
+    (n.max(1).div_ceil(k), k)
 }
 
 /// The smallest prime s with s² ≥ n.

@@ -69,6 +69,9 @@ fn sample_counts_round_up_as_each_construction_needs() {
     assert_eq!(Stratified.sample_count(10), 16);
     assert_eq!(MultiJitter.sample_count(10), 12);
     assert_eq!(MultiJitter.sample_count(64), 64);
+    // Mitsuba 3's rounding: ⌊√n⌋ rows.
+    assert_eq!(MultiJitter.sample_count(32), 35);
+    assert_eq!(MultiJitter.sample_count(8), 8);
     assert_eq!(Orthogonal.sample_count(10), 25);
     assert_eq!(Orthogonal.sample_count(64), 121);
     assert_eq!(LowDiscrepancy.sample_count(10), 16);
