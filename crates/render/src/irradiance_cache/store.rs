@@ -14,6 +14,9 @@ use rustc_hash::FxHashMap;
 #[derive(Clone, Debug)]
 pub struct RecordStore<R: CachedRecord = Record> {
     records: Vec<R>,
+    /// Each record's position and validity radius at threshold 1, beside the records: lookups
+    /// reject the far candidates of a cell from these 16 bytes without reading the record.
+    reach: Vec<[f32; 4]>,
     /// Cell size of grid level 0 (the smallest validity radius expected).
     base_cell: f32,
     /// Accuracy `a`.
@@ -53,6 +56,7 @@ impl<R: CachedRecord> RecordStore<R> {
     ) -> RecordStore<R> {
         RecordStore {
             records: Vec::new(),
+            reach: Vec::new(),
             base_cell: min_validity_radius.max(f32::MIN_POSITIVE),
             accuracy,
             metric,
@@ -106,6 +110,7 @@ impl<R: CachedRecord> RecordStore<R> {
                 if d <= self.metric.validity_radius(other, self.accuracy) {
                     rec.set_radius(rec.radius().min(other.radius() + d));
                     other.set_radius(other.radius().min(rec.radius() + d));
+                    self.reach[id as usize][3] = self.metric.validity_radius(other, self.accuracy);
                 }
             }
         }
@@ -126,6 +131,7 @@ impl<R: CachedRecord> RecordStore<R> {
             }
         }
         self.levels_used |= 1 << level;
+        self.reach.push([p.x, p.y, p.z, rho]);
         self.records.push(rec);
     }
 
@@ -155,6 +161,7 @@ impl<R: CachedRecord> RecordStore<R> {
             spread(q.x as u32) | (spread(q.y as u32) << 1) | (spread(q.z as u32) << 2)
         };
         let mut records = std::mem::take(&mut self.records);
+        self.reach.clear();
         // Stable: equal keys keep their insertion order.
         records.sort_by_key(key);
         self.cells.clear();
@@ -176,10 +183,22 @@ impl<R: CachedRecord> RecordStore<R> {
             let key = (level, Self::cell_of(p, self.cell_size(level)));
             if let Some(ids) = self.cells.get(&key) {
                 for &id in ids {
-                    f(id);
+                    if self.may_reach(id, p, 1.0) {
+                        f(id);
+                    }
                 }
             }
         }
+    }
+
+    /// False when record `id`'s validity sphere grown `threshold` times cannot hold `p` (every
+    /// metric's error exceeds the threshold beyond that distance); a relative margin keeps
+    /// the records on the boundary, whatever the rounding.
+    #[inline]
+    fn may_reach(&self, id: u32, p: Vec3, threshold: f32) -> bool {
+        let [x, y, z, rho] = self.reach[id as usize];
+        let reach = threshold * rho;
+        (p - Vec3::new(x, y, z)).length_squared() <= reach * reach * (1.0 + 1e-4)
     }
 
     /// Calls `f(record index)` once for every record whose validity sphere grown `threshold`
@@ -212,7 +231,9 @@ impl<R: CachedRecord> RecordStore<R> {
         ids.sort_unstable();
         ids.dedup();
         for id in ids {
-            f(id);
+            if self.may_reach(id, p, threshold) {
+                f(id);
+            }
         }
     }
 
