@@ -75,7 +75,12 @@ pub fn sample_lights(
         } else {
             dims::extra(depth, i)
         });
-        let u_sel = sampler.next_1d();
+        let u_sel = if scene.lights.len() > 1 {
+            sampler.next_1d()
+        } else {
+            sampler.skip_1d();
+            0.0
+        };
         let mut u = sampler.next_2d();
         if grid {
             u = (Vec2::new((i % side) as f32, (i / side) as f32) + u) / side as f32;

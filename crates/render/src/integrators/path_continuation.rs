@@ -254,7 +254,13 @@ pub fn trace_path(
 
         // The BSDF sample that continues the path.
         sampler.set_dimension(dims::vertex(depth, dims::BSDF));
-        let (u_lobe, u) = (sampler.next_1d(), sampler.next_2d());
+        let u_lobe = if bsdf.is_diffuse_only() {
+            sampler.skip_1d();
+            0.0
+        } else {
+            sampler.next_1d()
+        };
+        let u = sampler.next_2d();
         let Some(bs) = strategy.sample(&bsdf, wo_local, u_lobe, u) else {
             break;
         };

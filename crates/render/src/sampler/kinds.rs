@@ -515,4 +515,9 @@ impl Sampler for PixelSampler<'_> {
     fn set_dimension(&mut self, dim: u32) {
         self.dim = dim;
     }
+
+    #[inline]
+    fn skip_1d(&mut self) {
+        self.dim += 1;
+    }
 }

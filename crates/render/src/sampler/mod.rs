@@ -30,6 +30,12 @@ pub trait Sampler {
     fn next_key(&mut self) -> u64;
     /// Jumps to dimension `dim` of the current sample (see [`dims`]); a plain stream ignores it.
     fn set_dimension(&mut self, _dim: u32) {}
+
+    /// Passes over the next coordinate, which the caller does not need (a light choice among
+    /// one light, a lobe choice in a one-lobe BSDF): the coordinates after it stay the same.
+    fn skip_1d(&mut self) {
+        let _ = self.next_1d();
+    }
 }
 
 impl Sampler for Rng {
