@@ -461,7 +461,7 @@ fn cache_file_is_reused_across_runs_and_views_and_refused_when_stale() {
     assert!(!o.status.success());
     let e = stderr(&o);
     assert!(
-        e.contains("accuracy 0.4 (now 0.3)") && e.contains("--cache-reuse force"),
+        e.contains("accuracy 0.35 (now 0.3)") && e.contains("--cache-reuse force"),
         "{e}"
     );
     assert!(!d.join("x.exr").exists());

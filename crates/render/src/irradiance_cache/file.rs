@@ -546,7 +546,7 @@ mod tests {
         let e = CacheFile::open(&path, &other, false)
             .unwrap_err()
             .to_string();
-        assert!(e.contains("accuracy 0.4 (now 0.5)"), "{e}");
+        assert!(e.contains("accuracy 0.35 (now 0.5)"), "{e}");
         assert!(CacheFile::open(&path, &other, true).is_ok());
         let c = read(&path).unwrap();
         assert_eq!(c.header, header());

@@ -129,7 +129,7 @@ pub struct IcParams {
 impl Default for IcParams {
     fn default() -> Self {
         IcParams {
-            accuracy: 0.4,
+            accuracy: 0.35,
             divisions: 512,
             // Radiance's 128 would floor Tabellion's footprint radii at size/256 (4× Sponza's
             // error, measured); the floor stays for records the camera does not see.
