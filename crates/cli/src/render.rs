@@ -44,10 +44,10 @@ pub struct RenderArgs {
     /// ldsampler (Mitsuba 3's) or sobol (Owen-scrambled Sobol' along a Morton curve, the best).
     #[arg(long)]
     pub sampler: Option<String>,
-    /// Adaptive pixel sampling to this relative error per pixel (e.g. 0.02): every pixel takes
-    /// --spp samples, then as many more (a power of two, up to --max-spp) as the variance of
-    /// its eight neighbours' first samples says it needs; unbiased, since no pixel decides from
-    /// its own samples.
+    /// Adaptive pixel sampling to this root-mean-square relative error over the image (e.g.
+    /// 0.02): every pixel takes --spp samples, then as many more (a power of two, up to
+    /// --max-spp) as the variance of its eight neighbours' first samples says it needs;
+    /// unbiased, since no pixel decides from its own samples.
     #[arg(long, value_name = "REL_ERROR")]
     pub adaptive: Option<f32>,
     /// Most samples a pixel takes under --adaptive (default: 8 × --spp).

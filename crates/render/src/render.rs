@@ -55,9 +55,10 @@ pub struct Sampling {
 /// Adaptive pixel sampling: every pixel first takes `spp` samples (the pilot); then each pixel
 /// takes as many more as its neighbourhood's pilot says it needs, in powers of two up to
 /// `max_spp`: the counts that bring the image's root-mean-square relative error to `target`
-/// with the fewest samples (a pixel's count ∝ the standard deviation of its relative value). The samples are the prefixes of one progressive
-/// sequence (the `sobol` sampler at `max_spp`: its prefixes stay stratified), so the added
-/// samples extend the stratification instead of starting another.
+/// with the fewest samples (a pixel's count ∝ the standard deviation of its relative value).
+/// The samples are the prefixes of one progressive sequence (the `sobol` sampler at `max_spp`:
+/// its prefixes stay stratified), so the added samples extend the stratification instead of
+/// starting another.
 ///
 /// Unbiased: a pixel's sample count is decided from its eight neighbours' pilot samples, never
 /// from its own, so the count is independent of the samples it averages. (Deciding from a
@@ -68,7 +69,7 @@ pub struct Sampling {
 /// Deterministic: every decision is a function of the pilot, which is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Adaptive {
-    /// Target relative error of a pixel.
+    /// Target root-mean-square relative error over the image.
     pub target: f32,
     /// Most samples a pixel takes.
     pub max_spp: u32,
@@ -196,24 +197,12 @@ pub fn render(
     let pixel_start = Instant::now();
     let rows = settings.rows();
     let first = settings.first_samples();
-    // The pilot (every pixel, when not adaptive), then the adaptive pass; progress counts each
-    // pass as half of the pixels when there are two.
-    let passes = if settings.sampling.adaptive.is_some() {
-        2
-    } else {
-        1
-    };
-    let mut states = vec![PixelState::default(); w * h];
-    let mut rays = RayCounts::default();
-    for pass in 0..passes {
-        let targets: Vec<u32> = if pass == 0 {
-            (0..w * h)
-                .map(|i| if rows.contains(&(i / w)) { first } else { 0 })
-                .collect()
-        } else {
-            adaptive_targets(&states, w, h, first, sampler.spp, settings)
-        };
+    // Progress counts each pass as half of the pixels when there are two.
+    let passes = 1 + u64::from(settings.sampling.adaptive.is_some());
+    // One pass: every pixel taken on to its target count, tiles in parallel.
+    let run_pass = |targets: &[u32], states: &mut [PixelState], rays: &mut RayCounts| {
         let before = done.load(Ordering::Relaxed);
+        let states_in: &[PixelState] = states;
         let tiles: Vec<(Vec<PixelState>, RayCounts)> = pool.install(|| {
             (0..tiles_x * tiles_y)
                 .into_par_iter()
@@ -224,7 +213,7 @@ pub fn render(
                     let mut out = Vec::with_capacity((x1 - x0) * (y1 - y0));
                     for y in y0..y1 {
                         for x in x0..x1 {
-                            let mut state = states[y * w + x];
+                            let mut state = states_in[y * w + x];
                             let to = targets[y * w + x];
                             if to > state.samples {
                                 extend_pixel(
@@ -250,6 +239,17 @@ pub fn render(
             }
             rays.add(&r);
         }
+    };
+    let mut states = vec![PixelState::default(); w * h];
+    let mut rays = RayCounts::default();
+    // The pilot: every pixel of the rendered rows (all the samples, when not adaptive).
+    let pilot: Vec<u32> = (0..w * h)
+        .map(|i| if rows.contains(&(i / w)) { first } else { 0 })
+        .collect();
+    run_pass(&pilot, &mut states, &mut rays);
+    if let Some(adaptive) = settings.sampling.adaptive {
+        let targets = adaptive_targets(&states, w, h, &rows, first, sampler.spp, adaptive.target);
+        run_pass(&targets, &mut states, &mut rays);
     }
     let mut image = Image::new(w, h);
     let (mut invalid_samples, mut samples) = (0, 0);
@@ -325,14 +325,11 @@ fn adaptive_targets(
     states: &[PixelState],
     w: usize,
     h: usize,
+    rows: &std::ops::Range<usize>,
     first: u32,
     max_spp: u32,
-    settings: &RenderSettings,
+    target: f32,
 ) -> Vec<u32> {
-    let Some(a) = settings.sampling.adaptive else {
-        return states.iter().map(|s| s.samples).collect();
-    };
-    let rows = settings.rows();
     let rendered = states.iter().filter(|s| s.samples > 0);
     let (total, count) = rendered.fold((0.0f64, 0u64), |(t, c), s| {
         (t + s.luminance_moments().0, c + 1)
@@ -372,7 +369,7 @@ fn adaptive_targets(
         .iter()
         .flatten()
         .fold((0.0, 0u64), |(s, n), v| (s + v.sqrt(), n + 1));
-    let scale = sum_sqrt / (pixels.max(1) as f64 * f64::from(a.target).powi(2));
+    let scale = sum_sqrt / (pixels.max(1) as f64 * f64::from(target).powi(2));
     neighbourhood
         .iter()
         .map(|v| match v {
@@ -380,16 +377,16 @@ fn adaptive_targets(
             Some(v) => {
                 let want = (v.sqrt() * scale).max(1.0);
                 // The nearest power of two (in ratio): prefixes of the sequence stay nets.
-                let spp = 2f64.powf(want.log2().round()).min(f64::from(max_spp)) as u32;
+                let spp = 2f64.powf(want.log2().round()) as u32;
                 spp.clamp(first, max_spp.max(first))
             }
         })
         .collect()
 }
 
-/// Takes pixel (x, y)'s samples `state.samples..to`: filter-importance-sampled estimates.
-/// Samples that the integrator returns as non-finite or negative count as zero and are counted
-/// (Mitsuba drops them too).
+/// Takes pixel (x, y)'s samples `state.samples..to`: filter-importance-sampled estimates, with
+/// their luminance and its square for the adaptive pass. Samples that the integrator returns as
+/// non-finite or negative count as zero and are counted (Mitsuba drops them too).
 #[allow(clippy::too_many_arguments)]
 fn extend_pixel(
     scene: &Scene,
@@ -403,46 +400,13 @@ fn extend_pixel(
     rays: &mut RayCounts,
 ) {
     let mut sampler = samplers.pixel(x as u32, y as u32);
-    let (sum, invalid) = pixel_pass(
-        scene,
-        integrator,
-        settings,
-        &mut sampler,
-        state.samples..to,
-        x,
-        y,
-        &mut state.lum,
-        rays,
-    );
-    state.sum += sum;
-    state.invalid += invalid;
-    state.samples = to;
-}
-
-/// The sum of the values of samples `range` at pixel (x, y), and the samples dropped as
-/// invalid; adds the samples' luminance and its square to `lum`.
-#[allow(clippy::too_many_arguments)]
-fn pixel_pass(
-    scene: &Scene,
-    integrator: &Integrator,
-    settings: &RenderSettings,
-    sampler: &mut crate::sampler::PixelSampler<'_>,
-    range: std::ops::Range<u32>,
-    x: usize,
-    y: usize,
-    lum: &mut (f64, f64),
-    rays: &mut RayCounts,
-) -> (Rgb, u64) {
-    let end = range.end;
-    let mut sum = Rgb::ZERO;
-    let mut invalid = 0;
     let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
     // Camera rays of one pixel are nearly parallel: trace them in 16-wide packets.
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
     let mut hits = [None; 16];
-    let mut done = range.start;
-    while done < end {
-        let n = (end - done).min(16);
+    let mut done = state.samples;
+    while done < to {
+        let n = (to - done).min(16);
         for (k, ray) in (done..done + n).zip(&mut camera) {
             sampler.set_sample(k, dims::FILM);
             let offset = settings.filter.sample(sampler.next_2d());
@@ -454,17 +418,17 @@ fn pixel_pass(
         rays.camera += n as u64;
         for ((k, ray), hit) in (done..).zip(&camera[..n]).zip(&hits[..n]) {
             sampler.set_sample(k, dims::vertex(0, 0));
-            let l = integrator.li(scene, ray, hit.as_ref(), sampler, rays);
+            let l = integrator.li(scene, ray, hit.as_ref(), &mut sampler, rays);
             if l.is_valid_radiance() {
-                sum += l;
-                let y = f64::from(l.luminance());
-                lum.0 += y;
-                lum.1 += y * y;
+                state.sum += l;
+                let luminance = f64::from(l.luminance());
+                state.lum.0 += luminance;
+                state.lum.1 += luminance * luminance;
             } else {
-                invalid += 1;
+                state.invalid += 1;
             }
         }
         done += n as u32;
     }
-    (sum, invalid)
+    state.samples = to;
 }

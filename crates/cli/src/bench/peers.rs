@@ -4,8 +4,9 @@
 //! For each scene: Mitsuba 3 (`llvm_ad_rgb`, 2 threads) with its `independent` and
 //! `multijitter` samplers at 64 spp; ircache's path tracer (its default sampler) at 16, 32, 64
 //! spp; `ic` at its defaults. Then Mitsuba `multijitter` at 16, 32, 64, … spp until it reaches
-//! `ic`'s error (or 20 times `ic`'s time), each in a process of its own; the time to equal error is interpolated between the
-//! two renders that bracket it (log error against log time), never taken from an error law.
+//! `ic`'s error (or 20 times `ic`'s time), each in a process of its own; the time to equal
+//! error is interpolated between the two renders that bracket it (log error against log time),
+//! never taken from an error law.
 //! Mitsuba renders more than 64 spp in passes of 64 with different seeds (its memory grows
 //! with the samples of one pass), as the references were made.
 

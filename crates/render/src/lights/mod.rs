@@ -14,7 +14,8 @@
 //!   reference point ([`selection`]), not uniformly as Mitsuba 3's `Scene::sample_emitter` does.
 //! - All environment emitters (normally at most one) are treated as a single environment: a sample
 //!   drawn from any of them reports the *total* environment radiance along its direction and the
-//!   mixture density [`LightSet::pdf_environment`] (each weighted by its selection probability), which is exactly what a BSDF-sampled escaping
+//!   mixture density [`LightSet::pdf_environment`] (each weighted by its selection probability),
+//!   which is exactly what a BSDF-sampled escaping
 //!   ray sees, so MIS weights agree on both sides.
 //! - Samples that cannot contribute (back side of a one-sided emitter, outside a spot's cone,
 //!   black environment direction, degenerate geometry) are reported as `None` rather than as a
@@ -37,7 +38,7 @@ use environment::{ConstantLight, EnvmapLight};
 use ircache_math::{Rgb, Vec2, Vec3};
 use ircache_scene::{EmitterDesc, Geometry, SceneDesc};
 use point::PointLight;
-use selection::{light_pmf, selection_pmf, LightBound, MAX_ESTIMATED};
+use selection::LightBound;
 use sphere::SphereLight;
 use spot::SpotLight;
 
@@ -283,41 +284,14 @@ impl LightSet {
     /// The light chosen by `u_select` at `p` and its selection probability.
     #[inline]
     fn select(&self, p: Vec3, u_select: f32) -> (usize, f32) {
-        let n = self.lights.len();
-        if n == 1 {
-            return (0, 1.0);
-        }
-        if n > MAX_ESTIMATED {
-            return (((u_select * n as f32) as usize).min(n - 1), 1.0 / n as f32);
-        }
-        let mut pmf = [0.0f32; MAX_ESTIMATED];
-        selection_pmf(&self.bounds, p, &mut pmf);
-        let mut cumulative = 0.0;
-        let mut last = 0;
-        for (i, &q) in pmf[..n].iter().enumerate() {
-            if q > 0.0 {
-                cumulative += q;
-                last = i;
-                if u_select < cumulative {
-                    return (i, q);
-                }
-            }
-        }
-        // Rounding left u_select beyond the sum: the last light that can be chosen.
-        (last, pmf[last])
+        selection::select(&self.bounds, p, u_select)
     }
 
     /// The probability that [`LightSet::sample`] at `p` selects `light`.
     #[inline]
     #[must_use]
     pub fn selection_probability(&self, p: Vec3, light: u32) -> f32 {
-        let n = self.lights.len();
-        match n {
-            0 => 0.0,
-            1 => 1.0,
-            _ if n > MAX_ESTIMATED => 1.0 / n as f32,
-            _ => light_pmf(&self.bounds, p, light as usize),
-        }
+        selection::probability(&self.bounds, p, light as usize)
     }
 
     /// A sample of the environment along `wi` with the total radiance and mixture density.

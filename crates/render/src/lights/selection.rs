@@ -59,38 +59,66 @@ impl LightBound {
     }
 }
 
-/// Selection probabilities at `p` for `bounds` (at most [`MAX_ESTIMATED`]), written to `pmf`;
-/// uniform when no light has a weight.
+/// `P(light | p)` from its weight, the weights' total and the number of lights: uniform when no
+/// light has a weight. The one formula both [`select`] and [`probability`] use, so that the
+/// probability a sample reports and the one MIS recomputes are the same number.
 #[inline]
-pub fn selection_pmf(bounds: &[LightBound], p: Vec3, pmf: &mut [f32]) {
-    let n = bounds.len();
-    let mut total = 0.0f32;
-    for (w, b) in pmf.iter_mut().zip(bounds) {
-        *w = b.weight(p);
-        total += *w;
-    }
+fn mixed(weight: f32, total: f32, n: usize) -> f32 {
     let uniform = 1.0 / n as f32;
-    if !(total > 0.0 && total.is_finite()) {
-        pmf[..n].fill(uniform);
-        return;
-    }
-    let scale = (1.0 - UNIFORM_SHARE) / total;
-    for w in &mut pmf[..n] {
-        *w = *w * scale + UNIFORM_SHARE * uniform;
+    if total > 0.0 && total.is_finite() {
+        (1.0 - UNIFORM_SHARE) * weight / total + UNIFORM_SHARE * uniform
+    } else {
+        uniform
     }
 }
 
-/// The probability of light `light` at `p` under [`selection_pmf`], without the others'.
+/// The light `u` in `[0, 1)` chooses at `p` among `bounds` (not empty) and its probability:
+/// one light is certain; beyond [`MAX_ESTIMATED`] lights the choice is uniform.
 #[inline]
 #[must_use]
-pub fn light_pmf(bounds: &[LightBound], p: Vec3, light: usize) -> f32 {
+pub fn select(bounds: &[LightBound], p: Vec3, u: f32) -> (usize, f32) {
     let n = bounds.len();
-    let total: f32 = bounds.iter().map(|b| b.weight(p)).sum();
-    let uniform = 1.0 / n as f32;
-    if !(total > 0.0 && total.is_finite()) {
-        return uniform;
+    if n <= 1 {
+        return (0, 1.0);
     }
-    (1.0 - UNIFORM_SHARE) * bounds[light].weight(p) / total + UNIFORM_SHARE * uniform
+    if n > MAX_ESTIMATED {
+        return (((u * n as f32) as usize).min(n - 1), 1.0 / n as f32);
+    }
+    let mut weights = [0.0f32; MAX_ESTIMATED];
+    let mut total = 0.0f32;
+    for (w, b) in weights.iter_mut().zip(bounds) {
+        *w = b.weight(p);
+        total += *w;
+    }
+    let (mut cumulative, mut last) = (0.0, (0, 0.0));
+    for (i, &w) in weights[..n].iter().enumerate() {
+        let q = mixed(w, total, n);
+        if q > 0.0 {
+            cumulative += q;
+            last = (i, q);
+            if u < cumulative {
+                return last;
+            }
+        }
+    }
+    // Rounding left u beyond the sum: the last light that can be chosen.
+    last
+}
+
+/// The probability with which [`select`] at `p` chooses `light`.
+#[inline]
+#[must_use]
+pub fn probability(bounds: &[LightBound], p: Vec3, light: usize) -> f32 {
+    let n = bounds.len();
+    match n {
+        0 => 0.0,
+        1 => 1.0,
+        _ if n > MAX_ESTIMATED => 1.0 / n as f32,
+        _ => {
+            let total: f32 = bounds.iter().map(|b| b.weight(p)).sum();
+            mixed(bounds[light].weight(p), total, n)
+        }
+    }
 }
 
 #[cfg(test)]
@@ -113,11 +141,21 @@ mod tests {
             LightBound::Distant { irradiance: 0.0 },
         ];
         let p = Vec3::ZERO;
-        let mut pmf = [0.0; 3];
-        selection_pmf(&bounds, p, &mut pmf);
+        let pmf: Vec<f32> = (0..3).map(|i| probability(&bounds, p, i)).collect();
         assert!((pmf.iter().sum::<f32>() - 1.0).abs() < 1e-6, "{pmf:?}");
-        for (i, &q) in pmf.iter().enumerate() {
-            assert!((q - light_pmf(&bounds, p, i)).abs() < 1e-7);
+        // Each light is chosen on an interval of u as long as its probability, reported as such.
+        let n = 100_000;
+        let mut counts = [0u32; 3];
+        for k in 0..n {
+            let (i, q) = select(&bounds, p, (k as f32 + 0.5) / n as f32);
+            assert_eq!(q, pmf[i]);
+            counts[i] += 1;
+        }
+        for (i, &c) in counts.iter().enumerate() {
+            assert!(
+                (c as f32 / n as f32 - pmf[i]).abs() < 1e-4,
+                "{counts:?} {pmf:?}"
+            );
         }
         // Weights 100 : 1 : 0, and every light keeps its uniform share.
         let expect = 0.9 * 100.0 / 101.0 + 0.1 / 3.0;
@@ -130,8 +168,7 @@ mod tests {
         let b = sphere(Vec3::ZERO, 0.5, 2.0);
         assert!((b.weight(Vec3::ZERO) - 2.0 * std::f32::consts::PI).abs() < 1e-5);
         let none = [LightBound::Distant { irradiance: 0.0 }; 4];
-        let mut pmf = [0.0; 4];
-        selection_pmf(&none, Vec3::ONE, &mut pmf);
+        let pmf: Vec<f32> = (0..4).map(|i| probability(&none, Vec3::ONE, i)).collect();
         assert_eq!(pmf, [0.25; 4]);
     }
 }

@@ -8,25 +8,30 @@ fn settings(kind: SamplerKind, spp: u32) -> SamplerSettings {
     SamplerSettings::new(kind, spp, 17, 64, 48)
 }
 
-/// The points of one pixel in the 2-D pair starting at `dim`.
-fn points_2d(s: &SamplerSettings, x: u32, y: u32, dim: u32) -> Vec<Vec2> {
+/// What `draw` takes from dimension `dim` of each of one pixel's samples.
+fn points<T>(
+    s: &SamplerSettings,
+    x: u32,
+    y: u32,
+    dim: u32,
+    draw: impl Fn(&mut PixelSampler<'_>) -> T,
+) -> Vec<T> {
     let mut p = s.pixel(x, y);
     (0..s.spp)
         .map(|i| {
             p.set_sample(i, dim);
-            p.next_2d()
+            draw(&mut p)
         })
         .collect()
 }
 
+/// The points of one pixel in the 2-D pair starting at `dim`.
+fn points_2d(s: &SamplerSettings, x: u32, y: u32, dim: u32) -> Vec<Vec2> {
+    points(s, x, y, dim, |p| p.next_2d())
+}
+
 fn points_1d(s: &SamplerSettings, x: u32, y: u32, dim: u32) -> Vec<f32> {
-    let mut p = s.pixel(x, y);
-    (0..s.spp)
-        .map(|i| {
-            p.set_sample(i, dim);
-            p.next_1d()
-        })
-        .collect()
+    points(s, x, y, dim, |p| p.next_1d())
 }
 
 /// True when every cell of an nx × ny grid holds exactly one point.
