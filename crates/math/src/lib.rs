@@ -7,6 +7,7 @@
 //! (sample, pdf, inverse) so round trips can be tested.
 
 pub mod frame;
+pub mod harmonics;
 pub mod ray;
 pub mod rgb;
 pub mod rng;

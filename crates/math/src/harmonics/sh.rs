@@ -1,0 +1,296 @@
+//! Real spherical harmonics Y_l^m (001 eqs. 3.7–3.8, Condon–Shortley phase) and their rotations.
+//!
+//! A rotation of a band-limited function keeps each band, so its matrix is block-diagonal, one
+//! (2l+1)² block per band. The blocks are computed here by projection,
+//! R_{mm'} = ∫_S Y_l^m(ω) Y_l^{m'}(R⁻¹ω) dω, with a rule that integrates those products exactly
+//! ([`super::quadrature::sphere`]), so they are exact to rounding without the Ivanic–Ruedenberg
+//! recurrence (its 1998 erratum is a known trap); rotations about z have a closed form
+//! ([`super::rotate_about_z`]).
+
+use super::legendre::{normalized_legendre, table_len, triangle_index};
+use super::{azimuthal, coefficient_count, index, quadrature};
+use glam::{DMat3, DVec3};
+use std::f64::consts::SQRT_2;
+
+/// Evaluates every Y_l^m, l < order, at a direction, with its scratch space.
+#[derive(Clone, Debug)]
+pub struct ShBasis {
+    order: usize,
+    legendre: Vec<f64>,
+    cos: Vec<f64>,
+    sin: Vec<f64>,
+}
+
+impl ShBasis {
+    /// An evaluator for `order` bands.
+    #[must_use]
+    pub fn new(order: usize) -> ShBasis {
+        ShBasis {
+            order,
+            legendre: vec![0.0; table_len(order)],
+            cos: vec![0.0; order.max(1)],
+            sin: vec![0.0; order.max(1)],
+        }
+    }
+
+    /// The order it evaluates.
+    #[must_use]
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// Y_i(ω) for every index i < order² into `out` (`ω` a unit vector).
+    pub fn eval(&mut self, w: DVec3, out: &mut [f64]) {
+        let s = w.x.hypot(w.y);
+        let (c, sn) = if s > 0.0 {
+            (w.x / s, w.y / s)
+        } else {
+            (1.0, 0.0)
+        };
+        normalized_legendre(self.order, w.z, s, &mut self.legendre);
+        azimuthal(c, sn, &mut self.cos, &mut self.sin);
+        fill(self.order, &self.legendre, &self.cos, &self.sin, 1.0, out);
+    }
+
+    /// Y_i(ω) for every index as a new vector.
+    #[must_use]
+    pub fn values(&mut self, w: DVec3) -> Vec<f64> {
+        let mut out = vec![0.0; coefficient_count(self.order)];
+        self.eval(w, &mut out);
+        out
+    }
+}
+
+/// The three cases of 3.7 (and of 3.18, with `scale` = √2 for K̃ = √2 K) from a Legendre table
+/// and cos mφ, sin mφ.
+pub(crate) fn fill(
+    order: usize,
+    legendre: &[f64],
+    cos: &[f64],
+    sin: &[f64],
+    scale: f64,
+    out: &mut [f64],
+) {
+    assert!(
+        out.len() >= coefficient_count(order),
+        "basis output too short"
+    );
+    for l in 0..order {
+        out[index(l, 0)] = scale * legendre[triangle_index(l, 0)];
+        for m in 1..=l {
+            let n = scale * SQRT_2 * legendre[triangle_index(l, m)];
+            out[index(l, m as i64)] = n * cos[m];
+            out[index(l, -(m as i64))] = n * sin[m];
+        }
+    }
+}
+
+/// Projection f_i = ∫_S f Y_i dω (3.9) by `rule`.
+#[must_use]
+pub fn project(order: usize, rule: &quadrature::Rule, mut f: impl FnMut(DVec3) -> f64) -> Vec<f64> {
+    let mut basis = ShBasis::new(order);
+    let mut y = vec![0.0; coefficient_count(order)];
+    let mut out = vec![0.0; coefficient_count(order)];
+    for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
+        let v = w * f(d);
+        if v != 0.0 {
+            basis.eval(d, &mut y);
+            for (o, yi) in out.iter_mut().zip(&y) {
+                *o += v * yi;
+            }
+        }
+    }
+    out
+}
+
+/// The rotation of spherical-harmonic coefficients by a rotation matrix: block-diagonal, one
+/// (2l+1)² block per band, row-major over m, m' = −l … l.
+#[derive(Clone, Debug)]
+pub struct ShRotation {
+    order: usize,
+    blocks: Vec<Vec<f64>>,
+}
+
+impl ShRotation {
+    /// The matrix taking the coefficients of f to those of (R f)(ω) = f(R⁻¹ω).
+    #[must_use]
+    pub fn new(order: usize, rotation: DMat3) -> ShRotation {
+        let rule = quadrature::sphere(order);
+        let inverse = rotation.transpose();
+        let mut basis = ShBasis::new(order);
+        let n = coefficient_count(order);
+        let (mut y, mut y_rotated) = (vec![0.0; n], vec![0.0; n]);
+        let mut blocks: Vec<Vec<f64>> = (0..order)
+            .map(|l| vec![0.0; (2 * l + 1) * (2 * l + 1)])
+            .collect();
+        for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
+            basis.eval(d, &mut y);
+            basis.eval(inverse * d, &mut y_rotated);
+            for (l, block) in blocks.iter_mut().enumerate() {
+                let base = l * l;
+                let width = 2 * l + 1;
+                for r in 0..width {
+                    let wy = w * y[base + r];
+                    let row = &mut block[r * width..(r + 1) * width];
+                    for (e, yr) in row.iter_mut().zip(&y_rotated[base..base + width]) {
+                        *e += wy * yr;
+                    }
+                }
+            }
+        }
+        ShRotation { order, blocks }
+    }
+
+    /// The order it rotates.
+    #[must_use]
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// Band l's block, row-major.
+    #[must_use]
+    pub fn block(&self, l: usize) -> &[f64] {
+        &self.blocks[l]
+    }
+
+    /// The rotated coefficients.
+    #[must_use]
+    pub fn apply(&self, coefficients: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; coefficients.len()];
+        for (l, block) in self.blocks.iter().enumerate() {
+            let base = l * l;
+            let width = 2 * l + 1;
+            if base + width > coefficients.len() {
+                break;
+            }
+            let input = &coefficients[base..base + width];
+            for r in 0..width {
+                out[base + r] = block[r * width..(r + 1) * width]
+                    .iter()
+                    .zip(input)
+                    .map(|(a, b)| a * b)
+                    .sum();
+            }
+        }
+        out
+    }
+
+    /// The dense matrix (order² × order²).
+    #[must_use]
+    pub fn dense(&self) -> Vec<f64> {
+        let n = coefficient_count(self.order);
+        let mut out = vec![0.0; n * n];
+        for (l, block) in self.blocks.iter().enumerate() {
+            let (base, width) = (l * l, 2 * l + 1);
+            for r in 0..width {
+                for c in 0..width {
+                    out[(base + r) * n + base + c] = block[r * width + c];
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Rotation about the y axis by β, as in NOTES-001 §0: [[cos β, 0, sin β], [0, 1, 0], [−sin β, 0, cos β]].
+#[must_use]
+pub fn rotation_y(beta: f64) -> DMat3 {
+    let (s, c) = beta.sin_cos();
+    DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c))
+}
+
+/// Rotation about the z axis by α.
+#[must_use]
+pub fn rotation_z(alpha: f64) -> DMat3 {
+    DMat3::from_rotation_z(alpha)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::rotate_about_z;
+    use super::*;
+    use std::f64::consts::PI;
+
+    fn norm(v: &[f64]) -> f64 {
+        v.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+
+    #[test]
+    fn orthonormal_on_the_sphere() {
+        for order in [1usize, 3, 6, 10, 16] {
+            let rule = quadrature::sphere(order);
+            let n = coefficient_count(order);
+            let mut basis = ShBasis::new(order);
+            let mut gram = vec![0.0; n * n];
+            let mut y = vec![0.0; n];
+            for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
+                basis.eval(d, &mut y);
+                for i in 0..n {
+                    for j in 0..n {
+                        gram[i * n + j] += w * y[i] * y[j];
+                    }
+                }
+            }
+            for i in 0..n {
+                for j in 0..n {
+                    let want = if i == j { 1.0 } else { 0.0 };
+                    assert!(
+                        (gram[i * n + j] - want).abs() < 1e-10,
+                        "order {order} ({i},{j})"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn low_bands_in_closed_form() {
+        // Y_1^{-1} = −√(3/4π) y, Y_1^0 = √(3/4π) z, Y_1^1 = −√(3/4π) x (Condon–Shortley).
+        let w = DVec3::new(0.3, -0.5, 0.6).normalize();
+        let y = ShBasis::new(2).values(w);
+        let k = (3.0 / (4.0 * PI)).sqrt();
+        assert!((y[0] - 0.5 / PI.sqrt()).abs() < 1e-15);
+        assert!((y[1] + k * w.y).abs() < 1e-15);
+        assert!((y[2] - k * w.z).abs() < 1e-15);
+        assert!((y[3] + k * w.x).abs() < 1e-15);
+    }
+
+    /// A-T6: rotations keep the norm, compose, and R(2π) = I; agree with projecting the rotated
+    /// function; about z they equal the closed form.
+    #[test]
+    fn rotations_are_orthogonal_and_compose() {
+        let order = 8;
+        let lobe = |d: DVec3| (5.0 * (d.dot(DVec3::new(0.4, 0.2, 0.9).normalize()) - 1.0)).exp();
+        let s = project(order, &quadrature::sphere(40), lobe);
+        let r1 = ShRotation::new(order, rotation_y(0.3));
+        let r2 = ShRotation::new(order, rotation_y(0.5));
+        let r12 = ShRotation::new(order, rotation_y(0.8));
+        let a = r2.apply(&r1.apply(&s));
+        let b = r12.apply(&s);
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() < 1e-12);
+        }
+        assert!((norm(&r1.apply(&s)) - norm(&s)).abs() < 1e-12);
+        let full = ShRotation::new(order, rotation_y(2.0 * PI)).apply(&s);
+        for (x, y) in full.iter().zip(&s) {
+            assert!((x - y).abs() < 1e-12);
+        }
+        // A general rotation against the projection of the rotated function (whose own
+        // truncation error is the lobe's energy beyond order 8: compare the low bands).
+        let rot = DMat3::from_euler(glam::EulerRot::ZYZ, 0.7, 1.1, -0.4);
+        let rotated =
+            ShRotation::new(order, rot).apply(&project(order, &quadrature::sphere(40), lobe));
+        let projected = project(order, &quadrature::sphere(40), |d| {
+            lobe(rot.transpose() * d)
+        });
+        for (x, y) in rotated.iter().zip(&projected) {
+            assert!((x - y).abs() < 1e-10, "{x} vs {y}");
+        }
+        let z = ShRotation::new(order, rotation_z(0.9)).apply(&s);
+        let mut closed = s.clone();
+        rotate_about_z(order, &mut closed, 0.9);
+        for (x, y) in z.iter().zip(&closed) {
+            assert!((x - y).abs() < 1e-12);
+        }
+    }
+}
