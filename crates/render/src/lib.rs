@@ -7,6 +7,7 @@
 //! - [`lights`]: emitters with importance sampling, for next-event estimation and MIS.
 //! - [`integrators`]: `direct` and `path` (the unbiased reference).
 //! - [`irradiance_cache`]: Ward's irradiance cache with gradients (the `ic` integrator's records).
+//! - [`radiance_cache`]: radiance caching of glossy light in hemispherical harmonics (issue 10, begun).
 //! - [`render`]: the parallel, deterministic tile loop.
 
 pub mod bsdf;
@@ -15,6 +16,7 @@ pub mod film;
 pub mod integrators;
 pub mod irradiance_cache;
 pub mod lights;
+pub mod radiance_cache;
 pub mod render;
 pub mod sampler;
 pub mod scene;

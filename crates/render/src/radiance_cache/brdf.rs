@@ -1,0 +1,322 @@
+//! BRDFs in hemispherical harmonics (001 eqs. 3.33–3.36, NOTES-001 §A.6, §B.5): for each outgoing
+//! direction ωo the coefficients c_i(ωo) = ∫_H f_r(ωo, ωi) cos θi H_i(ωi) dωi of the
+//! cosine-weighted glossy lobe (3.34 leaves out the cosine; shading needs it), so that the light
+//! a surface reflects from incoming radiance with coefficients λ is L_o(ωo) = Σ_i λ_i c_i(ωo).
+//!
+//! The models are isotropic, so the coefficients are tabulated over cos θo alone at φo = 0 and
+//! turned to φo exactly about the normal at lookup (NOTES-001 §A.6 [P]; the thesis's 32 × 32
+//! paraboloid map is for anisotropic BRDFs). Only the glossy part is tabulated: the Lambertian
+//! part k/π has the exact coefficients (k/π)(√(π/2), 0, √(π/6), 0, …) (NOTES-001 §B.4), and an
+//! irradiance record serves it.
+//!
+//! [`order_for`] chooses a material's order by the energy its lobe keeps (3.32): the smallest
+//! order keeping ≥ 95 % at every θo ≤ 75° (NOTES-001 §B.5); a lobe needing more stays traced.
+
+use crate::bsdf::Bsdf;
+use ircache_math::harmonics::hsh::HshBasis;
+use ircache_math::harmonics::{coefficient_count, quadrature, rotate_about_z};
+use ircache_math::{Rgb, Vec3};
+
+/// Outgoing directions tabulated, uniform in cos θo over [0, 1].
+pub const OUTGOING_SAMPLES: usize = 64;
+
+/// Gauss–Legendre nodes in cos θi of the projection rule (twice as many in φi): resolves lobes
+/// down to about 0.1 rad, sharper than any the order rule lets through at order 10.
+const PROJECTION_NODES: usize = 96;
+
+/// Largest θo at which [`order_for`] demands the energy (NOTES-001 §B.5).
+const ORDER_MAX_THETA_DEGREES: f64 = 75.0;
+
+/// The HSH coefficients of a BSDF's cosine-weighted glossy lobe over the outgoing directions.
+#[derive(Clone, Debug)]
+pub struct BrdfCoefficients {
+    order: usize,
+    /// `[sample][channel][coefficient]`: c_i(θo_k, φo = 0), cos θo_k = k / (OUTGOING_SAMPLES − 1).
+    table: Vec<f32>,
+}
+
+/// Projections of the glossy lobe at one θo: per channel, the coefficients and ∫ (f cos)² dωi.
+fn project_slice(
+    bsdf: &Bsdf,
+    cos_theta_o: f64,
+    rule: &quadrature::Rule,
+    basis_values: &[Vec<f64>],
+    n: usize,
+) -> ([Vec<f64>; 3], [f64; 3]) {
+    let sin_theta_o = (1.0 - cos_theta_o * cos_theta_o).max(0.0).sqrt();
+    let wo = Vec3::new(sin_theta_o as f32, 0.0, cos_theta_o as f32);
+    let mut c = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    let mut energy = [0.0; 3];
+    for ((d, &w), h) in rule.directions.iter().zip(&rule.weights).zip(basis_values) {
+        let f = bsdf.eval_glossy(wo, d.as_vec3());
+        for (ch, v) in [f.r, f.g, f.b].into_iter().enumerate() {
+            let v = f64::from(v);
+            if v == 0.0 {
+                continue;
+            }
+            energy[ch] += w * v * v;
+            let wv = w * v;
+            for (ci, hi) in c[ch].iter_mut().zip(h) {
+                *ci += wv * hi;
+            }
+        }
+    }
+    (c, energy)
+}
+
+/// The projection rule over the incoming hemisphere and every basis value at its nodes.
+fn rule_and_basis(order: usize) -> (quadrature::Rule, Vec<Vec<f64>>) {
+    let rule = quadrature::hemisphere_fine(PROJECTION_NODES);
+    let mut basis = HshBasis::new(order);
+    let values = rule.directions.iter().map(|&d| basis.values(d)).collect();
+    (rule, values)
+}
+
+impl BrdfCoefficients {
+    /// Tabulates `bsdf`'s glossy part (a one-sided or front-side model, seen from above) to
+    /// `order`.
+    #[must_use]
+    pub fn new(bsdf: &Bsdf, order: usize) -> BrdfCoefficients {
+        let n = coefficient_count(order);
+        let (rule, values) = rule_and_basis(order);
+        let mut table = Vec::with_capacity(OUTGOING_SAMPLES * 3 * n);
+        for k in 0..OUTGOING_SAMPLES {
+            let cos_theta_o = k as f64 / (OUTGOING_SAMPLES - 1) as f64;
+            let (c, _) = project_slice(bsdf, cos_theta_o, &rule, &values, n);
+            for channel in &c {
+                table.extend(channel.iter().map(|&v| v as f32));
+            }
+        }
+        BrdfCoefficients { order, table }
+    }
+
+    /// The order tabulated.
+    #[must_use]
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// c_i(ωo) per channel for a local outgoing direction above the surface (zero below), into
+    /// `out` (`[channel][coefficient]`, 3 × order²): lerped in cos θo, turned by φo.
+    pub fn at(&self, wo: Vec3, out: &mut [f64]) {
+        let n = coefficient_count(self.order);
+        assert!(out.len() >= 3 * n, "BRDF coefficient output too short");
+        if wo.z <= 0.0 {
+            out[..3 * n].iter_mut().for_each(|v| *v = 0.0);
+            return;
+        }
+        let position = f64::from(wo.z.min(1.0)) * (OUTGOING_SAMPLES - 1) as f64;
+        let k = (position.floor() as usize).min(OUTGOING_SAMPLES - 2);
+        let t = position - k as f64;
+        let (a, b) = (
+            &self.table[k * 3 * n..(k + 1) * 3 * n],
+            &self.table[(k + 1) * 3 * n..(k + 2) * 3 * n],
+        );
+        for ((o, &x), &y) in out.iter_mut().zip(a).zip(b) {
+            *o = f64::from(x) + t * (f64::from(y) - f64::from(x));
+        }
+        let phi = f64::from(wo.y).atan2(f64::from(wo.x));
+        if phi != 0.0 {
+            for channel in out[..3 * n].chunks_mut(n) {
+                rotate_about_z(self.order, channel, phi);
+            }
+        }
+    }
+
+    /// Light reflected towards `wo` from incoming radiance with coefficients `radiance`
+    /// (`[channel][coefficient]`): Σ_i λ_i c_i(ωo), clamped at zero (a truncated expansion can ring
+    /// negative, NOTES-001 §B.3).
+    #[must_use]
+    pub fn reflect(&self, wo: Vec3, radiance: &[f64]) -> Rgb {
+        let n = coefficient_count(self.order);
+        let mut c = vec![0.0; 3 * n];
+        self.at(wo, &mut c);
+        let dot = |ch: usize| -> f32 {
+            let s: f64 = c[ch * n..(ch + 1) * n]
+                .iter()
+                .zip(&radiance[ch * n..(ch + 1) * n])
+                .map(|(a, b)| a * b)
+                .sum();
+            s.max(0.0) as f32
+        };
+        Rgb::new(dot(0), dot(1), dot(2))
+    }
+}
+
+/// The fraction of the cosine-weighted glossy lobe's energy ∫ (f cos)² (3.32) that each order
+/// 1 … `max_order` keeps at outgoing angle θo (degrees), the channels summed.
+#[must_use]
+pub fn energy_kept(bsdf: &Bsdf, max_order: usize, theta_o_degrees: f64) -> Vec<f64> {
+    let n = coefficient_count(max_order);
+    let (rule, values) = rule_and_basis(max_order);
+    let (c, energy) = project_slice(bsdf, theta_o_degrees.to_radians().cos(), &rule, &values, n);
+    let total: f64 = energy.iter().sum();
+    (1..=max_order)
+        .map(|order| {
+            let kept: f64 = c
+                .iter()
+                .map(|ch| {
+                    ch[..coefficient_count(order)]
+                        .iter()
+                        .map(|v| v * v)
+                        .sum::<f64>()
+                })
+                .sum();
+            if total > 0.0 {
+                kept / total
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+/// The smallest order ≤ `max_order` whose expansion keeps at least `threshold` of the glossy
+/// lobe's energy at every θo from 0° to 75° (every 5°); `None` when none does (the lobe stays
+/// traced) or the BSDF has no glossy part.
+#[must_use]
+pub fn order_for(bsdf: &Bsdf, max_order: usize, threshold: f64) -> Option<usize> {
+    if !bsdf.has_glossy() {
+        return None;
+    }
+    let steps = (ORDER_MAX_THETA_DEGREES / 5.0) as usize;
+    let mut needed = 1;
+    for k in 0..=steps {
+        let kept = energy_kept(bsdf, max_order, 5.0 * k as f64);
+        needed = needed.max(kept.iter().position(|&e| e >= threshold)? + 1);
+    }
+    Some(needed)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::Material;
+    use ircache_math::harmonics::hsh;
+    use ircache_math::{Rng, Vec2};
+    use ircache_scene::{BsdfDesc, MicrofacetDistribution, TextureDesc};
+
+    fn phong(exponent: f32) -> Bsdf {
+        Material::from_desc(&BsdfDesc::ObjPhong {
+            diffuse: TextureDesc::Constant(Rgb::ZERO),
+            specular: Rgb::ONE,
+            exponent,
+        })
+        .at(Vec2::ZERO)
+    }
+
+    fn rough_conductor(alpha: f32) -> Bsdf {
+        Material::from_desc(&BsdfDesc::RoughConductor {
+            distribution: MicrofacetDistribution::Ggx,
+            alpha_u: alpha,
+            alpha_v: alpha,
+            eta: Rgb::new(0.143, 0.374, 1.442),
+            k: Rgb::new(3.983, 2.385, 1.603),
+            specular_reflectance: Rgb::ONE,
+        })
+        .at(Vec2::ZERO)
+    }
+
+    fn rough_plastic(alpha: f32) -> Bsdf {
+        Material::from_desc(&BsdfDesc::RoughPlastic {
+            distribution: MicrofacetDistribution::Beckmann,
+            alpha,
+            diffuse_reflectance: TextureDesc::Constant(Rgb::new(0.2, 0.5, 0.3)),
+            specular_reflectance: Rgb::ONE,
+            int_ior: 1.49,
+            ext_ior: 1.000_277,
+            nonlinear: false,
+        })
+        .at(Vec2::ZERO)
+    }
+
+    /// The energy a Phong lobe keeps at orders 3, 5, 7, 10 (NOTES-001 §B.5's table, two
+    /// decimals), and the orders the rule picks from it.
+    #[test]
+    fn phong_energy_matches_the_notes() {
+        let table: [(f32, f64, [f64; 4]); 6] = [
+            (20.0, 0.0, [0.57, 0.90, 0.990, 1.0]),
+            (20.0, 45.0, [0.56, 0.90, 0.988, 1.0]),
+            (20.0, 75.0, [0.49, 0.83, 0.96, 0.997]),
+            (50.0, 0.0, [0.30, 0.62, 0.85, 0.98]),
+            (50.0, 75.0, [0.26, 0.55, 0.76, 0.93]),
+            (10.0, 75.0, [0.70, 0.96, 0.997, 1.0]),
+        ];
+        for (e, theta, want) in table {
+            let kept = energy_kept(&phong(e), 10, theta);
+            for (order, w) in [3usize, 5, 7, 10].into_iter().zip(want) {
+                let got = kept[order - 1];
+                assert!(
+                    (got - w).abs() < 0.01,
+                    "e {e} θ {theta} order {order}: {got} vs {w}"
+                );
+            }
+        }
+        // Phong 20 needs order 7 (0.96 at 75°), Phong 50 more than 10.
+        assert_eq!(order_for(&phong(20.0), 10, 0.95), Some(7));
+        assert_eq!(order_for(&phong(50.0), 10, 0.95), None);
+        assert_eq!(order_for(&phong(5.0), 10, 0.95), Some(4));
+    }
+
+    /// Under uniform incoming radiance 1 (λ = √(2π) δ_i0), the reflected light is the lobe's
+    /// directional albedo, here estimated independently by sampling the BSDF.
+    #[test]
+    fn white_furnace_gives_the_directional_albedo() {
+        let bsdfs = [
+            ("phong 20", phong(20.0), 7),
+            ("rough gold α 0.3", rough_conductor(0.3), 8),
+            ("rough plastic α 0.3", rough_plastic(0.3), 8),
+        ];
+        for (name, bsdf, order) in bsdfs {
+            let table = BrdfCoefficients::new(&bsdf, order);
+            let n = coefficient_count(order);
+            let mut uniform = vec![0.0; 3 * n];
+            for ch in 0..3 {
+                uniform[ch * n] = (2.0 * std::f64::consts::PI).sqrt();
+            }
+            for theta in [0.0f32, 30.0, 60.0] {
+                // A φo off the tabulated plane: the turn about the normal must not change it.
+                let (t, p) = (theta.to_radians(), 1.3f32);
+                let wo = Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
+                let reflected = table.reflect(wo, &uniform);
+                let mut rng = Rng::new(7, 1);
+                let samples = 200_000;
+                let mut albedo = Rgb::ZERO;
+                for _ in 0..samples {
+                    if let Some(s) = bsdf.sample_glossy(wo, rng.next_f32(), rng.next_2d()) {
+                        albedo += s.weight;
+                    }
+                }
+                let albedo = albedo / samples as f32;
+                for (got, want) in [(reflected.r, albedo.r), (reflected.g, albedo.g)] {
+                    assert!(
+                        (got - want).abs() < 0.01 * want.max(0.05),
+                        "{name} θo {theta}: {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The coefficients at φo equal projecting the lobe seen from φo directly (the exact turn
+    /// about the normal, and its sign).
+    #[test]
+    fn turning_about_the_normal_equals_projecting() {
+        let bsdf = rough_conductor(0.4);
+        let order = 6;
+        let n = coefficient_count(order);
+        let table = BrdfCoefficients::new(&bsdf, order);
+        // A tabulated cos θo, so the lerp does not enter.
+        let cos_theta = 40.0 / (OUTGOING_SAMPLES - 1) as f32;
+        let (s, p) = ((1.0 - cos_theta * cos_theta).sqrt(), 2.1f32);
+        let wo = Vec3::new(s * p.cos(), s * p.sin(), cos_theta);
+        let mut c = vec![0.0; 3 * n];
+        table.at(wo, &mut c);
+        let direct = hsh::project(order, &quadrature::hemisphere_fine(PROJECTION_NODES), |d| {
+            f64::from(bsdf.eval_glossy(wo, d.as_vec3()).r)
+        });
+        for (a, b) in c[..n].iter().zip(&direct) {
+            assert!((a - b).abs() < 1e-5, "{a} vs {b}");
+        }
+    }
+}
