@@ -4,7 +4,10 @@
 //!
 //! - [`brdf`]: the BRDFs' cosine-weighted glossy lobes in HSH over the outgoing directions, and the
 //!   order each material needs.
+//! - [`gather`]: a gather's incoming radiance in HSH and its translational gradients.
 //!
-//! Not yet here: the radiance records themselves, their gradients, lookups and the pre-pass.
+//! Not yet here: the radiance records in the cache, their lookups (rotation by
+//! [`ircache_math::harmonics::rotation::TiltTable`]) and the pre-pass.
 
 pub mod brdf;
+pub mod gather;
