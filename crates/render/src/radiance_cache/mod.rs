@@ -5,9 +5,12 @@
 //! - [`brdf`]: the BRDFs' cosine-weighted glossy lobes in HSH over the outgoing directions, and the
 //!   order each material needs.
 //! - [`gather`]: a gather's incoming radiance in HSH and its translational gradients.
+//! - [`record`]: a radiance record and its reading at a shading point (extrapolation, rotation
+//!   into the shading frame, blending).
 //!
-//! Not yet here: the radiance records in the cache, their lookups (rotation by
-//! [`ircache_math::harmonics::rotation::TiltTable`]) and the pre-pass.
+//! Not yet here: radiance records in the cache's store and pre-pass, the `ic` integrator's use of
+//! them for glossy lobes, the cache file, parameters and images.
 
 pub mod brdf;
 pub mod gather;
+pub mod record;
