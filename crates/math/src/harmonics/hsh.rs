@@ -3,88 +3,18 @@
 //! on the upper hemisphere. The shift maps the horizon to the sphere's pole, so every H_l^m with
 //! m ≠ 0 vanishes there (NOTES-001 §A.8-1).
 
-use super::legendre::{normalized_legendre, table_len};
-use super::sh::fill;
-use super::{azimuthal, coefficient_count, quadrature};
+use super::basis::{Basis, Hemisphere};
+use super::quadrature;
 use glam::DVec3;
-use std::f64::consts::SQRT_2;
 
-/// Evaluates every H_l^m, l < order, at a direction of the upper hemisphere.
-#[derive(Clone, Debug)]
-pub struct HshBasis {
-    order: usize,
-    legendre: Vec<f64>,
-    cos: Vec<f64>,
-    sin: Vec<f64>,
-}
-
-impl HshBasis {
-    /// An evaluator for `order` bands.
-    #[must_use]
-    pub fn new(order: usize) -> HshBasis {
-        HshBasis {
-            order,
-            legendre: vec![0.0; table_len(order)],
-            cos: vec![0.0; order.max(1)],
-            sin: vec![0.0; order.max(1)],
-        }
-    }
-
-    /// The order it evaluates.
-    #[must_use]
-    pub fn order(&self) -> usize {
-        self.order
-    }
-
-    /// H_i(ω) for every index i < order² into `out`; `ω` a unit vector with ω_z ≥ 0 (below
-    /// the horizon the basis is not defined: a negative ω_z is taken as the horizon).
-    pub fn eval(&mut self, w: DVec3, out: &mut [f64]) {
-        let x = w.z.clamp(0.0, 1.0);
-        // s = √(1 − u²) for u = 2x − 1, formed as 2√(x(1 − x)) without cancellation (A.2).
-        let s = 2.0 * (x * (1.0 - x)).sqrt();
-        let rho = w.x.hypot(w.y);
-        let (c, sn) = if rho > 0.0 {
-            (w.x / rho, w.y / rho)
-        } else {
-            (1.0, 0.0)
-        };
-        normalized_legendre(self.order, 2.0 * x - 1.0, s, &mut self.legendre);
-        azimuthal(c, sn, &mut self.cos, &mut self.sin);
-        fill(
-            self.order,
-            &self.legendre,
-            &self.cos,
-            &self.sin,
-            SQRT_2,
-            out,
-        );
-    }
-
-    /// H_i(ω) for every index as a new vector.
-    #[must_use]
-    pub fn values(&mut self, w: DVec3) -> Vec<f64> {
-        let mut out = vec![0.0; coefficient_count(self.order)];
-        self.eval(w, &mut out);
-        out
-    }
-}
+/// Evaluates every H_l^m, l < order, at a direction of the upper hemisphere (below the horizon
+/// the basis is not defined: a negative ω_z is taken as the horizon).
+pub type HshBasis = Basis<Hemisphere>;
 
 /// Projection λ_i = ∫_H f H_i dω (NOTES-001 §A.3) by a hemisphere `rule`.
 #[must_use]
-pub fn project(order: usize, rule: &quadrature::Rule, mut f: impl FnMut(DVec3) -> f64) -> Vec<f64> {
-    let mut basis = HshBasis::new(order);
-    let n = coefficient_count(order);
-    let (mut h, mut out) = (vec![0.0; n], vec![0.0; n]);
-    for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
-        let v = w * f(d);
-        if v != 0.0 {
-            basis.eval(d, &mut h);
-            for (o, hi) in out.iter_mut().zip(&h) {
-                *o += v * hi;
-            }
-        }
-    }
-    out
+pub fn project(order: usize, rule: &quadrature::Rule, f: impl FnMut(DVec3) -> f64) -> Vec<f64> {
+    HshBasis::new(order).project(rule, f)
 }
 
 /// The expansion's value Σ λ_i H_i(ω).
@@ -106,6 +36,7 @@ pub fn irradiance(coefficients: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::basis::{gram_deviation, Hemisphere};
     use super::super::{index, rotate_about_z};
     use super::*;
     use std::f64::consts::PI;
@@ -114,34 +45,11 @@ mod tests {
     #[test]
     fn orthonormal_on_the_hemisphere() {
         for order in 1..=16usize {
-            let rule = quadrature::hemisphere(order);
-            let n = coefficient_count(order);
-            let mut basis = HshBasis::new(order);
-            let mut gram = vec![0.0; n * n];
-            let mut h = vec![0.0; n];
-            for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
-                basis.eval(d, &mut h);
-                for i in 0..n {
-                    let wh = w * h[i];
-                    for j in 0..n {
-                        gram[i * n + j] += wh * h[j];
-                    }
-                }
-            }
-            for i in 0..n {
-                for j in 0..n {
-                    let want = if i == j { 1.0 } else { 0.0 };
-                    assert!(
-                        (gram[i * n + j] - want).abs() < 1e-10,
-                        "order {order} ({i},{j})"
-                    );
-                }
-            }
+            let deviation = gram_deviation::<Hemisphere>(order, &quadrature::hemisphere(order));
+            assert!(deviation < 1e-10, "order {order}: {deviation}");
         }
     }
 
-    /// A-T3: projections of 1, cos θ, cos²θ, cos⁵θ: only m = 0, l ≤ k non-zero, with the
-    /// notes' values.
     #[test]
     fn projections_of_powers_of_the_cosine() {
         let order = 8;

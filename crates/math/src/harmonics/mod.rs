@@ -9,13 +9,15 @@
 //! - **Rotating a function**: (R f)(ω) = f(R⁻¹ω); a record's coefficients reach a shading point's
 //!   frame by R = F_pᵀ F_k, applied as Z(α) · Y(β) · Z(γ) ([`rotation::ZyzAngles`]).
 //!
-//! Modules: [`legendre`] (normalised associated Legendre functions), [`sh`] (real spherical
+//! Modules: [`legendre`] (normalised associated Legendre functions), [`basis`] (evaluating either
+//! basis at a direction), [`sh`] (real spherical
 //! harmonics 3.7–3.8 and their rotations), [`hsh`] (hemispherical harmonics 3.15–3.19, projection,
 //! rotation about the normal), [`conversion`] (the SH ↔ HSH matrix 3.20–3.26), [`rotation`] (the
 //! lossy tilt of HSH: the precomputed rotation-with-horizon-loss matrices 3.31 and the SH route),
 //! [`quadrature`] (the exact rules the tables and tests are built with). Everything is `f64`: the
 //! tables are built once; a cache may store its coefficients in `f32`.
 
+pub mod basis;
 pub mod conversion;
 pub mod hsh;
 pub mod legendre;

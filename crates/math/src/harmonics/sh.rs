@@ -7,100 +7,17 @@
 //! recurrence (its 1998 erratum is a known trap); rotations about z have a closed form
 //! ([`super::rotate_about_z`]).
 
-use super::legendre::{normalized_legendre, table_len, triangle_index};
-use super::{azimuthal, coefficient_count, index, quadrature};
+use super::basis::{Basis, Sphere};
+use super::{coefficient_count, quadrature};
 use glam::{DMat3, DVec3};
-use std::f64::consts::SQRT_2;
 
-/// Evaluates every Y_l^m, l < order, at a direction, with its scratch space.
-#[derive(Clone, Debug)]
-pub struct ShBasis {
-    order: usize,
-    legendre: Vec<f64>,
-    cos: Vec<f64>,
-    sin: Vec<f64>,
-}
-
-impl ShBasis {
-    /// An evaluator for `order` bands.
-    #[must_use]
-    pub fn new(order: usize) -> ShBasis {
-        ShBasis {
-            order,
-            legendre: vec![0.0; table_len(order)],
-            cos: vec![0.0; order.max(1)],
-            sin: vec![0.0; order.max(1)],
-        }
-    }
-
-    /// The order it evaluates.
-    #[must_use]
-    pub fn order(&self) -> usize {
-        self.order
-    }
-
-    /// Y_i(ω) for every index i < order² into `out` (`ω` a unit vector).
-    pub fn eval(&mut self, w: DVec3, out: &mut [f64]) {
-        let s = w.x.hypot(w.y);
-        let (c, sn) = if s > 0.0 {
-            (w.x / s, w.y / s)
-        } else {
-            (1.0, 0.0)
-        };
-        normalized_legendre(self.order, w.z, s, &mut self.legendre);
-        azimuthal(c, sn, &mut self.cos, &mut self.sin);
-        fill(self.order, &self.legendre, &self.cos, &self.sin, 1.0, out);
-    }
-
-    /// Y_i(ω) for every index as a new vector.
-    #[must_use]
-    pub fn values(&mut self, w: DVec3) -> Vec<f64> {
-        let mut out = vec![0.0; coefficient_count(self.order)];
-        self.eval(w, &mut out);
-        out
-    }
-}
-
-/// The three cases of 3.7 (and of 3.18, with `scale` = √2 for K̃ = √2 K) from a Legendre table
-/// and cos mφ, sin mφ.
-pub(crate) fn fill(
-    order: usize,
-    legendre: &[f64],
-    cos: &[f64],
-    sin: &[f64],
-    scale: f64,
-    out: &mut [f64],
-) {
-    assert!(
-        out.len() >= coefficient_count(order),
-        "basis output too short"
-    );
-    for l in 0..order {
-        out[index(l, 0)] = scale * legendre[triangle_index(l, 0)];
-        for m in 1..=l {
-            let n = scale * SQRT_2 * legendre[triangle_index(l, m)];
-            out[index(l, m as i64)] = n * cos[m];
-            out[index(l, -(m as i64))] = n * sin[m];
-        }
-    }
-}
+/// Evaluates every Y_l^m, l < order, at a direction.
+pub type ShBasis = Basis<Sphere>;
 
 /// Projection f_i = ∫_S f Y_i dω (3.9) by `rule`.
 #[must_use]
-pub fn project(order: usize, rule: &quadrature::Rule, mut f: impl FnMut(DVec3) -> f64) -> Vec<f64> {
-    let mut basis = ShBasis::new(order);
-    let mut y = vec![0.0; coefficient_count(order)];
-    let mut out = vec![0.0; coefficient_count(order)];
-    for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
-        let v = w * f(d);
-        if v != 0.0 {
-            basis.eval(d, &mut y);
-            for (o, yi) in out.iter_mut().zip(&y) {
-                *o += v * yi;
-            }
-        }
-    }
-    out
+pub fn project(order: usize, rule: &quadrature::Rule, f: impl FnMut(DVec3) -> f64) -> Vec<f64> {
+    ShBasis::new(order).project(rule, f)
 }
 
 /// The rotation of spherical-harmonic coefficients by a rotation matrix: block-diagonal, one
@@ -207,6 +124,7 @@ pub fn rotation_z(alpha: f64) -> DMat3 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::basis::{gram_deviation, Sphere};
     use super::super::rotate_about_z;
     use super::*;
     use std::f64::consts::PI;
@@ -218,28 +136,8 @@ mod tests {
     #[test]
     fn orthonormal_on_the_sphere() {
         for order in [1usize, 3, 6, 10, 16] {
-            let rule = quadrature::sphere(order);
-            let n = coefficient_count(order);
-            let mut basis = ShBasis::new(order);
-            let mut gram = vec![0.0; n * n];
-            let mut y = vec![0.0; n];
-            for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
-                basis.eval(d, &mut y);
-                for i in 0..n {
-                    for j in 0..n {
-                        gram[i * n + j] += w * y[i] * y[j];
-                    }
-                }
-            }
-            for i in 0..n {
-                for j in 0..n {
-                    let want = if i == j { 1.0 } else { 0.0 };
-                    assert!(
-                        (gram[i * n + j] - want).abs() < 1e-10,
-                        "order {order} ({i},{j})"
-                    );
-                }
-            }
+            let deviation = gram_deviation::<Sphere>(order, &quadrature::sphere(order));
+            assert!(deviation < 1e-10, "order {order}: {deviation}");
         }
     }
 

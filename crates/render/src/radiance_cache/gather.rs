@@ -193,47 +193,11 @@ impl RadianceCoefficients {
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_room::{gather, room};
     use super::*;
     use ircache_math::harmonics::hsh::{self, irradiance};
     use ircache_math::harmonics::quadrature;
     use ircache_math::{Rgb, Rng};
-
-    /// A closed-form room seen from a point on the floor z = 0: a ceiling at z = 1 whose
-    /// radiance is 3 over the square [−0.3, 0.5]² and 0.5 elsewhere, and a black occluding
-    /// square [0.2, 0.9] × [−0.6, 0.1] at z = 0.4. Radiance and distance along a direction.
-    fn room(p: DVec3, d: DVec3) -> (f64, f64) {
-        if d.z <= 0.0 {
-            return (0.0, f64::INFINITY);
-        }
-        let t_occluder = (0.4 - p.z) / d.z;
-        let q = p + d * t_occluder;
-        if (0.2..=0.9).contains(&q.x) && (-0.6..=0.1).contains(&q.y) {
-            return (0.0, t_occluder);
-        }
-        let t = (1.0 - p.z) / d.z;
-        let q = p + d * t;
-        let bright = (-0.3..=0.5).contains(&q.x) && (-0.3..=0.5).contains(&q.y);
-        (if bright { 3.0 } else { 0.5 }, t)
-    }
-
-    /// The gather's samples at p: one jittered direction per cell (a fixed seed).
-    fn samples(
-        p: DVec3,
-        strata: Stratification,
-        light: impl Fn(DVec3, DVec3) -> (f64, f64),
-    ) -> HemisphereSamples {
-        let mut s = HemisphereSamples::new(strata);
-        let mut rng = Rng::new(11, 3);
-        let mut cells = Vec::new();
-        strata.for_each_direction(|| rng.next_2d(), |j, k, _, d| cells.push((j, k, d)));
-        for (j, k, d) in cells {
-            let (l, r) = light(p, d.as_dvec3().normalize());
-            let cell = j * strata.azimuthal + k;
-            s.radiance[cell] = Rgb::new(l as f32, (0.5 * l) as f32, (0.25 * l) as f32);
-            s.distance[cell] = r as f32;
-        }
-        s
-    }
 
     /// B-T1: the coefficients combine to the gather's irradiance, their gradients to its
     /// Ward–Heckbert translational gradient, to rounding, on any samples.
@@ -293,7 +257,8 @@ mod tests {
         let fine = quadrature::hemisphere_fine(500);
         let converged = |p: DVec3| hsh::project(order, &fine, |d| room(p, d).0);
         let p = DVec3::new(0.1, 0.05, 0.0);
-        let rc = RadianceCoefficients::from_samples(&samples(p, strata, room), &basis);
+        let samples = gather(p, ircache_math::DMat3::IDENTITY, strata, 11);
+        let rc = RadianceCoefficients::from_samples(&samples, &basis);
         let h = 0.01;
         for (axis, gradient) in [(DVec3::X, &rc.gradient_x), (DVec3::Y, &rc.gradient_y)] {
             let plus = converged(p + axis * h);

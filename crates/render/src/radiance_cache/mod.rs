@@ -14,3 +14,5 @@
 pub mod brdf;
 pub mod gather;
 pub mod record;
+#[cfg(test)]
+mod test_room;
