@@ -446,6 +446,7 @@ fn write_stats(
             "records_loaded": st.records_loaded,
             "records_from_others": st.records_from_others,
             "records_regathered": st.records_regathered,
+            "radiance_records": st.radiance_records,
             "gather_rays": out.rays.gather,
             "prepass_gather_rays": st.gather_rays,
             "gather_seconds": st.gather_seconds,

@@ -123,6 +123,10 @@ fn multiply(matrix: &[f64], v: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// The tilt below which [`TiltTable::rotate`] skips MR(β): MR(β) = I + O(β), so the error is
+/// about 1e-5 of the coefficients.
+pub const NEGLIGIBLE_TILT: f64 = 1e-5;
+
 /// MR(β) at steps of `step` from 0 to at least `max_beta`, lerped between (NOTES-001 §A.5: the
 /// error is quadratic in the step, 1.7e-4 at 1°).
 #[derive(Clone, Debug)]
@@ -179,12 +183,16 @@ impl TiltTable {
 
     /// The coefficients h in a frame F_k seen from a frame F_p: R = F_pᵀ F_k applied as
     /// Z(α) MR(β) Z(γ) h; `None` when the normals are further apart than the table reaches.
+    /// Below [`NEGLIGIBLE_TILT`] the tilt is skipped (the normals of one plane differ by
+    /// rounding), so coplanar frames cost two turns about the normal, not a dense product.
     #[must_use]
     pub fn rotate(&self, rotation: DMat3, h: &[f64]) -> Option<Vec<f64>> {
         let angles = ZyzAngles::from_matrix(rotation);
         let mut v = h.to_vec();
         rotate_about_z(self.order, &mut v, angles.gamma);
-        let mut v = self.tilt(angles.beta, &v)?;
+        if angles.beta >= NEGLIGIBLE_TILT {
+            v = self.tilt(angles.beta, &v)?;
+        }
         rotate_about_z(self.order, &mut v, angles.alpha);
         Some(v)
     }

@@ -30,6 +30,14 @@ pub trait IndirectSource {
         rays: &mut RayCounts,
     ) -> Option<Rgb>;
 
+    /// Indirect light the glossy part of the BSDF at `sp` reflects towards `wo` (world, unit),
+    /// from cached incoming radiance (radiance caching), or `None` to trace it. Only asked where
+    /// indirect light exists and the Lambertian part needs nothing traced (served, or absent).
+    fn glossy(&mut self, scene: &Scene, sp: &ShadingPoint, depth: u32, wo: Vec3) -> Option<Rgb> {
+        let _ = (scene, sp, depth, wo);
+        None
+    }
+
     /// Radiance assumed beyond the last bounce (Radiance's ambient value): what the Lambertian
     /// part reflects at a vertex where the depth runs out.
     fn ambient(&self) -> Rgb {
@@ -209,21 +217,35 @@ pub fn trace_path(
         let wo_local = it.frame.to_local(wo);
 
         // The Lambertian part's indirect light from the cache, where it serves; the beyond-last
-        // bounce ambient value where the depth runs out.
+        // bounce ambient value where the depth runs out. Then the glossy part's, where cached
+        // radiance serves it: the path ends here, its direct light left to the light samples.
         let mut strategy = BsdfStrategy::All;
+        let mut all_served = false;
         if source.serves() && bsdf.has_smooth() {
             let k = bsdf.lambertian_albedo(wo_local);
+            let indirect = depth + 2 < max_depth;
+            let sp = indirect.then(|| {
+                let mut sp = ShadingPoint::facing(it, wo);
+                sp.travelled = if from_camera { travelled } else { 0.0 };
+                sp
+            });
+            let mut lambertian_served = k.is_black();
             if !k.is_black() {
-                if depth + 2 < max_depth {
-                    let mut sp = ShadingPoint::facing(it, wo);
-                    sp.travelled = if from_camera { travelled } else { 0.0 };
+                if let Some(sp) = &sp {
                     sampler.set_dimension(dims::vertex(depth, dims::CACHE));
-                    if let Some(e) = source.irradiance(scene, &sp, depth, sampler, rays) {
+                    if let Some(e) = source.irradiance(scene, sp, depth, sampler, rays) {
                         l += beta * k * e * INV_PI;
                         strategy = BsdfStrategy::Glossy;
+                        lambertian_served = true;
                     }
                 } else {
                     l += beta * k * source.ambient();
+                }
+            }
+            if let Some(sp) = sp.filter(|_| lambertian_served && bsdf.has_glossy()) {
+                if let Some(glossy) = source.glossy(scene, &sp, depth, wo) {
+                    l += beta * glossy;
+                    all_served = true;
                 }
             }
         }
@@ -234,7 +256,7 @@ pub fn trace_path(
         } else {
             1
         };
-        let continues = depth + 2 < max_depth || scene.has_hittable_emitters;
+        let continues = !all_served && (depth + 2 < max_depth || scene.has_hittable_emitters);
         l += beta
             * sample_lights(
                 scene,

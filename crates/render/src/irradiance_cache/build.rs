@@ -14,6 +14,7 @@ use super::gather::{
     mix, GatherCounts, Gatherer, IrradianceCache, SceneRadiance, ShadingPoint, WorkState,
 };
 use super::record::Record;
+use crate::radiance_cache::RadianceCache;
 use crate::scene::Scene;
 use ircache_math::{Ray, Vec2, Vec3};
 use rayon::prelude::*;
@@ -48,6 +49,8 @@ pub struct CacheStats {
     pub notes: Vec<String>,
     /// Records gathered again with more rays because their neighbourhood was noisy.
     pub records_regathered: u64,
+    /// Records that also hold their incoming radiance in HSH (`--radiance-cache on`).
+    pub radiance_records: usize,
 }
 
 /// Where the pre-pass gathered each record it made: per level, (index in the level's store,
@@ -79,9 +82,15 @@ const MAX_SITES: usize = 8;
 /// (the cache level the pixel pass looks up there): the first surface; through mirrors and glass
 /// every lobe (reflection and refraction); and one central direction of each glossy lobe; down to
 /// depth `levels` − 1. The pre-pass places records at these points, so that the pixel pass, which
-/// follows the same paths, finds them.
+/// follows the same paths, finds them. With `radiance` tables, surfaces whose glossy lobe is
+/// radiance-cached are sites too, and paths end there as the pixel pass's do.
 #[must_use]
-pub fn record_sites(scene: &Scene, ray: &Ray, levels: u32) -> Vec<(u32, ShadingPoint)> {
+pub fn record_sites(
+    scene: &Scene,
+    ray: &Ray,
+    levels: u32,
+    radiance: Option<&RadianceCache>,
+) -> Vec<(u32, ShadingPoint)> {
     let mut sites = Vec::new();
     // Depth-first, reflection before refraction: a fixed order, so the same sites every time.
     let mut stack = vec![(*ray, 0u32, 0.0f32)];
@@ -96,12 +105,13 @@ pub fn record_sites(scene: &Scene, ray: &Ray, levels: u32) -> Vec<(u32, ShadingP
         let wo = -ray.d;
         let wo_local = it.frame.to_local(wo);
         let travelled = travelled + it.t;
-        if bsdf.has_smooth() && !bsdf.lambertian_albedo(wo_local).is_black() {
+        let glossy_cached = radiance.is_some_and(|r| r.brdf_of_shape(it.shape).is_some());
+        if bsdf.has_smooth() && (glossy_cached || !bsdf.lambertian_albedo(wo_local).is_black()) {
             let mut sp = ShadingPoint::facing(it, wo);
             sp.travelled = travelled;
             sites.push((depth, sp));
         }
-        if depth + 1 >= levels || !bsdf.has_glossy() {
+        if depth + 1 >= levels || !bsdf.has_glossy() || glossy_cached {
             continue;
         }
         // Delta lobes: each one (u_lobe picks reflection or transmission); glossy lobes: the
@@ -125,7 +135,7 @@ pub fn record_sites(scene: &Scene, ray: &Ray, levels: u32) -> Vec<(u32, ShadingP
 /// The first record site of a camera ray (see [`record_sites`]).
 #[must_use]
 pub fn first_diffuse_point(scene: &Scene, ray: &Ray, levels: u32) -> Option<ShadingPoint> {
-    record_sites(scene, ray, levels)
+    record_sites(scene, ray, levels, None)
         .into_iter()
         .min_by_key(|(depth, _)| *depth)
         .map(|(_, sp)| sp)
@@ -196,10 +206,12 @@ pub fn run_batch(
     };
     let mut counts = GatherCounts::default();
     let mut added = Vec::new();
-    for (rec, st) in results.into_iter().flatten() {
+    for (rec, mut st) in results.into_iter().flatten() {
         counts.add(&st.counts);
+        let mut radiance = std::mem::take(&mut st.radiance);
         // Deeper records first: they were made for the level-0 record's gather.
-        for (r, sp) in st.new_records.into_iter().chain(std::iter::once(rec)) {
+        for (mut r, sp) in st.new_records.into_iter().chain(std::iter::once(rec)) {
+            cache.adopt_radiance(&mut r, &mut radiance);
             let store = &mut cache.levels[r.level as usize];
             if store.covers(r.p, r.n) {
                 stats.records_overlapping += 1;
@@ -261,7 +273,7 @@ pub fn fill_for_image(
                     let film = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) * inv;
                     let ray = scene.camera.generate_ray(film);
                     let key = mix(0x0070_7265_7061_7373, (y * width + x) as u64);
-                    record_sites(scene, &ray, levels)
+                    record_sites(scene, &ray, levels, cache.radiance.as_deref())
                         .into_iter()
                         .enumerate()
                         .filter(|(_, (_, sp))| !cache.is_excluded(sp.it.shape))
@@ -368,7 +380,7 @@ pub fn regather_noisy(
             cache,
             seed,
         };
-        let fresh: Vec<(usize, Record, GatherCounts)> = jobs
+        let fresh: Vec<(usize, Record, WorkState)> = jobs
             .par_iter()
             .with_max_len(1)
             .map(|&(i, sp, rays)| {
@@ -376,11 +388,13 @@ pub fn regather_noisy(
                 let key = mix(0x7265_6761_7468_6572 ^ level as u64, i as u64);
                 let strata = super::hemisphere::Stratification::from_divisions(rays);
                 let rec = g.record_with(&mut st, &sp, level as u32, key, strata);
-                (i, rec, st.counts)
+                (i, rec, st)
             })
             .collect();
         let mut records = cache.levels[level].records().to_vec();
-        for (i, rec, counts) in fresh {
+        for (i, mut rec, mut st) in fresh {
+            cache.adopt_radiance(&mut rec, &mut st.radiance);
+            let counts = st.counts;
             records[i] = rec;
             stats.records_regathered += 1;
             stats.records_computed += counts.records;

@@ -266,6 +266,8 @@ fn decode_record(b: &[u8]) -> Option<Record> {
         grad_t: [v(10), v(13), v(16)],
         grad_r: [v(19), v(22), v(25)],
         ray_variance: f[28],
+        // Radiance coefficients are not written to cache files (yet).
+        radiance: super::record::NO_RADIANCE,
     })
 }
 
@@ -504,6 +506,7 @@ mod tests {
             grad_r: [Vec3::ONE, Vec3::X, Vec3::Y * f],
             level: (i % 3) as u8,
             ray_variance: 0.5 * f,
+            radiance: crate::irradiance_cache::record::NO_RADIANCE,
         }
     }
 

@@ -11,14 +11,18 @@
 use super::hemisphere::{largest_eigenvalue, to_world, HemisphereSamples, Stratification};
 pub use super::params::Deeper;
 use super::params::{IcParams, TranslationalFormula};
-use super::record::{ErrorMetric, Record};
+use super::record::{ErrorMetric, Record, NO_RADIANCE};
 use super::store::RecordStore;
 use crate::integrators::path_continuation::{
     trace_path, Arrival, IndirectSource, PathSettings, PathStart,
 };
 use crate::integrators::RayCounts;
+use crate::radiance_cache::gather::RadianceCoefficients;
+use crate::radiance_cache::record::RadianceRecord;
+use crate::radiance_cache::RadianceCache;
 use crate::scene::{Interaction, Scene};
-use ircache_math::{Frame, Rgb, Rng, Vec2, Vec3};
+use ircache_math::{DMat3, Frame, Rgb, Rng, Vec2, Vec3};
+use std::sync::Arc;
 
 /// The records of every bounce level, and the settings they were made with.
 #[derive(Clone, Debug)]
@@ -44,6 +48,10 @@ pub struct IrradianceCache {
     /// Shapes excluded from the cache (003 item 6), by shape index: they get the ambient value
     /// as their indirect light instead of records.
     pub excluded: Vec<bool>,
+    /// Radiance caching's tables (`--radiance-cache on`).
+    pub radiance: Option<Arc<RadianceCache>>,
+    /// The radiance records' coefficients, indexed by [`Record::radiance`].
+    pub radiance_records: Vec<RadianceRecord>,
 }
 
 impl IrradianceCache {
@@ -57,6 +65,20 @@ impl IrradianceCache {
         }
         cache.excluded = vec![false; scene.shapes.len()];
         cache
+    }
+
+    /// Moves a new record's radiance coefficients from its work state's list `made` into the
+    /// cache's, pointing the record at their new place (a no-op for records without).
+    pub fn adopt_radiance(&mut self, record: &mut Record, made: &mut [RadianceRecord]) {
+        if record.radiance == NO_RADIANCE {
+            return;
+        }
+        let Some(slot) = made.get_mut(record.radiance as usize) else {
+            record.radiance = NO_RADIANCE;
+            return;
+        };
+        record.radiance = self.radiance_records.len() as u32;
+        self.radiance_records.push(std::mem::take(slot));
     }
 
     /// An empty cache for a scene of size `size` (no shape excluded, no mean albedo): what
@@ -79,6 +101,8 @@ impl IrradianceCache {
             ambient: params.ambient_value,
             mean_albedo: 0.0,
             excluded: Vec::new(),
+            radiance: None,
+            radiance_records: Vec::new(),
             pixel_angle: 0.0,
         };
         cache.levels = (0..params.bounces.clamp(1, super::params::MAX_STORED_LEVELS))
@@ -201,6 +225,9 @@ pub struct WorkState {
     overlay: Vec<Option<RecordStore>>,
     /// Records made, in order, with the points they were gathered at.
     pub new_records: Vec<(Record, ShadingPoint)>,
+    /// Radiance coefficients of the records made (their [`Record::radiance`] indexes this
+    /// until they are inserted into the cache, which moves these to its own list).
+    pub radiance: Vec<RadianceRecord>,
     /// Counters.
     pub counts: GatherCounts,
 }
@@ -212,6 +239,7 @@ impl WorkState {
         WorkState {
             overlay: vec![None; levels],
             new_records: Vec::new(),
+            radiance: Vec::new(),
             counts: GatherCounts::default(),
         }
     }
@@ -529,7 +557,33 @@ impl Gatherer<'_> {
             grad_r,
             level: level as u8,
             ray_variance: h.relative_variance(),
+            radiance: self.radiance_at(st, sp, &h, &frame),
         }
+    }
+
+    /// A record's incoming radiance in HSH from its gather `h` in `frame`, where the surface's
+    /// glossy lobe is radiance-cached: kept in the work state, whose index it returns
+    /// ([`NO_RADIANCE`] elsewhere).
+    fn radiance_at(
+        &self,
+        st: &mut WorkState,
+        sp: &ShadingPoint,
+        h: &HemisphereSamples,
+        frame: &Frame,
+    ) -> u32 {
+        let Some(rc) = &self.cache.radiance else {
+            return NO_RADIANCE;
+        };
+        let Some(brdf) = rc.brdf_of_shape(sp.it.shape) else {
+            return NO_RADIANCE;
+        };
+        let basis = rc.cell_basis(h.strata, brdf.order());
+        st.radiance.push(RadianceRecord {
+            position: sp.it.p.as_dvec3(),
+            frame: DMat3::from_cols(frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3()),
+            radiance: RadianceCoefficients::from_samples(h, &basis),
+        });
+        (st.radiance.len() - 1) as u32
     }
 
     /// Indirect irradiance at `sp` for bounce `level`: interpolated from the cache and this work

@@ -124,6 +124,12 @@ pub struct IcParams {
     /// Light samples per pixel sample for the direct term (stratified over the light when a
     /// square number): shadow rays are cheaper than pixel samples.
     pub direct_samples: u32,
+    /// Radiance records for moderately glossy lobes (`--radiance-cache`, 001 ch. 3): records on
+    /// glossy surfaces also hold their incoming radiance in hemispherical harmonics.
+    pub radiance_cache: bool,
+    /// Highest order of radiance records (`--radiance-order`): a glossy lobe is cached when an
+    /// order up to this keeps 95 % of its energy, traced otherwise.
+    pub radiance_order: usize,
 }
 
 impl Default for IcParams {
@@ -149,6 +155,8 @@ impl Default for IcParams {
             spatial_order: false,
             neighbour_clamp: false,
             deeper: Deeper::PathTraced,
+            radiance_cache: false,
+            radiance_order: 10,
         }
     }
 }
@@ -467,6 +475,33 @@ pub const PARAMS: &[ParamSpec] = &[
         get: |p| p.direct_samples.to_string(),
         set: |p, v| {
             p.direct_samples = number(v, 1, 4096, "light samples")?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "radiance_cache",
+        aliases: &[],
+        value: "on|off",
+        help: "radiance caching (001 ch. 3): records on glossy surfaces also hold their \
+               incoming radiance in hemispherical harmonics, and glossy lobes that an order up \
+               to --radiance-order represents (95 % of their energy) are shaded from them \
+               instead of traced",
+        shapes_records: true,
+        get: |p| if p.radiance_cache { "on" } else { "off" }.to_string(),
+        set: |p, v| {
+            p.radiance_cache = on_off(v)?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "radiance_order",
+        aliases: &[],
+        value: "N",
+        help: "highest order of radiance records (bands 0 … N − 1, N² coefficients per colour)",
+        shapes_records: true,
+        get: |p| p.radiance_order.to_string(),
+        set: |p, v| {
+            p.radiance_order = number(v, 1, 16, "an order")?;
             Ok(())
         },
     },

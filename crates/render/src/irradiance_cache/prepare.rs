@@ -6,8 +6,10 @@ use super::build::{fill_for_image, BatchHook};
 use super::file::{self, CacheFile, Header};
 use super::{CacheStats, IrradianceCache, Record};
 use crate::integrators::ic::IcIntegrator;
+use crate::radiance_cache::RadianceCache;
 use crate::render::RenderSettings;
 use crate::scene::{RenderError, Scene};
+use std::sync::Arc;
 
 /// Fills the irradiance cache for the image: records from the cache file first (if any), then
 /// the pre-pass, whose new records are appended to the file batch by batch.
@@ -18,6 +20,17 @@ pub fn prepare_cache(
     pool: &rayon::ThreadPool,
 ) -> Result<(IrradianceCache, CacheStats), RenderError> {
     let mut cache = IrradianceCache::new(scene, &ic.params);
+    if ic.params.radiance_cache {
+        if ic.cache_file.is_some() {
+            return Err(RenderError::Invalid(
+                "--radiance-cache on does not work with a cache file (--cache) yet: radiance \
+                 records are not written to it"
+                    .into(),
+            ));
+        }
+        let tables = pool.install(|| RadianceCache::new(scene, ic.params.radiance_order));
+        cache.radiance = Some(Arc::new(tables));
+    }
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     cache.pixel_angle = 2.0 * scene.camera.tan_half_x / settings.width.max(1) as f32;
     let header = Header {
@@ -84,6 +97,7 @@ pub fn prepare_cache(
     stats.records_loaded = loaded;
     stats.notes = notes;
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
+    stats.radiance_records = cache.radiance_records.len();
     Ok((cache, stats))
 }
 

@@ -25,7 +25,14 @@ pub struct Record {
     /// own strata ([`super::hemisphere::HemisphereSamples::relative_variance`]): the rays a
     /// gather here needs for a relative standard error t are about this / t².
     pub ray_variance: f32,
+    /// Where the record is on a radiance-cached surface: its incoming radiance in HSH, an index
+    /// into [`super::IrradianceCache::radiance_records`] (while a gather's work state holds it,
+    /// into the state's own list); [`NO_RADIANCE`] elsewhere.
+    pub radiance: u32,
 }
+
+/// [`Record::radiance`] of a record without radiance coefficients.
+pub const NO_RADIANCE: u32 = u32::MAX;
 
 /// What a record store and the error metrics need of any kind of record (irradiance records
 /// today; radiance, photon and media records later): where it sits, which side it serves, and the

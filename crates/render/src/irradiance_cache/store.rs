@@ -334,6 +334,7 @@ mod tests {
             grad_r: [Vec3::ZERO; 3],
             level: 0,
             ray_variance: 0.0,
+            radiance: crate::irradiance_cache::record::NO_RADIANCE,
         }
     }
 
@@ -505,6 +506,7 @@ mod order_tests {
                 grad_r: [Vec3::ZERO; 3],
                 level: 0,
                 ray_variance: 0.0,
+                radiance: crate::irradiance_cache::record::NO_RADIANCE,
             });
         }
         let queries: Vec<Vec3> = (0..200)

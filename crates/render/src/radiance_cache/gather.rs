@@ -106,7 +106,7 @@ impl CellBasis {
 
 /// A gather's incoming radiance in HSH: coefficients and their translational gradients along
 /// the local x and y axes, each `[channel][coefficient]` (3 × order²).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct RadianceCoefficients {
     /// The order.
     pub order: usize,

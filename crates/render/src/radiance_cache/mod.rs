@@ -8,11 +8,130 @@
 //! - [`record`]: a radiance record and its reading at a shading point (extrapolation, rotation
 //!   into the shading frame, blending).
 //!
-//! Not yet here: radiance records in the cache's store and pre-pass, the `ic` integrator's use of
-//! them for glossy lobes, the cache file, parameters and images.
+//! [`RadianceCache`] holds what the irradiance cache needs to carry radiance records: per
+//! material, the BRDF table at the order its glossy lobe needs (or none: traced); per order, the
+//! tilt table; per stratification, the cell integrals. Records live in the irradiance cache's
+//! stores (one cache, two record kinds: a record on a radiance-cached surface also points at its
+//! coefficients, [`crate::irradiance_cache::Record::radiance`]); the `ic` integrator shades a
+//! cached glossy lobe from them (`integrators/ic.rs`).
+//!
+//! Not yet: the cache file (records with coefficients are not written), environment maps through
+//! SH, images of the radiance records.
 
 pub mod brdf;
 pub mod gather;
 pub mod record;
 #[cfg(test)]
 mod test_room;
+
+use crate::irradiance_cache::hemisphere::Stratification;
+use crate::scene::Scene;
+use gather::CellBasis;
+use ircache_math::harmonics::rotation::TiltTable;
+use ircache_math::Vec2;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::{Arc, RwLock};
+
+/// Energy a cached lobe's expansion keeps (3.32): the order is chosen for it at every viewing
+/// angle up to 60°, and viewing angles where the order keeps less are traced (`brdf`).
+pub const ENERGY_KEPT: f64 = 0.95;
+
+/// Largest angle between a record's normal and a shading normal that the tilt tables hold: beyond
+/// the accuracy's normal limit at relaxed thresholds (Tabellion's at a = 0.35 allows 17.5° at
+/// threshold 1; Ward's arccos(1 − a²) = 28.6°).
+const MAX_TILT_DEGREES: f64 = 30.0;
+
+/// The tables radiance records are made and read with.
+#[derive(Debug)]
+pub struct RadianceCache {
+    /// Per material: the BRDF table of its glossy lobe at the order it needs, or `None` where
+    /// the lobe stays traced (no glossy part, or too sharp for the highest order).
+    materials: Vec<Option<Arc<brdf::BrdfCoefficients>>>,
+    /// Per shape, its material.
+    shape_material: Vec<usize>,
+    /// Per order in use: the tilt table MR(β) at 1° steps.
+    tilts: HashMap<usize, Arc<TiltTable>>,
+    /// Per (polar, azimuthal, order): the cells' basis integrals, made on first use.
+    bases: RwLock<HashMap<(usize, usize, usize), Arc<CellBasis>>>,
+}
+
+impl RadianceCache {
+    /// The tables for `scene`'s materials up to `max_order` (in parallel, in the caller's pool).
+    #[must_use]
+    pub fn new(scene: &Scene, max_order: usize) -> RadianceCache {
+        let materials: Vec<Option<Arc<brdf::BrdfCoefficients>>> = scene
+            .materials
+            .par_iter()
+            .map(|m| {
+                // Glossy parts are untextured in every model; the texture coordinate is moot.
+                let bsdf = m.at(Vec2::splat(0.5));
+                let order = brdf::order_for(&bsdf, max_order, ENERGY_KEPT)?;
+                Some(Arc::new(brdf::BrdfCoefficients::new(
+                    &bsdf,
+                    order,
+                    ENERGY_KEPT,
+                )))
+            })
+            .collect();
+        let mut orders: Vec<usize> = materials.iter().flatten().map(|t| t.order()).collect();
+        orders.sort_unstable();
+        orders.dedup();
+        let tilts = orders
+            .into_par_iter()
+            .map(|order| {
+                let table = TiltTable::new(order, 1f64.to_radians(), MAX_TILT_DEGREES.to_radians());
+                (order, Arc::new(table))
+            })
+            .collect();
+        RadianceCache {
+            materials,
+            shape_material: scene.shapes.iter().map(|s| s.material).collect(),
+            tilts,
+            bases: RwLock::new(HashMap::new()),
+        }
+    }
+
+    /// The BRDF table of material `material`, if its glossy lobe is cached.
+    #[must_use]
+    pub fn brdf(&self, material: usize) -> Option<&brdf::BrdfCoefficients> {
+        self.materials.get(material)?.as_deref()
+    }
+
+    /// The BRDF table of shape `shape`'s material, if its glossy lobe is cached.
+    #[must_use]
+    pub fn brdf_of_shape(&self, shape: u32) -> Option<&brdf::BrdfCoefficients> {
+        self.brdf(*self.shape_material.get(shape as usize)?)
+    }
+
+    /// Whether any material's glossy lobe is cached.
+    #[must_use]
+    pub fn caches_any(&self) -> bool {
+        self.materials.iter().any(Option::is_some)
+    }
+
+    /// The tilt table of `order`.
+    #[must_use]
+    pub fn tilt(&self, order: usize) -> Option<&TiltTable> {
+        self.tilts.get(&order).map(|t| t.as_ref())
+    }
+
+    /// The cell integrals for a gather's stratification at `order` (made once, shared).
+    ///
+    /// # Panics
+    /// If the lock was poisoned by a panic elsewhere.
+    #[must_use]
+    pub fn cell_basis(&self, strata: Stratification, order: usize) -> Arc<CellBasis> {
+        let key = (strata.polar, strata.azimuthal, order);
+        if let Some(b) = self.bases.read().expect("cell tables").get(&key) {
+            return b.clone();
+        }
+        let made = Arc::new(CellBasis::new(strata, order));
+        self.bases
+            .write()
+            .expect("cell tables")
+            .entry(key)
+            .or_insert(made)
+            .clone()
+    }
+}

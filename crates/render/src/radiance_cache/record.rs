@@ -10,7 +10,7 @@ use ircache_math::harmonics::rotation::TiltTable;
 use ircache_math::{DMat3, DVec3};
 
 /// A record: where, in which frame, and the incoming radiance there in HSH.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct RadianceRecord {
     /// Position.
     pub position: DVec3,
