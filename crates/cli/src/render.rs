@@ -88,8 +88,11 @@ pub struct RenderArgs {
     #[arg(long)]
     pub fov: Option<f32>,
     /// Extra images (ic integrator): `irradiance` (interpolated indirect irradiance, written to
-    /// NAME-irradiance.exr) and `records` (level-0 record positions as red dots over the image,
-    /// NAME-records.exr). Repeat or separate with commas.
+    /// NAME-irradiance.exr), `records` (level-0 record positions as red dots over the image, cyan
+    /// for records that also hold radiance, NAME-records.exr) and `glossy` (with
+    /// --radiance-cache on: the indirect light the first surface's cached glossy lobe reflects
+    /// towards the camera, from the radiance records, NAME-glossy.exr). Repeat or separate with
+    /// commas.
     #[arg(long, value_delimiter = ',')]
     pub aov: Vec<String>,
     /// Render only band i of n equal bands of rows (0-based, `--tile 2/4`), the rest black: n
@@ -262,8 +265,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         _ => {}
     }
     for aov in &args.aov {
-        if !matches!(aov.as_str(), "irradiance" | "records") {
-            bail!("--aov {aov}: expected irradiance or records");
+        if !matches!(aov.as_str(), "irradiance" | "records" | "glossy") {
+            bail!("--aov {aov}: expected irradiance, records or glossy");
         }
         if !matches!(integrator, Integrator::Ic(_)) {
             bail!("--aov {aov} needs the ic integrator");
@@ -447,6 +450,7 @@ fn write_stats(
             "records_from_others": st.records_from_others,
             "records_regathered": st.records_regathered,
             "radiance_records": st.radiance_records,
+            "radiance_table_seconds": st.radiance_table_seconds,
             "gather_rays": out.rays.gather,
             "prepass_gather_rays": st.gather_rays,
             "gather_seconds": st.gather_seconds,
@@ -483,6 +487,7 @@ fn write_aovs(
             "irradiance" => {
                 aov::irradiance_image(scene, &report.cache, settings.width, settings.height)
             }
+            "glossy" => aov::glossy_image(scene, &report.cache, settings.width, settings.height),
             _ => aov::record_overlay(scene, &report.cache, image),
         };
         let stem = output

@@ -15,6 +15,7 @@
 
 mod cache_vs_path;
 mod peers;
+mod radiance;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -45,7 +46,8 @@ pub struct BenchArgs {
     pub no_mitsuba: bool,
     /// Which parts: all, rays, path, gather, ic, peers (ircache against Mitsuba 3 with
     /// multijitter, by rendering), cache (the cache against path tracing by rendering, and the
-    /// cost of depth).
+    /// cost of depth), radiance (radiance caching against tracing the same lobes and against
+    /// Mitsuba 3, by rendering).
     #[arg(long, default_value = "all")]
     pub only: String,
 }
@@ -108,6 +110,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "cache" {
         cache_vs_path::run_all(&shared)?;
+    }
+    if args.only == "all" || args.only == "radiance" {
+        radiance::run_all(&shared, !args.no_mitsuba)?;
     }
     Ok(())
 }

@@ -30,15 +30,25 @@ pub struct ZyzAngles {
 }
 
 impl ZyzAngles {
-    /// The angles of a rotation matrix; where sin β vanishes, γ = 0.
+    /// The angles of a rotation matrix. Where the tilt is below [`NEGLIGIBLE_TILT`] it is taken
+    /// as a turn about z alone (β = 0, γ = 0, α from the top-left block): α and γ alone are then
+    /// ill-conditioned (each the angle of a vector of length sin β, which frames built in `f32` on
+    /// one plane make of rounding noise), their sum is not.
     #[must_use]
     pub fn from_matrix(r: DMat3) -> ZyzAngles {
         // glam is column-major: r.col(j)[i] is R_ij.
         let at = |i: usize, j: usize| r.col(j)[i];
-        let beta = at(2, 2).clamp(-1.0, 1.0).acos();
         let sin_beta = at(0, 2).hypot(at(1, 2));
+        if sin_beta < NEGLIGIBLE_TILT && at(2, 2) > 0.0 {
+            return ZyzAngles {
+                alpha: (at(1, 0) - at(0, 1)).atan2(at(0, 0) + at(1, 1)),
+                beta: 0.0,
+                gamma: 0.0,
+            };
+        }
+        let beta = at(2, 2).clamp(-1.0, 1.0).acos();
         if sin_beta < 1e-12 {
-            // R_z(α) R_y(0 or π) R_z(0): α from the top-left block.
+            // R_z(α) R_y(π) R_z(0): α from the top-left block.
             return ZyzAngles {
                 alpha: at(1, 0).atan2(at(0, 0)),
                 beta,
@@ -123,9 +133,10 @@ fn multiply(matrix: &[f64], v: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// The tilt below which [`TiltTable::rotate`] skips MR(β): MR(β) = I + O(β), so the error is
-/// about 1e-5 of the coefficients.
-pub const NEGLIGIBLE_TILT: f64 = 1e-5;
+/// The tilt (sin β) below which a rotation is taken as a turn about the normal alone: MR(β) =
+/// I + O(β), so the error is about 1e-4 of the coefficients, while frames built in `f32` make
+/// the normals of one plane differ by about 1e-7.
+pub const NEGLIGIBLE_TILT: f64 = 1e-4;
 
 /// MR(β) at steps of `step` from 0 to at least `max_beta`, lerped between (NOTES-001 §A.5: the
 /// error is quadratic in the step, 1.7e-4 at 1°).
@@ -183,16 +194,18 @@ impl TiltTable {
 
     /// The coefficients h in a frame F_k seen from a frame F_p: R = F_pᵀ F_k applied as
     /// Z(α) MR(β) Z(γ) h; `None` when the normals are further apart than the table reaches.
-    /// Below [`NEGLIGIBLE_TILT`] the tilt is skipped (the normals of one plane differ by
-    /// rounding), so coplanar frames cost two turns about the normal, not a dense product.
+    /// Coplanar frames (tilt below [`NEGLIGIBLE_TILT`], [`ZyzAngles::from_matrix`]) cost one turn
+    /// about the normal, not a dense product.
     #[must_use]
     pub fn rotate(&self, rotation: DMat3, h: &[f64]) -> Option<Vec<f64>> {
         let angles = ZyzAngles::from_matrix(rotation);
         let mut v = h.to_vec();
-        rotate_about_z(self.order, &mut v, angles.gamma);
-        if angles.beta >= NEGLIGIBLE_TILT {
-            v = self.tilt(angles.beta, &v)?;
+        if angles.beta == 0.0 {
+            rotate_about_z(self.order, &mut v, angles.alpha);
+            return Some(v);
         }
+        rotate_about_z(self.order, &mut v, angles.gamma);
+        v = self.tilt(angles.beta, &v)?;
         rotate_about_z(self.order, &mut v, angles.alpha);
         Some(v)
     }
@@ -220,6 +233,38 @@ mod tests {
         hsh::project(5, &quadrature::hemisphere_fine(64), |d| {
             d.dot(axis).max(0.0).powi(5)
         })
+    }
+
+    /// Frames built in `f32` around normals of one plane that differ by rounding: the rotation
+    /// between them is their turn about the normal, not two ill-conditioned angles' noise.
+    #[test]
+    fn nearly_coplanar_frames_turn_about_the_normal() {
+        let order = 6;
+        let h = hsh::project(order, &quadrature::hemisphere_fine(40), |d| {
+            (4.0 * (d.dot(DVec3::new(0.5, 0.2, 0.8).normalize()) - 1.0)).exp()
+        });
+        let frame = |n: glam::Vec3, turn: f32| {
+            let helper = glam::Vec3::X;
+            let t0 = (helper - n * n.dot(helper)).normalize();
+            let b0 = n.cross(t0);
+            let t = t0 * turn.cos() + b0 * turn.sin();
+            DMat3::from_cols(t.as_dvec3(), n.cross(t).as_dvec3(), n.as_dvec3())
+        };
+        let n1 = glam::Vec3::new(0.3, -0.2, 0.9).normalize();
+        // The same plane's normal through a different rounding.
+        let n2 = (glam::Vec3::new(0.3, -0.2, 0.9) * 1.000_001).normalize();
+        let table = TiltTable::new(order, 1f64.to_radians(), 5f64.to_radians());
+        let rotated = table
+            .rotate(frame(n1, 0.3).transpose() * frame(n2, 1.0), &h)
+            .unwrap();
+        let mut turned = h.clone();
+        // The record's tangent is 0.7 further round than the shading point's: R = R_z(0.7).
+        rotate_about_z(order, &mut turned, 0.7);
+        assert!(
+            relative(&rotated, &turned) < 1e-4,
+            "{}",
+            relative(&rotated, &turned)
+        );
     }
 
     #[test]

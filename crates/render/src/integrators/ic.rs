@@ -12,11 +12,10 @@ use super::RayCounts;
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, ShadingPoint, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::{IcParams, IrradianceCache};
-use crate::radiance_cache::record::{interpolate, RadianceRecord};
 use crate::sampler::Sampler;
 use crate::scene::Scene;
 use ircache_embree::Hit;
-use ircache_math::{DMat3, Frame, Ray, Rgb, Vec3};
+use ircache_math::{Ray, Rgb, Vec3};
 use ircache_scene::{IntegratorDesc, ParamValue};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -236,34 +235,7 @@ impl IndirectSource for PixelLookup<'_> {
     }
 
     fn glossy(&mut self, _: &Scene, sp: &ShadingPoint, depth: u32, wo: Vec3) -> Option<Rgb> {
-        let cache = self.cache;
-        let tables = cache.radiance.as_deref()?;
-        let brdf = tables.brdf_of_shape(sp.it.shape)?;
-        let tilt = tables.tilt(brdf.order())?;
-        let store = cache.levels.get(depth as usize)?;
-        // The shading frame around the shading normal, its tangent from the normal alone, as
-        // the records' frames are (coplanar records and points then share frames: R = I).
-        let frame = Frame::from_z(sp.n_bump);
-        let wo_local = frame.to_local(wo);
-        if !brdf.serves(wo_local) {
-            return None;
-        }
-        let f = DMat3::from_cols(frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3());
-        let mut records: Vec<(f64, &RadianceRecord)> = Vec::new();
-        for threshold in [1.0, 2.0] {
-            records.clear();
-            store.for_each_serving(sp.it.p, sp.n, threshold, |rec, w| {
-                if let Some(r) = cache.radiance_records.get(rec.radiance as usize) {
-                    if r.radiance.order == brdf.order() {
-                        records.push((f64::from(w), r));
-                    }
-                }
-            });
-            if let Some(lambda) = interpolate(&records, sp.it.p.as_dvec3(), f, tilt) {
-                return Some(brdf.reflect(wo_local, &lambda));
-            }
-        }
-        None
+        crate::radiance_cache::lookup::glossy(self.cache, sp, depth, wo)
     }
 
     fn ambient(&self) -> Rgb {

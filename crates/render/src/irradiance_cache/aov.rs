@@ -1,8 +1,9 @@
-//! Seeing the cache: the interpolated indirect irradiance per pixel, and the record positions
-//! drawn as dots over an image (as in 004's first figure).
+//! Seeing the cache: the interpolated indirect irradiance per pixel, the glossy light shaded
+//! from radiance records, and the record positions drawn as dots over an image (as in 004's
+//! first figure).
 
 use super::build::first_diffuse_point;
-use super::gather::IrradianceCache;
+use super::gather::{IrradianceCache, ShadingPoint};
 use crate::scene::Scene;
 use ircache_image::Image;
 use ircache_math::{Rgb, Vec2};
@@ -48,8 +49,39 @@ pub fn irradiance_image(
     image
 }
 
-/// `image` with a dot at every level-0 record visible from the camera: red, one pixel plus its
-/// four neighbours, bright enough to show at any exposure.
+/// The indirect light that the first surface each pixel centre sees reflects towards the camera
+/// by its radiance-cached glossy lobe, shaded from the level-0 radiance records (black where the
+/// surface's lobe is not cached, the view is traced, or no record serves).
+#[must_use]
+pub fn glossy_image(scene: &Scene, cache: &IrradianceCache, width: usize, height: usize) -> Image {
+    let pixels: Vec<Rgb> = (0..width * height)
+        .into_par_iter()
+        .with_max_len(256)
+        .map(|i| {
+            let film = Vec2::new(
+                ((i % width) as f32 + 0.5) / width as f32,
+                ((i / width) as f32 + 0.5) / height as f32,
+            );
+            let ray = scene.camera.generate_ray(film);
+            scene
+                .intersect(&ray)
+                .and_then(|it| {
+                    let sp = ShadingPoint::facing(it, -ray.d);
+                    crate::radiance_cache::lookup::glossy(cache, &sp, 0, -ray.d)
+                })
+                .unwrap_or(Rgb::ZERO)
+        })
+        .collect();
+    let mut image = Image::new(width, height);
+    for (i, c) in pixels.into_iter().enumerate() {
+        image.set(i % width, i / width, c);
+    }
+    image
+}
+
+/// `image` with a dot at every level-0 record visible from the camera: red (cyan for records
+/// that also hold radiance coefficients), one pixel plus its four neighbours, bright enough to
+/// show at any exposure.
 #[must_use]
 pub fn record_overlay(scene: &Scene, cache: &IrradianceCache, image: &Image) -> Image {
     let (w, h) = (image.width, image.height);
@@ -58,8 +90,12 @@ pub fn record_overlay(scene: &Scene, cache: &IrradianceCache, image: &Image) -> 
         .map(|i| image.get(i % w, i / w).max_channel())
         .fold(0.0f32, f32::max)
         .max(1.0);
-    let dot = Rgb::new(peak, 0.0, 0.0);
     for rec in cache.levels[0].records() {
+        let dot = if rec.radiance == super::record::NO_RADIANCE {
+            Rgb::new(peak, 0.0, 0.0)
+        } else {
+            Rgb::new(0.0, peak, peak)
+        };
         let Some(film) = scene.camera.project(rec.p) else {
             continue;
         };

@@ -51,6 +51,8 @@ pub struct CacheStats {
     pub records_regathered: u64,
     /// Records that also hold their incoming radiance in HSH (`--radiance-cache on`).
     pub radiance_records: usize,
+    /// Seconds spent making radiance caching's tables (BRDFs in HSH, tilt matrices).
+    pub radiance_table_seconds: f64,
 }
 
 /// Where the pre-pass gathered each record it made: per level, (index in the level's store,

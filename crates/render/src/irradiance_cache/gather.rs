@@ -465,7 +465,16 @@ impl Gatherer<'_> {
 
     /// A record at `sp` for bounce `level`: gather, then limit the radius.
     pub fn record_at(&self, st: &mut WorkState, sp: &ShadingPoint, level: u32, key: u64) -> Record {
-        let strata = Stratification::from_divisions(self.cache.params.divisions);
+        // A radiance record weighs its cells by the glossy lobe: it needs as many more rays as
+        // the lobe is narrower than the cosine.
+        let factor = self
+            .cache
+            .radiance
+            .as_deref()
+            .and_then(|r| r.brdf_of_shape(sp.it.shape))
+            .map_or(1.0, |b| b.ray_factor());
+        let divisions = (self.cache.params.divisions as f64 * factor).round() as usize;
+        let strata = Stratification::from_divisions(divisions);
         self.record_with(st, sp, level, key, strata)
     }
 

@@ -20,6 +20,7 @@ pub fn prepare_cache(
     pool: &rayon::ThreadPool,
 ) -> Result<(IrradianceCache, CacheStats), RenderError> {
     let mut cache = IrradianceCache::new(scene, &ic.params);
+    let tables_start = std::time::Instant::now();
     if ic.params.radiance_cache {
         if ic.cache_file.is_some() {
             return Err(RenderError::Invalid(
@@ -31,6 +32,7 @@ pub fn prepare_cache(
         let tables = pool.install(|| RadianceCache::new(scene, ic.params.radiance_order));
         cache.radiance = Some(Arc::new(tables));
     }
+    let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     cache.pixel_angle = 2.0 * scene.camera.tan_half_x / settings.width.max(1) as f32;
     let header = Header {
@@ -98,6 +100,7 @@ pub fn prepare_cache(
     stats.notes = notes;
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     stats.radiance_records = cache.radiance_records.len();
+    stats.radiance_table_seconds = radiance_table_seconds;
     Ok((cache, stats))
 }
 

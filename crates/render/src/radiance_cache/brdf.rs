@@ -29,6 +29,9 @@ pub const OUTGOING_SAMPLES: usize = 64;
 /// down to about 0.1 rad, sharper than any the order rule lets through at order 10.
 const PROJECTION_NODES: usize = 96;
 
+/// Most times an irradiance record's rays a radiance record takes.
+pub const MAX_RAY_FACTOR: f64 = 4.0;
+
 /// Largest θo at which [`order_for`] demands the energy.
 const ORDER_MAX_THETA_DEGREES: f64 = 60.0;
 
@@ -40,22 +43,30 @@ pub struct BrdfCoefficients {
     table: Vec<f32>,
     /// Per sample: whether the order keeps the energy asked for there.
     kept: Vec<bool>,
+    /// The lobe's share η of a cosine-weighted gather's cells at normal view.
+    share: f64,
 }
 
-/// Projections of the glossy lobe at one θo: per channel, the coefficients and ∫ (f cos)² dωi.
+/// Projections of the glossy lobe at one θo: per channel, the coefficients, ∫ (f cos)² dωi, and
+/// the lobe's share of the cells of a cosine-weighted gather
+/// η = (∫ f cos dωi)² / (π ∫ f² cos dωi) (1 for a constant f).
 fn project_slice(
     bsdf: &Bsdf,
     cos_theta_o: f64,
     rule: &quadrature::Rule,
     basis_values: &[Vec<f64>],
     n: usize,
-) -> ([Vec<f64>; 3], [f64; 3]) {
+) -> ([Vec<f64>; 3], [f64; 3], f64) {
+    let (mut first, mut second) = (0.0, 0.0);
     let sin_theta_o = (1.0 - cos_theta_o * cos_theta_o).max(0.0).sqrt();
     let wo = Vec3::new(sin_theta_o as f32, 0.0, cos_theta_o as f32);
     let mut c = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
     let mut energy = [0.0; 3];
     for ((d, &w), h) in rule.directions.iter().zip(&rule.weights).zip(basis_values) {
         let f = bsdf.eval_glossy(wo, d.as_vec3());
+        let y = f64::from(f.g);
+        first += w * y;
+        second += w * y * y / d.z.max(1e-9);
         for (ch, v) in [f.r, f.g, f.b].into_iter().enumerate() {
             let v = f64::from(v);
             if v == 0.0 {
@@ -68,7 +79,12 @@ fn project_slice(
             }
         }
     }
-    (c, energy)
+    let share = if second > 0.0 {
+        (first * first / (std::f64::consts::PI * second)).min(1.0)
+    } else {
+        1.0
+    };
+    (c, energy, share)
 }
 
 /// The projection rule over the incoming hemisphere and every basis value at its nodes.
@@ -89,9 +105,12 @@ impl BrdfCoefficients {
         let (rule, values) = rule_and_basis(order);
         let mut table = Vec::with_capacity(OUTGOING_SAMPLES * 3 * n);
         let mut kept = Vec::with_capacity(OUTGOING_SAMPLES);
+        let mut share = 1.0;
         for k in 0..OUTGOING_SAMPLES {
             let cos_theta_o = k as f64 / (OUTGOING_SAMPLES - 1) as f64;
-            let (c, energy) = project_slice(bsdf, cos_theta_o, &rule, &values, n);
+            let (c, energy, eta) = project_slice(bsdf, cos_theta_o, &rule, &values, n);
+            // The last sample is the normal view.
+            share = eta;
             let total: f64 = energy.iter().sum();
             let captured: f64 = c.iter().flatten().map(|v| v * v).sum();
             kept.push(total <= 0.0 || captured >= threshold * total);
@@ -99,7 +118,21 @@ impl BrdfCoefficients {
                 table.extend(channel.iter().map(|&v| v as f32));
             }
         }
-        BrdfCoefficients { order, table, kept }
+        BrdfCoefficients {
+            order,
+            table,
+            kept,
+            share,
+        }
+    }
+
+    /// How many times an irradiance record's rays a radiance record for this lobe takes: 1/η,
+    /// η the lobe's share of a cosine-weighted gather's cells at normal view (a record's glossy
+    /// estimate Σ L_c g_c weighs the cells by the lobe, so for iid cell noise its relative
+    /// variance is 1/η times the irradiance's), between 1 and [`MAX_RAY_FACTOR`].
+    #[must_use]
+    pub fn ray_factor(&self) -> f64 {
+        (1.0 / self.share.max(1e-6)).clamp(1.0, MAX_RAY_FACTOR)
     }
 
     /// Whether the table serves the outgoing direction `wo` (local): above the surface, and the
@@ -173,7 +206,7 @@ impl BrdfCoefficients {
 pub fn energy_kept(bsdf: &Bsdf, max_order: usize, theta_o_degrees: f64) -> Vec<f64> {
     let n = coefficient_count(max_order);
     let (rule, values) = rule_and_basis(max_order);
-    let (c, energy) = project_slice(bsdf, theta_o_degrees.to_radians().cos(), &rule, &values, n);
+    let (c, energy, _) = project_slice(bsdf, theta_o_degrees.to_radians().cos(), &rule, &values, n);
     let total: f64 = energy.iter().sum();
     (1..=max_order)
         .map(|order| {

@@ -7,6 +7,7 @@
 //! - [`gather`]: a gather's incoming radiance in HSH and its translational gradients.
 //! - [`record`]: a radiance record and its reading at a shading point (extrapolation, rotation
 //!   into the shading frame, blending).
+//! - [`lookup`]: a cached glossy lobe shaded from the cache's records.
 //!
 //! [`RadianceCache`] holds what the irradiance cache needs to carry radiance records: per
 //! material, the BRDF table at the order its glossy lobe needs (or none: traced); per order, the
@@ -20,6 +21,7 @@
 
 pub mod brdf;
 pub mod gather;
+pub mod lookup;
 pub mod record;
 #[cfg(test)]
 mod test_room;
