@@ -578,6 +578,8 @@ mod tests {
             ("neighbour_clamp", "on"),
             ("gradients", "rotation"),
             ("gradient_formula", "krivanek"),
+            ("radiance_cache", "on"),
+            ("radiance_order", "5"),
         ];
         for spec in crate::irradiance_cache::params::PARAMS {
             let listed = changed.iter().find(|(n, _)| *n == spec.name);
