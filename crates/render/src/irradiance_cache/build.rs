@@ -107,10 +107,10 @@ pub fn record_sites(
         let wo = -ray.d;
         let wo_local = it.frame.to_local(wo);
         let travelled = travelled + it.t;
-        let glossy_cached = radiance.is_some_and(|r| r.brdf_of_shape(it.shape).is_some());
+        let mut sp = ShadingPoint::facing(it, wo);
+        sp.travelled = travelled;
+        let glossy_cached = radiance.is_some_and(|r| r.brdf_at(&sp).is_some());
         if bsdf.has_smooth() && (glossy_cached || !bsdf.lambertian_albedo(wo_local).is_black()) {
-            let mut sp = ShadingPoint::facing(it, wo);
-            sp.travelled = travelled;
             sites.push((depth, sp));
         }
         if depth + 1 >= levels || !bsdf.has_glossy() || glossy_cached {

@@ -471,7 +471,7 @@ impl Gatherer<'_> {
             .cache
             .radiance
             .as_deref()
-            .and_then(|r| r.brdf_of_shape(sp.it.shape))
+            .and_then(|r| r.brdf_at(sp))
             .map_or(1.0, |b| b.ray_factor());
         let divisions = (self.cache.params.divisions as f64 * factor).round() as usize;
         let strata = Stratification::from_divisions(divisions);
@@ -583,7 +583,7 @@ impl Gatherer<'_> {
         let Some(rc) = &self.cache.radiance else {
             return NO_RADIANCE;
         };
-        let Some(brdf) = rc.brdf_of_shape(sp.it.shape) else {
+        let Some(brdf) = rc.brdf_at(sp) else {
             return NO_RADIANCE;
         };
         let basis = rc.cell_basis(h.strata, brdf.order());

@@ -13,7 +13,7 @@ use ircache_math::{DMat3, Frame, Rgb, Vec3};
 #[must_use]
 pub fn glossy(cache: &IrradianceCache, sp: &ShadingPoint, depth: u32, wo: Vec3) -> Option<Rgb> {
     let tables = cache.radiance.as_deref()?;
-    let brdf = tables.brdf_of_shape(sp.it.shape)?;
+    let brdf = tables.brdf_at(sp)?;
     let tilt = tables.tilt(brdf.order())?;
     let store = cache.levels.get(depth as usize)?;
     // The shading frame around the shading normal, its tangent from the normal alone, as the

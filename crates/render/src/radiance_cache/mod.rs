@@ -26,6 +26,8 @@ pub mod record;
 #[cfg(test)]
 mod test_room;
 
+use crate::bsdf::Bsdf;
+use crate::irradiance_cache::gather::ShadingPoint;
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::scene::Scene;
 use gather::CellBasis;
@@ -47,9 +49,10 @@ const MAX_TILT_DEGREES: f64 = 30.0;
 /// The tables radiance records are made and read with.
 #[derive(Debug)]
 pub struct RadianceCache {
-    /// Per material: the BRDF table of its glossy lobe at the order it needs, or `None` where
-    /// the lobe stays traced (no glossy part, or too sharp for the highest order).
-    materials: Vec<Option<Arc<brdf::BrdfCoefficients>>>,
+    /// Per material: the BRDF table of its glossy lobe (its front side's) at the order it
+    /// needs, or `None` where the lobe stays traced (no glossy part, or too sharp for the highest
+    /// order); and whether the back side is the same model (a `twosided` of one model).
+    materials: Vec<Option<(Arc<brdf::BrdfCoefficients>, bool)>>,
     /// Per shape, its material.
     shape_material: Vec<usize>,
     /// Per order in use: the tilt table MR(β) at 1° steps.
@@ -62,21 +65,19 @@ impl RadianceCache {
     /// The tables for `scene`'s materials up to `max_order` (in parallel, in the caller's pool).
     #[must_use]
     pub fn new(scene: &Scene, max_order: usize) -> RadianceCache {
-        let materials: Vec<Option<Arc<brdf::BrdfCoefficients>>> = scene
+        let materials: Vec<Option<(Arc<brdf::BrdfCoefficients>, bool)>> = scene
             .materials
             .par_iter()
             .map(|m| {
                 // Glossy parts are untextured in every model; the texture coordinate is moot.
                 let bsdf = m.at(Vec2::splat(0.5));
+                let both_sides = matches!(bsdf, Bsdf::TwoSided { front, back } if front == back);
                 let order = brdf::order_for(&bsdf, max_order, ENERGY_KEPT)?;
-                Some(Arc::new(brdf::BrdfCoefficients::new(
-                    &bsdf,
-                    order,
-                    ENERGY_KEPT,
-                )))
+                let table = brdf::BrdfCoefficients::new(&bsdf, order, ENERGY_KEPT);
+                Some((Arc::new(table), both_sides))
             })
             .collect();
-        let mut orders: Vec<usize> = materials.iter().flatten().map(|t| t.order()).collect();
+        let mut orders: Vec<usize> = materials.iter().flatten().map(|t| t.0.order()).collect();
         orders.sort_unstable();
         orders.dedup();
         let tilts = orders
@@ -94,22 +95,21 @@ impl RadianceCache {
         }
     }
 
-    /// The BRDF table of material `material`, if its glossy lobe is cached.
+    /// The BRDF table of material `material` seen from its front (`front`) or back side, if
+    /// that side's glossy lobe is cached.
     #[must_use]
-    pub fn brdf(&self, material: usize) -> Option<&brdf::BrdfCoefficients> {
-        self.materials.get(material)?.as_deref()
+    pub fn brdf(&self, material: usize, front: bool) -> Option<&brdf::BrdfCoefficients> {
+        let (table, both_sides) = self.materials.get(material)?.as_ref()?;
+        (front || *both_sides).then_some(table.as_ref())
     }
 
-    /// The BRDF table of shape `shape`'s material, if its glossy lobe is cached.
+    /// The BRDF table of the side of shape `shape` that `sp` looks at, if cached.
     #[must_use]
-    pub fn brdf_of_shape(&self, shape: u32) -> Option<&brdf::BrdfCoefficients> {
-        self.brdf(*self.shape_material.get(shape as usize)?)
-    }
-
-    /// Whether any material's glossy lobe is cached.
-    #[must_use]
-    pub fn caches_any(&self) -> bool {
-        self.materials.iter().any(Option::is_some)
+    pub fn brdf_at(&self, sp: &ShadingPoint) -> Option<&brdf::BrdfCoefficients> {
+        // The shading point's normals are turned towards the viewer: the front is seen where
+        // that keeps the shading frame's normal.
+        let front = sp.n_bump.dot(sp.it.frame.n) > 0.0;
+        self.brdf(*self.shape_material.get(sp.it.shape as usize)?, front)
     }
 
     /// The tilt table of `order`.
