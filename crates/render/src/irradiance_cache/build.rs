@@ -13,7 +13,7 @@
 use super::gather::{
     mix, GatherCounts, Gatherer, IrradianceCache, SceneRadiance, ShadingPoint, WorkState,
 };
-use super::record::Record;
+use super::record::{Record, NO_RADIANCE};
 use crate::radiance_cache::RadianceCache;
 use crate::scene::Scene;
 use ircache_math::{Ray, Vec2, Vec3};
@@ -396,6 +396,14 @@ pub fn regather_noisy(
         let mut records = cache.levels[level].records().to_vec();
         for (i, mut rec, mut st) in fresh {
             cache.adopt_radiance(&mut rec, &mut st.radiance);
+            // The new coefficients take the old record's place in the list.
+            let old = records[i].radiance;
+            if old != NO_RADIANCE && rec.radiance != NO_RADIANCE {
+                if let Some(new) = cache.radiance_records.pop() {
+                    cache.radiance_records[old as usize] = new;
+                    rec.radiance = old;
+                }
+            }
             let counts = st.counts;
             records[i] = rec;
             stats.records_regathered += 1;

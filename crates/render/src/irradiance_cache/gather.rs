@@ -565,9 +565,27 @@ impl Gatherer<'_> {
             grad_t,
             grad_r,
             level: level as u8,
-            ray_variance: h.relative_variance(),
+            ray_variance: self.ray_variance(sp, &h),
             radiance: self.radiance_at(st, sp, &h, &frame),
         }
+    }
+
+    /// The relative variance per ray of a record's estimate: its irradiance's, or for a
+    /// radiance record the larger of that and its glossy estimate's at normal view (the cells
+    /// weighed by the lobe), so that noisy radiance records are gathered again with the rays
+    /// they need ([`super::build::regather_noisy`]).
+    fn ray_variance(&self, sp: &ShadingPoint, h: &HemisphereSamples) -> f32 {
+        let irradiance = h.relative_variance();
+        let Some(rc) = &self.cache.radiance else {
+            return irradiance;
+        };
+        let Some(brdf) = rc.brdf_at(sp) else {
+            return irradiance;
+        };
+        let weights = rc
+            .cell_basis(h.strata, brdf.order())
+            .lobe_weights(&brdf.normal_view());
+        irradiance.max(h.weighted_relative_variance(Some(&weights)))
     }
 
     /// A record's incoming radiance in HSH from its gather `h` in `frame`, where the surface's

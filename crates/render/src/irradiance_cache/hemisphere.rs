@@ -187,13 +187,22 @@ impl HemisphereSamples {
     /// cancels (plain differences would count it as noise). Var(E)/E² = Σ σᵢ² / (Σ Yᵢ)².
     #[must_use]
     pub fn relative_variance(&self) -> f32 {
+        self.weighted_relative_variance(None)
+    }
+
+    /// [`Self::relative_variance`] of a weighted estimate Σ w_c Y_c (weights of mean 1, one per
+    /// cell; `None`: all 1): Σ w_c² σ_c² / (Σ w_c Y_c)² times the number of cells. A radiance
+    /// record's glossy estimate weighs its cells by the lobe.
+    #[must_use]
+    pub fn weighted_relative_variance(&self, weights: Option<&[f64]>) -> f32 {
         let (m, n) = (self.strata.polar, self.strata.azimuthal);
         let y: Vec<f64> = self
             .radiance
             .iter()
             .map(|c| f64::from(c.luminance()))
             .collect();
-        let total: f64 = y.iter().sum();
+        let w = |i: usize| weights.map_or(1.0, |w| w[i]);
+        let total: f64 = y.iter().enumerate().map(|(i, v)| w(i) * v).sum();
         if total <= 0.0 || n < 3 {
             return 0.0;
         }
@@ -208,7 +217,7 @@ impl HemisphereSamples {
                     sum += po * po;
                     count += 1.0;
                 }
-                v += sum / (1.5 * count);
+                v += w(j * n + k).powi(2) * sum / (1.5 * count);
             }
         }
         (v / (total * total) * (m * n) as f64) as f32

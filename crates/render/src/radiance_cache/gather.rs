@@ -97,6 +97,23 @@ impl CellBasis {
         self.order
     }
 
+    /// Each cell's weight in the light a lobe with coefficients `c` (one channel) reflects from
+    /// one sample per cell, g_c = Σ_i c_i ∫_cell H_i (at least 0), scaled to a mean of 1.
+    #[must_use]
+    pub fn lobe_weights(&self, c: &[f64]) -> Vec<f64> {
+        let count = coefficient_count(self.order);
+        let mut g: Vec<f64> = self
+            .cells
+            .chunks(count)
+            .map(|b| b.iter().zip(c).map(|(x, y)| x * y).sum::<f64>().max(0.0))
+            .collect();
+        let mean = g.iter().sum::<f64>() / g.len().max(1) as f64;
+        if mean > 0.0 {
+            g.iter_mut().for_each(|v| *v /= mean);
+        }
+        g
+    }
+
     /// The stratification it was made for.
     #[must_use]
     pub fn strata(&self) -> Stratification {
