@@ -454,6 +454,32 @@ mod tests {
         h
     }
 
+    /// iid cell noise: the variance per ray of an estimate weighing a quarter of the cells
+    /// (weights 4 there, 0 elsewhere: mean 1) is four times the plain one's, and uniform weights
+    /// give the plain figure.
+    #[test]
+    fn weighted_variance_grows_as_the_weights_narrow() {
+        let strata = Stratification::from_divisions(4096);
+        let h = random_samples(strata, 17);
+        let plain = h.relative_variance();
+        let ones = vec![1.0; strata.cells()];
+        assert!((h.weighted_relative_variance(Some(&ones)) - plain).abs() < 1e-6 * plain);
+        // A quarter of the sectors, all rings.
+        let quarter: Vec<f64> = (0..strata.cells())
+            .map(|i| {
+                if (i % strata.azimuthal) * 4 < strata.azimuthal {
+                    4.0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mean = quarter.iter().sum::<f64>() / quarter.len() as f64;
+        let quarter: Vec<f64> = quarter.iter().map(|w| w / mean).collect();
+        let ratio = h.weighted_relative_variance(Some(&quarter)) / plain;
+        assert!((ratio - 4.0).abs() < 0.6, "ratio {ratio}");
+    }
+
     #[test]
     fn divisions_give_azimuthal_about_pi_times_polar() {
         let s = Stratification::from_divisions(1024);
