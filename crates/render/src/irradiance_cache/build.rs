@@ -197,7 +197,8 @@ pub fn run_batch(
             .par_iter()
             .with_max_len(4)
             .map(|&(key, level, ref sp)| {
-                if cache.levels[level as usize].covers(sp.it.p, sp.n) {
+                let threshold = cache.coverage_threshold(sp);
+                if cache.levels[level as usize].covers_within(sp.it.p, sp.n, threshold) {
                     return None;
                 }
                 let mut st = WorkState::new(cache.levels.len());

@@ -580,6 +580,7 @@ mod tests {
             ("gradient_formula", "krivanek"),
             ("radiance_cache", "on"),
             ("radiance_order", "5"),
+            ("radiance_accuracy", "0.2"),
         ];
         for spec in crate::irradiance_cache::params::PARAMS {
             let listed = changed.iter().find(|(n, _)| *n == spec.name);

@@ -67,6 +67,18 @@ impl IrradianceCache {
         cache
     }
 
+    /// The normalised error at which records cover `sp`: 1, or on a radiance-cached surface the
+    /// radiance accuracy over the accuracy (finer).
+    #[must_use]
+    pub fn coverage_threshold(&self, sp: &ShadingPoint) -> f32 {
+        match &self.radiance {
+            Some(r) if r.brdf_at(sp).is_some() => {
+                (self.params.radiance_accuracy / self.params.accuracy).min(1.0)
+            }
+            _ => 1.0,
+        }
+    }
+
     /// Moves a new record's radiance coefficients from its work state's list `made` into the
     /// cache's, pointing the record at their new place (a no-op for records without).
     pub fn adopt_radiance(&mut self, record: &mut Record, made: &mut [RadianceRecord]) {

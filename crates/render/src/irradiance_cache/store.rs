@@ -270,6 +270,13 @@ impl<R: CachedRecord> RecordStore<R> {
     /// True when some record covers (p, n) at the store's accuracy.
     #[must_use]
     pub fn covers(&self, p: Vec3, n: Vec3) -> bool {
+        self.covers_within(p, n, 1.0)
+    }
+
+    /// True when some record's normalised error at (p, n) is at most `threshold` ≤ 1 (a finer
+    /// accuracy: `threshold` = a′/a for Ward's and Tabellion's metrics).
+    #[must_use]
+    pub fn covers_within(&self, p: Vec3, n: Vec3, threshold: f32) -> bool {
         let mut hit = false;
         self.for_each_near(p, |id| {
             if !hit {
@@ -277,7 +284,7 @@ impl<R: CachedRecord> RecordStore<R> {
                 hit = self
                     .metric
                     .error(rec, p, n, self.accuracy)
-                    .is_some_and(|e| e <= 1.0);
+                    .is_some_and(|e| e <= threshold);
             }
         });
         hit

@@ -25,7 +25,8 @@ pub fn glossy(cache: &IrradianceCache, sp: &ShadingPoint, depth: u32, wo: Vec3) 
     }
     let f = DMat3::from_cols(frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3());
     let mut records: Vec<(f64, &RadianceRecord)> = Vec::new();
-    for threshold in [1.0, 2.0] {
+    let finer = cache.coverage_threshold(sp);
+    for threshold in [finer, 2.0 * finer] {
         records.clear();
         store.for_each_serving(sp.it.p, sp.n, threshold, |rec, w| {
             if let Some(r) = cache.radiance_records.get(rec.radiance as usize) {
