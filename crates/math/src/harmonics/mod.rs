@@ -60,9 +60,21 @@ pub fn band_and_degree(i: usize) -> (usize, i64) {
 /// With (a, b) = (c_{l,m}, c_{l,−m}), m > 0: a' = a cos mα − b sin mα, b' = a sin mα + b cos mα,
 /// so that the result is f(φ − α).
 pub fn rotate_about_z(order: usize, coefficients: &mut [f64], alpha: f64) {
-    let (mut cos, mut sin) = (vec![0.0; order.max(1)], vec![0.0; order.max(1)]);
+    // On the stack for the orders a cache uses (it runs per record and pixel sample).
+    let (mut small_cos, mut small_sin) = ([0.0; 32], [0.0; 32]);
+    let (mut big_cos, mut big_sin) = (Vec::new(), Vec::new());
+    let (cos, sin): (&mut [f64], &mut [f64]) = if order <= 32 {
+        (
+            &mut small_cos[..order.max(1)],
+            &mut small_sin[..order.max(1)],
+        )
+    } else {
+        big_cos.resize(order, 0.0);
+        big_sin.resize(order, 0.0);
+        (&mut big_cos, &mut big_sin)
+    };
     let (s, c) = alpha.sin_cos();
-    azimuthal(c, s, &mut cos, &mut sin);
+    azimuthal(c, s, cos, sin);
     for l in 1..order {
         for m in 1..=l {
             let (i, j) = (index(l, m as i64), index(l, -(m as i64)));

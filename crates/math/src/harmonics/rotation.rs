@@ -198,16 +198,24 @@ impl TiltTable {
     /// about the normal, not a dense product.
     #[must_use]
     pub fn rotate(&self, rotation: DMat3, h: &[f64]) -> Option<Vec<f64>> {
-        let angles = ZyzAngles::from_matrix(rotation);
         let mut v = h.to_vec();
+        self.rotate_in_place(rotation, &mut v).then_some(v)
+    }
+
+    /// [`Self::rotate`] in place; false (and `h` unspecified) beyond the table.
+    pub fn rotate_in_place(&self, rotation: DMat3, h: &mut [f64]) -> bool {
+        let angles = ZyzAngles::from_matrix(rotation);
         if angles.beta == 0.0 {
-            rotate_about_z(self.order, &mut v, angles.alpha);
-            return Some(v);
+            rotate_about_z(self.order, h, angles.alpha);
+            return true;
         }
-        rotate_about_z(self.order, &mut v, angles.gamma);
-        v = self.tilt(angles.beta, &v)?;
-        rotate_about_z(self.order, &mut v, angles.alpha);
-        Some(v)
+        rotate_about_z(self.order, h, angles.gamma);
+        let Some(v) = self.tilt(angles.beta, h) else {
+            return false;
+        };
+        h.copy_from_slice(&v);
+        rotate_about_z(self.order, h, angles.alpha);
+        true
     }
 }
 

@@ -25,30 +25,47 @@ impl RadianceRecord {
     /// (the gradient has no normal component, 000 eq. 3.18).
     #[must_use]
     pub fn extrapolated(&self, p: DVec3) -> Vec<f64> {
+        let mut out = Vec::new();
+        self.extrapolate_into(p, &mut out);
+        out
+    }
+
+    /// [`Self::extrapolated`] into `out` (its length set).
+    pub fn extrapolate_into(&self, p: DVec3, out: &mut Vec<f64>) {
         let d = p - self.position;
         let (dx, dy) = (d.dot(self.frame.x_axis), d.dot(self.frame.y_axis));
         let r = &self.radiance;
-        r.coefficients
-            .iter()
-            .zip(&r.gradient_x)
-            .zip(&r.gradient_y)
-            .map(|((c, gx), gy)| c + dx * gx + dy * gy)
-            .collect()
+        out.clear();
+        out.extend(
+            r.coefficients
+                .iter()
+                .zip(&r.gradient_x)
+                .zip(&r.gradient_y)
+                .map(|((c, gx), gy)| c + dx * gx + dy * gy),
+        );
     }
 
     /// The coefficients at `p` in the frame `frame` (columns t, b, n): extrapolated, then rotated
     /// by R = F_pᵀ F_k, per channel. `None` when the normals differ by more than `tilt` holds.
     #[must_use]
     pub fn seen_from(&self, p: DVec3, frame: DMat3, tilt: &TiltTable) -> Option<Vec<f64>> {
-        let order = self.radiance.order;
-        let n = coefficient_count(order);
-        let extrapolated = self.extrapolated(p);
+        let mut out = Vec::new();
+        self.seen_from_into(p, frame, tilt, &mut out).then_some(out)
+    }
+
+    /// [`Self::seen_from`] into `out`; false (and `out` unspecified) beyond the tilt table.
+    pub fn seen_from_into(
+        &self,
+        p: DVec3,
+        frame: DMat3,
+        tilt: &TiltTable,
+        out: &mut Vec<f64>,
+    ) -> bool {
+        let n = coefficient_count(self.radiance.order);
+        self.extrapolate_into(p, out);
         let rotation = frame.transpose() * self.frame;
-        let mut out = Vec::with_capacity(3 * n);
-        for channel in extrapolated.chunks(n) {
-            out.extend(tilt.rotate(rotation, channel)?);
-        }
-        Some(out)
+        out.chunks_mut(n)
+            .all(|channel| tilt.rotate_in_place(rotation, channel))
     }
 }
 
@@ -63,15 +80,13 @@ pub fn interpolate(
 ) -> Option<Vec<f64>> {
     let mut sum: Option<Vec<f64>> = None;
     let mut total = 0.0;
+    let mut seen = Vec::new();
     for &(w, record) in records {
-        if w <= 0.0 {
+        if w <= 0.0 || !record.seen_from_into(p, frame, tilt, &mut seen) {
             continue;
         }
-        let Some(v) = record.seen_from(p, frame, tilt) else {
-            continue;
-        };
-        let acc = sum.get_or_insert_with(|| vec![0.0; v.len()]);
-        for (a, x) in acc.iter_mut().zip(&v) {
+        let acc = sum.get_or_insert_with(|| vec![0.0; seen.len()]);
+        for (a, x) in acc.iter_mut().zip(&seen) {
             *a += w * x;
         }
         total += w;
