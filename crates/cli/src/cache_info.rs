@@ -21,11 +21,12 @@ pub fn run(cmd: &CacheCommand) -> Result<()> {
     let c = file::read(path)?;
     let p = &c.header.params;
     let mut per_level = vec![0usize; p.bounces.max(1) as usize];
-    for r in &c.records {
+    for (r, _) in &c.records {
         if let Some(n) = per_level.get_mut(r.level as usize) {
             *n += 1;
         }
     }
+    let radiance = c.records.iter().filter(|(_, c)| c.is_some()).count();
     println!("{}", path.display());
     println!("  format version   {}", c.header.version);
     println!("  scene hash       {:016x}", c.header.scene_hash);
@@ -42,7 +43,7 @@ pub fn run(cmd: &CacheCommand) -> Result<()> {
         p.formula
     );
     println!(
-        "  records          {} (per bounce level: {per_level:?})",
+        "  records          {} (per bounce level: {per_level:?}; {radiance} with radiance)",
         c.records.len()
     );
     if c.torn_bytes > 0 {

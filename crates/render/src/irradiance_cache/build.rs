@@ -10,6 +10,7 @@
 //! during a batch), tiles do not exist here so no border duplicates, and the result depends only
 //! on the seed.
 
+use super::file::Stored;
 use super::gather::{
     mix, GatherCounts, Gatherer, IrradianceCache, SceneRadiance, ShadingPoint, WorkState,
 };
@@ -147,11 +148,11 @@ pub fn first_diffuse_point(scene: &Scene, ray: &Ray, levels: u32) -> Option<Shad
 /// to bring in their records and hand out this process's.
 pub trait BatchHook {
     /// Before a batch: records made elsewhere, to add to the cache.
-    fn before(&mut self) -> Vec<Record> {
+    fn before(&mut self) -> Vec<Stored> {
         Vec::new()
     }
     /// After a batch, with the records it added (in order): more records made elsewhere.
-    fn after(&mut self, added: &[Record]) -> Vec<Record> {
+    fn after(&mut self, added: &[Stored]) -> Vec<Stored> {
         let _ = added;
         Vec::new()
     }
@@ -160,10 +161,9 @@ pub trait BatchHook {
 impl BatchHook for () {}
 
 /// Adds records made elsewhere to their levels' stores.
-fn take_in(cache: &mut IrradianceCache, records: Vec<Record>, stats: &mut CacheStats) {
-    for r in records {
-        if let Some(store) = cache.levels.get_mut(r.level as usize) {
-            store.insert(r);
+fn take_in(cache: &mut IrradianceCache, records: Vec<Stored>, stats: &mut CacheStats) {
+    for stored in records {
+        if cache.insert_stored(stored) {
             stats.records_from_others += 1;
         }
     }
@@ -221,7 +221,17 @@ pub fn run_batch(
             }
             sites.add(r.level as usize, store.len(), sp);
             store.insert(r);
-            added.push(r);
+            let radiance = cache
+                .radiance_records
+                .get(r.radiance as usize)
+                .map(|c| c.radiance.clone());
+            added.push((
+                Record {
+                    radiance: NO_RADIANCE,
+                    ..r
+                },
+                radiance,
+            ));
         }
     }
     stats.records_computed += counts.records;

@@ -8,12 +8,17 @@
 //!   view hash (u64), length (u32) and text of the record-shaping settings as `name=value` lines
 //!   (from the parameter table, [`super::params::PARAMS`]), zeros, header checksum (u64: FNV-1a
 //!   of the bytes before it);
-//! - records, 128 bytes each: level (u8), 3 bytes zero, position, normal, irradiance (f32 × 9),
-//!   radius (f32), translational then rotational gradient (f32 × 18), variance per ray (f32),
-//!   checksum (u64: FNV-1a of the 120 bytes before it).
+//! - records, 128 bytes each: level (u8), whether radiance follows (u8), 2 bytes zero, position,
+//!   normal, irradiance (f32 × 9), radius (f32), translational then rotational gradient
+//!   (f32 × 18), variance per ray (f32), checksum (u64: FNV-1a of the 120 bytes before it);
+//! - after a record on a radiance-cached surface, its radiance in continuation slots of 128 bytes:
+//!   0xFE, 1 byte zero, the slot's number (u16), 29 f32 (the first slot's first two: the order
+//!   and the count of values; then coefficients, x and y gradients, 3 × order² each), checksum.
+//!   A record whose continuation is incomplete or damaged is skipped with it.
 
 use super::params::{IcParams, PARAMS};
-use super::record::Record;
+use super::record::{Record, NO_RADIANCE};
+use crate::radiance_cache::gather::RadianceCoefficients;
 use ircache_math::{Rgb, Vec3};
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -22,12 +27,20 @@ use std::path::{Path, PathBuf};
 /// Bytes that open every cache file.
 pub const MAGIC: &[u8; 8] = b"IRCACHE\0";
 /// The format version this build reads and writes.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 /// Header size in bytes.
 pub const HEADER_BYTES: usize = 1024;
 /// Record size in bytes (payload and checksum).
 pub const RECORD_BYTES: usize = 128;
 const PAYLOAD_BYTES: usize = RECORD_BYTES - 8;
+/// First byte of a radiance continuation slot (levels are far below).
+const CONTINUATION: u8 = 0xFE;
+/// Values a continuation slot holds.
+const CONTINUATION_FLOATS: usize = 29;
+
+/// A record as a file holds it: on a radiance-cached surface with its coefficients (the
+/// record's own [`Record::radiance`] index is [`NO_RADIANCE`] here; the cache assigns one).
+pub type Stored = (Record, Option<RadianceCoefficients>);
 
 /// Problems with a cache file.
 #[derive(Debug, thiserror::Error)]
@@ -220,9 +233,93 @@ impl Header {
     }
 }
 
-fn encode_record(r: &Record) -> [u8; RECORD_BYTES] {
+/// Seals a slot: the checksum of its payload in its last 8 bytes.
+fn seal(b: &mut [u8]) {
+    let sum = Fnv::of(&b[..PAYLOAD_BYTES]);
+    b[PAYLOAD_BYTES..RECORD_BYTES].copy_from_slice(&sum.to_le_bytes());
+}
+
+/// A record's slot and its radiance continuation slots.
+fn encode_stored((r, radiance): &Stored) -> Vec<u8> {
+    let mut out = encode_record(r, radiance.is_some()).to_vec();
+    if let Some(c) = radiance {
+        let mut values = vec![
+            c.order as f32,
+            (c.coefficients.len() + c.gradient_x.len() + c.gradient_y.len()) as f32,
+        ];
+        for v in c
+            .coefficients
+            .iter()
+            .chain(&c.gradient_x)
+            .chain(&c.gradient_y)
+        {
+            values.push(*v as f32);
+        }
+        for (k, chunk) in values.chunks(CONTINUATION_FLOATS).enumerate() {
+            let mut b = [0u8; RECORD_BYTES];
+            b[0] = CONTINUATION;
+            b[2..4].copy_from_slice(&(k as u16).to_le_bytes());
+            for (i, f) in chunk.iter().enumerate() {
+                b[4 + 4 * i..8 + 4 * i].copy_from_slice(&f.to_le_bytes());
+            }
+            seal(&mut b);
+            out.extend_from_slice(&b);
+        }
+    }
+    out
+}
+
+/// The values of continuation slot number `k`, `None` when it is not one or is damaged.
+fn decode_continuation(b: &[u8], k: usize) -> Option<[f32; CONTINUATION_FLOATS]> {
+    let sum = u64::from_le_bytes(b.get(PAYLOAD_BYTES..RECORD_BYTES)?.try_into().ok()?);
+    if b[0] != CONTINUATION
+        || Fnv::of(&b[..PAYLOAD_BYTES]) != sum
+        || usize::from(u16::from_le_bytes([b[2], b[3]])) != k
+    {
+        return None;
+    }
+    let mut f = [0.0f32; CONTINUATION_FLOATS];
+    for (i, v) in f.iter_mut().enumerate() {
+        *v = f32::from_le_bytes(b[4 + 4 * i..8 + 4 * i].try_into().ok()?);
+        if !v.is_finite() {
+            return None;
+        }
+    }
+    Some(f)
+}
+
+/// The radiance in the continuation slots at the start of `slots`, and how many slots it took.
+fn decode_radiance(slots: &[u8]) -> Option<(RadianceCoefficients, usize)> {
+    let first = decode_continuation(slots.get(..RECORD_BYTES)?, 0)?;
+    let (order, count) = (first[0] as usize, first[1] as usize);
+    let n = 3 * order * order;
+    if order == 0 || order > 32 || count != 3 * n {
+        return None;
+    }
+    let total = count + 2;
+    let blocks = total.div_ceil(CONTINUATION_FLOATS);
+    let mut values = Vec::with_capacity(blocks * CONTINUATION_FLOATS);
+    values.extend_from_slice(&first);
+    for k in 1..blocks {
+        let slot = slots.get(k * RECORD_BYTES..(k + 1) * RECORD_BYTES)?;
+        values.extend_from_slice(&decode_continuation(slot, k)?);
+    }
+    let v: Vec<f64> = values[2..total].iter().map(|&x| f64::from(x)).collect();
+    Some((
+        RadianceCoefficients {
+            order,
+            coefficients: v[..n].to_vec(),
+            gradient_x: v[n..2 * n].to_vec(),
+            gradient_y: v[2 * n..].to_vec(),
+        },
+        blocks,
+    ))
+}
+
+fn encode_record(r: &Record, with_radiance: bool) -> [u8; RECORD_BYTES] {
     let mut b = [0u8; RECORD_BYTES];
     b[0] = r.level;
+    b[1] = u8::from(with_radiance);
     let mut floats = Vec::with_capacity(29);
     for v in [r.p, r.n] {
         floats.extend_from_slice(&v.to_array());
@@ -236,14 +333,14 @@ fn encode_record(r: &Record) -> [u8; RECORD_BYTES] {
     for (i, f) in floats.iter().enumerate() {
         b[4 + 4 * i..8 + 4 * i].copy_from_slice(&f.to_le_bytes());
     }
-    let sum = Fnv::of(&b[..PAYLOAD_BYTES]);
-    b[PAYLOAD_BYTES..].copy_from_slice(&sum.to_le_bytes());
+    seal(&mut b);
     b
 }
 
-/// A record from its bytes; `None` when the checksum fails or a value is not finite.
-fn decode_record(b: &[u8]) -> Option<Record> {
-    if b.len() < RECORD_BYTES {
+/// A record from its bytes and whether radiance follows; `None` when the checksum fails, a
+/// value is not finite, or the slot is a continuation.
+fn decode_record(b: &[u8]) -> Option<(Record, bool)> {
+    if b.len() < RECORD_BYTES || b[0] == CONTINUATION {
         return None;
     }
     let sum = u64::from_le_bytes(b[PAYLOAD_BYTES..RECORD_BYTES].try_into().ok()?);
@@ -257,7 +354,7 @@ fn decode_record(b: &[u8]) -> Option<Record> {
         return None;
     }
     let v = |i: usize| Vec3::new(f[i], f[i + 1], f[i + 2]);
-    Some(Record {
+    let record = Record {
         level: b[0],
         p: v(0),
         n: v(3),
@@ -266,9 +363,9 @@ fn decode_record(b: &[u8]) -> Option<Record> {
         grad_t: [v(10), v(13), v(16)],
         grad_r: [v(19), v(22), v(25)],
         ray_variance: f[28],
-        // Radiance coefficients are not written to cache files (yet).
-        radiance: super::record::NO_RADIANCE,
-    })
+        radiance: NO_RADIANCE,
+    };
+    Some((record, b[1] == 1))
 }
 
 /// What reading a file found.
@@ -276,9 +373,10 @@ fn decode_record(b: &[u8]) -> Option<Record> {
 pub struct Contents {
     /// Its header.
     pub header: Header,
-    /// Every complete, intact record, in file order.
-    pub records: Vec<Record>,
-    /// Damaged records between intact ones (skipped).
+    /// Every complete, intact record, in file order (with its radiance where it has some).
+    pub records: Vec<Stored>,
+    /// Damaged slots (records and their radiance continuations) between intact records
+    /// (skipped).
     pub damaged: u64,
     /// Bytes after the last intact record (a torn tail or damage), ignored.
     pub torn_bytes: u64,
@@ -323,7 +421,7 @@ pub fn read(path: &Path) -> Result<Contents, CacheFileError> {
 /// The records in a run of record slots.
 struct Scan {
     /// Every intact record, in order.
-    records: Vec<Record>,
+    records: Vec<Stored>,
     /// Damaged slots followed by an intact one (skipped).
     damaged: u64,
     /// Bytes up to the end of the last intact record (what follows is a torn tail).
@@ -340,15 +438,31 @@ fn scan_records(bytes: &[u8]) -> Scan {
         end: 0,
     };
     let mut bad_run = 0u64;
-    for (i, slot) in bytes.chunks_exact(RECORD_BYTES).enumerate() {
-        match decode_record(slot) {
-            Some(r) => {
-                scan.records.push(r);
+    let slots = bytes.len() / RECORD_BYTES;
+    let mut i = 0;
+    while i < slots {
+        let slot = &bytes[i * RECORD_BYTES..(i + 1) * RECORD_BYTES];
+        let decoded = decode_record(slot).and_then(|(r, with_radiance)| {
+            if with_radiance {
+                let rest = &bytes[(i + 1) * RECORD_BYTES..slots * RECORD_BYTES];
+                let (c, used) = decode_radiance(rest)?;
+                Some(((r, Some(c)), 1 + used))
+            } else {
+                Some(((r, None), 1))
+            }
+        });
+        match decoded {
+            Some((stored, used)) => {
+                scan.records.push(stored);
                 scan.damaged += bad_run;
                 bad_run = 0;
-                scan.end = (i + 1) * RECORD_BYTES;
+                i += used;
+                scan.end = i * RECORD_BYTES;
             }
-            None => bad_run += 1,
+            None => {
+                bad_run += 1;
+                i += 1;
+            }
         }
     }
     scan
@@ -441,7 +555,7 @@ impl CacheFile {
 
     /// Intact records from `read_pos` to the end of the file (the caller holds a lock), and
     /// the offset after the last of them.
-    fn read_tail(&self) -> Result<(Vec<Record>, u64, u64), CacheFileError> {
+    fn read_tail(&self) -> Result<(Vec<Stored>, u64, u64), CacheFileError> {
         let mut f = &self.file;
         let len = f.metadata().map_err(self.io())?.len();
         let mut bytes = Vec::new();
@@ -457,7 +571,7 @@ impl CacheFile {
     }
 
     /// Records other processes appended since this one last looked.
-    pub fn read_new(&mut self) -> Result<Vec<Record>, CacheFileError> {
+    pub fn read_new(&mut self) -> Result<Vec<Stored>, CacheFileError> {
         self.file.lock_shared().map_err(self.io())?;
         let guard = Locked(&self.file);
         let (records, end, _) = self.read_tail()?;
@@ -468,7 +582,7 @@ impl CacheFile {
 
     /// Appends `records` (flushed to the disk before the lock is released) and returns the
     /// records others appended since this process last looked, which come before them.
-    pub fn append(&mut self, records: &[Record]) -> Result<Vec<Record>, CacheFileError> {
+    pub fn append(&mut self, records: &[Stored]) -> Result<Vec<Stored>, CacheFileError> {
         self.file.lock().map_err(self.io())?;
         let guard = Locked(&self.file);
         let (others, end, len) = self.read_tail()?;
@@ -478,7 +592,7 @@ impl CacheFile {
         }
         let mut buf = Vec::with_capacity(records.len() * RECORD_BYTES);
         for r in records {
-            buf.extend_from_slice(&encode_record(r));
+            buf.extend_from_slice(&encode_stored(r));
         }
         let mut f = &self.file;
         f.seek(SeekFrom::Start(end)).map_err(self.io())?;
@@ -510,6 +624,25 @@ mod tests {
         }
     }
 
+    /// Record i, with radiance coefficients (values exact in `f32`) for every third.
+    fn stored(i: usize) -> Stored {
+        let radiance = (i % 3 == 1).then(|| {
+            let n = 3 * 4;
+            let v = |k: usize| {
+                (0..n)
+                    .map(|j| (i * 100 + k * 20 + j) as f64 * 0.25)
+                    .collect()
+            };
+            RadianceCoefficients {
+                order: 2,
+                coefficients: v(0),
+                gradient_x: v(1),
+                gradient_y: v(2),
+            }
+        });
+        (record(i), radiance)
+    }
+
     fn header() -> Header {
         Header {
             version: VERSION,
@@ -534,7 +667,7 @@ mod tests {
         let _ = std::fs::remove_file(&path);
         let (mut f, c) = CacheFile::open(&path, &header(), false).unwrap();
         assert!(c.records.is_empty());
-        let recs: Vec<Record> = (0..10).map(record).collect();
+        let recs: Vec<Stored> = (0..10).map(stored).collect();
         assert!(f.append(&recs[..4]).unwrap().is_empty());
         // A second writer on the same file sees the first one's records and adds its own.
         let (mut g, c) = CacheFile::open(&path, &header(), false).unwrap();
@@ -605,10 +738,46 @@ mod tests {
         let _ = std::fs::remove_file(path);
     }
 
+    /// Radiance continuation slots: a damaged one loses its record alone; a torn one at the end
+    /// loses the last record and is cut off by the next write.
+    #[test]
+    fn radiance_continuations_are_checked_with_their_record() {
+        let path = temp("radiance");
+        let _ = std::fs::remove_file(&path);
+        let recs: Vec<Stored> = (0..6).map(stored).collect();
+        let (mut f, _) = CacheFile::open(&path, &header(), false).unwrap();
+        f.append(&recs).unwrap();
+        drop(f);
+        let full = std::fs::read(&path).unwrap();
+        assert_eq!(read(&path).unwrap().records, recs);
+        // Record 1 has radiance: 36 values + 2 in two continuation slots, after its own slot.
+        let continuation = HEADER_BYTES + 2 * RECORD_BYTES;
+        let mut bad = full.clone();
+        bad[continuation + 40] ^= 2;
+        let cut = temp("radiance-cut");
+        std::fs::write(&cut, &bad).unwrap();
+        let c = read(&cut).unwrap();
+        let mut expect = recs.clone();
+        expect.remove(1);
+        // The record's slot and its two continuation slots count as damaged slots.
+        assert_eq!((c.records, c.damaged), (expect, 3));
+        // Record 4 is the last with radiance: cut inside its continuation.
+        let last = full.len() - RECORD_BYTES;
+        std::fs::write(&cut, &full[..last - 10]).unwrap();
+        let c = read(&cut).unwrap();
+        assert_eq!(c.records, recs[..4]);
+        let (mut f, _) = CacheFile::open(&cut, &header(), false).unwrap();
+        f.append(&[stored(7)]).unwrap();
+        drop(f);
+        let mut expect = recs[..4].to_vec();
+        expect.push(stored(7));
+        assert_eq!(read(&cut).unwrap().records, expect);
+    }
+
     #[test]
     fn a_torn_last_record_leaves_every_earlier_one() {
         let path = temp("torn");
-        let recs: Vec<Record> = (0..6).map(record).collect();
+        let recs: Vec<Stored> = (0..6).map(|i| (record(i), None)).collect();
         let _ = std::fs::remove_file(&path);
         let (mut f, _) = CacheFile::open(&path, &header(), false).unwrap();
         f.append(&recs).unwrap();
@@ -624,11 +793,11 @@ mod tests {
             // Opening cuts the torn tail off.
             let (mut f, c2) = CacheFile::open(&cut, &header(), false).unwrap();
             assert_eq!(c2.records, recs[..5]);
-            f.append(&[record(9)]).unwrap();
+            f.append(&[(record(9), None)]).unwrap();
             drop(f);
             let c = read(&cut).unwrap();
             assert_eq!(c.records.len(), 6);
-            assert_eq!(c.records[5], record(9));
+            assert_eq!(c.records[5], (record(9), None));
             assert_eq!(c.torn_bytes, 0);
         }
         // A flipped bit in the last record: it is dropped, the others stay.
@@ -650,9 +819,9 @@ mod tests {
         );
         let (mut f, c2) = CacheFile::open(&cut, &header(), false).unwrap();
         assert_eq!(c2.records, expect);
-        f.append(&[record(9)]).unwrap();
+        f.append(&[(record(9), None)]).unwrap();
         drop(f);
-        expect.push(record(9));
+        expect.push((record(9), None));
         assert_eq!(read(&cut).unwrap().records, expect);
         // Not a cache file, a short file, a damaged header: clear errors.
         std::fs::write(&cut, b"hello").unwrap();

@@ -67,6 +67,35 @@ impl IrradianceCache {
         cache
     }
 
+    /// Adds a record read from a file or made by another process to its level's store, its
+    /// radiance coefficients (if any) to the cache's list; false when it has no level here.
+    pub fn insert_stored(
+        &mut self,
+        (mut record, radiance): crate::irradiance_cache::file::Stored,
+    ) -> bool {
+        if record.level as usize >= self.levels.len() {
+            return false;
+        }
+        record.radiance = match radiance {
+            Some(c) if self.radiance.is_some() => {
+                let frame = Frame::from_z(record.n);
+                self.radiance_records.push(RadianceRecord {
+                    position: record.p.as_dvec3(),
+                    frame: DMat3::from_cols(
+                        frame.s.as_dvec3(),
+                        frame.t.as_dvec3(),
+                        frame.n.as_dvec3(),
+                    ),
+                    radiance: c,
+                });
+                (self.radiance_records.len() - 1) as u32
+            }
+            _ => NO_RADIANCE,
+        };
+        self.levels[record.level as usize].insert(record);
+        true
+    }
+
     /// The normalised error at which records cover `sp`: 1, or on a radiance-cached surface the
     /// radiance accuracy over the accuracy (finer).
     #[must_use]

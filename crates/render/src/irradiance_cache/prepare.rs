@@ -3,8 +3,8 @@
 //! go to the file batch by batch.
 
 use super::build::{fill_for_image, BatchHook};
-use super::file::{self, CacheFile, Header};
-use super::{CacheStats, IrradianceCache, Record};
+use super::file::{self, CacheFile, Header, Stored};
+use super::{CacheStats, IrradianceCache};
 use crate::integrators::ic::IcIntegrator;
 use crate::radiance_cache::RadianceCache;
 use crate::render::RenderSettings;
@@ -22,13 +22,6 @@ pub fn prepare_cache(
     let mut cache = IrradianceCache::new(scene, &ic.params);
     let tables_start = std::time::Instant::now();
     if ic.params.radiance_cache {
-        if ic.cache_file.is_some() {
-            return Err(RenderError::Invalid(
-                "--radiance-cache on does not work with a cache file (--cache) yet: radiance \
-                 records are not written to it"
-                    .into(),
-            ));
-        }
         let tables = pool.install(|| RadianceCache::new(scene, ic.params.radiance_order));
         cache.radiance = Some(Arc::new(tables));
     }
@@ -55,9 +48,8 @@ pub fn prepare_cache(
                     contents.damaged
                 ));
             }
-            for r in &contents.records {
-                if let Some(store) = cache.levels.get_mut(r.level as usize) {
-                    store.insert(*r);
+            for stored in contents.records {
+                if cache.insert_stored(stored) {
                     loaded += 1;
                 }
             }
@@ -126,7 +118,7 @@ struct SharedFile {
 }
 
 impl BatchHook for SharedFile {
-    fn before(&mut self) -> Vec<Record> {
+    fn before(&mut self) -> Vec<Stored> {
         if self.failure.is_some() {
             return Vec::new();
         }
@@ -136,7 +128,7 @@ impl BatchHook for SharedFile {
         })
     }
 
-    fn after(&mut self, added: &[Record]) -> Vec<Record> {
+    fn after(&mut self, added: &[Stored]) -> Vec<Stored> {
         if self.failure.is_some() {
             return Vec::new();
         }

@@ -16,8 +16,8 @@
 //! coefficients, [`crate::irradiance_cache::Record::radiance`]); the `ic` integrator shades a
 //! cached glossy lobe from them (`integrators/ic.rs`).
 //!
-//! Not yet: the cache file (records with coefficients are not written), environment maps through
-//! SH, images of the radiance records.
+//! Cache files carry the coefficients (`irradiance_cache/file.rs`); `--aov glossy` shows what the
+//! records give. Not yet: environment maps through SH.
 
 pub mod brdf;
 pub mod gather;
