@@ -169,3 +169,22 @@ pub fn emitting_shape(geometry: Geometry, radiance: Rgb) -> ShapeDesc {
         location: here(),
     }
 }
+
+/// A quad from four corners in order, as two triangles, `twosided` with `bsdf` on both sides.
+pub fn two_sided_quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>) -> ShapeDesc {
+    ShapeDesc {
+        id: None,
+        geometry: Geometry::Mesh(TriangleMesh {
+            positions: corners.to_vec(),
+            normals: None,
+            uvs: None,
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+        }),
+        bsdf: Arc::new(BsdfDesc::TwoSided {
+            front: bsdf,
+            back: None,
+        }),
+        emitter: None,
+        location: here(),
+    }
+}

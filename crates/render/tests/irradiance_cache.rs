@@ -14,23 +14,9 @@ use ircache_render::scene::Scene;
 use ircache_scene::*;
 use std::f32::consts::PI;
 
-/// A quad from four corners in order, as two triangles, two-sided diffuse of albedo `rho`.
+/// A quad from four corners in order, two-sided diffuse of albedo `rho`.
 fn quad(c: [Vec3; 4], rho: f32) -> ShapeDesc {
-    ShapeDesc {
-        id: None,
-        geometry: Geometry::Mesh(TriangleMesh {
-            positions: c.to_vec(),
-            normals: None,
-            uvs: None,
-            indices: vec![[0, 1, 2], [0, 2, 3]],
-        }),
-        bsdf: std::sync::Arc::new(BsdfDesc::TwoSided {
-            front: diffuse(Rgb::splat(rho)),
-            back: None,
-        }),
-        emitter: None,
-        location: here(),
-    }
+    two_sided_quad(c, diffuse(Rgb::splat(rho)))
 }
 
 fn v(x: f32, y: f32, z: f32) -> Vec3 {

@@ -10,21 +10,7 @@ use ircache_scene::*;
 use std::sync::Arc;
 
 fn quad(c: [Vec3; 4], bsdf: Arc<BsdfDesc>) -> ShapeDesc {
-    ShapeDesc {
-        id: None,
-        geometry: Geometry::Mesh(TriangleMesh {
-            positions: c.to_vec(),
-            normals: None,
-            uvs: None,
-            indices: vec![[0, 1, 2], [0, 2, 3]],
-        }),
-        bsdf: Arc::new(BsdfDesc::TwoSided {
-            front: bsdf,
-            back: None,
-        }),
-        emitter: None,
-        location: here(),
-    }
+    two_sided_quad(c, bsdf)
 }
 
 fn v(x: f32, y: f32, z: f32) -> Vec3 {

@@ -29,6 +29,33 @@ fn mitsuba(scene: &Path, depth: u32, sampler: &str, spp: u32, reference: &Image)
     measure_image(&img, seconds, reference)
 }
 
+/// Mitsuba 3 `multijitter` at 16, 32, 64, … spp until a render reaches `error` (and `blurred`,
+/// when given) or takes longer than `cap` seconds, each printed by `show`.
+pub(super) fn multijitter_series(
+    scene: &Path,
+    depth: u32,
+    reference: &Image,
+    error: f64,
+    blurred: Option<f64>,
+    cap: f64,
+    show: &dyn Fn(&str, &Point),
+) -> Result<Vec<Point>> {
+    let mut series = Vec::new();
+    let mut spp = 16;
+    loop {
+        let p = mitsuba(scene, depth, "multijitter", spp, reference)?;
+        show(&format!("Mitsuba multijitter, {spp} spp"), &p);
+        series.push(p);
+        if (p.error <= error && blurred.is_none_or(|b| p.blurred <= b))
+            || p.seconds > cap
+            || spp >= 8192
+        {
+            return Ok(series);
+        }
+        spp *= 2;
+    }
+}
+
 /// Runs the comparison.
 pub fn run_all(shared: &Path) -> Result<()> {
     // (scene, max_depth of the reference and of `ic`, reference)
@@ -68,17 +95,15 @@ pub fn run_all(shared: &Path) -> Result<()> {
                 continue;
             }
         }
-        let cap = 20.0 * ic.seconds;
-        let mut spp = 16;
-        loop {
-            let p = mitsuba(&scene_path, depth, "multijitter", spp, &reference)?;
-            show(&format!("Mitsuba multijitter, {spp} spp"), &p);
-            mi_series.push(p);
-            if (p.error <= ic.error && p.blurred <= ic.blurred) || p.seconds > cap || spp >= 8192 {
-                break;
-            }
-            spp *= 2;
-        }
+        mi_series.extend(multijitter_series(
+            &scene_path,
+            depth,
+            &reference,
+            ic.error,
+            Some(ic.blurred),
+            20.0 * ic.seconds,
+            &show,
+        )?);
         let path64 = path[2];
         match error_at(&mi_series, path64.seconds, |p| p.error) {
             Some(e) => println!(

@@ -9,7 +9,7 @@
 //! 3,023 irradiance and 869 radiance records on a 2006 GPU).
 
 use super::cache_vs_path::{fmt_time, measure, run, time_to, Point};
-use super::mitsuba_render;
+use super::peers::multijitter_series;
 use anyhow::{Context, Result};
 use ircache_render::scene::Scene;
 use ircache_scene::obj_scene::ObjCamera;
@@ -30,16 +30,6 @@ fn show(label: &str, p: &Point) {
         "  {label:<44} {:>8.2} s  relMSE_trim {:.3e}  blurred {:.3e}  lum {:.4}",
         p.seconds, p.error, p.blurred, p.lum
     );
-}
-
-/// Mitsuba 3 multijitter at `spp` against `reference`.
-fn mitsuba(scene: &Path, spp: u32, reference: &ircache_image::Image) -> Result<Point> {
-    let tmp = std::env::temp_dir().join(format!("ircache-radiance-{}.exr", std::process::id()));
-    let seconds = mitsuba_render(scene, spp, Some(&tmp), 5, Some("multijitter"))?;
-    let img =
-        ircache_image::read_image(&tmp).with_context(|| format!("reading {}", tmp.display()))?;
-    let _ = std::fs::remove_file(&tmp);
-    super::cache_vs_path::measure_image(&img, seconds, reference)
 }
 
 /// Runs the comparison.
@@ -101,23 +91,14 @@ pub fn run_all(shared: &Path, with_mitsuba: bool) -> Result<()> {
         if !with_mitsuba {
             continue;
         }
-        let mut mi = Vec::new();
-        let mut spp = 16;
-        loop {
-            let p = match mitsuba(scene_path, spp, &reference) {
-                Ok(p) => p,
-                Err(e) => {
-                    println!("  Mitsuba 3 not measured: {e:#}");
-                    break;
-                }
-            };
-            show(&format!("Mitsuba multijitter, {spp} spp"), &p);
-            mi.push(p);
-            if p.error <= cached.error || p.seconds > cap || spp >= 8192 {
-                break;
+        let mi = match multijitter_series(scene_path, 5, &reference, cached.error, None, cap, &show)
+        {
+            Ok(mi) => mi,
+            Err(e) => {
+                println!("  Mitsuba 3 not measured: {e:#}");
+                Vec::new()
             }
-            spp *= 2;
-        }
+        };
         if !mi.is_empty() {
             let last = mi.last().map_or(0.0, |p| p.seconds);
             let t = time_to(&mi, cached.error, |p| p.error);

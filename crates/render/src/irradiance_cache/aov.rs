@@ -18,6 +18,24 @@ pub fn irradiance_image(
     width: usize,
     height: usize,
 ) -> Image {
+    per_pixel_centre(scene, width, height, |ray| {
+        first_diffuse_point(scene, ray, 1)
+            .and_then(|sp| {
+                [1.0, 2.0].into_iter().find_map(|m| {
+                    cache.levels[0].interpolate(sp.it.p, sp.n, sp.n_bump, m, cache.params.gradients)
+                })
+            })
+            .map_or(Rgb::ZERO, |i| i.e)
+    })
+}
+
+/// An image of `f` along the camera ray through each pixel centre.
+fn per_pixel_centre(
+    scene: &Scene,
+    width: usize,
+    height: usize,
+    f: impl Fn(&ircache_math::Ray) -> Rgb + Sync,
+) -> Image {
     let pixels: Vec<Rgb> = (0..width * height)
         .into_par_iter()
         .with_max_len(256)
@@ -26,20 +44,7 @@ pub fn irradiance_image(
                 ((i % width) as f32 + 0.5) / width as f32,
                 ((i / width) as f32 + 0.5) / height as f32,
             );
-            let ray = scene.camera.generate_ray(film);
-            first_diffuse_point(scene, &ray, 1)
-                .and_then(|sp| {
-                    [1.0, 2.0].into_iter().find_map(|m| {
-                        cache.levels[0].interpolate(
-                            sp.it.p,
-                            sp.n,
-                            sp.n_bump,
-                            m,
-                            cache.params.gradients,
-                        )
-                    })
-                })
-                .map_or(Rgb::ZERO, |i| i.e)
+            f(&scene.camera.generate_ray(film))
         })
         .collect();
     let mut image = Image::new(width, height);
@@ -54,29 +59,15 @@ pub fn irradiance_image(
 /// surface's lobe is not cached, the view is traced, or no record serves).
 #[must_use]
 pub fn glossy_image(scene: &Scene, cache: &IrradianceCache, width: usize, height: usize) -> Image {
-    let pixels: Vec<Rgb> = (0..width * height)
-        .into_par_iter()
-        .with_max_len(256)
-        .map(|i| {
-            let film = Vec2::new(
-                ((i % width) as f32 + 0.5) / width as f32,
-                ((i / width) as f32 + 0.5) / height as f32,
-            );
-            let ray = scene.camera.generate_ray(film);
-            scene
-                .intersect(&ray)
-                .and_then(|it| {
-                    let sp = ShadingPoint::facing(it, -ray.d);
-                    crate::radiance_cache::lookup::glossy(cache, &sp, 0, -ray.d)
-                })
-                .unwrap_or(Rgb::ZERO)
-        })
-        .collect();
-    let mut image = Image::new(width, height);
-    for (i, c) in pixels.into_iter().enumerate() {
-        image.set(i % width, i / width, c);
-    }
-    image
+    per_pixel_centre(scene, width, height, |ray| {
+        scene
+            .intersect(ray)
+            .and_then(|it| {
+                let sp = ShadingPoint::facing(it, -ray.d);
+                crate::radiance_cache::lookup::glossy(cache, &sp, 0, -ray.d)
+            })
+            .unwrap_or(Rgb::ZERO)
+    })
 }
 
 /// `image` with a dot at every level-0 record visible from the camera: red (cyan for records
