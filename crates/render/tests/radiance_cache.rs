@@ -80,6 +80,9 @@ fn furnace(radiance_cache: &str, spp: u32) -> SceneDesc {
 #[test]
 fn cached_glossy_light_equals_the_traced_lobe_in_a_furnace() {
     let cached = render_desc(&furnace("on", 4), 2, 1);
+    // Same seed, same image, whatever the thread count.
+    let one_thread = render_desc(&furnace("on", 4), 1, 1);
+    assert_eq!(cached.image.pixels, one_thread.image.pixels);
     let traced = render_desc(&furnace("off", 256), 2, 1);
     let stats = &cached.cache.as_ref().expect("cache").stats;
     assert!(stats.radiance_records > 0, "no radiance records");
