@@ -14,8 +14,9 @@
 //! traced. NOTES-001 §B.5 asks for 75°, which only Phong lobes meet: a microfacet lobe seen at
 //! grazing angles narrows towards the horizon, where every HSH function of m ≠ 0 vanishes (§A.8-1),
 //! and keeps 82 % at order 10 where it keeps 99 % at 45° (rough plastic, Beckmann α 0.3, measured).
-//! So the table also marks, per θo, whether the chosen order keeps 95 % there; where it does not
-//! (grazing views), the lobe is traced ([`BrdfCoefficients::serves`]).
+//! So the table also marks, per θo, whether the chosen order keeps enough there (80 %, measured:
+//! `ENERGY_SERVED`); where it does not (the most grazing views), the lobe is traced
+//! ([`BrdfCoefficients::serves`]).
 
 use crate::bsdf::Bsdf;
 use ircache_math::harmonics::hsh::HshBasis;
