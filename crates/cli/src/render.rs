@@ -271,6 +271,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if !matches!(integrator, Integrator::Ic(_)) {
             bail!("--aov {aov} needs the ic integrator");
         }
+        if aov == "glossy" && !matches!(&integrator, Integrator::Ic(ic) if ic.params.radiance_cache)
+        {
+            bail!("--aov glossy needs --radiance-cache on (it shows the radiance records)");
+        }
     }
     let scene = Scene::build(&desc).context("building the scene")?;
     let load_seconds = t0.elapsed().as_secs_f64();

@@ -217,6 +217,28 @@ fn ic_render_reports_the_cache_and_writes_aovs() {
     for f in ["ic-irradiance.exr", "ic-records.exr"] {
         assert!(std::fs::metadata(d.join(f)).unwrap().len() > 0, "{f}");
     }
+    // The glossy AOV shows radiance records: without them, an error, not a black image.
+    let o = ircache(
+        &[
+            "render",
+            "--integrator",
+            "ic",
+            "--aov",
+            "glossy",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-o",
+            "g.exr",
+            "-q",
+        ],
+        &d,
+    );
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--radiance-cache on"), "{}", stderr(&o));
     // Cache options with another integrator are an error, not ignored.
     let o = ircache(
         &[
@@ -736,4 +758,62 @@ fn unbounded_depth_and_other_renderers_integrators() {
         &d,
     );
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// `--radiance-cache on` on the repository's moderately glossy Cornell box: radiance records are
+/// made, reported, written to a cache file and read back from it, and shown by the glossy AOV.
+#[test]
+fn radiance_cache_renders_reports_and_reuses_its_records() {
+    let d = temp_dir("radiance");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/cornell-rough/scene.xml"
+    );
+    let args = |out: &str, stats: &str| -> Vec<String> {
+        [
+            "render",
+            scene,
+            "--integrator",
+            "ic",
+            "--radiance-cache",
+            "on",
+            "-ab",
+            "1",
+            "--spp",
+            "1",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--cache",
+            "rough.icc",
+            "-o",
+            out,
+            "--stats",
+            stats,
+            "--aov",
+            "glossy",
+            "-q",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect()
+    };
+    let first = args("a.exr", "a.json");
+    let o = ircache(&first.iter().map(String::as_str).collect::<Vec<_>>(), &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let read = |f: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(d.join(f)).unwrap()).unwrap()
+    };
+    let a = read("a.json");
+    let radiance = a["radiance_records"].as_u64().unwrap();
+    assert!(radiance > 0, "{a}");
+    let glossy = ircache_image::read_image(&d.join("a-glossy.exr")).unwrap();
+    assert!(glossy.pixels.iter().any(|p| p.g > 0.0));
+    let second = args("b.exr", "b.json");
+    let o = ircache(&second.iter().map(String::as_str).collect::<Vec<_>>(), &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let b = read("b.json");
+    assert_eq!(b["records_computed"].as_u64(), Some(0), "{b}");
+    assert!(b["radiance_records"].as_u64().unwrap() >= radiance, "{b}");
 }
