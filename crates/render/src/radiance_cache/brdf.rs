@@ -222,9 +222,18 @@ impl BrdfCoefficients {
 /// 1 … `max_order` keeps at outgoing angle θo (degrees), the channels summed.
 #[must_use]
 pub fn energy_kept(bsdf: &Bsdf, max_order: usize, theta_o_degrees: f64) -> Vec<f64> {
+    energy_kept_with(bsdf, max_order, theta_o_degrees, &rule_and_basis(max_order))
+}
+
+/// [`energy_kept`] with the projection rule and its basis values made once.
+fn energy_kept_with(
+    bsdf: &Bsdf,
+    max_order: usize,
+    theta_o_degrees: f64,
+    (rule, values): &(quadrature::Rule, Vec<Vec<f64>>),
+) -> Vec<f64> {
     let n = coefficient_count(max_order);
-    let (rule, values) = rule_and_basis(max_order);
-    let (c, energy, _) = project_slice(bsdf, theta_o_degrees.to_radians().cos(), &rule, &values, n);
+    let (c, energy, _) = project_slice(bsdf, theta_o_degrees.to_radians().cos(), rule, values, n);
     let total: f64 = energy.iter().sum();
     (1..=max_order)
         .map(|order| {
@@ -255,9 +264,10 @@ pub fn order_for(bsdf: &Bsdf, max_order: usize, threshold: f64) -> Option<usize>
         return None;
     }
     let steps = (ORDER_MAX_THETA_DEGREES / 5.0) as usize;
+    let rule = rule_and_basis(max_order);
     let mut needed = 1;
     for k in 0..=steps {
-        let kept = energy_kept(bsdf, max_order, 5.0 * k as f64);
+        let kept = energy_kept_with(bsdf, max_order, 5.0 * k as f64, &rule);
         needed = needed.max(kept.iter().position(|&e| e >= threshold)? + 1);
     }
     Some(needed)
