@@ -214,24 +214,14 @@ pub fn run_batch(
         let mut radiance = std::mem::take(&mut st.radiance);
         // Deeper records first: they were made for the level-0 record's gather.
         for (mut r, sp) in st.new_records.into_iter().chain(std::iter::once(rec)) {
-            cache.adopt_radiance(&mut r, &mut radiance);
+            cache.adopt_radiance(&mut r, &mut radiance, NO_RADIANCE);
             let store = &mut cache.levels[r.level as usize];
             if store.covers(r.p, r.n) {
                 stats.records_overlapping += 1;
             }
             sites.add(r.level as usize, store.len(), sp);
             store.insert(r);
-            let radiance = cache
-                .radiance_records
-                .get(r.radiance as usize)
-                .map(|c| c.radiance.clone());
-            added.push((
-                Record {
-                    radiance: NO_RADIANCE,
-                    ..r
-                },
-                radiance,
-            ));
+            added.push(cache.stored(&r));
         }
     }
     stats.records_computed += counts.records;
@@ -406,15 +396,8 @@ pub fn regather_noisy(
             .collect();
         let mut records = cache.levels[level].records().to_vec();
         for (i, mut rec, mut st) in fresh {
-            cache.adopt_radiance(&mut rec, &mut st.radiance);
             // The new coefficients take the old record's place in the list.
-            let old = records[i].radiance;
-            if old != NO_RADIANCE && rec.radiance != NO_RADIANCE {
-                if let Some(new) = cache.radiance_records.pop() {
-                    cache.radiance_records[old as usize] = new;
-                    rec.radiance = old;
-                }
-            }
+            cache.adopt_radiance(&mut rec, &mut st.radiance, records[i].radiance);
             let counts = st.counts;
             records[i] = rec;
             stats.records_regathered += 1;

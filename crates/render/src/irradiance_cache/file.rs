@@ -35,8 +35,8 @@ pub const RECORD_BYTES: usize = 128;
 const PAYLOAD_BYTES: usize = RECORD_BYTES - 8;
 /// First byte of a radiance continuation slot (levels are far below).
 const CONTINUATION: u8 = 0xFE;
-/// Values a continuation slot holds.
-const CONTINUATION_FLOATS: usize = 29;
+/// Values a slot holds (a record's or a continuation's), after its 4 bytes of tags.
+const SLOT_FLOATS: usize = 29;
 
 /// A record as a file holds it: on a radiance-cached surface with its coefficients (the
 /// record's own [`Record::radiance`] index is [`NO_RADIANCE`] here; the cache assigns one).
@@ -233,10 +233,30 @@ impl Header {
     }
 }
 
-/// Seals a slot: the checksum of its payload in its last 8 bytes.
-fn seal(b: &mut [u8]) {
+/// A slot with tag bytes `tags` and `values` (at most [`SLOT_FLOATS`], the rest zero), sealed
+/// with the checksum of its payload in its last 8 bytes.
+fn write_slot(tags: [u8; 4], values: &[f32]) -> [u8; RECORD_BYTES] {
+    let mut b = [0u8; RECORD_BYTES];
+    b[..4].copy_from_slice(&tags);
+    for (i, f) in values.iter().enumerate() {
+        b[4 + 4 * i..8 + 4 * i].copy_from_slice(&f.to_le_bytes());
+    }
     let sum = Fnv::of(&b[..PAYLOAD_BYTES]);
-    b[PAYLOAD_BYTES..RECORD_BYTES].copy_from_slice(&sum.to_le_bytes());
+    b[PAYLOAD_BYTES..].copy_from_slice(&sum.to_le_bytes());
+    b
+}
+
+/// A slot's values; `None` when it is short, its checksum fails or a value is not finite.
+fn read_slot(b: &[u8]) -> Option<[f32; SLOT_FLOATS]> {
+    let sum = u64::from_le_bytes(b.get(PAYLOAD_BYTES..RECORD_BYTES)?.try_into().ok()?);
+    if Fnv::of(&b[..PAYLOAD_BYTES]) != sum {
+        return None;
+    }
+    let mut f = [0.0f32; SLOT_FLOATS];
+    for (i, v) in f.iter_mut().enumerate() {
+        *v = f32::from_le_bytes(b[4 + 4 * i..8 + 4 * i].try_into().ok()?);
+    }
+    f.iter().all(|v| v.is_finite()).then_some(f)
 }
 
 /// A record's slot and its radiance continuation slots.
@@ -255,37 +275,21 @@ fn encode_stored((r, radiance): &Stored) -> Vec<u8> {
         {
             values.push(*v as f32);
         }
-        for (k, chunk) in values.chunks(CONTINUATION_FLOATS).enumerate() {
-            let mut b = [0u8; RECORD_BYTES];
-            b[0] = CONTINUATION;
-            b[2..4].copy_from_slice(&(k as u16).to_le_bytes());
-            for (i, f) in chunk.iter().enumerate() {
-                b[4 + 4 * i..8 + 4 * i].copy_from_slice(&f.to_le_bytes());
-            }
-            seal(&mut b);
-            out.extend_from_slice(&b);
+        for (k, chunk) in values.chunks(SLOT_FLOATS).enumerate() {
+            let [lo, hi] = (k as u16).to_le_bytes();
+            out.extend_from_slice(&write_slot([CONTINUATION, 0, lo, hi], chunk));
         }
     }
     out
 }
 
 /// The values of continuation slot number `k`, `None` when it is not one or is damaged.
-fn decode_continuation(b: &[u8], k: usize) -> Option<[f32; CONTINUATION_FLOATS]> {
-    let sum = u64::from_le_bytes(b.get(PAYLOAD_BYTES..RECORD_BYTES)?.try_into().ok()?);
-    if b[0] != CONTINUATION
-        || Fnv::of(&b[..PAYLOAD_BYTES]) != sum
-        || usize::from(u16::from_le_bytes([b[2], b[3]])) != k
-    {
+fn decode_continuation(b: &[u8], k: usize) -> Option<[f32; SLOT_FLOATS]> {
+    let tags = b.get(..4)?;
+    if tags[0] != CONTINUATION || usize::from(u16::from_le_bytes([tags[2], tags[3]])) != k {
         return None;
     }
-    let mut f = [0.0f32; CONTINUATION_FLOATS];
-    for (i, v) in f.iter_mut().enumerate() {
-        *v = f32::from_le_bytes(b[4 + 4 * i..8 + 4 * i].try_into().ok()?);
-        if !v.is_finite() {
-            return None;
-        }
-    }
-    Some(f)
+    read_slot(b)
 }
 
 /// The radiance in the continuation slots at the start of `slots`, and how many slots it took.
@@ -297,8 +301,8 @@ fn decode_radiance(slots: &[u8]) -> Option<(RadianceCoefficients, usize)> {
         return None;
     }
     let total = count + 2;
-    let blocks = total.div_ceil(CONTINUATION_FLOATS);
-    let mut values = Vec::with_capacity(blocks * CONTINUATION_FLOATS);
+    let blocks = total.div_ceil(SLOT_FLOATS);
+    let mut values = Vec::with_capacity(blocks * SLOT_FLOATS);
     values.extend_from_slice(&first);
     for k in 1..blocks {
         let slot = slots.get(k * RECORD_BYTES..(k + 1) * RECORD_BYTES)?;
@@ -317,10 +321,7 @@ fn decode_radiance(slots: &[u8]) -> Option<(RadianceCoefficients, usize)> {
 }
 
 fn encode_record(r: &Record, with_radiance: bool) -> [u8; RECORD_BYTES] {
-    let mut b = [0u8; RECORD_BYTES];
-    b[0] = r.level;
-    b[1] = u8::from(with_radiance);
-    let mut floats = Vec::with_capacity(29);
+    let mut floats = Vec::with_capacity(SLOT_FLOATS);
     for v in [r.p, r.n] {
         floats.extend_from_slice(&v.to_array());
     }
@@ -330,29 +331,16 @@ fn encode_record(r: &Record, with_radiance: bool) -> [u8; RECORD_BYTES] {
         floats.extend_from_slice(&g.to_array());
     }
     floats.push(r.ray_variance);
-    for (i, f) in floats.iter().enumerate() {
-        b[4 + 4 * i..8 + 4 * i].copy_from_slice(&f.to_le_bytes());
-    }
-    seal(&mut b);
-    b
+    write_slot([r.level, u8::from(with_radiance), 0, 0], &floats)
 }
 
 /// A record from its bytes and whether radiance follows; `None` when the checksum fails, a
 /// value is not finite, or the slot is a continuation.
 fn decode_record(b: &[u8]) -> Option<(Record, bool)> {
-    if b.len() < RECORD_BYTES || b[0] == CONTINUATION {
+    if b.first() == Some(&CONTINUATION) {
         return None;
     }
-    let sum = u64::from_le_bytes(b[PAYLOAD_BYTES..RECORD_BYTES].try_into().ok()?);
-    if Fnv::of(&b[..PAYLOAD_BYTES]) != sum {
-        return None;
-    }
-    let f: Vec<f32> = (0..29)
-        .map(|i| f32::from_le_bytes(b[4 + 4 * i..8 + 4 * i].try_into().unwrap_or([0; 4])))
-        .collect();
-    if f.iter().any(|x| !x.is_finite()) {
-        return None;
-    }
+    let f = read_slot(b)?;
     let v = |i: usize| Vec3::new(f[i], f[i + 1], f[i + 2]);
     let record = Record {
         level: b[0],

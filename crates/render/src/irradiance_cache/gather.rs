@@ -17,11 +17,12 @@ use crate::integrators::path_continuation::{
     trace_path, Arrival, IndirectSource, PathSettings, PathStart,
 };
 use crate::integrators::RayCounts;
+use crate::radiance_cache::brdf::BrdfCoefficients;
 use crate::radiance_cache::gather::RadianceCoefficients;
 use crate::radiance_cache::record::RadianceRecord;
 use crate::radiance_cache::RadianceCache;
 use crate::scene::{Interaction, Scene};
-use ircache_math::{DMat3, Frame, Rgb, Rng, Vec2, Vec3};
+use ircache_math::{Frame, Rgb, Rng, Vec2, Vec3};
 use std::sync::Arc;
 
 /// The records of every bounce level, and the settings they were made with.
@@ -78,22 +79,30 @@ impl IrradianceCache {
         }
         record.radiance = match radiance {
             Some(c) if self.radiance.is_some() => {
-                let frame = Frame::from_z(record.n);
-                self.radiance_records.push(RadianceRecord {
-                    position: record.p.as_dvec3(),
-                    frame: DMat3::from_cols(
-                        frame.s.as_dvec3(),
-                        frame.t.as_dvec3(),
-                        frame.n.as_dvec3(),
-                    ),
-                    radiance: c,
-                });
+                self.radiance_records
+                    .push(RadianceRecord::new(record.p, record.n, c));
                 (self.radiance_records.len() - 1) as u32
             }
             _ => NO_RADIANCE,
         };
         self.levels[record.level as usize].insert(record);
         true
+    }
+
+    /// A record of this cache as a file holds it (the inverse of [`Self::insert_stored`]).
+    #[must_use]
+    pub fn stored(&self, record: &Record) -> crate::irradiance_cache::file::Stored {
+        let radiance = self
+            .radiance_records
+            .get(record.radiance as usize)
+            .map(|r| r.radiance.clone());
+        (
+            Record {
+                radiance: NO_RADIANCE,
+                ..*record
+            },
+            radiance,
+        )
     }
 
     /// The normalised error at which records cover `sp`: 1, or on a radiance-cached surface the
@@ -109,8 +118,15 @@ impl IrradianceCache {
     }
 
     /// Moves a new record's radiance coefficients from its work state's list `made` into the
-    /// cache's, pointing the record at their new place (a no-op for records without).
-    pub fn adopt_radiance(&mut self, record: &mut Record, made: &mut [RadianceRecord]) {
+    /// cache's, pointing the record at their new place (a no-op for records without): into the
+    /// place `replacing` (the coefficients of the record it replaces) when that is one, else at
+    /// the end.
+    pub fn adopt_radiance(
+        &mut self,
+        record: &mut Record,
+        made: &mut [RadianceRecord],
+        replacing: u32,
+    ) {
         if record.radiance == NO_RADIANCE {
             return;
         }
@@ -118,8 +134,17 @@ impl IrradianceCache {
             record.radiance = NO_RADIANCE;
             return;
         };
-        record.radiance = self.radiance_records.len() as u32;
-        self.radiance_records.push(std::mem::take(slot));
+        let coefficients = std::mem::take(slot);
+        match self.radiance_records.get_mut(replacing as usize) {
+            Some(old) => {
+                *old = coefficients;
+                record.radiance = replacing;
+            }
+            None => {
+                record.radiance = self.radiance_records.len() as u32;
+                self.radiance_records.push(coefficients);
+            }
+        }
     }
 
     /// An empty cache for a scene of size `size` (no shape excluded, no mean albedo): what
@@ -508,12 +533,7 @@ impl Gatherer<'_> {
     pub fn record_at(&self, st: &mut WorkState, sp: &ShadingPoint, level: u32, key: u64) -> Record {
         // A radiance record weighs its cells by the glossy lobe: it needs as many more rays as
         // the lobe is narrower than the cosine.
-        let factor = self
-            .cache
-            .radiance
-            .as_deref()
-            .and_then(|r| r.brdf_at(sp))
-            .map_or(1.0, |b| b.ray_factor());
+        let factor = self.glossy_brdf(sp).map_or(1.0, |b| b.ray_factor());
         let divisions = (self.cache.params.divisions as f64 * factor).round() as usize;
         let strata = Stratification::from_divisions(divisions);
         self.record_with(st, sp, level, key, strata)
@@ -598,6 +618,7 @@ impl Gatherer<'_> {
                 grad_t = grad_t.map(|g| g * f);
             }
         }
+        let (ray_variance, radiance) = self.variance_and_radiance(st, sp, &h);
         Record {
             p: sp.it.p,
             n: sp.n,
@@ -606,52 +627,40 @@ impl Gatherer<'_> {
             grad_t,
             grad_r,
             level: level as u8,
-            ray_variance: self.ray_variance(sp, &h),
-            radiance: self.radiance_at(st, sp, &h, &frame),
+            ray_variance,
+            radiance,
         }
     }
 
-    /// The relative variance per ray of a record's estimate: its irradiance's, or for a
-    /// radiance record the larger of that and its glossy estimate's at normal view (the cells
-    /// weighed by the lobe), so that noisy radiance records are gathered again with the rays
-    /// they need ([`super::build::regather_noisy`]).
-    fn ray_variance(&self, sp: &ShadingPoint, h: &HemisphereSamples) -> f32 {
-        let irradiance = h.relative_variance();
-        let Some(rc) = &self.cache.radiance else {
-            return irradiance;
-        };
-        let Some(brdf) = rc.brdf_at(sp) else {
-            return irradiance;
-        };
-        let weights = rc
-            .cell_basis(h.strata, brdf.order())
-            .lobe_weights(&brdf.normal_view());
-        irradiance.max(h.weighted_relative_variance(Some(&weights)))
+    /// The radiance-cached glossy lobe's table at `sp`, if radiance caching serves it there.
+    fn glossy_brdf(&self, sp: &ShadingPoint) -> Option<&BrdfCoefficients> {
+        self.cache.radiance.as_deref()?.brdf_at(sp)
     }
 
-    /// A record's incoming radiance in HSH from its gather `h` in `frame`, where the surface's
-    /// glossy lobe is radiance-cached: kept in the work state, whose index it returns
-    /// ([`NO_RADIANCE`] elsewhere).
-    fn radiance_at(
+    /// What a record gathered as `h` at `sp` holds beyond irradiance: its relative variance per
+    /// ray, and where the surface's glossy lobe is radiance-cached, its incoming radiance in HSH
+    /// (kept in the work state, whose index is returned; [`NO_RADIANCE`] elsewhere). A radiance
+    /// record's variance is the larger of its irradiance's and its glossy estimate's at normal
+    /// view (the cells weighed by the lobe), so that noisy radiance records are gathered again
+    /// with the rays they need ([`super::build::regather_noisy`]).
+    fn variance_and_radiance(
         &self,
         st: &mut WorkState,
         sp: &ShadingPoint,
         h: &HemisphereSamples,
-        frame: &Frame,
-    ) -> u32 {
-        let Some(rc) = &self.cache.radiance else {
-            return NO_RADIANCE;
+    ) -> (f32, u32) {
+        let irradiance = h.relative_variance();
+        let (Some(tables), Some(brdf)) = (self.cache.radiance.as_deref(), self.glossy_brdf(sp))
+        else {
+            return (irradiance, NO_RADIANCE);
         };
-        let Some(brdf) = rc.brdf_at(sp) else {
-            return NO_RADIANCE;
-        };
-        let basis = rc.cell_basis(h.strata, brdf.order());
-        st.radiance.push(RadianceRecord {
-            position: sp.it.p.as_dvec3(),
-            frame: DMat3::from_cols(frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3()),
-            radiance: RadianceCoefficients::from_samples(h, &basis),
-        });
-        (st.radiance.len() - 1) as u32
+        let basis = tables.cell_basis(h.strata, brdf.order());
+        let weights = basis.lobe_weights(&brdf.normal_view());
+        let variance = irradiance.max(h.weighted_relative_variance(Some(&weights)));
+        let coefficients = RadianceCoefficients::from_samples(h, &basis);
+        st.radiance
+            .push(RadianceRecord::new(sp.it.p, sp.n, coefficients));
+        (variance, (st.radiance.len() - 1) as u32)
     }
 
     /// Indirect irradiance at `sp` for bounce `level`: interpolated from the cache and this work

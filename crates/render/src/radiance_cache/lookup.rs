@@ -3,9 +3,9 @@
 //! extrapolated, rotated into the shading frame and blended; the result is dotted with the BRDF's
 //! coefficients for the viewing direction.
 
-use super::record::{interpolate, RadianceRecord};
+use super::record::{frame_around, interpolate, RadianceRecord};
 use crate::irradiance_cache::gather::{IrradianceCache, ShadingPoint};
-use ircache_math::{DMat3, Frame, Rgb, Vec3};
+use ircache_math::{Frame, Rgb, Vec3};
 
 /// Indirect light the glossy lobe at `sp` reflects towards `wo` (world, unit) from the records
 /// of level `depth`; `None` where the lobe is not cached, the view is one the material's order
@@ -23,7 +23,7 @@ pub fn glossy(cache: &IrradianceCache, sp: &ShadingPoint, depth: u32, wo: Vec3) 
     if !brdf.serves(wo_local) {
         return None;
     }
-    let f = DMat3::from_cols(frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3());
+    let f = frame_around(sp.n_bump);
     let mut records: Vec<(f64, &RadianceRecord)> = Vec::new();
     let finer = cache.coverage_threshold(sp);
     for threshold in [finer, 2.0 * finer] {

@@ -7,7 +7,16 @@
 use super::gather::RadianceCoefficients;
 use ircache_math::harmonics::coefficient_count;
 use ircache_math::harmonics::rotation::TiltTable;
-use ircache_math::{DMat3, DVec3};
+use ircache_math::{DMat3, DVec3, Frame, Vec3};
+
+/// The frame [t b n] (columns) coefficients are expressed in around the normal `n`: the gather's
+/// own frame (`Frame::from_z`), built from the normal alone, so that a record read back from a
+/// cache file has the frame it was gathered in and coplanar frames coincide (R = I).
+#[must_use]
+pub fn frame_around(n: Vec3) -> DMat3 {
+    let f = Frame::from_z(n);
+    DMat3::from_cols(f.s.as_dvec3(), f.t.as_dvec3(), f.n.as_dvec3())
+}
 
 /// A record: where, in which frame, and the incoming radiance there in HSH.
 #[derive(Clone, Debug, Default)]
@@ -21,6 +30,16 @@ pub struct RadianceRecord {
 }
 
 impl RadianceRecord {
+    /// A record at `position` whose coefficients were gathered around the normal `normal`.
+    #[must_use]
+    pub fn new(position: Vec3, normal: Vec3, radiance: RadianceCoefficients) -> RadianceRecord {
+        RadianceRecord {
+            position: position.as_dvec3(),
+            frame: frame_around(normal),
+            radiance,
+        }
+    }
+
     /// The coefficients extrapolated to `p` by the gradients, d_x = (p − p_k)·t, d_y = (p − p_k)·b
     /// (the gradient has no normal component, 000 eq. 3.18).
     #[must_use]
