@@ -53,8 +53,8 @@ pub struct RenderArgs {
     /// Most samples a pixel takes under --adaptive (default: 8 × --spp).
     #[arg(long, requires = "adaptive")]
     pub max_spp: Option<u32>,
-    /// Integrator (overrides the scene's): path, direct, or ic (the irradiance cache; also
-    /// irrcache).
+    /// Integrator (overrides the scene's): path, direct, ic (the irradiance cache; also
+    /// irrcache), or splat (the same cache, its first-bounce records splatted over the image).
     #[arg(long)]
     pub integrator: Option<String>,
     /// Maximum path depth (overrides the scene's; Mitsuba's meaning: 2 = direct light only).
@@ -403,6 +403,19 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
             c.pixel_seconds,
             c.uncached_samples
         );
+        if let Some(sp) = &c.splat {
+            eprintln!(
+                "splatting: {} layers, {} record splats, {} records gathered at misses; \
+                 G-buffers {:.2} s, splats {:.2} s, misses {:.2} s, shading {:.2} s",
+                sp.layers,
+                sp.splats,
+                sp.miss_records,
+                sp.gbuffer_seconds,
+                sp.splat_seconds,
+                sp.miss_seconds,
+                sp.shade_seconds
+            );
+        }
     }
     if out.invalid_samples > 0 {
         eprintln!(
@@ -470,6 +483,20 @@ fn write_stats(
         });
         if let (Some(a), Some(b)) = (json.as_object_mut(), extra.as_object()) {
             a.extend(b.clone());
+        }
+        if let (Some(a), Some(sp)) = (json.as_object_mut(), &c.splat) {
+            a.insert(
+                "splat".into(),
+                serde_json::json!({
+                    "layers": sp.layers,
+                    "splats": sp.splats,
+                    "miss_records": sp.miss_records,
+                    "gbuffer_seconds": sp.gbuffer_seconds,
+                    "splat_seconds": sp.splat_seconds,
+                    "miss_seconds": sp.miss_seconds,
+                    "shade_seconds": sp.shade_seconds,
+                }),
+            );
         }
     }
     std::fs::write(path, serde_json::to_string_pretty(&json)? + "\n")

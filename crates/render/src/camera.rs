@@ -89,6 +89,60 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// The film rectangle `(min, max)` that holds the projection of the sphere (`centre`,
+    /// `radius`), given the world-to-camera transform `to_camera` (the inverse of `to_world`,
+    /// made once by the caller). Per film axis, the tangent lines from the eye to the sphere's
+    /// circle in that axis's plane bound it (NOTES-001 §C.2 step 2); an axis runs over the
+    /// whole film where the circle holds the eye or reaches the eye's plane. `None` when the
+    /// sphere lies wholly behind the camera.
+    #[must_use]
+    pub fn sphere_bounds(
+        &self,
+        to_camera: &Mat4,
+        centre: Vec3,
+        radius: f32,
+    ) -> Option<(Vec2, Vec2)> {
+        let q = to_camera.transform_point3(centre);
+        if q.z + radius <= 0.0 {
+            return None;
+        }
+        // Range of x/z (or y/z) over the circle, as tangents of angles from the optical axis.
+        let range = |c: f32, z: f32| -> Option<(f32, f32)> {
+            let d = (c * c + z * z).sqrt();
+            if d <= radius {
+                return Some((f32::NEG_INFINITY, f32::INFINITY));
+            }
+            let centre = c.atan2(z);
+            let half = (radius / d).asin();
+            let (lo, hi) = (centre - half, centre + half);
+            let quarter = std::f32::consts::FRAC_PI_2;
+            if lo >= quarter || hi <= -quarter {
+                return None;
+            }
+            let lo = if lo <= -quarter {
+                f32::NEG_INFINITY
+            } else {
+                lo.tan()
+            };
+            let hi = if hi >= quarter {
+                f32::INFINITY
+            } else {
+                hi.tan()
+            };
+            Some((lo, hi))
+        };
+        let (x_lo, x_hi) = range(q.x, q.z)?;
+        let (y_lo, y_hi) = range(q.y, q.z)?;
+        // Film coordinates fall as camera x and y grow (see `generate_ray`).
+        let film = |t: f32, tan_half: f32| 0.5 * (1.0 - t / tan_half);
+        Some((
+            Vec2::new(film(x_hi, self.tan_half_x), film(y_hi, self.tan_half_y)),
+            Vec2::new(film(x_lo, self.tan_half_x), film(y_lo, self.tan_half_y)),
+        ))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -134,5 +188,57 @@ mod tests {
         let r = c.generate_ray(f);
         let back = c.project(r.at(5.0)).unwrap();
         assert!((back - f).length() < 1e-4);
+    }
+
+    /// The film bounds of a sphere hold the projection of every point on it that lies in front
+    /// of the camera, and are tight (within 2 % of the extent) for spheres wholly in front; at
+    /// millimetre, metre and kilometre scales.
+    #[test]
+    fn sphere_bounds_hold_the_projected_sphere_tightly() {
+        let mut rng = ircache_math::Rng::new(7, 0);
+        for scale in [1e-3f32, 1.0, 1e3] {
+            let m = Mat4::from_translation(Vec3::new(1.0, -2.0, 0.5) * scale)
+                * Mat4::from_rotation_y(0.4)
+                * Mat4::from_rotation_x(-0.2);
+            let c = Camera::new(&sensor(50.0, FovAxis::X, m), 200, 100);
+            let to_camera = c.to_world.inverse();
+            for case in 0..200 {
+                // Centres around and behind the eye; radii up to past the eye.
+                let local = Vec3::new(
+                    rng.next_f32() * 4.0 - 2.0,
+                    rng.next_f32() * 4.0 - 2.0,
+                    rng.next_f32() * 6.0 - 1.0,
+                );
+                let radius = 0.05 + rng.next_f32() * if case % 4 == 0 { 3.0 } else { 0.6 };
+                let centre = c.to_world.transform_point3(local * scale);
+                let bounds = c.sphere_bounds(&to_camera, centre, radius * scale);
+                let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+                for _ in 0..2000 {
+                    let z = rng.next_f32() * 2.0 - 1.0;
+                    let phi = rng.next_f32() * std::f32::consts::TAU;
+                    let s = (1.0 - z * z).max(0.0).sqrt();
+                    let p = centre + Vec3::new(s * phi.cos(), s * phi.sin(), z) * (radius * scale);
+                    if let Some(f) = c.project(p) {
+                        let (bl, bh) = bounds.expect("a visible point on a sphere called behind");
+                        let slack = 1e-4 * (1.0 + f.abs().max_element());
+                        assert!(
+                            f.x >= bl.x - slack
+                                && f.x <= bh.x + slack
+                                && f.y >= bl.y - slack
+                                && f.y <= bh.y + slack,
+                            "{f:?} outside {bl:?}..{bh:?}"
+                        );
+                        lo = lo.min(f);
+                        hi = hi.max(f);
+                    }
+                }
+                let in_front = local.z - radius > 0.05;
+                if let (true, Some((bl, bh))) = (in_front, bounds) {
+                    let extent = bh - bl;
+                    assert!((lo - bl).max_element() < 0.02 * extent.max_element());
+                    assert!((bh - hi).max_element() < 0.02 * extent.max_element());
+                }
+            }
+        }
     }
 }

@@ -30,6 +30,16 @@ impl Filter {
         }
     }
 
+    /// The farthest a sampled offset lies from the pixel centre along either axis, in pixels.
+    #[must_use]
+    pub fn radius(&self) -> f32 {
+        match *self {
+            Filter::Box => 0.5,
+            Filter::Tent(r) => r,
+            Filter::Gaussian(s) => 4.0 * s,
+        }
+    }
+
     /// An offset from the pixel centre, in pixels, distributed like the filter.
     #[must_use]
     pub fn sample(&self, u: Vec2) -> Vec2 {
@@ -66,6 +76,7 @@ mod tests {
                         (j as f32 + 0.5) / n as f32,
                     ));
                     assert!(o.x.abs() <= r && o.y.abs() <= r, "{f:?} {o}");
+                    assert!(o.x.abs() <= f.radius() && o.y.abs() <= f.radius());
                     mean += o;
                 }
             }

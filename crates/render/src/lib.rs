@@ -20,5 +20,6 @@ pub mod radiance_cache;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod splatting;
 pub mod testing;
 pub mod texture;

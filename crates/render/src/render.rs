@@ -172,6 +172,8 @@ pub struct CacheReport {
     pub uncached_samples: u64,
     /// Seconds of the pixel pass (interpolation, direct light).
     pub pixel_seconds: f64,
+    /// What splatting did (`splat` integrator only).
+    pub splat: Option<crate::splatting::SplatStats>,
 }
 
 /// Renders the image. `progress` is called (from worker threads) with the number of pixels done
@@ -242,15 +244,56 @@ pub fn render(
     };
     let mut states = vec![PixelState::default(); w * h];
     let mut rays = RayCounts::default();
-    // The pilot: every pixel of the rendered rows (all the samples, when not adaptive).
-    let pilot: Vec<u32> = (0..w * h)
-        .map(|i| if rows.contains(&(i / w)) { first } else { 0 })
-        .collect();
-    run_pass(&pilot, &mut states, &mut rays);
-    if let Some(adaptive) = settings.sampling.adaptive {
-        let targets = adaptive_targets(&states, w, h, &rows, first, sampler.spp, adaptive.target);
-        run_pass(&targets, &mut states, &mut rays);
+    let mut splatted = None;
+    if let Some(ic) = integrator.splatting() {
+        // Layer by layer: sample k of every pixel at once (see `crate::splatting`).
+        if settings.sampling.adaptive.is_some() {
+            return Err(RenderError::Invalid(
+                "the splat integrator renders every pixel's samples layer by layer: \
+                 --adaptive is not available with it (use --integrator ic)"
+                    .into(),
+            ));
+        }
+        let pixels = (rows.len() * w) as u64;
+        let (cache, stats) = pool.install(|| {
+            crate::splatting::pass::render_layers(
+                scene,
+                ic,
+                settings,
+                &sampler,
+                &mut rays,
+                &mut |layer, values| {
+                    for (state, l) in states.iter_mut().zip(values) {
+                        if let Some(l) = l {
+                            state.add(l);
+                            state.samples += 1;
+                        }
+                    }
+                    progress(pixels * u64::from(layer + 1) / u64::from(sampler.spp.max(1)));
+                },
+            )
+        });
+        rays.gather += stats.cache.gather_rays;
+        rays.shadow += stats.cache.shadow_rays;
+        let mut ic = ic.clone();
+        ic.cache = Some(Arc::new(cache));
+        splatted = Some((Integrator::Ic(ic), stats));
+    } else {
+        // The pilot: every pixel of the rendered rows (all the samples, when not adaptive).
+        let pilot: Vec<u32> = (0..w * h)
+            .map(|i| if rows.contains(&(i / w)) { first } else { 0 })
+            .collect();
+        run_pass(&pilot, &mut states, &mut rays);
+        if let Some(adaptive) = settings.sampling.adaptive {
+            let targets =
+                adaptive_targets(&states, w, h, &rows, first, sampler.spp, adaptive.target);
+            run_pass(&targets, &mut states, &mut rays);
+        }
     }
+    let (integrator, splat_stats) = match &splatted {
+        Some((i, stats)) => (i, Some(stats.clone())),
+        None => (integrator, None),
+    };
     let mut image = Image::new(w, h);
     let (mut invalid_samples, mut samples) = (0, 0);
     for (i, state) in states.iter().enumerate() {
@@ -268,6 +311,7 @@ pub fn render(
                 stats,
                 uncached_samples,
                 pixel_seconds,
+                splat: splat_stats,
             })
         }
         _ => None,
@@ -302,6 +346,18 @@ struct PixelState {
 }
 
 impl PixelState {
+    /// Adds a sample's value to the sums (an invalid one is counted and left out).
+    fn add(&mut self, l: Rgb) {
+        if l.is_valid_radiance() {
+            self.sum += l;
+            let luminance = f64::from(l.luminance());
+            self.lum.0 += luminance;
+            self.lum.1 += luminance * luminance;
+        } else {
+            self.invalid += 1;
+        }
+    }
+
     /// The pixel's value: the mean of its samples.
     fn value(&self) -> Rgb {
         self.sum / self.samples.max(1) as f32
@@ -419,14 +475,7 @@ fn extend_pixel(
         for ((k, ray), hit) in (done..).zip(&camera[..n]).zip(&hits[..n]) {
             sampler.set_sample(k, dims::vertex(0, 0));
             let l = integrator.li(scene, ray, hit.as_ref(), &mut sampler, rays);
-            if l.is_valid_radiance() {
-                state.sum += l;
-                let luminance = f64::from(l.luminance());
-                state.lum.0 += luminance;
-                state.lum.1 += luminance * luminance;
-            } else {
-                state.invalid += 1;
-            }
+            state.add(l);
         }
         done += n as u32;
     }

@@ -40,6 +40,30 @@ pub struct IcIntegrator {
     pub force_reuse: bool,
     /// Surfaces excluded from the cache (003 item 6).
     pub exclusions: Exclusions,
+    /// How the pixel pass finds the records of a camera path's first vertex.
+    pub pixel_pass: PixelPass,
+}
+
+/// How the pixel pass finds the records serving a camera path's first vertex.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PixelPass {
+    /// Each pixel sample looks the records up in the cache's spatial index (`ic`).
+    #[default]
+    Lookup,
+    /// Records are splatted over the image's samples (`splat`, 001 ch. 4; see
+    /// [`crate::splatting`]); deeper vertices still look up.
+    Splat,
+}
+
+/// What splatting found for a sample's first vertex (see [`crate::splatting`]): the blended
+/// irradiance and the light the radiance-cached glossy lobe reflects towards the camera, each
+/// `None` where no record reaches the vertex at the accuracy.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Splatted {
+    /// Irradiance (000 eq. 3.15), as the lookup at threshold 1 gives it.
+    pub irradiance: Option<Rgb>,
+    /// Glossy radiance towards the camera (000 eq. 3.19), as the glossy lookup gives it.
+    pub glossy: Option<Rgb>,
 }
 
 /// Which surfaces take no cache records (Radiance's `-ae`/`-aE` and `-ai`/`-aI`): they get the
@@ -137,6 +161,7 @@ impl IcIntegrator {
             cache_file: None,
             force_reuse: false,
             exclusions: Exclusions::None,
+            pixel_pass: PixelPass::Lookup,
         })
     }
 
@@ -152,6 +177,30 @@ impl IcIntegrator {
         sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Rgb {
+        let fresh;
+        let cache = match &self.cache {
+            Some(c) => c.as_ref(),
+            None => {
+                fresh = IrradianceCache::new(scene, &self.params);
+                &fresh
+            }
+        };
+        self.li_splatted(scene, cache, ray, first_hit, None, sampler, rays)
+    }
+
+    /// [`IcIntegrator::li`] with the cache `cache` and, for the first vertex, what splatting
+    /// found there (`splatted`; where it found nothing, the vertex looks up as any other).
+    #[allow(clippy::too_many_arguments)]
+    pub fn li_splatted(
+        &self,
+        scene: &Scene,
+        cache: &IrradianceCache,
+        ray: &Ray,
+        first_hit: Option<&Hit>,
+        splatted: Option<Splatted>,
+        sampler: &mut dyn Sampler,
+        rays: &mut RayCounts,
+    ) -> Rgb {
         // One light sample when the only light is a delta light (all samples are alike).
         let first_light_samples = if scene.lights.all_delta() && scene.lights.len() == 1 {
             1
@@ -164,15 +213,11 @@ impl IcIntegrator {
             first_light_samples,
         };
         let start = PathStart::camera(*ray, self.hide_emitters);
-        let fresh;
-        let cache = match &self.cache {
-            Some(c) => c.as_ref(),
-            None => {
-                fresh = IrradianceCache::new(scene, &self.params);
-                &fresh
-            }
+        let mut source = PixelLookup {
+            ic: self,
+            cache,
+            splatted: splatted.unwrap_or_default(),
         };
-        let mut source = PixelLookup { ic: self, cache };
         let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
         trace_path(scene, start, first, &mut source, &settings, sampler, rays)
     }
@@ -184,10 +229,12 @@ const RR_DEPTH: u32 = 5;
 /// The pixel pass's lookups: the cache of the vertex's depth, interpolated at the accuracy `a`,
 /// else from records up to 4a away (pixel samples off the pre-pass's pixel centres); else, at
 /// depth 0, from a record gathered for this sample alone, and deeper (surfaces seen in glossy
-/// reflections, which the pre-pass does not visit) by tracing.
+/// reflections, which the pre-pass does not visit) by tracing. At depth 0, what splatting found
+/// comes first.
 struct PixelLookup<'a> {
     ic: &'a IcIntegrator,
     cache: &'a IrradianceCache,
+    splatted: Splatted,
 }
 
 impl IndirectSource for PixelLookup<'_> {
@@ -202,6 +249,9 @@ impl IndirectSource for PixelLookup<'_> {
         let cache = self.cache;
         if cache.is_excluded(sp.it.shape) {
             return Some(cache.ambient * std::f32::consts::PI);
+        }
+        if let (0, Some(e)) = (depth, self.splatted.irradiance) {
+            return Some(e);
         }
         let store = cache.levels.get(depth as usize)?;
         for threshold in [1.0, 2.0, 4.0] {
@@ -235,6 +285,9 @@ impl IndirectSource for PixelLookup<'_> {
     }
 
     fn glossy(&mut self, _: &Scene, sp: &ShadingPoint, depth: u32, wo: Vec3) -> Option<Rgb> {
+        if let (0, Some(l)) = (depth, self.splatted.glossy) {
+            return Some(l);
+        }
         crate::radiance_cache::lookup::glossy(self.cache, sp, depth, wo)
     }
 

@@ -55,7 +55,7 @@ pub enum Integrator {
 }
 
 /// The integrator names this renderer knows.
-pub const INTEGRATOR_NAMES: &[&str] = &["path", "direct", "ic (irrcache)"];
+pub const INTEGRATOR_NAMES: &[&str] = &["path", "direct", "ic (irrcache)", "splat"];
 
 impl Integrator {
     /// Builds the integrator named in `desc`.
@@ -75,6 +75,12 @@ impl Integrator {
                 hide_emitters: desc.hide_emitters,
             })),
             "ic" | "irrcache" => Ok(Integrator::Ic(ic::IcIntegrator::from_desc(desc)?)),
+            // The irradiance cache with its first vertices served by splatting (001 ch. 4).
+            "splat" => {
+                let mut ic = ic::IcIntegrator::from_desc(desc)?;
+                ic.pixel_pass = ic::PixelPass::Splat;
+                Ok(Integrator::Ic(ic))
+            }
             other => Err(format!(
                 "unknown integrator \"{other}\" (known: {})",
                 INTEGRATOR_NAMES.join(", ")
@@ -121,6 +127,15 @@ impl Integrator {
                         .load(std::sync::atomic::Ordering::Relaxed),
                 )
             }),
+            _ => None,
+        }
+    }
+
+    /// The integrator whose pixel pass splats records (see [`crate::splatting`]), if it is one.
+    #[must_use]
+    pub fn splatting(&self) -> Option<&ic::IcIntegrator> {
+        match self {
+            Integrator::Ic(ic) if ic.pixel_pass == ic::PixelPass::Splat => Some(ic),
             _ => None,
         }
     }

@@ -84,6 +84,29 @@ impl<R: CachedRecord> RecordStore<R> {
         self.records.is_empty()
     }
 
+    /// Record `id`'s position and the distance beyond which it never serves at threshold 1
+    /// (its validity radius): the sphere a splat covers (NOTES-001 §C.2 step 1).
+    #[must_use]
+    pub fn reach(&self, id: u32) -> (Vec3, f32) {
+        let [x, y, z, rho] = self.reach[id as usize];
+        (Vec3::new(x, y, z), rho)
+    }
+
+    /// Record `rec`'s normalised error at (p, n), `None` when it lies in front of p: the rule
+    /// every lookup applies ([`ErrorMetric::error`] at the store's accuracy).
+    #[inline]
+    #[must_use]
+    pub fn error(&self, rec: &R, p: Vec3, n: Vec3) -> Option<f32> {
+        self.metric.error(rec, p, n, self.accuracy)
+    }
+
+    /// The weight of a record whose normalised error is `e`, serving up to `threshold`.
+    #[inline]
+    #[must_use]
+    pub fn weight(&self, e: f32, threshold: f32) -> f32 {
+        self.metric.weight(e, threshold)
+    }
+
     fn cell_size(&self, level: u8) -> f32 {
         self.base_cell * (1u64 << level) as f32
     }

@@ -1,0 +1,249 @@
+//! The splat buffer and Algorithm 3 of paper 001 (NOTES-001 §C.2): a record adds its weighted,
+//! extrapolated irradiance (000 eq. 3.15) to every sample of the layer it serves, and, for a
+//! radiance record, the light its rotated, extrapolated coefficients reflect through the
+//! sample's BRDF towards the camera (3.19). The pixels visited are those inside the film
+//! rectangle of the record's influence sphere (its validity radius: every metric's error
+//! exceeds its threshold beyond it), grown by the pixel filter's reach.
+//!
+//! Bands of rows own their pixels and take their records in index order, so a pixel's sums do
+//! not depend on the thread count. The glossy part sums the dot products before clamping, as
+//! the lookup clamps the dot product of the blended coefficients.
+
+use super::gbuffer::GBuffer;
+use crate::irradiance_cache::gather::{IrradianceCache, ShadingPoint};
+use crate::irradiance_cache::record::extrapolate;
+use crate::radiance_cache::brdf::BrdfCoefficients;
+use crate::radiance_cache::record::frame_around;
+use crate::render::TILE;
+use ircache_math::harmonics::coefficient_count;
+use ircache_math::harmonics::rotation::TiltTable;
+use ircache_math::{DMat3, Frame, Mat4, Rgb, Vec2};
+use rayon::prelude::*;
+use std::ops::Range;
+
+/// One sample's sums.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SplatPixel {
+    /// Σ w E′ (3.15's numerator).
+    pub irradiance: Rgb,
+    /// Σ w.
+    pub weight: f32,
+    /// Records that reached the sample.
+    pub count: u32,
+    /// The smallest normalised error among them (∞ when none): the sample is covered when it
+    /// is at most the cache's coverage threshold there.
+    pub min_error: f32,
+    /// Σ w ⟨Rot(Λ + d·∇Λ), c(ωo)⟩ per channel over radiance records.
+    pub glossy: [f64; 3],
+    /// Σ w over those radiance records.
+    pub glossy_weight: f64,
+}
+
+impl Default for SplatPixel {
+    fn default() -> Self {
+        SplatPixel {
+            irradiance: Rgb::ZERO,
+            weight: 0.0,
+            count: 0,
+            min_error: f32::INFINITY,
+            glossy: [0.0; 3],
+            glossy_weight: 0.0,
+        }
+    }
+}
+
+impl SplatPixel {
+    /// The blended irradiance (clamped at zero, as the lookup's), `None` when no record reached.
+    #[must_use]
+    pub fn irradiance(&self) -> Option<Rgb> {
+        (self.count > 0).then(|| (self.irradiance / self.weight).max(Rgb::ZERO))
+    }
+
+    /// The glossy radiance towards the camera, `None` when no radiance record reached.
+    #[must_use]
+    pub fn glossy(&self) -> Option<Rgb> {
+        (self.glossy_weight > 0.0).then(|| {
+            let c = self
+                .glossy
+                .map(|g| (g / self.glossy_weight).max(0.0) as f32);
+            Rgb::new(c[0], c[1], c[2])
+        })
+    }
+}
+
+/// The splat buffer of one layer (SPLATBUFF, NOTES-001 §C.1).
+#[derive(Clone, Debug)]
+pub struct SplatBuffer {
+    /// Image width.
+    pub width: usize,
+    /// Per sample, row-major.
+    pub pixels: Vec<SplatPixel>,
+}
+
+impl SplatBuffer {
+    /// A cleared buffer for `g`.
+    #[must_use]
+    pub fn new(g: &GBuffer) -> SplatBuffer {
+        SplatBuffer {
+            width: g.width,
+            pixels: vec![SplatPixel::default(); g.width * g.height],
+        }
+    }
+}
+
+/// What a sample needs to shade a radiance record's coefficients: the BRDF's coefficients for
+/// its viewing direction, its frame, the tilt table, and the glossy lookup's threshold.
+struct GlossyView<'a> {
+    brdf: Vec<f64>,
+    order: usize,
+    frame: DMat3,
+    tilt: &'a TiltTable,
+    threshold: f32,
+}
+
+impl<'a> GlossyView<'a> {
+    /// As [`crate::radiance_cache::lookup::glossy`] sets itself up; `None` where it would
+    /// decline.
+    fn new(cache: &'a IrradianceCache, sp: &ShadingPoint, wo: ircache_math::Vec3) -> Option<Self> {
+        let tables = cache.radiance.as_deref()?;
+        let brdf: &BrdfCoefficients = tables.brdf_at(sp)?;
+        let tilt = tables.tilt(brdf.order())?;
+        let wo_local = Frame::from_z(sp.n_bump).to_local(wo);
+        if !brdf.serves(wo_local) {
+            return None;
+        }
+        let mut c = vec![0.0; 3 * coefficient_count(brdf.order())];
+        brdf.at(wo_local, &mut c);
+        Some(GlossyView {
+            brdf: c,
+            order: brdf.order(),
+            frame: frame_around(sp.n_bump),
+            tilt,
+            threshold: cache.coverage_threshold(sp),
+        })
+    }
+}
+
+/// The pixel rectangle (x0, y0, x1, y1), exclusive ends, whose samples may lie in the film
+/// rectangle `bounds`: samples stray up to `reach` pixels from their pixel's centre.
+fn pixel_rect(bounds: (Vec2, Vec2), w: usize, h: usize, reach: f32) -> Option<[usize; 4]> {
+    let (lo, hi) = bounds;
+    let clamp = |v: f32, n: usize| -> f32 { v.clamp(-1.0, n as f32 + 1.0) };
+    // A sample of pixel x lies in [x + 0.5 − reach, x + 0.5 + reach]; one pixel more for
+    // rounding.
+    let x0 = clamp((lo.x * w as f32 - 0.5 - reach).floor() - 1.0, w);
+    let y0 = clamp((lo.y * h as f32 - 0.5 - reach).floor() - 1.0, h);
+    let x1 = clamp((hi.x * w as f32 - 0.5 + reach).ceil() + 2.0, w);
+    let y1 = clamp((hi.y * h as f32 - 0.5 + reach).ceil() + 2.0, h);
+    let (x0, y0) = (x0.max(0.0) as usize, y0.max(0.0) as usize);
+    let (x1, y1) = ((x1.max(0.0) as usize).min(w), (y1.max(0.0) as usize).min(h));
+    (x0 < x1 && y0 < y1).then_some([x0, y0, x1, y1])
+}
+
+/// Splats level-0 records `ids` of `cache` into `buffer` over the samples of `g`, whose film
+/// samples stray up to `filter_reach` pixels from their pixel centres.
+pub fn splat(
+    buffer: &mut SplatBuffer,
+    g: &GBuffer,
+    cache: &IrradianceCache,
+    ids: Range<usize>,
+    camera: &crate::camera::Camera,
+    filter_reach: f32,
+) {
+    let Some(store) = cache.levels.first() else {
+        return;
+    };
+    let (w, h) = (g.width, g.height);
+    let to_camera: Mat4 = camera.to_world.inverse();
+    // Each record's rectangle, filed under the bands of rows it touches.
+    let bands = h.div_ceil(TILE);
+    let rects: Vec<Option<[usize; 4]>> = ids
+        .clone()
+        .into_par_iter()
+        .map(|id| {
+            let (centre, reach) = store.reach(id as u32);
+            let bounds = camera.sphere_bounds(&to_camera, centre, reach)?;
+            pixel_rect(bounds, w, h, filter_reach)
+        })
+        .collect();
+    let mut per_band: Vec<Vec<(u32, [usize; 4])>> = vec![Vec::new(); bands];
+    for (id, rect) in ids.clone().zip(&rects) {
+        if let Some(r) = rect {
+            for list in &mut per_band[r[1] / TILE..r[3].div_ceil(TILE)] {
+                list.push((id as u32, *r));
+            }
+        }
+    }
+    let mode = cache.params.gradients;
+    let records = store.records();
+    buffer
+        .pixels
+        .par_chunks_mut(w * TILE)
+        .zip(g.samples.par_chunks(w * TILE))
+        .zip(per_band.par_iter())
+        .enumerate()
+        .for_each(|(band, ((pixels, samples), list))| {
+            if list.is_empty() {
+                return;
+            }
+            let y_band = band * TILE;
+            // Set up lazily: most samples never meet a radiance record.
+            let mut views: Vec<Option<Option<GlossyView>>> = Vec::new();
+            views.resize_with(samples.len(), || None);
+            let mut seen = Vec::new();
+            for &(id, [x0, y0, x1, y1]) in list {
+                let rec = &records[id as usize];
+                let radiance = cache.radiance_records.get(rec.radiance as usize);
+                for y in y0.max(y_band)..y1.min(y_band + TILE) {
+                    for x in x0..x1 {
+                        let i = (y - y_band) * w + x;
+                        let Some(sp) = &samples[i].point else {
+                            continue;
+                        };
+                        let Some(err) = store.error(rec, sp.it.p, sp.n) else {
+                            continue;
+                        };
+                        if err > 1.0 {
+                            continue;
+                        }
+                        let px = &mut pixels[i];
+                        let weight = store.weight(err, 1.0);
+                        px.irradiance += extrapolate(rec, sp.it.p, sp.n_bump, mode) * weight;
+                        px.weight += weight;
+                        px.count += 1;
+                        px.min_error = px.min_error.min(err);
+                        let Some(r) = radiance else {
+                            continue;
+                        };
+                        let view = views[i]
+                            .get_or_insert_with(|| GlossyView::new(cache, sp, -samples[i].ray.d));
+                        let Some(view) = view else {
+                            continue;
+                        };
+                        if err > view.threshold
+                            || r.radiance.order != view.order
+                            || !r.seen_from_into(
+                                sp.it.p.as_dvec3(),
+                                view.frame,
+                                view.tilt,
+                                &mut seen,
+                            )
+                        {
+                            continue;
+                        }
+                        let weight = f64::from(store.weight(err, view.threshold));
+                        let n = seen.len() / 3;
+                        for (c, g) in px.glossy.iter_mut().enumerate() {
+                            let dot: f64 = view.brdf[c * n..(c + 1) * n]
+                                .iter()
+                                .zip(&seen[c * n..(c + 1) * n])
+                                .map(|(a, b)| a * b)
+                                .sum();
+                            *g += weight * dot;
+                        }
+                        px.glossy_weight += weight;
+                    }
+                }
+            }
+        });
+}

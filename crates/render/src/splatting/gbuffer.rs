@@ -1,0 +1,124 @@
+//! The G-buffer (NOTES-001 §C.1): for one layer of pixel samples (sample `k` of every pixel),
+//! the camera ray, its first hit and, where the cache serves that surface, its shading point
+//! exactly as the path loop makes it for the first vertex. The rays are those of the `ic`
+//! pixel pass (same sampler dimensions), so both passes shade the same vertices.
+
+use crate::irradiance_cache::gather::{IrradianceCache, ShadingPoint};
+use crate::render::RenderSettings;
+use crate::sampler::{dims, Sampler, SamplerSettings};
+use crate::scene::Scene;
+use ircache_embree::Hit;
+use ircache_math::{Ray, Vec2, Vec3};
+use rayon::prelude::*;
+
+/// One pixel's sample of the layer.
+#[derive(Clone, Copy, Debug)]
+pub struct GSample {
+    /// The camera ray.
+    pub ray: Ray,
+    /// Its first hit.
+    pub hit: Option<Hit>,
+    /// The first vertex, where records serve it (a Lambertian part or a radiance-cached glossy
+    /// lobe on a surface not excluded from the cache): a record site of level 0.
+    pub point: Option<ShadingPoint>,
+}
+
+/// One layer of samples, row-major, `width × height` (rows outside the render's band hold no
+/// ray and no point).
+#[derive(Clone, Debug)]
+pub struct GBuffer {
+    /// Image width.
+    pub width: usize,
+    /// Image height.
+    pub height: usize,
+    /// Sample index of this layer in every pixel.
+    pub layer: u32,
+    /// The samples.
+    pub samples: Vec<GSample>,
+}
+
+impl GBuffer {
+    /// Layer `layer` of the render `settings` with pixel samplers `samplers`; `cache` decides
+    /// which vertices are record sites.
+    #[must_use]
+    pub fn build(
+        scene: &Scene,
+        cache: &IrradianceCache,
+        settings: &RenderSettings,
+        samplers: &SamplerSettings,
+        layer: u32,
+    ) -> GBuffer {
+        let (w, h) = (settings.width, settings.height);
+        let rows = settings.rows();
+        let inv_size = Vec2::new(1.0 / w as f32, 1.0 / h as f32);
+        let empty = GSample {
+            ray: Ray::new(Vec3::ZERO, Vec3::Z),
+            hit: None,
+            point: None,
+        };
+        let mut samples = vec![empty; w * h];
+        samples
+            .par_chunks_mut(w)
+            .enumerate()
+            .filter(|(y, _)| rows.contains(y))
+            .for_each(|(y, row)| {
+                for (x16, chunk) in row.chunks_mut(16).enumerate() {
+                    let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
+                    let mut hits = [None; 16];
+                    let n = chunk.len();
+                    for (i, ray) in camera[..n].iter_mut().enumerate() {
+                        let x = x16 * 16 + i;
+                        let mut sampler = samplers.pixel(x as u32, y as u32);
+                        sampler.set_sample(layer, dims::FILM);
+                        let offset = settings.filter.sample(sampler.next_2d());
+                        let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
+                        *ray = scene.camera.generate_ray(film);
+                    }
+                    scene.accel.intersect16(&camera[..n], &mut hits[..n]);
+                    for ((s, ray), hit) in chunk.iter_mut().zip(&camera).zip(&hits) {
+                        *s = GSample {
+                            ray: *ray,
+                            hit: *hit,
+                            point: hit.as_ref().and_then(|h| record_site(scene, cache, ray, h)),
+                        };
+                    }
+                }
+            });
+        GBuffer {
+            width: w,
+            height: h,
+            layer,
+            samples,
+        }
+    }
+}
+
+/// The first vertex of `ray` at `hit` as the path loop makes it, when records serve it.
+fn record_site(
+    scene: &Scene,
+    cache: &IrradianceCache,
+    ray: &Ray,
+    hit: &Hit,
+) -> Option<ShadingPoint> {
+    if cache.levels.is_empty() {
+        return None;
+    }
+    let it = scene.interaction(ray, hit);
+    if cache.is_excluded(it.shape) {
+        return None;
+    }
+    let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+    if !bsdf.has_smooth() {
+        return None;
+    }
+    let wo = -ray.d;
+    // As `trace_path` makes the first vertex of a camera path.
+    let mut sp = ShadingPoint::facing(it, wo);
+    sp.travelled = it.t;
+    let lambertian = !bsdf.lambertian_albedo(it.frame.to_local(wo)).is_black();
+    let glossy = cache
+        .radiance
+        .as_deref()
+        .is_some_and(|r| r.brdf_at(&sp).is_some());
+    (lambertian || glossy).then_some(sp)
+}
