@@ -191,7 +191,8 @@ mod tests {
     }
 
     /// The film bounds of a sphere hold the projection of every point on it that lies in front
-    /// of the camera, and are tight (within 2 % of the extent) for spheres wholly in front; at
+    /// of the camera, and are tight (within 2 % of the extent) for spheres well in front (random
+    /// points rarely find the extremes of one that nearly touches the eye's plane); at
     /// millimetre, metre and kilometre scales.
     #[test]
     fn sphere_bounds_hold_the_projected_sphere_tightly() {
@@ -232,10 +233,13 @@ mod tests {
                         hi = hi.max(f);
                     }
                 }
-                let in_front = local.z - radius > 0.05;
+                let in_front = local.z > 2.0 * radius;
                 if let (true, Some((bl, bh))) = (in_front, bounds) {
                     let extent = bh - bl;
-                    assert!((lo - bl).max_element() < 0.02 * extent.max_element());
+                    assert!(
+                        (lo - bl).max_element() < 0.02 * extent.max_element(),
+                        "{lo} {bl} {hi} {bh} scale {scale} local {local} r {radius}"
+                    );
                     assert!((bh - hi).max_element() < 0.02 * extent.max_element());
                 }
             }
