@@ -10,12 +10,14 @@
 //! - The irradiance cache (`ic`, one bounce) on the Cornell box and Sponza: time, records and
 //!   relMSE_trim against the references, with gradient variants, next to Mitsuba 3's path
 //!   tracer run at the spp its error law says reaches the same error (and checked).
+//! - `splat`: radiance cache splatting against the lookup (see [`splat`]).
 //! - `peers`: ircache's `path` and `ic` against Mitsuba 3 with `independent` and `multijitter`,
 //!   Mitsuba rendered at more samples until it reaches `ic`'s error (see [`peers`]).
 
 mod cache_vs_path;
 mod peers;
 mod radiance;
+mod splat;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -47,7 +49,7 @@ pub struct BenchArgs {
     /// Which parts: all, rays, path, gather, ic, peers (ircache against Mitsuba 3 with
     /// multijitter, by rendering), cache (the cache against path tracing by rendering, and the
     /// cost of depth), radiance (radiance caching against tracing the same lobes and against
-    /// Mitsuba 3, by rendering).
+    /// Mitsuba 3, by rendering), splat (splatting against the lookup: per record, per frame).
     #[arg(long, default_value = "all")]
     pub only: String,
 }
@@ -113,6 +115,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "radiance" {
         radiance::run_all(&shared, !args.no_mitsuba)?;
+    }
+    if args.only == "all" || args.only == "splat" {
+        splat::run_all(&shared)?;
     }
     Ok(())
 }
