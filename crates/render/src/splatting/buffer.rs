@@ -89,6 +89,13 @@ impl SplatBuffer {
             pixels: vec![SplatPixel::default(); g.width * g.height],
         }
     }
+
+    /// Clears every sample's sums (for the next layer).
+    pub fn clear(&mut self) {
+        self.pixels
+            .par_iter_mut()
+            .for_each(|p| *p = SplatPixel::default());
+    }
 }
 
 /// What a sample needs to shade a radiance record's coefficients: the BRDF's coefficients for
@@ -129,12 +136,13 @@ impl<'a> GlossyView<'a> {
 fn pixel_rect(bounds: (Vec2, Vec2), w: usize, h: usize, reach: f32) -> Option<[usize; 4]> {
     let (lo, hi) = bounds;
     let clamp = |v: f32, n: usize| -> f32 { v.clamp(-1.0, n as f32 + 1.0) };
-    // A sample of pixel x lies in [x + 0.5 − reach, x + 0.5 + reach]; one pixel more for
-    // rounding.
-    let x0 = clamp((lo.x * w as f32 - 0.5 - reach).floor() - 1.0, w);
-    let y0 = clamp((lo.y * h as f32 - 0.5 - reach).floor() - 1.0, h);
-    let x1 = clamp((hi.x * w as f32 - 0.5 + reach).ceil() + 2.0, w);
-    let y1 = clamp((hi.y * h as f32 - 0.5 + reach).ceil() + 2.0, h);
+    // A sample of pixel x lies in [x + 0.5 − reach, x + 0.5 + reach]; a hundredth of a pixel
+    // more for the rounding of the bounds.
+    let reach = reach + 0.01;
+    let x0 = clamp((lo.x * w as f32 - 0.5 - reach).floor(), w);
+    let y0 = clamp((lo.y * h as f32 - 0.5 - reach).floor(), h);
+    let x1 = clamp((hi.x * w as f32 - 0.5 + reach).floor() + 1.0, w);
+    let y1 = clamp((hi.y * h as f32 - 0.5 + reach).floor() + 1.0, h);
     let (x0, y0) = (x0.max(0.0) as usize, y0.max(0.0) as usize);
     let (x1, y1) = ((x1.max(0.0) as usize).min(w), (y1.max(0.0) as usize).min(h));
     (x0 < x1 && y0 < y1).then_some([x0, y0, x1, y1])

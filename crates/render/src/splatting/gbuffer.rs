@@ -48,16 +48,36 @@ impl GBuffer {
         samplers: &SamplerSettings,
         layer: u32,
     ) -> GBuffer {
-        let (w, h) = (settings.width, settings.height);
-        let rows = settings.rows();
-        let inv_size = Vec2::new(1.0 / w as f32, 1.0 / h as f32);
         let empty = GSample {
             ray: Ray::new(Vec3::ZERO, Vec3::Z),
             hit: None,
             point: None,
         };
-        let mut samples = vec![empty; w * h];
-        samples
+        let mut g = GBuffer {
+            width: settings.width,
+            height: settings.height,
+            layer,
+            samples: vec![empty; settings.width * settings.height],
+        };
+        g.rebuild(scene, cache, settings, samplers, layer);
+        g
+    }
+
+    /// Makes this buffer (of the same size) hold layer `layer` instead, reusing its memory.
+    pub fn rebuild(
+        &mut self,
+        scene: &Scene,
+        cache: &IrradianceCache,
+        settings: &RenderSettings,
+        samplers: &SamplerSettings,
+        layer: u32,
+    ) {
+        let (w, h) = (settings.width, settings.height);
+        assert_eq!(self.samples.len(), w * h, "G-buffer of another size");
+        let rows = settings.rows();
+        let inv_size = Vec2::new(1.0 / w as f32, 1.0 / h as f32);
+        self.layer = layer;
+        self.samples
             .par_chunks_mut(w)
             .enumerate()
             .filter(|(y, _)| rows.contains(y))
@@ -84,12 +104,6 @@ impl GBuffer {
                     }
                 }
             });
-        GBuffer {
-            width: w,
-            height: h,
-            layer,
-            samples,
-        }
     }
 }
 

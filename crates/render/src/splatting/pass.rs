@@ -147,16 +147,29 @@ pub fn render_layers(
     let reach = settings.filter.radius();
     let rows = settings.rows();
     let w = settings.width;
+    let (mut g, mut buffer): (Option<GBuffer>, Option<SplatBuffer>) = (None, None);
     for layer in 0..samplers.spp {
         let t = Instant::now();
-        let g = GBuffer::build(scene, &cache, settings, samplers, layer);
+        let g = match &mut g {
+            Some(g) => {
+                g.rebuild(scene, &cache, settings, samplers, layer);
+                g
+            }
+            None => g.insert(GBuffer::build(scene, &cache, settings, samplers, layer)),
+        };
         rays.camera += (rows.len() * w) as u64;
         stats.gbuffer_seconds += t.elapsed().as_secs_f64();
 
         let t = Instant::now();
-        let mut buffer = SplatBuffer::new(&g);
+        let buffer = match &mut buffer {
+            Some(b) => {
+                b.clear();
+                b
+            }
+            None => buffer.insert(SplatBuffer::new(g)),
+        };
         let existing = cache.levels.first().map_or(0, |s| s.len());
-        splat(&mut buffer, &g, &cache, 0..existing, &scene.camera, reach);
+        splat(buffer, g, &cache, 0..existing, &scene.camera, reach);
         stats.splats += existing as u64;
         stats.splat_seconds += t.elapsed().as_secs_f64();
 
@@ -164,8 +177,8 @@ pub fn render_layers(
         let added = fill_misses(
             scene,
             &mut cache,
-            &g,
-            &mut buffer,
+            g,
+            buffer,
             settings.seed,
             usize::MAX,
             reach,
