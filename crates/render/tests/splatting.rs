@@ -246,3 +246,72 @@ fn a_splatted_render_is_the_same_on_one_thread_and_two_and_matches_ic() {
         "{m:?}"
     );
 }
+
+/// The walkthrough (NOTES-001 §C.7): each frame adds at most its budget of records; frames fill
+/// every hole; a finer accuracy opens holes that later frames fill, a coarser one opens none;
+/// the running mean converges to the image `splat` renders of the same view.
+#[test]
+fn the_walkthrough_fills_its_holes_within_budget_and_converges() {
+    use ircache_render::integrators::RayCounts;
+    use ircache_render::splatting::walkthrough::Walkthrough;
+    let desc = cornell_rough("splat", 32, 64);
+    let scene = Scene::build(&desc).expect("scene builds");
+    let Integrator::Ic(ic) = Integrator::from_desc(&desc.integrator).expect("integrator") else {
+        panic!("not the cache's integrator")
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("pool");
+    let mut walk = pool
+        .install(|| Walkthrough::new(scene, &ic, 32, 32, 3, &pool))
+        .expect("walkthrough");
+    walk.budget = 40;
+    let mut rays = RayCounts::default();
+    let mut frames = Vec::new();
+    for _ in 0..64 {
+        frames.push(pool.install(|| walk.frame(&mut rays)));
+    }
+    assert!(frames.iter().all(|f| f.new_records <= 40));
+    assert_eq!(
+        frames[0].new_records, 40,
+        "the first frame spends its budget"
+    );
+    let last = frames.last().expect("frames");
+    assert_eq!(last.uncovered, 0, "holes left after 64 frames");
+    assert_eq!(last.layers, 64);
+
+    // Coarser: no new records; finer: holes, filled again by later frames.
+    walk.set_accuracy(0.7).expect("accuracy");
+    let coarser = pool.install(|| walk.frame(&mut rays));
+    assert_eq!(
+        (coarser.layers, coarser.new_records, coarser.uncovered),
+        (1, 0, 0)
+    );
+    walk.set_accuracy(0.15).expect("accuracy");
+    assert!(walk.set_accuracy(1.5).is_err() && walk.set_accuracy(f32::NAN).is_err());
+    let finer = pool.install(|| walk.frame(&mut rays));
+    assert!(finer.new_records > 0);
+    let mut report = finer;
+    for _ in 0..200 {
+        if report.uncovered == 0 {
+            break;
+        }
+        report = pool.install(|| walk.frame(&mut rays));
+    }
+    assert_eq!(
+        report.uncovered, 0,
+        "the finer accuracy's holes were never filled"
+    );
+
+    // Converged against the splat integrator's own render at the same view and accuracy.
+    walk.set_accuracy(ic.params.accuracy).expect("accuracy");
+    for _ in 0..64 {
+        pool.install(|| walk.frame(&mut rays));
+    }
+    let mean = walk.image(false);
+    assert!(mean.pixels.iter().all(|p| p.is_valid_radiance()));
+    let rendered = render_desc(&desc, 2, 3);
+    let m = ircache_image::compare::compare(&mean, &rendered.image).expect("same size");
+    assert!((m.lum_ratio - 1.0).abs() < 0.02, "{m:?}");
+}

@@ -64,6 +64,10 @@ pub struct Splatted {
     pub irradiance: Option<Rgb>,
     /// Glossy radiance towards the camera (000 eq. 3.19), as the glossy lookup gives it.
     pub glossy: Option<Rgb>,
+    /// Where splatting found no irradiance, trace the Lambertian part (the walkthrough: a
+    /// miss waits for a record of a later frame) instead of looking up at relaxed thresholds
+    /// or gathering a record for the sample alone.
+    pub trace_misses: bool,
 }
 
 /// Which surfaces take no cache records (Radiance's `-ae`/`-aE` and `-ai`/`-aI`): they get the
@@ -250,8 +254,13 @@ impl IndirectSource for PixelLookup<'_> {
         if cache.is_excluded(sp.it.shape) {
             return Some(cache.ambient * std::f32::consts::PI);
         }
-        if let (0, Some(e)) = (depth, self.splatted.irradiance) {
-            return Some(e);
+        if depth == 0 {
+            if let Some(e) = self.splatted.irradiance {
+                return Some(e);
+            }
+            if self.splatted.trace_misses {
+                return None;
+            }
         }
         let store = cache.levels.get(depth as usize)?;
         for threshold in [1.0, 2.0, 4.0] {

@@ -28,12 +28,7 @@ pub fn prepare_cache(
     let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     cache.pixel_angle = 2.0 * scene.camera.tan_half_x / settings.width.max(1) as f32;
-    let header = Header {
-        version: file::VERSION,
-        scene_hash: scene.content_hash ^ ic.exclusions.hash(),
-        view_hash: view_hash(scene, &ic.params, settings.width),
-        params: ic.params.clone(),
-    };
+    let header = header(scene, ic, settings.width);
     let mut loaded = 0u64;
     let mut notes = Vec::new();
     let mut shared = match &ic.cache_file {
@@ -98,6 +93,17 @@ pub fn prepare_cache(
 
 /// What records' radii depend on besides the scene and settings: with Tabellion's metric the
 /// pixel footprint, so the camera and the film width; otherwise nothing (0).
+/// The header of a cache file for `scene` rendered by `ic` at `width` pixels across.
+#[must_use]
+pub fn header(scene: &Scene, ic: &IcIntegrator, width: usize) -> Header {
+    Header {
+        version: file::VERSION,
+        scene_hash: scene.content_hash ^ ic.exclusions.hash(),
+        view_hash: view_hash(scene, &ic.params, width),
+        params: ic.params.clone(),
+    }
+}
+
 fn view_hash(scene: &Scene, params: &super::IcParams, width: usize) -> u64 {
     use super::record::ErrorMetric;
     use std::fmt::Write;

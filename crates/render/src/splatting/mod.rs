@@ -11,6 +11,8 @@
 //!   parallel over bands of rows that own their pixels, so sums are deterministic.
 //! - [`pass`]: cache-miss detection on the splat buffer, coarse to fine (NOTES-001 §C.6), with
 //!   an optional budget of new records (§C.7), and the `splat` integrator's pixel pass.
+//! - [`walkthrough`]: the progressive walkthrough (§C.7): one layer a frame, a budget of new
+//!   records, a running mean restarted when the view or the accuracy changes.
 //!
 //! Splatting and the lookup of [`crate::integrators::ic`] combine the same records with the same
 //! weights (the store's error rule and weight at threshold 1, the glossy lookup's at its
@@ -21,6 +23,7 @@
 pub mod buffer;
 pub mod gbuffer;
 pub mod pass;
+pub mod walkthrough;
 
 pub use buffer::{SplatBuffer, SplatPixel};
 pub use gbuffer::{GBuffer, GSample};

@@ -210,6 +210,7 @@ pub fn render_layers(
                         let splatted = s.point.map(|_| Splatted {
                             irradiance: px.irradiance(),
                             glossy: px.glossy(),
+                            trace_misses: false,
                         });
                         Some(ic.li_splatted(
                             scene,
