@@ -27,6 +27,9 @@ use std::time::Instant;
 /// Layers a view accumulates before it stops refining (the samples of one pixel sequence).
 pub const MAX_LAYERS: u32 = 1024;
 
+/// A sample's value, its splatted irradiance, and whether no record covered it.
+type Shaded = (Rgb, Rgb, bool);
+
 /// What one frame did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameReport {
@@ -220,7 +223,7 @@ impl Walkthrough {
         let cache = &*cache;
         let ic = &self.ic;
         let w = settings.width;
-        let shaded: Vec<(Vec<(Rgb, Rgb, bool)>, RayCounts)> = g
+        let shaded: Vec<(Vec<Shaded>, RayCounts)> = g
             .samples
             .par_chunks(w)
             .zip(buffer.pixels.par_chunks(w))
