@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
-# Installs what ircache needs on a fresh Debian machine: Embree 3 (the ray-tracing core) and a C
-# toolchain. Rust itself comes from rustup. Safe to run again: it installs only what is missing.
+# Installs what ircache needs on a fresh Debian machine: Embree 3 (the ray-tracing core), a C
+# toolchain, and Chromium (the walkthrough's end-to-end test drives it headless). Rust itself comes from rustup. Safe to run again: it installs only what is missing.
 set -euo pipefail
 need=()
 dpkg -s libembree-dev >/dev/null 2>&1 || need+=(libembree-dev)
 command -v cc >/dev/null 2>&1 || need+=(build-essential)
 command -v pkg-config >/dev/null 2>&1 || need+=(pkg-config)
+command -v chromium >/dev/null 2>&1 || need+=(chromium)
 if [ ${#need[@]} -gt 0 ]; then
   sudo=""
   [ "$(id -u)" -eq 0 ] || sudo="sudo"
   $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${need[@]}"
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${need[@]}"
 fi
 if ! command -v cargo >/dev/null 2>&1; then
   echo "setup: cargo not found; install Rust with rustup (https://rustup.rs) and run again" >&2

@@ -7,6 +7,7 @@
 //! - `ircache irradiance SCENE` prints irradiance at points (by the cache or by brute force).
 //! - `ircache cache info FILE` prints what an irradiance cache file holds.
 //! - `ircache bench` measures ray throughput and rendering speed.
+//! - `ircache view [SCENE]` serves the progressive walkthrough to a browser.
 
 mod bench;
 mod cache_args;
@@ -14,6 +15,7 @@ mod cache_info;
 mod compare;
 mod irradiance;
 mod render;
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -41,6 +43,8 @@ enum Command {
     Cache(cache_info::CacheCommand),
     /// Measure ray throughput and rendering speed (prints figures).
     Bench(bench::BenchArgs),
+    /// Walk through a scene in the browser: the cache splatted progressively (a local server).
+    View(Box<view::ViewArgs>),
 }
 
 fn main() -> ExitCode {
@@ -54,6 +58,7 @@ fn main() -> ExitCode {
         Command::Cache(c) => cache_info::run(&c),
         Command::Merge(a) => compare::merge(&a),
         Command::Bench(a) => bench::run(&a),
+        Command::View(a) => view::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,388 @@
+//! `ircache view` end to end: the server over plain HTTP (frames, controls, bad requests), and
+//! the page in headless Chromium (the page loads, shows frames that converge to `ircache render`
+//! of the same view, and sends the controls it is given). The built-in Cornell box, small.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ircache-view-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+/// A running `ircache view`, stopped when dropped.
+struct Server {
+    child: Child,
+    port: u16,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn serve(size: u32) -> Server {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ircache"))
+        .args([
+            "view",
+            "--port",
+            "0",
+            "--width",
+            &size.to_string(),
+            "--height",
+        ])
+        .arg(size.to_string())
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("ircache view starts");
+    let mut lines = BufReader::new(child.stderr.take().expect("stderr")).lines();
+    let port = loop {
+        let line = lines
+            .next()
+            .expect("ircache view printed its address")
+            .expect("stderr");
+        if let Some(rest) = line.split("http://127.0.0.1:").nth(1) {
+            break rest
+                .split('/')
+                .next()
+                .and_then(|p| p.parse().ok())
+                .expect("port");
+        }
+    };
+    // Keep draining stderr so the server never blocks on it.
+    std::thread::spawn(move || for _ in lines {});
+    Server { child, port }
+}
+
+struct Reply {
+    status: u16,
+    headers: Vec<(String, String)>,
+    body: Vec<u8>,
+}
+
+impl Reply {
+    fn header(&self, name: &str) -> Option<&str> {
+        self.headers
+            .iter()
+            .find(|(k, _)| k.eq_ignore_ascii_case(name))
+            .map(|(_, v)| v.as_str())
+    }
+    fn text(&self) -> String {
+        String::from_utf8_lossy(&self.body).into_owned()
+    }
+}
+
+fn raw(port: u16, request: &[u8]) -> Reply {
+    let mut s = TcpStream::connect(("127.0.0.1", port)).expect("connects");
+    s.set_read_timeout(Some(Duration::from_secs(60)))
+        .expect("timeout");
+    s.write_all(request).expect("sends");
+    let mut buf = Vec::new();
+    let _ = s.read_to_end(&mut buf);
+    let split = buf
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .expect("an HTTP reply");
+    let head = String::from_utf8_lossy(&buf[..split]).into_owned();
+    let mut lines = head.lines();
+    let status = lines
+        .next()
+        .and_then(|l| l.split(' ').nth(1))
+        .and_then(|c| c.parse().ok())
+        .expect("status");
+    let headers = lines
+        .filter_map(|l| l.split_once(": "))
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
+    Reply {
+        status,
+        headers,
+        body: buf[split + 4..].to_vec(),
+    }
+}
+
+fn http(port: u16, method: &str, path: &str) -> Reply {
+    raw(
+        port,
+        format!(
+            "{method} {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\nContent-Length: 0\r\n\r\n"
+        )
+        .as_bytes(),
+    )
+}
+
+/// A frame after `after` with its figures.
+fn frame(port: u16, after: u64) -> (u64, serde_json::Value, Vec<u8>) {
+    let r = http(port, "GET", &format!("/frame?after={after}"));
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.header("Content-Type"), Some("image/png"));
+    let n = r
+        .header("X-Frame")
+        .and_then(|f| f.parse().ok())
+        .expect("X-Frame");
+    let stats = serde_json::from_str(r.header("X-Stats").expect("X-Stats")).expect("JSON");
+    (n, stats, r.body)
+}
+
+/// Frames until the running mean holds `layers` layers; the last frame's figures and PNG.
+fn settle(port: u16, layers: u64) -> (u64, serde_json::Value, Vec<u8>) {
+    let start = Instant::now();
+    let mut last = frame(port, 0);
+    while last.1["layers"].as_u64().unwrap_or(0) < layers {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "never settled: {}",
+            last.1
+        );
+        last = frame(port, last.0);
+    }
+    last
+}
+
+fn decode(png: &[u8], dir: &Path, name: &str) -> ircache_image::Image {
+    let path = dir.join(name);
+    std::fs::write(&path, png).expect("write");
+    ircache_image::read_image(&path).expect("a PNG")
+}
+
+/// `ircache render --integrator splat` of the built-in scene at `size`, as a PNG image.
+fn rendered(dir: &Path, size: u32) -> ircache_image::Image {
+    let out = dir.join("render.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_ircache"))
+        .args([
+            "render",
+            "--integrator",
+            "splat",
+            "--spp",
+            "256",
+            "-q",
+            "--width",
+        ])
+        .args([
+            size.to_string(),
+            "--height".into(),
+            size.to_string(),
+            "-o".into(),
+        ])
+        .arg(&out)
+        .output()
+        .expect("render runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    ircache_image::read_image(&out).expect("render.png")
+}
+
+/// relMSE_trim after a 1-pixel blur and the luminance ratio of `a` against `b`.
+fn against(a: &ircache_image::Image, b: &ircache_image::Image) -> (f64, f64) {
+    use ircache_image::blur::gaussian_blur;
+    let m = ircache_image::compare::compare(&gaussian_blur(a, 1.0), &gaussian_blur(b, 1.0))
+        .expect("same size");
+    (m.rel_mse_trim, m.lum_ratio)
+}
+
+fn mean_abs_difference(a: &ircache_image::Image, b: &ircache_image::Image) -> f64 {
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .map(|(x, y)| f64::from((x.r - y.r).abs() + (x.g - y.g).abs() + (x.b - y.b).abs()))
+        .sum::<f64>()
+        / a.pixels.len() as f64
+}
+
+#[test]
+fn view_serves_converging_frames_follows_controls_and_refuses_bad_requests() {
+    let dir = temp_dir("http");
+    let size = 40;
+    let server = serve(size);
+    let port = server.port;
+
+    let page = http(port, "GET", "/");
+    assert_eq!(page.status, 200);
+    assert!(page.text().contains("<img id=\"frame\""));
+
+    // The first frame spends its budget; the mean then converges to the renderer's image.
+    let (_, first, _) = frame(port, 0);
+    assert_eq!(first["width"].as_u64(), Some(u64::from(size)));
+    let (n, settled, png) = settle(port, 256);
+    assert_eq!(settled["uncovered"].as_u64(), Some(0), "{settled}");
+    let image = decode(&png, &dir, "settled.png");
+    let reference = rendered(&dir, size);
+    let (error, lum) = against(&image, &reference);
+    assert!(
+        error < 2e-3 && (lum - 1.0).abs() < 0.02,
+        "blurred relMSE_trim {error}, lum {lum}"
+    );
+
+    // A finer accuracy restarts the mean and opens holes that new records fill.
+    let accuracy = http(port, "POST", "/control?accuracy=0.15");
+    assert_eq!(accuracy.status, 200, "{}", accuracy.text());
+    let mut finer = frame(port, n);
+    while finer.1["accuracy"].as_f64() != Some(0.15) {
+        finer = frame(port, finer.0);
+    }
+    assert!(finer.1["layers"].as_u64() < Some(10), "{}", finer.1);
+    assert!(
+        finer.1["records"].as_u64() > settled["records"].as_u64(),
+        "{}",
+        finer.1
+    );
+
+    // A turn of the camera shows another image.
+    let (n, settled, png) = settle(port, 16);
+    let before = decode(&png, &dir, "before.png");
+    assert_eq!(http(port, "POST", "/control?turn=0.4,0").status, 200);
+    let view = settled["view_number"].as_u64().expect("view number");
+    let mut turned = frame(port, n);
+    while turned.1["view_number"].as_u64() == Some(view) || turned.1["layers"].as_u64() < Some(4) {
+        turned = frame(port, turned.0);
+    }
+    let after = decode(&turned.2, &dir, "after.png");
+    assert!(
+        mean_abs_difference(&before, &after) > 0.05,
+        "the view did not change"
+    );
+
+    // Bad requests: a reason, the right status, and the server carries on.
+    for (method, path, status, says) in [
+        ("POST", "/control?accuracy=7", 400, "(0, 1]"),
+        ("POST", "/control?zoom=2", 400, "unknown control"),
+        ("GET", "/control?accuracy=0.2", 405, "not allowed"),
+        ("GET", "/frame?after=x", 400, "frame number"),
+        ("POST", "/save", 400, "--cache"),
+        ("GET", "/nothing-here", 404, "no such page"),
+    ] {
+        let r = http(port, method, path);
+        assert_eq!(r.status, status, "{method} {path}: {}", r.text());
+        assert!(r.text().contains(says), "{method} {path}: {}", r.text());
+    }
+    let _ = raw(port, b"\x00\x01 garbage that is not HTTP\r\n\r\n");
+    assert_eq!(http(port, "GET", "/stats").status, 200);
+}
+
+fn chromium() -> Option<PathBuf> {
+    ["chromium", "chromium-browser", "google-chrome"]
+        .iter()
+        .find_map(|name| {
+            std::env::var_os("PATH").and_then(|paths| {
+                std::env::split_paths(&paths)
+                    .map(|p| p.join(name))
+                    .find(|p| p.is_file())
+            })
+        })
+}
+
+/// Loads `url` in headless Chromium for `budget_ms` of virtual time; `what` is `--dump-dom` or
+/// `--screenshot=FILE`. Returns its standard output.
+fn browse(browser: &Path, url: &str, what: &str, budget_ms: u32) -> String {
+    let o = Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+            "--window-size=400,300",
+        ])
+        .arg(format!("--virtual-time-budget={budget_ms}"))
+        .arg(what)
+        .arg(url)
+        .output()
+        .expect("chromium runs");
+    assert!(
+        o.status.success(),
+        "chromium: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn view_in_headless_chromium_shows_the_converged_image_and_applies_controls() {
+    let Some(browser) = chromium() else {
+        eprintln!(
+            "SKIPPED view_in_headless_chromium: no chromium on PATH (scripts/setup.sh installs \
+             Debian's chromium)"
+        );
+        return;
+    };
+    let dir = temp_dir("browser");
+    let size = 48;
+    let server = serve(size);
+    let base = format!("http://127.0.0.1:{}/", server.port);
+
+    // The page shows frames and their figures; controls in the fragment go through the page's
+    // own control path (the slider's and the keys').
+    let dom = browse(
+        &browser,
+        &format!("{base}#accuracy=0.2&overlay=0"),
+        "--dump-dom",
+        4000,
+    );
+    assert!(
+        dom.contains("accuracy 0.2 "),
+        "the page never showed accuracy 0.2:\n{dom}"
+    );
+    let layers: u64 = dom
+        .split("layers ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .expect("the page shows its layers");
+    assert!(layers > 0);
+
+    // Back to the default accuracy, converged: the screenshot's image is the renderer's.
+    assert_eq!(
+        http(server.port, "POST", "/control?accuracy=0.35").status,
+        200
+    );
+    let mut last = frame(server.port, 0);
+    while last.1["accuracy"].as_f64() != Some(0.35) || last.1["layers"].as_u64() < Some(256) {
+        last = frame(server.port, last.0);
+    }
+    let shot = dir.join("shot.png");
+    browse(
+        &browser,
+        &base,
+        &format!("--screenshot={}", shot.display()),
+        3000,
+    );
+    let full = ircache_image::read_image(&shot).expect("a screenshot");
+    let mut image = ircache_image::Image::new(size as usize, size as usize);
+    for y in 0..size as usize {
+        for x in 0..size as usize {
+            image.set(x, y, full.get(x, y));
+        }
+    }
+    let (error, lum) = against(&image, &rendered(&dir, size));
+    assert!(
+        error < 2e-3 && (lum - 1.0).abs() < 0.02,
+        "screenshot: blurred relMSE_trim {error}, lum {lum}"
+    );
+
+    // A camera turn sent by the page changes what it shows.
+    browse(&browser, &format!("{base}#turn=0.5,0"), "--dump-dom", 2000);
+    let turned = dir.join("turned.png");
+    browse(
+        &browser,
+        &base,
+        &format!("--screenshot={}", turned.display()),
+        2000,
+    );
+    let turned = ircache_image::read_image(&turned).expect("a screenshot");
+    let mut moved = ircache_image::Image::new(size as usize, size as usize);
+    for y in 0..size as usize {
+        for x in 0..size as usize {
+            moved.set(x, y, turned.get(x, y));
+        }
+    }
+    assert!(
+        mean_abs_difference(&image, &moved) > 0.05,
+        "the turn did not show"
+    );
+}
