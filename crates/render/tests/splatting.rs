@@ -79,7 +79,23 @@ fn close(a: ircache_math::Rgb, b: ircache_math::Rgb, rel: f32) -> bool {
 
 #[test]
 fn splatting_equals_the_lookup_at_every_sample() {
-    let desc = cornell_rough("splat", 48, 2);
+    equal_at_every_sample("tabellion", 48, 2000, 300);
+}
+
+/// The same under the other error metrics: any metric with a distance bound splats.
+#[test]
+fn splatting_equals_the_lookup_under_ward_and_hessian_metrics() {
+    equal_at_every_sample("ward", 32, 800, 100);
+    equal_at_every_sample("hessian", 32, 800, 100);
+}
+
+fn equal_at_every_sample(metric: &str, size: u32, min_irradiance: usize, min_glossy: usize) {
+    let mut desc = cornell_rough("splat", size, 2);
+    desc.integrator.extra.push((
+        "error_metric".into(),
+        ircache_scene::ParamValue::String(metric.into()),
+        here(),
+    ));
     let s = settings(&desc, 2);
     let (scene, cache) = prepared(&desc, &s);
     let samplers = s.sampler();
@@ -146,9 +162,9 @@ fn splatting_equals_the_lookup_at_every_sample() {
         }
     }
     // Enough of each kind that the comparison means something.
-    assert!(irradiance > 2000, "{irradiance} irradiance comparisons");
-    assert!(glossy > 300, "{glossy} glossy comparisons");
-    eprintln!("{irradiance} irradiance, {glossy} glossy, {uncovered} uncovered samples");
+    assert!(irradiance > min_irradiance, "{metric}: {irradiance} irradiance comparisons");
+    assert!(glossy > min_glossy, "{metric}: {glossy} glossy comparisons");
+    eprintln!("{metric}: {irradiance} irradiance, {glossy} glossy, {uncovered} uncovered samples");
 }
 
 #[test]

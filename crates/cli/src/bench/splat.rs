@@ -8,6 +8,9 @@
 //!   sample of the same G-buffer.
 //! - A warm-cache frame at 640×480, 1 spp, the whole pixel pass: `splat` (G-buffer, splats,
 //!   shading) against `ic`'s lookup (camera rays, lookups, shading), same cache.
+//! - The walkthrough (`ircache view`'s frames, PNG encoding apart) at 512×512 on the Cornell box
+//!   and Sponza: frames per second while records are added (budget 100) and once the cache is
+//!   full, next to the thesis's 5 and 32 fps on a 2006 GPU (001 §4.7.2).
 
 use anyhow::Result;
 use ircache_render::film::Filter;
@@ -125,8 +128,60 @@ fn frame(scene: &Scene, cache: &IrradianceCache, s: &RenderSettings) {
     });
 }
 
+/// Frames per second of the walkthrough on `scene` at 512×512: while filling, and full.
+fn walkthrough(name: &str, path: &Path) -> Result<()> {
+    use ircache_render::integrators::RayCounts;
+    use ircache_render::splatting::walkthrough::Walkthrough;
+    let defines = vec![("max_depth".to_string(), "3".to_string())];
+    let mut desc = ircache_scene::load_scene(path, &defines, &ObjCamera::default())?;
+    desc.integrator.kind = "ic".into();
+    desc.sensor.film.width = 512;
+    desc.sensor.film.height = 512;
+    let scene = Scene::build(&desc)?;
+    let Integrator::Ic(ic) = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?
+    else {
+        anyhow::bail!("not the cache's integrator");
+    };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    let mut walk = pool.install(|| Walkthrough::new(scene, &ic, 512, 512, 1, &pool))?;
+    let mut rays = RayCounts::default();
+    let (mut filling, mut filling_time) = (0u32, 0.0f64);
+    let start = Instant::now();
+    let mut quiet = 0;
+    while quiet < 3 && start.elapsed().as_secs_f64() < 300.0 {
+        let f = pool.install(|| walk.frame(&mut rays));
+        if f.new_records > 0 {
+            filling += 1;
+            filling_time += f.seconds;
+            quiet = 0;
+        } else {
+            quiet += 1;
+        }
+    }
+    let mut full_time = 0.0;
+    let full = 10;
+    for _ in 0..full {
+        full_time += pool.install(|| walk.frame(&mut rays)).seconds;
+    }
+    let t = Instant::now();
+    let png = ircache_image::png::encode(&walk.image(false), 0.0).map_err(anyhow::Error::msg)?;
+    let encode = t.elapsed().as_secs_f64();
+    println!(
+        "  walkthrough {name:<12} 512×512: filling {:.1} fps ({filling} frames to {} records), \
+         full {:.1} fps; PNG encoding {:.1} ms ({} kB) [thesis: 5 and 32 fps]",
+        f64::from(filling) / filling_time.max(1e-9),
+        walk.cache().levels.first().map_or(0, |s| s.len()),
+        f64::from(full) / full_time,
+        encode * 1e3,
+        png.len() / 1024
+    );
+    Ok(())
+}
+
 /// Runs the benchmark.
 pub fn run_all(shared: &Path) -> Result<()> {
+    walkthrough("cornell-box", &shared.join("scenes/cornell-box/scene.xml"))?;
+    walkthrough("sponza-sun", &shared.join("scenes/sponza-sun/scene.xml"))?;
     let path = shared.join("scenes/sponza-sun/scene.xml");
     let defines = vec![("max_depth".to_string(), "3".to_string())];
     let mut desc = ircache_scene::load_scene(&path, &defines, &ObjCamera::default())?;
