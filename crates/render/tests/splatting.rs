@@ -162,7 +162,10 @@ fn equal_at_every_sample(metric: &str, size: u32, min_irradiance: usize, min_glo
         }
     }
     // Enough of each kind that the comparison means something.
-    assert!(irradiance > min_irradiance, "{metric}: {irradiance} irradiance comparisons");
+    assert!(
+        irradiance > min_irradiance,
+        "{metric}: {irradiance} irradiance comparisons"
+    );
     assert!(glossy > min_glossy, "{metric}: {glossy} glossy comparisons");
     eprintln!("{metric}: {irradiance} irradiance, {glossy} glossy, {uncovered} uncovered samples");
 }

@@ -128,68 +128,107 @@ pub fn fill_misses(
     cache.levels[0].len() - before
 }
 
-/// The `splat` integrator's pixel pass (run inside the caller's thread pool): for each layer
-/// k < spp, `sample(k, values)` receives every pixel's value (row-major; `None` outside the
-/// rendered rows). Returns the cache with the records the misses added.
-pub fn render_layers(
-    scene: &Scene,
-    ic: &IcIntegrator,
-    settings: &RenderSettings,
-    samplers: &SamplerSettings,
-    rays: &mut RayCounts,
-    sample: &mut dyn FnMut(u32, Vec<Option<Rgb>>),
-) -> (IrradianceCache, SplatStats) {
-    let mut cache = match &ic.cache {
-        Some(c) => (**c).clone(),
-        None => IrradianceCache::new(scene, &ic.params),
-    };
-    let mut stats = SplatStats::default();
-    let reach = settings.filter.radius();
-    let rows = settings.rows();
-    let w = settings.width;
-    let (mut g, mut buffer): (Option<GBuffer>, Option<SplatBuffer>) = (None, None);
-    for layer in 0..samplers.spp {
+/// One layer of samples and its splat buffer, reused from layer to layer.
+#[derive(Debug, Default)]
+pub struct Layer {
+    g: Option<GBuffer>,
+    buffer: Option<SplatBuffer>,
+}
+
+/// How the time of [`Layer::prepare`] went.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LayerTimes {
+    /// Seconds building the G-buffer.
+    pub gbuffer: f64,
+    /// Seconds splatting the records there were.
+    pub splat: f64,
+    /// Seconds finding and filling misses.
+    pub misses: f64,
+    /// Records splatted before the misses.
+    pub splatted: usize,
+    /// Records the misses added.
+    pub added: usize,
+}
+
+impl Layer {
+    /// The G-buffer (after [`Layer::prepare`]).
+    #[must_use]
+    pub fn gbuffer(&self) -> Option<&GBuffer> {
+        self.g.as_ref()
+    }
+
+    /// The splat buffer (after [`Layer::prepare`]).
+    #[must_use]
+    pub fn splats(&self) -> Option<&SplatBuffer> {
+        self.buffer.as_ref()
+    }
+
+    /// Layer `layer`: its G-buffer, every level-0 record splatted, then at most `budget` records
+    /// added at its misses (and splatted).
+    #[allow(clippy::too_many_arguments)]
+    pub fn prepare(
+        &mut self,
+        scene: &Scene,
+        cache: &mut IrradianceCache,
+        settings: &RenderSettings,
+        samplers: &SamplerSettings,
+        layer: u32,
+        budget: usize,
+        stats: &mut CacheStats,
+    ) -> LayerTimes {
         let t = Instant::now();
-        let g = match &mut g {
+        let g = match &mut self.g {
             Some(g) => {
-                g.rebuild(scene, &cache, settings, samplers, layer);
+                g.rebuild(scene, cache, settings, samplers, layer);
                 g
             }
-            None => g.insert(GBuffer::build(scene, &cache, settings, samplers, layer)),
+            None => self
+                .g
+                .insert(GBuffer::build(scene, cache, settings, samplers, layer)),
         };
-        rays.camera += (rows.len() * w) as u64;
-        stats.gbuffer_seconds += t.elapsed().as_secs_f64();
-
+        let gbuffer = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let buffer = match &mut buffer {
+        let buffer = match &mut self.buffer {
             Some(b) => {
                 b.clear();
                 b
             }
-            None => buffer.insert(SplatBuffer::new(g)),
+            None => self.buffer.insert(SplatBuffer::new(g)),
         };
-        let existing = cache.levels.first().map_or(0, |s| s.len());
-        splat(buffer, g, &cache, 0..existing, &scene.camera, reach);
-        stats.splats += existing as u64;
-        stats.splat_seconds += t.elapsed().as_secs_f64();
-
+        let reach = settings.filter.radius();
+        let splatted = cache.levels.first().map_or(0, |s| s.len());
+        splat(buffer, g, cache, 0..splatted, &scene.camera, reach);
+        let splat_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let added = fill_misses(
-            scene,
-            &mut cache,
-            g,
-            buffer,
-            settings.seed,
-            usize::MAX,
-            reach,
-            &mut stats.cache,
-        );
-        stats.miss_records += added as u64;
-        stats.splats += added as u64;
-        stats.miss_seconds += t.elapsed().as_secs_f64();
+        let added = fill_misses(scene, cache, g, buffer, settings.seed, budget, reach, stats);
+        LayerTimes {
+            gbuffer,
+            splat: splat_seconds,
+            misses: t.elapsed().as_secs_f64(),
+            splatted,
+            added,
+        }
+    }
 
-        let t = Instant::now();
-        let cache_ref = &cache;
+    /// Shades the samples of the rendered rows with `ic`, their first vertices from the splat
+    /// buffer (misses traced when `trace_misses`, else looked up as `ic` does); row-major, `None`
+    /// outside the rows. Call after [`Layer::prepare`].
+    #[allow(clippy::too_many_arguments)]
+    #[must_use]
+    pub fn shade(
+        &self,
+        scene: &Scene,
+        ic: &IcIntegrator,
+        cache: &IrradianceCache,
+        settings: &RenderSettings,
+        samplers: &SamplerSettings,
+        trace_misses: bool,
+        rays: &mut RayCounts,
+    ) -> Vec<Option<Rgb>> {
+        let (Some(g), Some(buffer)) = (&self.g, &self.buffer) else {
+            return Vec::new();
+        };
+        let (w, rows) = (settings.width, settings.rows());
         let shaded: Vec<(Vec<Option<Rgb>>, RayCounts)> = g
             .samples
             .par_chunks(w)
@@ -206,15 +245,15 @@ pub fn render_layers(
                     .enumerate()
                     .map(|(x, (s, px))| {
                         let mut sampler = samplers.pixel(x as u32, y as u32);
-                        sampler.set_sample(layer, dims::vertex(0, 0));
+                        sampler.set_sample(g.layer, dims::vertex(0, 0));
                         let splatted = s.point.map(|_| Splatted {
                             irradiance: px.irradiance(),
                             glossy: px.glossy(),
-                            trace_misses: false,
+                            trace_misses,
                         });
                         Some(ic.li_splatted(
                             scene,
-                            cache_ref,
+                            cache,
                             &s.ray,
                             s.hit.as_ref(),
                             splatted,
@@ -231,6 +270,45 @@ pub fn render_layers(
             values.extend(row);
             rays.add(&r);
         }
+        rays.camera += (rows.len() * w) as u64;
+        values
+    }
+}
+
+/// The `splat` integrator's pixel pass (run inside the caller's thread pool): for each layer
+/// k < spp, `sample(k, values)` receives every pixel's value (row-major; `None` outside the
+/// rendered rows). Returns the cache with the records the misses added.
+pub fn render_layers(
+    scene: &Scene,
+    ic: &IcIntegrator,
+    settings: &RenderSettings,
+    samplers: &SamplerSettings,
+    rays: &mut RayCounts,
+    sample: &mut dyn FnMut(u32, Vec<Option<Rgb>>),
+) -> (IrradianceCache, SplatStats) {
+    let mut cache = match &ic.cache {
+        Some(c) => (**c).clone(),
+        None => IrradianceCache::new(scene, &ic.params),
+    };
+    let mut stats = SplatStats::default();
+    let mut pass = Layer::default();
+    for layer in 0..samplers.spp {
+        let times = pass.prepare(
+            scene,
+            &mut cache,
+            settings,
+            samplers,
+            layer,
+            usize::MAX,
+            &mut stats.cache,
+        );
+        stats.gbuffer_seconds += times.gbuffer;
+        stats.splat_seconds += times.splat;
+        stats.miss_seconds += times.misses;
+        stats.splats += (times.splatted + times.added) as u64;
+        stats.miss_records += times.added as u64;
+        let t = Instant::now();
+        let values = pass.shade(scene, ic, &cache, settings, samplers, false, rays);
         stats.shade_seconds += t.elapsed().as_secs_f64();
         stats.layers += 1;
         sample(layer, values);

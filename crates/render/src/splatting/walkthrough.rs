@@ -6,29 +6,23 @@
 //! so they are kept across camera moves; changing the accuracy re-indexes them (the splat radius
 //! a·R and the threshold follow it, nothing is gathered again).
 
-use super::buffer::{splat, SplatBuffer};
-use super::gbuffer::GBuffer;
-use super::pass::fill_misses;
+use super::pass::Layer;
 use crate::camera::Camera;
-use crate::integrators::ic::{IcIntegrator, Splatted};
+use crate::integrators::ic::IcIntegrator;
 use crate::integrators::RayCounts;
 use crate::irradiance_cache::file::CacheFile;
 use crate::irradiance_cache::params::Overture;
 use crate::irradiance_cache::{CacheStats, IrradianceCache};
 use crate::render::{RenderSettings, Sampling};
-use crate::sampler::{dims, SamplerKind, SamplerSettings};
+use crate::sampler::{SamplerKind, SamplerSettings};
 use crate::scene::{RenderError, Scene};
 use ircache_image::Image;
 use ircache_math::{Mat4, Rgb, Vec3};
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Layers a view accumulates before it stops refining (the samples of one pixel sequence).
 pub const MAX_LAYERS: u32 = 1024;
-
-/// A sample's value, its splatted irradiance, and whether no record covered it.
-type Shaded = (Rgb, Rgb, bool);
 
 /// What one frame did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -57,8 +51,7 @@ pub struct Walkthrough {
     sum: Vec<Rgb>,
     irradiance_sum: Vec<Rgb>,
     layers: u32,
-    g: Option<GBuffer>,
-    buffer: Option<SplatBuffer>,
+    pass: Layer,
     /// The cache file records are saved to, and how many records of each level it holds.
     file: Option<(PathBuf, Vec<usize>)>,
     /// What the gathers at misses did, all frames together.
@@ -110,8 +103,7 @@ impl Walkthrough {
             sum: vec![Rgb::ZERO; width * height],
             irradiance_sum: vec![Rgb::ZERO; width * height],
             layers: 0,
-            g: None,
-            buffer: None,
+            pass: Layer::default(),
             file,
             settings,
             stats: CacheStats::default(),
@@ -190,89 +182,42 @@ impl Walkthrough {
             };
         }
         let layer = self.layers;
-        let (scene, cache, settings, samplers) =
-            (&self.scene, &mut self.cache, &self.settings, &self.samplers);
-        let g = match &mut self.g {
-            Some(g) => {
-                g.rebuild(scene, cache, settings, samplers, layer);
-                g
-            }
-            None => self
-                .g
-                .insert(GBuffer::build(scene, cache, settings, samplers, layer)),
-        };
-        let buffer = match &mut self.buffer {
-            Some(b) => {
-                b.clear();
-                b
-            }
-            None => self.buffer.insert(SplatBuffer::new(g)),
-        };
-        let reach = settings.filter.radius();
-        splat(buffer, g, cache, 0..records(cache), &scene.camera, reach);
-        let new_records = fill_misses(
-            scene,
-            cache,
-            g,
-            buffer,
-            settings.seed,
+        let times = self.pass.prepare(
+            &self.scene,
+            &mut self.cache,
+            &self.settings,
+            &self.samplers,
+            layer,
             self.budget,
-            reach,
             &mut self.stats,
         );
-        let cache = &*cache;
-        let ic = &self.ic;
-        let w = settings.width;
-        let shaded: Vec<(Vec<Shaded>, RayCounts)> = g
-            .samples
-            .par_chunks(w)
-            .zip(buffer.pixels.par_chunks(w))
-            .enumerate()
-            .map(|(y, (samples, splats))| {
-                let mut r = RayCounts::default();
-                let row = samples
-                    .iter()
-                    .zip(splats)
-                    .enumerate()
-                    .map(|(x, (s, px))| {
-                        let mut sampler = samplers.pixel(x as u32, y as u32);
-                        sampler.set_sample(layer, dims::vertex(0, 0));
-                        let splatted = s.point.map(|_| Splatted {
-                            irradiance: px.irradiance(),
-                            glossy: px.glossy(),
-                            trace_misses: true,
-                        });
-                        let l = ic.li_splatted(
-                            scene,
-                            cache,
-                            &s.ray,
-                            s.hit.as_ref(),
-                            splatted,
-                            &mut sampler,
-                            &mut r,
-                        );
-                        let uncovered = s
-                            .point
-                            .is_some_and(|sp| px.min_error > cache.coverage_threshold(&sp));
-                        (l, px.irradiance().unwrap_or(Rgb::ZERO), uncovered)
-                    })
-                    .collect();
-                (row, r)
-            })
-            .collect();
+        let values = self.pass.shade(
+            &self.scene,
+            &self.ic,
+            &self.cache,
+            &self.settings,
+            &self.samplers,
+            true,
+            rays,
+        );
+        let (Some(g), Some(splats)) = (self.pass.gbuffer(), self.pass.splats()) else {
+            return FrameReport::default();
+        };
         let mut uncovered = 0;
-        let mut i = 0;
-        for (row, r) in shaded {
-            rays.add(&r);
-            for (l, e, miss) in row {
-                // A sample that is not finite radiance counts as black (never a NaN pixel).
-                self.sum[i] += if l.is_valid_radiance() { l } else { Rgb::ZERO };
-                self.irradiance_sum[i] += e;
-                uncovered += usize::from(miss);
-                i += 1;
-            }
+        for (i, l) in values.into_iter().enumerate() {
+            // A sample that is not finite radiance counts as black (never a NaN pixel).
+            let l = l.filter(|l| l.is_valid_radiance()).unwrap_or(Rgb::ZERO);
+            let px = &splats.pixels[i];
+            self.sum[i] += l;
+            self.irradiance_sum[i] += px.irradiance().unwrap_or(Rgb::ZERO);
+            uncovered += usize::from(
+                g.samples[i]
+                    .point
+                    .is_some_and(|sp| px.min_error > self.cache.coverage_threshold(&sp)),
+            );
         }
-        rays.camera += self.sum.len() as u64;
+        let new_records = times.added;
+        let cache = &self.cache;
         self.layers += 1;
         FrameReport {
             layers: self.layers,
