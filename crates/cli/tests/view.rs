@@ -29,6 +29,11 @@ impl Drop for Server {
 }
 
 fn serve(size: u32) -> Server {
+    serve_with(size, &[])
+}
+
+/// `ircache view` of the built-in scene at `size × size` with more options.
+fn serve_with(size: u32, extra: &[&str]) -> Server {
     let mut child = Command::new(env!("CARGO_BIN_EXE_ircache"))
         .args([
             "view",
@@ -39,6 +44,7 @@ fn serve(size: u32) -> Server {
             "--height",
         ])
         .arg(size.to_string())
+        .args(extra)
         .stderr(Stdio::piped())
         .stdout(Stdio::null())
         .spawn()
@@ -187,6 +193,18 @@ fn against(a: &ircache_image::Image, b: &ircache_image::Image) -> (f64, f64) {
     (m.rel_mse_trim, m.lum_ratio)
 }
 
+/// The top-left `size × size` pixels of a screenshot: where the page shows the frame.
+fn frame_in_screenshot(path: &Path, size: usize) -> ircache_image::Image {
+    let full = ircache_image::read_image(path).expect("a screenshot");
+    let mut image = ircache_image::Image::new(size, size);
+    for y in 0..size {
+        for x in 0..size {
+            image.set(x, y, full.get(x, y));
+        }
+    }
+    image
+}
+
 fn mean_abs_difference(a: &ircache_image::Image, b: &ircache_image::Image) -> f64 {
     a.pixels
         .iter()
@@ -264,6 +282,31 @@ fn view_serves_converging_frames_follows_controls_and_refuses_bad_requests() {
     }
     let _ = raw(port, b"\x00\x01 garbage that is not HTTP\r\n\r\n");
     assert_eq!(http(port, "GET", "/stats").status, 200);
+}
+
+/// With `--cache FILE`, "save cache" appends the walkthrough's records to the file, and a
+/// later walkthrough starts from them.
+#[test]
+fn view_saves_its_records_and_a_later_view_starts_from_them() {
+    let dir = temp_dir("save");
+    let file = dir.join("walk.icc");
+    let file = file.to_str().expect("a UTF-8 path");
+    let first = serve_with(24, &["--cache", file]);
+    let (_, settled, _) = settle(first.port, 32);
+    let made = settled["records"].as_u64().expect("records");
+    let saved = http(first.port, "POST", "/save");
+    assert_eq!(saved.status, 200, "{}", saved.text());
+    assert_eq!(saved.text(), format!("saved {made} records"));
+    // Nothing new to save the second time.
+    assert_eq!(http(first.port, "POST", "/save").text(), "saved 0 records");
+    drop(first);
+
+    let second = serve_with(24, &["--cache", file]);
+    let (_, stats, _) = frame(second.port, 0);
+    assert!(
+        stats["records"].as_u64() >= Some(made) && stats["new_records"].as_u64() == Some(0),
+        "the second walkthrough did not start from the saved records: {stats}"
+    );
 }
 
 fn chromium() -> Option<PathBuf> {
@@ -352,13 +395,7 @@ fn view_in_headless_chromium_shows_the_converged_image_and_applies_controls() {
         &format!("--screenshot={}", shot.display()),
         3000,
     );
-    let full = ircache_image::read_image(&shot).expect("a screenshot");
-    let mut image = ircache_image::Image::new(size as usize, size as usize);
-    for y in 0..size as usize {
-        for x in 0..size as usize {
-            image.set(x, y, full.get(x, y));
-        }
-    }
+    let image = frame_in_screenshot(&shot, size as usize);
     let (error, lum) = against(&image, &rendered(&dir, size));
     assert!(
         error < 2e-3 && (lum - 1.0).abs() < 0.02,
@@ -374,13 +411,7 @@ fn view_in_headless_chromium_shows_the_converged_image_and_applies_controls() {
         &format!("--screenshot={}", turned.display()),
         2000,
     );
-    let turned = ircache_image::read_image(&turned).expect("a screenshot");
-    let mut moved = ircache_image::Image::new(size as usize, size as usize);
-    for y in 0..size as usize {
-        for x in 0..size as usize {
-            moved.set(x, y, turned.get(x, y));
-        }
-    }
+    let moved = frame_in_screenshot(&turned, size as usize);
     assert!(
         mean_abs_difference(&image, &moved) > 0.05,
         "the turn did not show"
