@@ -138,10 +138,13 @@ fn walkthrough(name: &str, path: &Path) -> Result<()> {
     desc.sensor.film.width = 512;
     desc.sensor.film.height = 512;
     let scene = Scene::build(&desc)?;
-    let Integrator::Ic(ic) = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?
+    let Integrator::Ic(mut ic) =
+        Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?
     else {
         anyhow::bail!("not the cache's integrator");
     };
+    // As `ircache view` runs it.
+    ic.params.direct_samples = ircache_render::splatting::walkthrough::WALKTHROUGH_LIGHT_SAMPLES;
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     let mut walk = pool.install(|| Walkthrough::new(scene, &ic, 512, 512, 1, &pool))?;
     let mut rays = RayCounts::default();

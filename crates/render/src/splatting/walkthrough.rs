@@ -21,6 +21,10 @@ use ircache_math::{Mat4, Rgb, Vec3};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// Light samples a walkthrough frame takes at each first vertex by default: frames are averaged,
+/// so one a frame gives the same image sooner and keeps the frames quick.
+pub const WALKTHROUGH_LIGHT_SAMPLES: u32 = 1;
+
 /// Layers a view accumulates before it stops refining (the samples of one pixel sequence).
 pub const MAX_LAYERS: u32 = 1024;
 
