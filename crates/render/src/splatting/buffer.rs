@@ -188,10 +188,9 @@ pub fn splat(
         .pixels
         .par_chunks_mut(w * TILE)
         .zip(g.samples.par_chunks(w * TILE))
-        .zip(g.sites.par_chunks(w * TILE))
         .zip(per_band.par_iter())
         .enumerate()
-        .for_each(|(band, (((pixels, samples), sites), list))| {
+        .for_each(|(band, ((pixels, samples), list))| {
             if list.is_empty() {
                 return;
             }
@@ -205,17 +204,15 @@ pub fn splat(
                 for y in y0.max(y_band)..y1.min(y_band + TILE) {
                     for x in x0..x1 {
                         let i = (y - y_band) * w + x;
-                        let site = &sites[i];
-                        let Some(err) = store.error(rec, site.p, site.n) else {
-                            continue;
-                        };
-                        // A NaN error (no site there) is no error at most 1 either.
-                        if err.is_nan() || err > 1.0 {
-                            continue;
-                        }
                         let Some(sp) = &samples[i].point else {
                             continue;
                         };
+                        let Some(err) = store.error(rec, sp.it.p, sp.n) else {
+                            continue;
+                        };
+                        if err > 1.0 {
+                            continue;
+                        }
                         let px = &mut pixels[i];
                         let weight = store.weight(err, 1.0);
                         px.irradiance += extrapolate(rec, sp.it.p, sp.n_bump, mode) * weight;

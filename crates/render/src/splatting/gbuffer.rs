@@ -23,22 +23,6 @@ pub struct GSample {
     pub point: Option<ShadingPoint>,
 }
 
-/// Where a sample's first vertex is and which way it faces (the error test's inputs), apart
-/// from the bulky [`GSample`]: splatting tests most samples of a record's rectangle and keeps
-/// few. A sample that is no record site has a NaN position, which every test rejects.
-#[derive(Clone, Copy, Debug)]
-pub struct Site {
-    /// Position.
-    pub p: Vec3,
-    /// Shading normal before any bump map, facing the viewer ([`ShadingPoint::n`]).
-    pub n: Vec3,
-}
-
-const NO_SITE: Site = Site {
-    p: Vec3::NAN,
-    n: Vec3::ZERO,
-};
-
 /// One layer of samples, row-major, `width × height` (rows outside the render's band hold no
 /// ray and no point).
 #[derive(Clone, Debug)]
@@ -51,8 +35,6 @@ pub struct GBuffer {
     pub layer: u32,
     /// The samples.
     pub samples: Vec<GSample>,
-    /// Their sites, in the same order.
-    pub sites: Vec<Site>,
 }
 
 impl GBuffer {
@@ -76,7 +58,6 @@ impl GBuffer {
             height: settings.height,
             layer,
             samples: vec![empty; settings.width * settings.height],
-            sites: vec![NO_SITE; settings.width * settings.height],
         };
         g.rebuild(scene, cache, settings, samplers, layer);
         g
@@ -98,13 +79,10 @@ impl GBuffer {
         self.layer = layer;
         self.samples
             .par_chunks_mut(w)
-            .zip(self.sites.par_chunks_mut(w))
             .enumerate()
             .filter(|(y, _)| rows.contains(y))
-            .for_each(|(y, (row, sites))| {
-                for (x16, (chunk, sites)) in
-                    row.chunks_mut(16).zip(sites.chunks_mut(16)).enumerate()
-                {
+            .for_each(|(y, row)| {
+                for (x16, chunk) in row.chunks_mut(16).enumerate() {
                     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
                     let mut hits = [None; 16];
                     let n = chunk.len();
@@ -117,21 +95,11 @@ impl GBuffer {
                         *ray = scene.camera.generate_ray(film);
                     }
                     scene.accel.intersect16(&camera[..n], &mut hits[..n]);
-                    for (((s, site), ray), hit) in chunk
-                        .iter_mut()
-                        .zip(sites.iter_mut())
-                        .zip(&camera)
-                        .zip(&hits)
-                    {
-                        let point = hit.as_ref().and_then(|h| record_site(scene, cache, ray, h));
-                        *site = point.map_or(NO_SITE, |sp| Site {
-                            p: sp.it.p,
-                            n: sp.n,
-                        });
+                    for ((s, ray), hit) in chunk.iter_mut().zip(&camera).zip(&hits) {
                         *s = GSample {
                             ray: *ray,
                             hit: *hit,
-                            point,
+                            point: hit.as_ref().and_then(|h| record_site(scene, cache, ray, h)),
                         };
                     }
                 }
