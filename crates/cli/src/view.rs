@@ -282,6 +282,13 @@ pub fn run(args: &ViewArgs) -> Result<()> {
             bail!("{name} does not apply to ircache view (it shows the image in the browser; use ircache render)");
         }
     }
+    if let Some(i) = r.integrator.as_deref() {
+        if !matches!(i, "ic" | "irrcache" | "splat") {
+            bail!(
+                "--integrator {i}: the walkthrough splats the irradiance cache (ic or splat only)"
+            );
+        }
+    }
     let mut desc = render::load(r)?;
     if !matches!(desc.integrator.kind.as_str(), "ic" | "irrcache" | "splat") {
         // The scene names another integrator: the walkthrough is the cache's, with its defaults.

@@ -417,3 +417,23 @@ fn view_in_headless_chromium_shows_the_converged_image_and_applies_controls() {
         "the turn did not show"
     );
 }
+
+/// Options that do not apply to a walkthrough are refused with the reason, before any server
+/// starts.
+#[test]
+fn view_refuses_options_it_cannot_honour() {
+    for (args, says) in [
+        (&["--spp", "4"][..], "--spp does not apply"),
+        (&["-o", "x.exr"][..], "-o does not apply"),
+        (&["--integrator", "path"][..], "ic or splat only"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_ircache"))
+            .arg("view")
+            .args(["--port", "0"])
+            .args(args)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{args:?}: {err}");
+    }
+}
