@@ -6,7 +6,7 @@
 use crate::film::Filter;
 use crate::integrators::{Integrator, RayCounts};
 use crate::irradiance_cache::{CacheStats, IrradianceCache};
-use crate::sampler::{dims, Sampler, SamplerKind, SamplerSettings};
+use crate::sampler::{dims, PixelSampler, Sampler, SamplerKind, SamplerSettings};
 use crate::scene::{RenderError, Scene};
 use ircache_image::Image;
 use ircache_math::{Ray, Rgb, Vec2, Vec3};
@@ -443,6 +443,23 @@ fn adaptive_targets(
 /// Takes pixel (x, y)'s samples `state.samples..to`: filter-importance-sampled estimates, with
 /// their luminance and its square for the adaptive pass. Samples that the integrator returns as
 /// non-finite or negative count as zero and are counted (Mitsuba drops them too).
+/// The camera ray of sample `sample` of pixel (x, y): its film position from the sampler's film
+/// dimensions through the pixel filter. The pixel pass and the splatting G-buffer both trace it.
+pub fn camera_ray(
+    scene: &Scene,
+    settings: &RenderSettings,
+    sampler: &mut PixelSampler,
+    x: usize,
+    y: usize,
+    sample: u32,
+) -> Ray {
+    sampler.set_sample(sample, dims::FILM);
+    let offset = settings.filter.sample(sampler.next_2d());
+    let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
+    let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
+    scene.camera.generate_ray(film)
+}
+
 #[allow(clippy::too_many_arguments)]
 fn extend_pixel(
     scene: &Scene,
@@ -456,7 +473,6 @@ fn extend_pixel(
     rays: &mut RayCounts,
 ) {
     let mut sampler = samplers.pixel(x as u32, y as u32);
-    let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
     // Camera rays of one pixel are nearly parallel: trace them in 16-wide packets.
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
     let mut hits = [None; 16];
@@ -464,10 +480,7 @@ fn extend_pixel(
     while done < to {
         let n = (to - done).min(16);
         for (k, ray) in (done..done + n).zip(&mut camera) {
-            sampler.set_sample(k, dims::FILM);
-            let offset = settings.filter.sample(sampler.next_2d());
-            let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
-            *ray = scene.camera.generate_ray(film);
+            *ray = camera_ray(scene, settings, &mut sampler, x, y, k);
         }
         let n = n as usize;
         scene.accel.intersect16(&camera[..n], &mut hits[..n]);

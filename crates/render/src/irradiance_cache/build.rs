@@ -111,7 +111,7 @@ pub fn record_sites(
         let mut sp = ShadingPoint::facing(it, wo);
         sp.travelled = travelled;
         let glossy_cached = radiance.is_some_and(|r| r.brdf_at(&sp).is_some());
-        if bsdf.has_smooth() && (glossy_cached || !bsdf.lambertian_albedo(wo_local).is_black()) {
+        if is_record_site(&bsdf, wo_local, glossy_cached) {
             sites.push((depth, sp));
         }
         if depth + 1 >= levels || !bsdf.has_glossy() || glossy_cached {
@@ -133,6 +133,14 @@ pub fn record_sites(
         }
     }
     sites
+}
+
+/// Whether records serve a surface with BSDF `bsdf` seen from the local direction `wo_local`:
+/// its smooth part has a Lambertian part, or a glossy lobe that radiance caching serves
+/// (`glossy_cached`).
+#[must_use]
+pub fn is_record_site(bsdf: &crate::bsdf::Bsdf, wo_local: Vec3, glossy_cached: bool) -> bool {
+    bsdf.has_smooth() && (glossy_cached || !bsdf.lambertian_albedo(wo_local).is_black())
 }
 
 /// The first record site of a camera ray (see [`record_sites`]).
@@ -234,6 +242,35 @@ pub fn run_batch(
     cache.update_ambient();
 }
 
+/// The phases of a stride of the coarse-to-fine search: on the coarsest stride one, every
+/// point of the grid (`None`); below it three, as (x/stride mod 2, y/stride mod 2), leaving
+/// out (0, 0), which belongs to the coarser grid, and putting each batch's points at least two
+/// strides apart.
+#[must_use]
+pub fn phases(coarsest: bool) -> &'static [Option<(usize, usize)>] {
+    if coarsest {
+        &[None]
+    } else {
+        &[Some((1, 1)), Some((1, 0)), Some((0, 1))]
+    }
+}
+
+/// The pixels of phase `phase` (see [`phases`]) of `stride` on a `width`×`height` image, row by
+/// row.
+pub fn phase_pixels(
+    width: usize,
+    height: usize,
+    stride: usize,
+    phase: Option<(usize, usize)>,
+) -> impl Iterator<Item = (usize, usize)> {
+    (0..height)
+        .step_by(stride)
+        .flat_map(move |y| (0..width).step_by(stride).map(move |x| (x, y)))
+        .filter(move |&(x, y)| {
+            phase.is_none_or(|(px, py)| (x / stride) % 2 == px && (y / stride) % 2 == py)
+        })
+}
+
 /// Fills `cache` for a `width`×`height` view of `scene` (run inside the caller's thread pool).
 pub fn fill_for_image(
     scene: &Scene,
@@ -252,22 +289,9 @@ pub fn fill_for_image(
     let finest = cache.params.overture.finest_stride();
     let mut sites = Sites::default();
     while stride >= finest.max(1) && finest > 0 {
-        // Phases: (x/stride mod 2, y/stride mod 2); (0, 0) belongs to the coarser grid except
-        // on the coarsest.
-        let phases: &[(usize, usize)] = if stride == coarsest {
-            &[(0, 0)]
-        } else {
-            &[(1, 1), (1, 0), (0, 1)]
-        };
-        for &(px, py) in phases {
-            let pixels: Vec<(usize, usize)> = (0..height)
-                .step_by(stride)
-                .flat_map(|y| (0..width).step_by(stride).map(move |x| (x, y)))
-                .filter(|&(x, y)| {
-                    rows.contains(&y)
-                        && (stride == coarsest
-                            || ((x / stride) % 2 == px && (y / stride) % 2 == py))
-                })
+        for &phase in phases(stride == coarsest) {
+            let pixels: Vec<(usize, usize)> = phase_pixels(width, height, stride, phase)
+                .filter(|(_, y)| rows.contains(y))
                 .collect();
             let levels = cache.levels.len() as u32;
             let points: Vec<(u64, u32, ShadingPoint)> = pixels
@@ -407,10 +431,6 @@ pub fn regather_noisy(
             stats.supersampled_cells += counts.supersampled_cells;
         }
         // Radii changed: index the level anew, in the same order.
-        let mut store = cache.empty_store();
-        for r in records {
-            store.insert(r);
-        }
-        cache.levels[level] = store;
+        cache.reindex(level, records);
     }
 }

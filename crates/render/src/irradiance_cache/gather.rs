@@ -226,6 +226,16 @@ impl IrradianceCache {
             self.params.neighbour_clamp,
         )
     }
+
+    /// Makes level `level` hold `records`, indexed anew in their order at the cache's current
+    /// settings (after radii or the accuracy changed).
+    pub fn reindex(&mut self, level: usize, records: Vec<Record>) {
+        let mut store = self.empty_store();
+        for r in records {
+            store.insert(r);
+        }
+        self.levels[level] = store;
+    }
 }
 
 /// Area-weighted mean luminance of the diffuse albedo over the scene's triangles (spheres by

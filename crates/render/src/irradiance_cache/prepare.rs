@@ -91,8 +91,6 @@ pub fn prepare_cache(
     Ok((cache, stats))
 }
 
-/// What records' radii depend on besides the scene and settings: with Tabellion's metric the
-/// pixel footprint, so the camera and the film width; otherwise nothing (0).
 /// The header of a cache file for `scene` rendered by `ic` at `width` pixels across.
 #[must_use]
 pub fn header(scene: &Scene, ic: &IcIntegrator, width: usize) -> Header {
@@ -104,6 +102,8 @@ pub fn header(scene: &Scene, ic: &IcIntegrator, width: usize) -> Header {
     }
 }
 
+/// What records' radii depend on besides the scene and settings: with Tabellion's metric the
+/// pixel footprint, so the camera and the film width; otherwise nothing (0).
 fn view_hash(scene: &Scene, params: &super::IcParams, width: usize) -> u64 {
     use super::record::ErrorMetric;
     use std::fmt::Write;

@@ -199,23 +199,34 @@ impl BrdfCoefficients {
     }
 
     /// Light reflected towards `wo` from incoming radiance with coefficients `radiance`
-    /// (`[channel][coefficient]`): Σ_i λ_i c_i(ωo), clamped at zero (a truncated expansion can ring
-    /// negative, NOTES-001 §B.3).
+    /// (`[channel][coefficient]`): Σ_i λ_i c_i(ωo), clamped at zero.
     #[must_use]
     pub fn reflect(&self, wo: Vec3, radiance: &[f64]) -> Rgb {
-        let n = coefficient_count(self.order);
-        let mut c = vec![0.0; 3 * n];
+        let mut c = vec![0.0; 3 * coefficient_count(self.order)];
         self.at(wo, &mut c);
-        let dot = |ch: usize| -> f32 {
-            let s: f64 = c[ch * n..(ch + 1) * n]
-                .iter()
-                .zip(&radiance[ch * n..(ch + 1) * n])
-                .map(|(a, b)| a * b)
-                .sum();
-            s.max(0.0) as f32
-        };
-        Rgb::new(dot(0), dot(1), dot(2))
+        clamped(dot_per_channel(&c, radiance))
     }
+}
+
+/// Σ_i a_i b_i per channel of two coefficient vectors laid out `[channel][coefficient]`.
+#[must_use]
+pub fn dot_per_channel(a: &[f64], b: &[f64]) -> [f64; 3] {
+    let n = a.len() / 3;
+    std::array::from_fn(|c| {
+        a[c * n..(c + 1) * n]
+            .iter()
+            .zip(&b[c * n..(c + 1) * n])
+            .map(|(x, y)| x * y)
+            .sum()
+    })
+}
+
+/// Reflected light per channel, clamped at zero: a truncated expansion can ring negative
+/// (NOTES-001 §B.3).
+#[must_use]
+pub fn clamped(l: [f64; 3]) -> Rgb {
+    let c = l.map(|v| v.max(0.0) as f32);
+    Rgb::new(c[0], c[1], c[2])
 }
 
 /// The fraction of the cosine-weighted glossy lobe's energy ∫ (f cos)² (3.32) that each order

@@ -10,14 +10,12 @@
 //! the lookup clamps the dot product of the blended coefficients.
 
 use super::gbuffer::GBuffer;
-use crate::irradiance_cache::gather::{IrradianceCache, ShadingPoint};
+use crate::irradiance_cache::gather::IrradianceCache;
 use crate::irradiance_cache::record::extrapolate;
-use crate::radiance_cache::brdf::BrdfCoefficients;
-use crate::radiance_cache::record::frame_around;
+use crate::radiance_cache::brdf::clamped;
+use crate::radiance_cache::lookup::GlossyView;
 use crate::render::TILE;
-use ircache_math::harmonics::coefficient_count;
-use ircache_math::harmonics::rotation::TiltTable;
-use ircache_math::{DMat3, Frame, Mat4, Rgb, Vec2};
+use ircache_math::{Mat4, Rgb, Vec2};
 use rayon::prelude::*;
 use std::ops::Range;
 
@@ -62,12 +60,7 @@ impl SplatPixel {
     /// The glossy radiance towards the camera, `None` when no radiance record reached.
     #[must_use]
     pub fn glossy(&self) -> Option<Rgb> {
-        (self.glossy_weight > 0.0).then(|| {
-            let c = self
-                .glossy
-                .map(|g| (g / self.glossy_weight).max(0.0) as f32);
-            Rgb::new(c[0], c[1], c[2])
-        })
+        (self.glossy_weight > 0.0).then(|| clamped(self.glossy.map(|g| g / self.glossy_weight)))
     }
 }
 
@@ -95,39 +88,6 @@ impl SplatBuffer {
         self.pixels
             .par_iter_mut()
             .for_each(|p| *p = SplatPixel::default());
-    }
-}
-
-/// What a sample needs to shade a radiance record's coefficients: the BRDF's coefficients for
-/// its viewing direction, its frame, the tilt table, and the glossy lookup's threshold.
-struct GlossyView<'a> {
-    brdf: Vec<f64>,
-    order: usize,
-    frame: DMat3,
-    tilt: &'a TiltTable,
-    threshold: f32,
-}
-
-impl<'a> GlossyView<'a> {
-    /// As [`crate::radiance_cache::lookup::glossy`] sets itself up; `None` where it would
-    /// decline.
-    fn new(cache: &'a IrradianceCache, sp: &ShadingPoint, wo: ircache_math::Vec3) -> Option<Self> {
-        let tables = cache.radiance.as_deref()?;
-        let brdf: &BrdfCoefficients = tables.brdf_at(sp)?;
-        let tilt = tables.tilt(brdf.order())?;
-        let wo_local = Frame::from_z(sp.n_bump).to_local(wo);
-        if !brdf.serves(wo_local) {
-            return None;
-        }
-        let mut c = vec![0.0; 3 * coefficient_count(brdf.order())];
-        brdf.at(wo_local, &mut c);
-        Some(GlossyView {
-            brdf: c,
-            order: brdf.order(),
-            frame: frame_around(sp.n_bump),
-            tilt,
-            threshold: cache.coverage_threshold(sp),
-        })
     }
 }
 
@@ -242,13 +202,7 @@ pub fn splat(
                             continue;
                         }
                         let weight = f64::from(store.weight(err, view.threshold));
-                        let n = seen.len() / 3;
-                        for (c, g) in px.glossy.iter_mut().enumerate() {
-                            let dot: f64 = view.brdf[c * n..(c + 1) * n]
-                                .iter()
-                                .zip(&seen[c * n..(c + 1) * n])
-                                .map(|(a, b)| a * b)
-                                .sum();
+                        for (g, dot) in px.glossy.iter_mut().zip(view.reflect_unclamped(&seen)) {
                             *g += weight * dot;
                         }
                         px.glossy_weight += weight;

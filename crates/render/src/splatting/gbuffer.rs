@@ -3,12 +3,13 @@
 //! exactly as the path loop makes it for the first vertex. The rays are those of the `ic`
 //! pixel pass (same sampler dimensions), so both passes shade the same vertices.
 
+use crate::irradiance_cache::build::is_record_site;
 use crate::irradiance_cache::gather::{IrradianceCache, ShadingPoint};
-use crate::render::RenderSettings;
-use crate::sampler::{dims, Sampler, SamplerSettings};
+use crate::render::{camera_ray, RenderSettings};
+use crate::sampler::SamplerSettings;
 use crate::scene::Scene;
 use ircache_embree::Hit;
-use ircache_math::{Ray, Vec2, Vec3};
+use ircache_math::{Ray, Vec3};
 use rayon::prelude::*;
 
 /// One pixel's sample of the layer.
@@ -75,7 +76,6 @@ impl GBuffer {
         let (w, h) = (settings.width, settings.height);
         assert_eq!(self.samples.len(), w * h, "G-buffer of another size");
         let rows = settings.rows();
-        let inv_size = Vec2::new(1.0 / w as f32, 1.0 / h as f32);
         self.layer = layer;
         self.samples
             .par_chunks_mut(w)
@@ -89,10 +89,7 @@ impl GBuffer {
                     for (i, ray) in camera[..n].iter_mut().enumerate() {
                         let x = x16 * 16 + i;
                         let mut sampler = samplers.pixel(x as u32, y as u32);
-                        sampler.set_sample(layer, dims::FILM);
-                        let offset = settings.filter.sample(sampler.next_2d());
-                        let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
-                        *ray = scene.camera.generate_ray(film);
+                        *ray = camera_ray(scene, settings, &mut sampler, x, y, layer);
                     }
                     scene.accel.intersect16(&camera[..n], &mut hits[..n]);
                     for ((s, ray), hit) in chunk.iter_mut().zip(&camera).zip(&hits) {
@@ -122,17 +119,13 @@ fn record_site(
         return None;
     }
     let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
-    if !bsdf.has_smooth() {
-        return None;
-    }
     let wo = -ray.d;
     // As `trace_path` makes the first vertex of a camera path.
     let mut sp = ShadingPoint::facing(it, wo);
     sp.travelled = it.t;
-    let lambertian = !bsdf.lambertian_albedo(it.frame.to_local(wo)).is_black();
     let glossy = cache
         .radiance
         .as_deref()
         .is_some_and(|r| r.brdf_at(&sp).is_some());
-    (lambertian || glossy).then_some(sp)
+    is_record_site(&bsdf, it.frame.to_local(wo), glossy).then_some(sp)
 }

@@ -2,7 +2,7 @@
 //! `splat` integrator's pixel pass.
 //!
 //! Misses are found coarse to fine: the samples on grids of strides 16, 8, …, 1, each stride
-//! split into phases two strides apart as in the cache's pre-pass, that no splatted record
+//! split into the cache pre-pass's phases ([`phases`]), that no splatted record
 //! covers (their smallest normalised error above the cache's coverage threshold there, the
 //! rule of [`crate::irradiance_cache::store::RecordStore::covers_within`]) gather records in
 //! parallel ([`crate::irradiance_cache::build::run_batch`], which drops a record an earlier one
@@ -22,7 +22,7 @@ use super::buffer::{splat, SplatBuffer};
 use super::gbuffer::GBuffer;
 use crate::integrators::ic::{IcIntegrator, Splatted};
 use crate::integrators::RayCounts;
-use crate::irradiance_cache::build::{run_batch, Sites};
+use crate::irradiance_cache::build::{phase_pixels, phases, run_batch, Sites};
 use crate::irradiance_cache::gather::{mix, IrradianceCache, ShadingPoint};
 use crate::irradiance_cache::CacheStats;
 use crate::render::RenderSettings;
@@ -78,27 +78,19 @@ pub fn fill_misses(
     let before = cache.levels[0].len();
     let mut asked = 0usize;
     for (s, &stride) in STRIDES.iter().enumerate() {
-        // Phases: (x/stride mod 2, y/stride mod 2); (0, 0) belongs to the coarser grid.
-        let phases: &[(usize, usize)] = if s == 0 {
-            &[(0, 0)]
-        } else {
-            &[(1, 1), (1, 0), (0, 1)]
-        };
-        for &(px, py) in phases {
+        for &phase in phases(s == 0) {
             if asked >= budget {
                 return cache.levels[0].len() - before;
             }
-            let mut points: Vec<(u64, u32, ShadingPoint)> = (0..g.height)
-                .step_by(stride)
-                .flat_map(|y| (0..w).step_by(stride).map(move |x| (x, y)))
-                .filter(|&(x, y)| s == 0 || ((x / stride) % 2 == px && (y / stride) % 2 == py))
-                .filter_map(|(x, y)| {
-                    let i = y * w + x;
-                    let sp = g.samples[i].point?;
-                    (buffer.pixels[i].min_error > cache.coverage_threshold(&sp))
-                        .then(|| (mix(key, i as u64), 0, sp))
-                })
-                .collect();
+            let mut points: Vec<(u64, u32, ShadingPoint)> =
+                phase_pixels(w, g.height, stride, phase)
+                    .filter_map(|(x, y)| {
+                        let i = y * w + x;
+                        let sp = g.samples[i].point?;
+                        (buffer.pixels[i].min_error > cache.coverage_threshold(&sp))
+                            .then(|| (mix(key, i as u64), 0, sp))
+                    })
+                    .collect();
             points.truncate(budget - asked);
             if points.is_empty() {
                 continue;

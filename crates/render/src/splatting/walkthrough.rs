@@ -164,11 +164,7 @@ impl Walkthrough {
         self.cache.params.radiance_accuracy = self.cache.params.radiance_accuracy.min(a);
         for level in 0..self.cache.levels.len() {
             let records = self.cache.levels[level].records().to_vec();
-            let mut store = self.cache.empty_store();
-            for r in records {
-                store.insert(r);
-            }
-            self.cache.levels[level] = store;
+            self.cache.reindex(level, records);
         }
         self.restart();
         Ok(())
