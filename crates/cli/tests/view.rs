@@ -321,28 +321,80 @@ fn chromium() -> Option<PathBuf> {
         })
 }
 
+/// Why a browser run gave no page: it did not exit within its wall-clock limit.
+struct BrowserHung(String);
+
 /// Loads `url` in headless Chromium for `budget_ms` of virtual time; `what` is `--dump-dom` or
 /// `--screenshot=FILE`. Returns its standard output.
-fn browse(browser: &Path, url: &str, what: &str, budget_ms: u32) -> String {
-    let o = Command::new(browser)
+///
+/// Chromium runs in its own process group with a fresh profile, its output in files rather than
+/// pipes (a helper process that outlives the browser, such as the crash handler, would otherwise
+/// hold a pipe open forever), without the background networking a closed network refuses or
+/// drops, and under a wall-clock limit after which the whole group is killed.
+fn browse(
+    browser: &Path,
+    dir: &Path,
+    url: &str,
+    what: &str,
+    budget_ms: u32,
+) -> Result<String, BrowserHung> {
+    use std::os::unix::process::CommandExt;
+    let profile = dir.join("chromium-profile");
+    let _ = std::fs::remove_dir_all(&profile);
+    let out_path = dir.join("chromium.out");
+    let err_path = dir.join("chromium.err");
+    let mut child = Command::new(browser)
         .args([
             "--headless",
             "--no-sandbox",
             "--disable-gpu",
+            "--disable-dev-shm-usage",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--disable-crash-reporter",
+            "--disable-breakpad",
             "--hide-scrollbars",
             "--window-size=400,300",
         ])
+        .arg(format!("--user-data-dir={}", profile.display()))
         .arg(format!("--virtual-time-budget={budget_ms}"))
         .arg(what)
         .arg(url)
-        .output()
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(&out_path).expect("chromium.out"))
+        .stderr(std::fs::File::create(&err_path).expect("chromium.err"))
+        .process_group(0)
+        .spawn()
         .expect("chromium runs");
-    assert!(
-        o.status.success(),
-        "chromium: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
+    let limit = Duration::from_secs(90);
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("chromium's status") {
+            break Some(status);
+        }
+        if start.elapsed() > limit {
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    // Whatever the browser left running goes with it.
+    let _ = Command::new("kill")
+        .args(["-KILL", "--", &format!("-{}", child.id())])
+        .stderr(Stdio::null())
+        .status();
+    let _ = child.wait();
+    let stderr = std::fs::read_to_string(&err_path).unwrap_or_default();
+    let Some(status) = status else {
+        let tail: String = stderr.lines().rev().take(20).collect::<Vec<_>>().join("\n");
+        return Err(BrowserHung(format!(
+            "chromium did not exit within {limit:?} on {url}; the last of its stderr, newest first:\n{tail}"
+        )));
+    };
+    assert!(status.success(), "chromium: {stderr}");
+    Ok(std::fs::read_to_string(&out_path).unwrap_or_default())
 }
 
 #[test]
@@ -354,6 +406,19 @@ fn view_in_headless_chromium_shows_the_converged_image_and_applies_controls() {
         );
         return;
     };
+    match page_in_chromium(&browser) {
+        Ok(()) => {}
+        // A browser that hangs says nothing about the page; where the environment lets Chromium
+        // hang, the test reports it and passes unless IRCACHE_REQUIRE_BROWSER is set (sessions set
+        // it; what hangs is shown either way).
+        Err(BrowserHung(why)) if std::env::var_os("IRCACHE_REQUIRE_BROWSER").is_none() => {
+            eprintln!("SKIPPED view_in_headless_chromium: {why}");
+        }
+        Err(BrowserHung(why)) => panic!("{why}"),
+    }
+}
+
+fn page_in_chromium(browser: &Path) -> Result<(), BrowserHung> {
     let dir = temp_dir("browser");
     let size = 48;
     let server = serve(size);
@@ -362,11 +427,12 @@ fn view_in_headless_chromium_shows_the_converged_image_and_applies_controls() {
     // The page shows frames and their figures; controls in the fragment go through the page's
     // own control path (the slider's and the keys').
     let dom = browse(
-        &browser,
+        browser,
+        &dir,
         &format!("{base}#accuracy=0.2&overlay=0"),
         "--dump-dom",
         4000,
-    );
+    )?;
     assert!(
         dom.contains("accuracy 0.2 "),
         "the page never showed accuracy 0.2:\n{dom}"
@@ -384,17 +450,24 @@ fn view_in_headless_chromium_shows_the_converged_image_and_applies_controls() {
         http(server.port, "POST", "/control?accuracy=0.35").status,
         200
     );
+    let start = Instant::now();
     let mut last = frame(server.port, 0);
     while last.1["accuracy"].as_f64() != Some(0.35) || last.1["layers"].as_u64() < Some(256) {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "never settled: {}",
+            last.1
+        );
         last = frame(server.port, last.0);
     }
     let shot = dir.join("shot.png");
     browse(
-        &browser,
+        browser,
+        &dir,
         &base,
         &format!("--screenshot={}", shot.display()),
         3000,
-    );
+    )?;
     let image = frame_in_screenshot(&shot, size as usize);
     let (error, lum) = against(&image, &rendered(&dir, size));
     assert!(
@@ -403,19 +476,27 @@ fn view_in_headless_chromium_shows_the_converged_image_and_applies_controls() {
     );
 
     // A camera turn sent by the page changes what it shows.
-    browse(&browser, &format!("{base}#turn=0.5,0"), "--dump-dom", 2000);
+    browse(
+        browser,
+        &dir,
+        &format!("{base}#turn=0.5,0"),
+        "--dump-dom",
+        2000,
+    )?;
     let turned = dir.join("turned.png");
     browse(
-        &browser,
+        browser,
+        &dir,
         &base,
         &format!("--screenshot={}", turned.display()),
         2000,
-    );
+    )?;
     let moved = frame_in_screenshot(&turned, size as usize);
     assert!(
         mean_abs_difference(&image, &moved) > 0.05,
         "the turn did not show"
     );
+    Ok(())
 }
 
 /// Options that do not apply to a walkthrough are refused with the reason, before any server
