@@ -746,3 +746,46 @@ fn light_samples_are_not_occluded_by_their_own_light() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The relative variance that decides whether radiance records hold the environment: an
+/// envmap bright above the horizon (a) and dim below (b) has ((a − b)/(a + b))², and a constant
+/// c added to it ((a − b)/(a + b + 2c))²; a constant alone 0.
+#[test]
+fn environment_relative_variance_has_its_closed_form() {
+    // Rows at texel centres v = y/(H − 1): an odd height puts the horizon on a row, whose cells
+    // blend the two values over 1/(H − 1) of the sphere's height.
+    let (w, h) = (16usize, 401usize);
+    let (a, b, c) = (3.0f32, 0.5f32, 2.0f32);
+    let mut img = Image::new(w, h);
+    for y in 0..h {
+        let v = match (2 * y + 1).cmp(&h) {
+            std::cmp::Ordering::Less => a,
+            std::cmp::Ordering::Equal => 0.5 * (a + b),
+            std::cmp::Ordering::Greater => b,
+        };
+        for x in 0..w {
+            img.set(x, y, Rgb::splat(v));
+        }
+    }
+    let envmap = EmitterDesc::Envmap {
+        path: PathBuf::from("<test>"),
+        image: Arc::new(img),
+        to_world: Mat4::IDENTITY,
+        scale: 1.0,
+    };
+    let constant = EmitterDesc::Constant {
+        radiance: Rgb::splat(c),
+    };
+    let variance = |emitters: Vec<EmitterDesc>| {
+        LightSet::new(&light_scene(vec![], emitters), Vec3::ZERO, 1.0)
+            .environment_relative_variance()
+    };
+    let expect = f64::from(((a - b) / (a + b)).powi(2));
+    let got = variance(vec![envmap.clone()]);
+    assert!((got - expect).abs() < 0.01 * expect, "{got} vs {expect}");
+    let expect = f64::from(((a - b) / (a + b + 2.0 * c)).powi(2));
+    let got = variance(vec![envmap, constant.clone()]);
+    assert!((got - expect).abs() < 0.01 * expect, "{got} vs {expect}");
+    assert_eq!(variance(vec![constant]), 0.0);
+    assert_eq!(variance(vec![]), 0.0);
+}

@@ -5,8 +5,10 @@
 //! same lobes traced at 16, 32, 64, … spp until it reaches that error; ircache's path tracer at 16
 //! and 64 spp; Mitsuba 3 `multijitter` at 16, 32, … spp until it reaches the error. Times to
 //! equal error are interpolated between the bracketing renders (log–log), never extrapolated.
-//! Then the thesis's setting: the glossy Cornell box at 1000 × 1000 (001 §4.7.1: 12.2 s with
-//! 3,023 irradiance and 869 radiance records on a 2006 GPU).
+//! Then environment light in the records (`--cached-environment`, `irradiance_cache::environment`)
+//! on `scenes/sky-glossy`, under its smooth sky and under the same sky with a sun; and the
+//! thesis's setting: the glossy Cornell box at 1000 × 1000 (001 §4.7.1: 12.2 s with 3,023
+//! irradiance and 869 radiance records on a 2006 GPU).
 
 use super::cache_vs_path::{fmt_time, measure, run, time_to, Point};
 use super::peers::multijitter_series;
@@ -112,6 +114,7 @@ pub fn run_all(shared: &Path, with_mitsuba: bool) -> Result<()> {
             );
         }
     }
+    environment(&own)?;
     // The thesis's setting: 1000 × 1000, one bounce.
     let scene_path = own.join("cornell-rough/scene.xml");
     let defines = vec![
@@ -131,5 +134,42 @@ pub fn run_all(shared: &Path, with_mitsuba: bool) -> Result<()> {
          (the thesis: 12.2 s, 3,023 irradiance and 869 radiance records, on a 2006 GPU)",
         out.seconds, records, radiance
     );
+    Ok(())
+}
+
+/// `--cached-environment` on `scenes/sky-glossy` (`-ab 1`, 16 spp, radiance cache on): each
+/// choice, under the smooth sky and under the sky with a sun, against the path tracer.
+fn environment(own: &Path) -> Result<()> {
+    println!(
+        "\nEnvironment light in the records (sky-glossy, 256 × 256, -ab 1, radiance cache on, 16 spp)"
+    );
+    let scene_path = own.join("sky-glossy/scene.xml");
+    for (sky, reference) in [
+        ("sky.exr", "reference-d3.exr"),
+        ("sky-sun.exr", "reference-sun-d3.exr"),
+    ] {
+        let reference_path = own.join("sky-glossy").join(reference);
+        let reference = ircache_image::read_image(&reference_path)
+            .with_context(|| format!("reading {}", reference_path.display()))?;
+        let defines = vec![
+            ("max_depth".to_string(), "3".to_string()),
+            ("sky".to_string(), sky.to_string()),
+        ];
+        let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
+        let scene = Scene::build(&desc)?;
+        println!(
+            "\n{sky} (relative variance {:.2})",
+            scene.lights.environment_relative_variance()
+        );
+        for choice in ["auto", "off", "glossy", "all"] {
+            let params = [("radiance_cache", "on"), ("cached_environment", choice)];
+            let p = measure(&run(&scene, &desc, "ic", 16, &params)?, &reference)?;
+            show(&format!("ic --cached-environment {choice}"), &p);
+        }
+        for spp in [16, 64] {
+            let p = measure(&run(&scene, &desc, "path", spp, &[])?, &reference)?;
+            show(&format!("ircache path, {spp} spp"), &p);
+        }
+    }
     Ok(())
 }

@@ -773,3 +773,51 @@ fn roughplastic_matches_mitsuba_at_grazing_angles() {
         }
     }
 }
+
+/// What light samples of a cached environment estimate (`EnvironmentServed::remainder`): with
+/// the Lambertian and glossy parts served, the rest integrates to zero under uniform light on
+/// every model (the Lambertian stand-in is exact there), and on a Lambertian surface it is zero
+/// in every direction (no light sample needed).
+#[test]
+fn the_environment_left_to_light_samples_integrates_to_zero_where_the_cache_serves_all() {
+    use crate::integrators::light_sampling::EnvironmentServed;
+    for (label, desc) in all_models() {
+        let b = mat(desc);
+        if !b.has_smooth() {
+            continue;
+        }
+        let diffuse_only = b.is_diffuse_only();
+        for t in [0.0f32, 40.0, 75.0] {
+            let wo = dir(t, 30.0);
+            let served = EnvironmentServed {
+                lambertian: b.lambertian_albedo(wo),
+                glossy: true,
+            };
+            let (nt, np) = (400, 64);
+            let (mut rest, mut whole) = (Rgb::ZERO, Rgb::ZERO);
+            for i in 0..nt {
+                let mu = (i as f32 + 0.5) / nt as f32;
+                for j in 0..np {
+                    let phi = 2.0 * PI * (j as f32 + 0.5) / np as f32;
+                    let s = (1.0 - mu * mu).sqrt();
+                    let wi = Vec3::new(s * phi.cos(), s * phi.sin(), mu);
+                    let f = b.eval(wo, wi);
+                    let r = served.remainder(&b, wo, wi, f);
+                    if diffuse_only {
+                        assert!(r.is_black(), "{label}: {r:?} left at {wi:?}");
+                    }
+                    rest += r;
+                    whole += f;
+                }
+            }
+            for ch in 0..3 {
+                assert!(
+                    rest[ch].abs() <= 5e-3 * whole[ch].max(0.05 * (nt * np) as f32),
+                    "{label} θo={t}: ∫ rest = {} of ∫ f = {}",
+                    rest[ch],
+                    whole[ch]
+                );
+            }
+        }
+    }
+}

@@ -2,7 +2,7 @@
 //! samples and `bsdf_samples` BSDF samples combined with the power heuristic, weighted by their
 //! sample counts; emitters seen directly are added as they are.
 
-use super::light_sampling::{sample_lights, BsdfStrategy};
+use super::light_sampling::{sample_lights, BsdfStrategy, EnvironmentServed};
 use super::{mis_weight, RayCounts};
 use crate::bsdf::Bsdf;
 use crate::sampler::{dims, Sampler};
@@ -80,8 +80,8 @@ pub fn estimate_direct(
         bsdf,
         wo_local,
         ne,
-        BsdfStrategy::All,
-        nb,
+        (BsdfStrategy::All, nb),
+        EnvironmentServed::default(),
         0,
         sampler,
         rays,

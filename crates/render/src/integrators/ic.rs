@@ -9,6 +9,7 @@
 
 use super::path_continuation::{trace_path, IndirectSource, PathSettings, PathStart};
 use super::RayCounts;
+use crate::irradiance_cache::environment::HeldEnvironment;
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, ShadingPoint, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::{IcParams, IrradianceCache};
@@ -298,6 +299,10 @@ impl IndirectSource for PixelLookup<'_> {
             return Some(l);
         }
         crate::radiance_cache::lookup::glossy(self.cache, sp, depth, wo)
+    }
+
+    fn held_environment(&self, sp: &ShadingPoint) -> HeldEnvironment {
+        self.cache.held_environment_at(sp)
     }
 
     fn ambient(&self) -> Rgb {

@@ -42,12 +42,52 @@ impl BsdfStrategy {
     }
 }
 
+/// What a cache served at a vertex with the environment's light in it (see
+/// `irradiance_cache::environment`): light samples of the environment estimate the rest.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EnvironmentServed {
+    /// `k(wo)` of the Lambertian part served as `k E/π` (black: not served).
+    pub lambertian: Rgb,
+    /// The glossy part was served by radiance records.
+    pub glossy: bool,
+}
+
+impl EnvironmentServed {
+    /// True when nothing was served with the environment in it.
+    #[inline]
+    #[must_use]
+    pub fn is_none(&self) -> bool {
+        self.lambertian.is_black() && !self.glossy
+    }
+
+    /// `f·|cos θᵢ|` less the parts served: `f − k |cos θᵢ|/π − f_glossy` (where served); may be
+    /// negative (the BSDF's diffuse part against its Lambertian stand-in), zero for a served
+    /// Lambertian surface.
+    #[inline]
+    #[must_use]
+    pub fn remainder(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3, f: Rgb) -> Rgb {
+        let mut rest = f - self.lambertian * (wi.z.abs() * ircache_math::INV_PI);
+        if self.glossy {
+            rest = rest - bsdf.eval_glossy(wo, wi);
+        }
+        // What is left of a served Lambertian surface is rounding.
+        let scale = f.max_channel().max(f32::MIN_POSITIVE);
+        if rest.r.abs().max(rest.g.abs()).max(rest.b.abs()) <= 1e-5 * scale {
+            Rgb::ZERO
+        } else {
+            rest
+        }
+    }
+}
+
 /// Direct light reflected at `it` towards `wo` (local frame) by `ne` light samples (jittered over
 /// a √ne × √ne grid when `ne` > 1 is a square). Each is weighted against `nb` samples of
 /// `strategy` at the same vertex (`nb` = 0: the light samples estimate everything): a light
 /// sample contributes `L/(ne·p_l) · (f − f_s·(1 − w))` with `f_s` the strategy's part of the BSDF
 /// and `w = w_power(ne·p_l, nb·p_s)`; the BSDF samples that find an emitter add the rest.
 /// `depth` is the vertex's depth in the path (which of the sampler's dimensions it draws).
+/// Where the cache served parts of the BSDF with the environment's light in them (`served`),
+/// samples of the environment estimate the rest ([`EnvironmentServed::remainder`]).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub fn sample_lights(
@@ -56,8 +96,8 @@ pub fn sample_lights(
     bsdf: &Bsdf,
     wo: Vec3,
     ne: u32,
-    strategy: BsdfStrategy,
-    nb: u32,
+    (strategy, nb): (BsdfStrategy, u32),
+    served: EnvironmentServed,
     depth: u32,
     sampler: &mut dyn Sampler,
     rays: &mut RayCounts,
@@ -90,7 +130,17 @@ pub fn sample_lights(
         };
         let wi = it.frame.to_local(ls.wi);
         let f = bsdf.eval(wo, wi);
+        let environment = !served.is_none() && scene.lights.is_environment(ls.light);
         if f.is_black() || ls.pdf <= 0.0 {
+            continue;
+        }
+        // Of the environment, the sample estimates what the cache did not serve.
+        let rest = if environment {
+            served.remainder(bsdf, wo, wi, f)
+        } else {
+            f
+        };
+        if rest.is_black() {
             continue;
         }
         rays.shadow += 1;
@@ -100,7 +150,15 @@ pub fn sample_lights(
         {
             continue;
         }
-        let weighted = if ls.is_delta || nb == 0 {
+        let weighted = if environment {
+            // The traced glossy part in it is weighed against its BSDF sample.
+            if !served.glossy && strategy == BsdfStrategy::Glossy && nb > 0 {
+                let w = mis_weight(fe * ls.pdf, fb * strategy.pdf(bsdf, wo, wi));
+                rest - bsdf.eval_glossy(wo, wi) * (1.0 - w)
+            } else {
+                rest
+            }
+        } else if ls.is_delta || nb == 0 {
             f
         } else {
             let w = mis_weight(fe * ls.pdf, fb * strategy.pdf(bsdf, wo, wi));

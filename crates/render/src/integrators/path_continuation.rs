@@ -9,8 +9,9 @@
 //! continues through the glossy part alone, and light samples are weighted against that part
 //! only. Where it declines, the whole BSDF is sampled, as in path tracing.
 
-use super::light_sampling::{sample_lights, BsdfStrategy};
+use super::light_sampling::{sample_lights, BsdfStrategy, EnvironmentServed};
 use super::{mis_weight, RayCounts};
+use crate::irradiance_cache::environment::HeldEnvironment;
 use crate::irradiance_cache::gather::ShadingPoint;
 use crate::sampler::{dims, Sampler};
 use crate::scene::{Interaction, Scene};
@@ -36,6 +37,14 @@ pub trait IndirectSource {
     fn glossy(&mut self, scene: &Scene, sp: &ShadingPoint, depth: u32, wo: Vec3) -> Option<Rgb> {
         let _ = (scene, sp, depth, wo);
         None
+    }
+
+    /// Which of what it serves at `sp` holds the environment's light too (records that hold
+    /// it, `irradiance_cache::environment`): light samples of the environment then leave out
+    /// the parts served.
+    fn held_environment(&self, sp: &ShadingPoint) -> HeldEnvironment {
+        let _ = sp;
+        HeldEnvironment::None
     }
 
     /// Radiance assumed beyond the last bounce (Radiance's ambient value): what the Lambertian
@@ -221,6 +230,7 @@ pub fn trace_path(
         // radiance serves it: the path ends here, its direct light left to the light samples.
         let mut strategy = BsdfStrategy::All;
         let mut all_served = false;
+        let mut environment_served = EnvironmentServed::default();
         if source.serves() && bsdf.has_smooth() {
             let k = bsdf.lambertian_albedo(wo_local);
             let indirect = depth + 2 < max_depth;
@@ -237,6 +247,9 @@ pub fn trace_path(
                         l += beta * k * e * INV_PI;
                         strategy = BsdfStrategy::Glossy;
                         lambertian_served = true;
+                        if source.held_environment(sp) == HeldEnvironment::All {
+                            environment_served.lambertian = k;
+                        }
                     }
                 } else {
                     l += beta * k * source.ambient();
@@ -246,6 +259,8 @@ pub fn trace_path(
                 if let Some(glossy) = source.glossy(scene, &sp, depth, wo) {
                     l += beta * glossy;
                     all_served = true;
+                    environment_served.glossy =
+                        source.held_environment(&sp) != HeldEnvironment::None;
                 }
             }
         }
@@ -264,8 +279,8 @@ pub fn trace_path(
                 &bsdf,
                 wo_local,
                 ne,
-                strategy,
-                u32::from(continues),
+                (strategy, u32::from(continues)),
+                environment_served,
                 depth,
                 sampler,
                 rays,

@@ -700,6 +700,7 @@ mod tests {
             ("gradients", "rotation"),
             ("gradient_formula", "krivanek"),
             ("radiance_cache", "on"),
+            ("cached_environment", "all"),
             ("radiance_order", "5"),
             ("radiance_accuracy", "0.2"),
         ];

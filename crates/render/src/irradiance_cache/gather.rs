@@ -8,6 +8,7 @@
 //! at the last bounce the ambient value. Records needed at deeper levels during a batch go to a
 //! private overlay of the work item, so the batch's result does not depend on thread timing.
 
+use super::environment::{held_environment, HeldEnvironment};
 use super::hemisphere::{largest_eigenvalue, to_world, HemisphereSamples, Stratification};
 pub use super::params::Deeper;
 use super::params::{IcParams, TranslationalFormula};
@@ -53,6 +54,8 @@ pub struct IrradianceCache {
     pub radiance: Option<Arc<RadianceCache>>,
     /// The radiance records' coefficients, indexed by [`Record::radiance`].
     pub radiance_records: Vec<RadianceRecord>,
+    /// Which records hold the environment's light ([`super::environment`]).
+    pub environment: HeldEnvironment,
 }
 
 impl IrradianceCache {
@@ -65,6 +68,7 @@ impl IrradianceCache {
             cache.mean_albedo = mean_albedo(scene);
         }
         cache.excluded = vec![false; scene.shapes.len()];
+        cache.environment = held_environment(scene, params.cached_environment);
         cache
     }
 
@@ -170,11 +174,23 @@ impl IrradianceCache {
             radiance: None,
             radiance_records: Vec::new(),
             pixel_angle: 0.0,
+            environment: HeldEnvironment::None,
         };
         cache.levels = (0..params.bounces.clamp(1, super::params::MAX_STORED_LEVELS))
             .map(|_| cache.empty_store())
             .collect();
         cache
+    }
+
+    /// Which records serving `sp` hold the environment's light (none on excluded surfaces).
+    #[inline]
+    #[must_use]
+    pub fn held_environment_at(&self, sp: &ShadingPoint) -> HeldEnvironment {
+        if self.is_excluded(sp.it.shape) {
+            HeldEnvironment::None
+        } else {
+            self.environment
+        }
     }
 
     /// True when shape `shape` takes no records.
@@ -352,6 +368,14 @@ pub trait IncidentRadiance: Sync {
         key: u64,
         rng: &mut Rng,
     ) -> Option<Incident>;
+
+    /// Radiance arriving from infinitely far along `d` when a gather ray escapes: the
+    /// environment's, which records hold where the cache says so ([`super::environment`]). None
+    /// by default.
+    fn escaped(&self, d: Vec3) -> Rgb {
+        let _ = d;
+        Rgb::ZERO
+    }
 }
 
 /// Computes records for one cache from the light an [`IncidentRadiance`] reports.
@@ -410,6 +434,27 @@ impl ShadingPoint {
 
 const GATHER_SALT: u64 = 0x6761_7468_6572;
 
+/// Where the environment's light that a gather's escaping rays bring goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Escapes {
+    /// Into the cells' radiance: the irradiance and the radiance record hold it.
+    Irradiance,
+    /// Into [`HemisphereSamples::escaped`]: the radiance record alone holds it.
+    Apart,
+    /// Nowhere: light samples estimate it.
+    Dropped,
+}
+
+/// What one gather ray finds.
+enum Found {
+    /// A surface: the radiance arriving from it, its distance and its normal (local frame).
+    Surface(Rgb, f32, Vec3),
+    /// Nothing: it escaped along the world direction.
+    Escaped(Vec3),
+    /// The direction is below the geometric surface: nothing arrives.
+    Below,
+}
+
 impl Gatherer<'_> {
     /// Gathers the hemisphere above `sp` with `strata`, shading the hits for `level`.
     pub fn gather(
@@ -428,6 +473,13 @@ impl Gatherer<'_> {
             sp.it.ng
         };
         let mut h = HemisphereSamples::new(strata);
+        // What escaped rays bring: into the irradiance (`all`), apart for the radiance record
+        // (`glossy`, on radiance-cached surfaces), or nothing.
+        let environment = match self.cache.environment {
+            HeldEnvironment::All => Escapes::Irradiance,
+            HeldEnvironment::Glossy if self.glossy_brdf(sp).is_some() => Escapes::Apart,
+            _ => Escapes::Dropped,
+        };
         let mut dirs = Vec::with_capacity(strata.cells());
         let mut jitter = vec![Vec2::ZERO; strata.cells()];
         strata.for_each_direction(
@@ -439,7 +491,7 @@ impl Gatherer<'_> {
         );
         for (j, k, local) in dirs {
             let idx = j * strata.azimuthal + k;
-            if let Some((l, t, n_hit)) = self.sample(
+            match self.sample(
                 st,
                 sp,
                 &frame,
@@ -449,22 +501,39 @@ impl Gatherer<'_> {
                 mix(key, idx as u64),
                 &mut rng,
             ) {
-                h.radiance[idx] = l;
-                h.distance[idx] = t;
-                h.hits[idx] = (local, n_hit);
+                Found::Surface(l, t, n_hit) => {
+                    h.radiance[idx] = l;
+                    h.distance[idx] = t;
+                    h.hits[idx] = (local, n_hit);
+                }
+                Found::Escaped(d) => match environment {
+                    Escapes::Irradiance => h.radiance[idx] = self.light.escaped(d),
+                    Escapes::Apart => h.escaped[idx] = self.light.escaped(d),
+                    Escapes::Dropped => {}
+                },
+                Found::Below => {}
             }
         }
         let extra = self.cache.params.supersamples;
         if extra > 0 {
             self.supersample(
-                st, sp, &frame, ng, &mut h, &jitter, extra, level, key, &mut rng,
+                st,
+                sp,
+                &frame,
+                ng,
+                &mut h,
+                &jitter,
+                extra,
+                level,
+                key,
+                environment,
+                &mut rng,
             );
         }
         (h, frame)
     }
 
-    /// One gather ray along the local direction `local`: the radiance found and the hit
-    /// distance, `None` when it escapes or points below the geometric surface.
+    /// One gather ray along the local direction `local`: what it finds.
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn sample(
@@ -477,16 +546,19 @@ impl Gatherer<'_> {
         level: u32,
         key: u64,
         rng: &mut Rng,
-    ) -> Option<(Rgb, f32, Vec3)> {
+    ) -> Found {
         let d = frame.from_local(local);
         if d.dot(ng) <= 0.0 {
-            return None; // below the geometric surface: nothing arrives
+            return Found::Below;
         }
         st.counts.gather_rays += 1;
-        let inc = self
+        match self
             .light
-            .incident(self.cache, self.seed, st, sp, d, level, key, rng)?;
-        Some((inc.radiance, inc.distance, frame.to_local(inc.normal)))
+            .incident(self.cache, self.seed, st, sp, d, level, key, rng)
+        {
+            Some(inc) => Found::Surface(inc.radiance, inc.distance, frame.to_local(inc.normal)),
+            None => Found::Escaped(d),
+        }
     }
 
     /// Adaptive super-sampling (003 item 2): the cells whose neighbours differ most among
@@ -509,6 +581,7 @@ impl Gatherer<'_> {
         extra: usize,
         level: u32,
         key: u64,
+        environment: Escapes,
         rng: &mut Rng,
     ) {
         let strata = h.strata;
@@ -519,22 +592,30 @@ impl Gatherer<'_> {
             let (j, k) = (idx / strata.azimuthal, idx % strata.azimuthal);
             let v = jitter[idx];
             let mut sum = h.radiance[idx];
+            let mut escaped = h.escaped[idx];
             for (q, (dx, dy)) in LATTICE.iter().enumerate() {
                 let u = Vec2::new((v.x + dx).fract(), (v.y + dy).fract());
                 let local = strata.direction(j, k, u);
                 let sample_key = mix(key, (strata.cells() + 3 * n + q) as u64);
-                if let Some((l, t, n_hit)) =
-                    self.sample(st, sp, frame, ng, local, level, sample_key, rng)
-                {
-                    sum += l;
-                    // The nearest surface in the cell moves its walls (3.42, 3.46).
-                    if t < h.distance[idx] {
-                        h.distance[idx] = t;
-                        h.hits[idx] = (local, n_hit);
+                match self.sample(st, sp, frame, ng, local, level, sample_key, rng) {
+                    Found::Surface(l, t, n_hit) => {
+                        sum += l;
+                        // The nearest surface in the cell moves its walls (3.42, 3.46).
+                        if t < h.distance[idx] {
+                            h.distance[idx] = t;
+                            h.hits[idx] = (local, n_hit);
+                        }
                     }
+                    Found::Escaped(d) => match environment {
+                        Escapes::Irradiance => sum += self.light.escaped(d),
+                        Escapes::Apart => escaped += self.light.escaped(d),
+                        Escapes::Dropped => {}
+                    },
+                    Found::Below => {}
                 }
             }
             h.radiance[idx] = sum * 0.25;
+            h.escaped[idx] = escaped * 0.25;
         }
         st.counts.supersampled_cells += cells.len() as u64;
     }
@@ -664,6 +745,8 @@ impl Gatherer<'_> {
         else {
             return (irradiance, NO_RADIANCE);
         };
+        let with_environment = h.with_escaped();
+        let h = with_environment.as_ref().unwrap_or(h);
         let basis = tables.cell_basis(h.strata, brdf.order());
         let weights = basis.lobe_weights(&brdf.normal_view());
         let variance = irradiance.max(h.weighted_relative_variance(Some(&weights)));
@@ -761,6 +844,10 @@ impl IncidentRadiance for SceneRadiance<'_> {
             normal,
         })
     }
+
+    fn escaped(&self, d: Vec3) -> Rgb {
+        self.scene.lights.environment_radiance(d)
+    }
 }
 
 /// The Lambertian indirect light at the vertices of a gather's paths.
@@ -794,6 +881,10 @@ impl IndirectSource for GatherSource<'_, '_> {
 
     fn ambient(&self) -> Rgb {
         self.gatherer.cache.ambient
+    }
+
+    fn held_environment(&self, sp: &ShadingPoint) -> HeldEnvironment {
+        self.gatherer.cache.held_environment_at(sp)
     }
 }
 

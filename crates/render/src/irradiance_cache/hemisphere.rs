@@ -93,6 +93,9 @@ pub struct HemisphereSamples {
     /// Per cell, the local direction of its sample and the unit normal of the surface it hit
     /// (local frame; zero when it hit nothing), for the Hessian by reprojection.
     pub hits: Vec<(Vec3, Vec3)>,
+    /// Per cell, the environment's radiance where its rays escaped, kept apart from
+    /// `radiance` where only radiance records hold it (`super::environment`); zero elsewhere.
+    pub escaped: Vec<Rgb>,
 }
 
 /// Per-channel gradients in the local frame (z components are zero).
@@ -107,7 +110,22 @@ impl HemisphereSamples {
             radiance: vec![Rgb::ZERO; strata.cells()],
             distance: vec![f32::INFINITY; strata.cells()],
             hits: vec![(Vec3::ZERO, Vec3::ZERO); strata.cells()],
+            escaped: vec![Rgb::ZERO; strata.cells()],
         }
+    }
+
+    /// The samples with the escaped environment radiance added to each cell's radiance (what
+    /// a radiance record holding the environment projects); `None` when none was kept apart.
+    #[must_use]
+    pub fn with_escaped(&self) -> Option<HemisphereSamples> {
+        if self.escaped.iter().all(|e| e.is_black()) {
+            return None;
+        }
+        let mut all = self.clone();
+        for (l, e) in all.radiance.iter_mut().zip(&self.escaped) {
+            *l += *e;
+        }
+        Some(all)
     }
 
     #[inline]

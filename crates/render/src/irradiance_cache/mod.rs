@@ -19,6 +19,7 @@
 
 pub mod aov;
 pub mod build;
+pub mod environment;
 pub mod file;
 pub mod gather;
 pub mod hemisphere;

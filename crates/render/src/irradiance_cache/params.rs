@@ -43,6 +43,24 @@ pub enum Deeper {
     PathTraced,
 }
 
+/// Whether the cache's records hold the environment's light (`--cached-environment`): the
+/// light of gather rays that escape to a `constant` or `envmap` emitter (see
+/// [`super::environment`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum CachedEnvironment {
+    /// `glossy` where the environment is smooth enough for a record's gather, else `off`
+    /// ([`super::environment::held_environment`]).
+    #[default]
+    Auto,
+    /// Radiance records hold it: the glossy part of radiance-cached surfaces takes it from them.
+    Glossy,
+    /// Irradiance and radiance records hold it, as Radiance's ambient calculation holds a sky:
+    /// noise-free, but the records' interpolation error now lies on all of it.
+    All,
+    /// Never: light samples estimate all of the environment's light.
+    Off,
+}
+
 impl Deeper {
     /// Parses `cache` or `traced`.
     pub fn parse(s: &str) -> Result<Deeper, String> {
@@ -134,6 +152,8 @@ pub struct IcParams {
     /// `accuracy`: glossy lobes show a record's error more than irradiance does (001 §4.7.1 uses
     /// 0.2 against 0.25).
     pub radiance_accuracy: f32,
+    /// Whether records hold the environment's light (`--cached-environment`).
+    pub cached_environment: CachedEnvironment,
 }
 
 impl Default for IcParams {
@@ -162,6 +182,7 @@ impl Default for IcParams {
             radiance_cache: false,
             radiance_order: 10,
             radiance_accuracy: 0.35,
+            cached_environment: CachedEnvironment::Auto,
         }
     }
 }
@@ -214,6 +235,13 @@ fn on_off(v: &str) -> Result<bool, String> {
         v => Err(format!("expected on or off, found \"{v}\"")),
     }
 }
+
+const CACHED_ENVIRONMENTS: &[(&str, CachedEnvironment)] = &[
+    ("auto", CachedEnvironment::Auto),
+    ("glossy", CachedEnvironment::Glossy),
+    ("all", CachedEnvironment::All),
+    ("off", CachedEnvironment::Off),
+];
 
 fn choice<T: Copy>(v: &str, options: &[(&str, T)]) -> Result<T, String> {
     options
@@ -520,6 +548,23 @@ pub const PARAMS: &[ParamSpec] = &[
         get: |p| p.radiance_accuracy.to_string(),
         set: |p, v| {
             p.radiance_accuracy = number(v, 0.001, 10.0, "an accuracy")?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "cached_environment",
+        aliases: &[],
+        value: "auto|glossy|all|off",
+        help: "which records hold the light of a constant or envmap emitter (light samples of \
+               it then estimate only the rest of the BSDF): glossy, radiance records (the \
+               radiance-cached glossy lobes take it from them); all, irradiance records too, as \
+               Radiance's ambient calculation holds a sky (noise-free, with the cache's \
+               interpolation error); auto, glossy where the environment is smooth enough for a \
+               record's gather (no sun in it)",
+        shapes_records: true,
+        get: |p| name_of(p.cached_environment, CACHED_ENVIRONMENTS),
+        set: |p, v| {
+            p.cached_environment = choice(v, CACHED_ENVIRONMENTS)?;
             Ok(())
         },
     },

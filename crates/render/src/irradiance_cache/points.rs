@@ -4,6 +4,7 @@
 //! indirect part's gradients either way.
 
 use super::build::{fill_for_points, CacheStats};
+use super::environment::HeldEnvironment;
 use super::gather::{
     mix, Deeper, Gatherer, IrradianceCache, SceneRadiance, ShadingPoint, WorkState,
 };
@@ -61,10 +62,17 @@ pub fn query_point(p: Vec3, n: Vec3) -> ShadingPoint {
 }
 
 /// Direct irradiance at `sp` from `samples` light samples: π times the radiance a white
-/// Lambertian surface there reflects, by the one light-sampling estimator.
-fn direct_irradiance(scene: &Scene, sp: &ShadingPoint, samples: u32, rng: &mut Rng) -> Rgb {
+/// Lambertian surface there reflects, by the one light-sampling estimator. Where the cache
+/// holds the environment (`environment`), its light is in the indirect part and left out here.
+fn direct_irradiance(
+    scene: &Scene,
+    sp: &ShadingPoint,
+    samples: u32,
+    environment: bool,
+    rng: &mut Rng,
+) -> Rgb {
     use crate::bsdf::{Bsdf, Diffuse, Lobe};
-    use crate::integrators::light_sampling::{sample_lights, BsdfStrategy};
+    use crate::integrators::light_sampling::{sample_lights, BsdfStrategy, EnvironmentServed};
     let white = Bsdf::Single(Lobe::Diffuse(Diffuse {
         reflectance: Rgb::ONE,
     }));
@@ -76,8 +84,11 @@ fn direct_irradiance(scene: &Scene, sp: &ShadingPoint, samples: u32, rng: &mut R
         &white,
         wo,
         samples,
-        BsdfStrategy::All,
-        0,
+        (BsdfStrategy::All, 0),
+        EnvironmentServed {
+            lambertian: if environment { Rgb::ONE } else { Rgb::ZERO },
+            glossy: false,
+        },
         0,
         rng,
         &mut rays,
@@ -108,7 +119,9 @@ pub fn irradiance_at_points(
         .map(|(i, sp)| {
             let mut rng = Rng::keyed(seed, &[0x6469_7265_6374, i as u64]);
             let direct = if direct_samples > 0 {
-                direct_irradiance(scene, sp, direct_samples, &mut rng)
+                // With no bounce the cache gathers nothing: the environment stays direct.
+                let environment = cache.environment == HeldEnvironment::All && params.bounces > 0;
+                direct_irradiance(scene, sp, direct_samples, environment, &mut rng)
             } else {
                 Rgb::ZERO
             };

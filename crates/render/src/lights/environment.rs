@@ -94,6 +94,23 @@ impl EnvmapLight {
         self.rows.integral
     }
 
+    /// `(∫ Y dω, ∫ Y² dω)` of the luminance `Y` over the sphere, each cell at the mean of its four
+    /// corner texels (as its sampling tabulates it).
+    #[must_use]
+    pub fn luminance_moments(&self) -> (f64, f64) {
+        let w = self.width;
+        let y = |i: usize, j: usize| f64::from(self.texels[j * w + i % w].luminance());
+        let (mut m1, mut m2) = (0.0, 0.0);
+        for (j, omega) in self.cell_solid_angle.iter().enumerate() {
+            for i in 0..w {
+                let mean = 0.25 * (y(i, j) + y(i + 1, j) + y(i, j + 1) + y(i + 1, j + 1));
+                m1 += mean * f64::from(*omega);
+                m2 += mean * mean * f64::from(*omega);
+            }
+        }
+        (m1, m2)
+    }
+
     /// Builds the emitter and its sampling distributions from the radiance image.
     #[must_use]
     pub fn new(image: &Image, to_world: Mat4, scale: f32) -> Option<EnvmapLight> {

@@ -384,6 +384,42 @@ impl LightSet {
         pdf
     }
 
+    /// Relative variance `E[Y²]/E[Y]² − 1` of the environment's luminance `Y` over the sphere
+    /// (uniform directions): 0 for a `constant` emitter, large for a map whose power is in a
+    /// small sun. Several maps are taken as uncorrelated. 0 without an environment.
+    #[must_use]
+    pub fn environment_relative_variance(&self) -> f64 {
+        let four_pi = 4.0 * std::f64::consts::PI;
+        let (mut mean, mut square) = (0.0f64, 0.0f64);
+        for &i in &self.env_lights {
+            let (m, s) = match &self.lights[i as usize] {
+                Light::Constant(c) => {
+                    let y = f64::from(c.radiance.luminance());
+                    (y, y * y)
+                }
+                Light::Envmap(e) => {
+                    let (m1, m2) = e.luminance_moments();
+                    (m1 / four_pi, m2 / four_pi)
+                }
+                _ => continue,
+            };
+            square += s + 2.0 * mean * m;
+            mean += m;
+        }
+        if mean > 0.0 {
+            (square / (mean * mean) - 1.0).max(0.0)
+        } else {
+            0.0
+        }
+    }
+
+    /// True when light `light` is a `constant` or `envmap` emitter.
+    #[inline]
+    #[must_use]
+    pub fn is_environment(&self, light: u32) -> bool {
+        self.env_lights.contains(&light)
+    }
+
     /// True when the scene has a constant or envmap emitter.
     #[must_use]
     pub fn has_environment(&self) -> bool {

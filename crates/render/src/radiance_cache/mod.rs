@@ -17,7 +17,11 @@
 //! cached glossy lobe from them (`integrators/ic.rs`).
 //!
 //! Cache files carry the coefficients (`irradiance_cache/file.rs`); `--aov glossy` shows what the
-//! records give. Not yet: environment maps through SH.
+//! records give.
+//!
+//! Environment light reaches the records through their gather where the cache holds it
+//! ([`crate::irradiance_cache::environment`]): its glossy share is then shaded by the same dot
+//! product as the indirect light.
 
 pub mod brdf;
 pub mod gather;
