@@ -449,24 +449,11 @@ fn downsample(img: &ircache_image::Image, k: usize) -> ircache_image::Image {
     out
 }
 
-/// Renders `scene` at 1/`k` of its film size with `integrator` (max_depth `depth`, cache
-/// parameters `params`) and compares it with the reference averaged to that size: returns
+/// Renders `scene` (its defaults `defines` overridden) at 1/`k` of its film size with
+/// `integrator` (max_depth `depth`, cache parameters `params`) and compares it with the reference averaged to that size: returns
 /// (relMSE_trim, relMSE_trim after a Gaussian blur of σ = 1 px, luminance ratio, seconds).
-fn small_against_reference(
-    scene: &str,
-    reference: &str,
-    k: usize,
-    depth: i32,
-    spp: u32,
-    integrator: &str,
-    params: &[(&str, &str)],
-) -> (f64, f64, f64, f64) {
-    small_against_reference_with(scene, &[], reference, k, depth, spp, integrator, params)
-}
-
-/// [`small_against_reference`] with the scene's defaults `defines` overridden.
 #[allow(clippy::too_many_arguments)]
-fn small_against_reference_with(
+fn small_against_reference(
     scene: &str,
     defines: &[(&str, &str)],
     reference: &str,
@@ -532,6 +519,7 @@ fn the_cache_keeps_the_glossy_light_of_cornell_glossy() {
     ] {
         let (e, blurred, lum, _) = small_against_reference(
             "scenes/cornell-glossy/scene.xml",
+            &[],
             reference,
             4,
             depth,
@@ -541,6 +529,7 @@ fn the_cache_keeps_the_glossy_light_of_cornell_glossy() {
         );
         let (pe, pblurred, _, _) = small_against_reference(
             "scenes/cornell-glossy/scene.xml",
+            &[],
             reference,
             4,
             depth,
@@ -574,9 +563,10 @@ fn deep_bounces_match_the_max_depth_10_references() {
             4,
         ),
     ] {
-        let (e, blurred, lum, _) = small_against_reference(scene, reference, k, 10, 16, "ic", &[]);
+        let (e, blurred, lum, _) =
+            small_against_reference(scene, &[], reference, k, 10, 16, "ic", &[]);
         let (pe, pblurred, _, _) =
-            small_against_reference(scene, reference, k, 10, 16, "path", &[]);
+            small_against_reference(scene, &[], reference, k, 10, 16, "path", &[]);
         // Measured: 0.06–0.11 of the path tracer's error at equal samples; blurred, 0.5–0.8 of
         // the path tracer's with multi-jittered samples (0.31–0.52 of it with independent ones).
         assert!((lum - 1.0).abs() < 0.01, "{scene}: lum ratio {lum}");
@@ -612,7 +602,7 @@ fn path_tracing_at_quarter_size_meets_mitsubas_error_law() {
         ),
     ] {
         let (e, blurred, lum, _) =
-            small_against_reference(scene, reference, 4, 3, spp, "path", &[]);
+            small_against_reference(scene, &[], reference, 4, 3, spp, "path", &[]);
         assert!(e < 1.3 * law, "{scene}: {e:.3e} vs Mitsuba's {law:.3e}");
         assert!(blurred < blur_bound, "{scene}: blurred {blurred:.3e}");
         assert!((lum - 1.0).abs() < 0.005, "{scene}: lum ratio {lum}");
@@ -646,7 +636,7 @@ fn radiance_records_hold_a_smooth_sky_and_leave_a_sun_to_the_light_samples() {
     // sample to combine with (measured: 0.54 of it), at no cost in low-frequency error
     // (measured: 0.88 of it); both converge.
     let render = |sky: &str, reference: &str, environment: &str| {
-        small_against_reference_with(
+        small_against_reference(
             scene,
             &[("sky", sky)],
             reference,

@@ -8,6 +8,21 @@ use ircache_math::{Rng, PI};
 use ircache_scene::{MicrofacetDistribution, TextureDesc};
 use std::sync::Arc;
 
+/// Calls `f` with the midpoints of a 400 × 64 grid in (cos θ, φ) over the upper hemisphere,
+/// cells of equal solid angle (2π over their number, which it returns).
+fn upper_hemisphere_midpoints(mut f: impl FnMut(Vec3)) -> usize {
+    let (nt, np) = (400, 64);
+    for i in 0..nt {
+        let mu = (i as f32 + 0.5) / nt as f32;
+        for j in 0..np {
+            let phi = 2.0 * PI * (j as f32 + 0.5) / np as f32;
+            let s = (1.0 - mu * mu).sqrt();
+            f(Vec3::new(s * phi.cos(), s * phi.sin(), mu));
+        }
+    }
+    nt * np
+}
+
 /// Upper bound on the number of χ² tests in this module (for the Šidák correction).
 const CHI2_TESTS: usize = 80;
 const ALPHA: f64 = 0.01;
@@ -703,18 +718,9 @@ fn glossy_split_is_consistent() {
             }
             // ∫ (eval − eval_glossy) dωi over the upper hemisphere by a midpoint rule in
             // (cos θ, φ).
-            let (nt, np) = (400, 64);
             let mut sum = Rgb::ZERO;
-            for i in 0..nt {
-                let mu = (i as f32 + 0.5) / nt as f32;
-                for j in 0..np {
-                    let phi = 2.0 * PI * (j as f32 + 0.5) / np as f32;
-                    let s = (1.0 - mu * mu).sqrt();
-                    let wi = Vec3::new(s * phi.cos(), s * phi.sin(), mu);
-                    sum += b.eval(wo, wi) - b.eval_glossy(wo, wi);
-                }
-            }
-            let lambert = sum * (2.0 * PI / (nt * np) as f32);
+            let n = upper_hemisphere_midpoints(|wi| sum += b.eval(wo, wi) - b.eval_glossy(wo, wi));
+            let lambert = sum * (2.0 * PI / n as f32);
             let k = b.lambertian_albedo(wo);
             for ch in 0..3 {
                 assert!(
@@ -793,26 +799,19 @@ fn the_environment_left_to_light_samples_integrates_to_zero_where_the_cache_serv
                 lambertian: b.lambertian_albedo(wo),
                 glossy: true,
             };
-            let (nt, np) = (400, 64);
             let (mut rest, mut whole) = (Rgb::ZERO, Rgb::ZERO);
-            for i in 0..nt {
-                let mu = (i as f32 + 0.5) / nt as f32;
-                for j in 0..np {
-                    let phi = 2.0 * PI * (j as f32 + 0.5) / np as f32;
-                    let s = (1.0 - mu * mu).sqrt();
-                    let wi = Vec3::new(s * phi.cos(), s * phi.sin(), mu);
-                    let f = b.eval(wo, wi);
-                    let r = served.remainder(&b, wo, wi, f);
-                    if diffuse_only {
-                        assert!(r.is_black(), "{label}: {r:?} left at {wi:?}");
-                    }
-                    rest += r;
-                    whole += f;
+            let n = upper_hemisphere_midpoints(|wi| {
+                let f = b.eval(wo, wi);
+                let r = served.remainder(&b, wo, wi, f);
+                if diffuse_only {
+                    assert!(r.is_black(), "{label}: {r:?} left at {wi:?}");
                 }
-            }
+                rest += r;
+                whole += f;
+            });
             for ch in 0..3 {
                 assert!(
-                    rest[ch].abs() <= 5e-3 * whole[ch].max(0.05 * (nt * np) as f32),
+                    rest[ch].abs() <= 5e-3 * whole[ch].max(0.05 * n as f32),
                     "{label} θo={t}: ∫ rest = {} of ∫ f = {}",
                     rest[ch],
                     whole[ch]
