@@ -13,6 +13,7 @@ mod bench;
 mod cache_args;
 mod cache_info;
 mod compare;
+mod gpu;
 mod irradiance;
 mod render;
 mod view;

@@ -6,6 +6,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use ircache_math::Vec3;
 use ircache_render::film::Filter;
+use ircache_render::integrators::ic::PixelPass;
 use ircache_render::integrators::Integrator;
 use ircache_render::render::{render, Adaptive, RenderOutput, RenderSettings, Sampling};
 use ircache_render::sampler::SamplerKind;
@@ -99,6 +100,11 @@ pub struct RenderArgs {
     /// processes, one per band, sharing one `--cache` file, and `ircache merge` sums their images.
     #[arg(long, value_parser = parse_tile, value_name = "i/n")]
     pub tile: Option<(usize, usize)>,
+    /// Splat on the GPU (`--integrator splat`): wgpu's first adapter, a hardware GPU before a
+    /// software one (Mesa's lavapipe); irradiance records only so far (radiance records splat on
+    /// the CPU). A clear error without a device or without the `gpu` feature.
+    #[arg(long)]
+    pub gpu: bool,
     /// Irradiance cache settings.
     #[command(flatten)]
     pub cache: CacheArgs,
@@ -276,6 +282,19 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             bail!("--aov glossy needs --radiance-cache on (it shows the radiance records)");
         }
     }
+    let gpu = if args.gpu {
+        let Integrator::Ic(ic) = &mut integrator else {
+            bail!("--gpu splats records: it needs --integrator splat");
+        };
+        if ic.pixel_pass != PixelPass::Splat {
+            bail!("--gpu splats records: it needs --integrator splat");
+        }
+        let gpu = crate::gpu::splatter()?;
+        ic.splatter = Some(gpu.splatter.clone());
+        Some(gpu)
+    } else {
+        None
+    };
     let scene = Scene::build(&desc).context("building the scene")?;
     let load_seconds = t0.elapsed().as_secs_f64();
     let settings = RenderSettings {
@@ -334,6 +353,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let wall = t0.elapsed().as_secs_f64();
     if !args.quiet {
         summary(&desc, &settings, &out, &output, wall);
+        if let Some(gpu) = &gpu {
+            eprintln!("{}", (gpu.summary)());
+        }
     }
     if let Some(stats) = &args.stats {
         write_stats(stats, &desc, &settings, &out, wall, load_seconds)?;

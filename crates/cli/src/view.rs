@@ -312,6 +312,11 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     r.cache.apply(&mut ic.params)?;
     (ic.cache_file, ic.force_reuse) = r.cache.cache_file()?;
     ic.exclusions = r.cache.exclusions()?;
+    if r.gpu {
+        let gpu = crate::gpu::splatter()?;
+        eprintln!("splatting on the GPU: {}", gpu.device);
+        ic.splatter = Some(gpu.splatter);
+    }
     let scene = Scene::build(&desc).context("building the scene")?;
     let (w, h) = (
         desc.sensor.film.width as usize,

@@ -817,3 +817,64 @@ fn radiance_cache_renders_reports_and_reuses_its_records() {
     assert_eq!(b["records_computed"].as_u64(), Some(0), "{b}");
     assert!(b["radiance_records"].as_u64().unwrap() >= radiance, "{b}");
 }
+
+/// `--gpu` (the `gpu` feature, on by default): the splat integrator's image equals the CPU
+/// splatter's to the GPU's rounding (on lavapipe, which `scripts/setup.sh` installs where there
+/// is no GPU, bit for bit); it is refused for other integrators; without a device it says so and
+/// exits non-zero. With no device at all the test fails, unless `IRCACHE_GPU_TESTS=skip`.
+#[cfg(feature = "gpu")]
+#[test]
+fn gpu_splatting_renders_the_cpu_image_and_says_what_it_cannot_do() {
+    let d = temp_dir("gpu");
+    let base = [
+        "render",
+        "--integrator",
+        "splat",
+        "--spp",
+        "2",
+        "--width",
+        "48",
+        "--height",
+        "48",
+        "-q",
+    ];
+    let run = |extra: &[&str]| ircache(&[&base[..], extra].concat(), &d);
+    let gpu = run(&["--gpu", "-o", "gpu.exr"]);
+    if !gpu.status.success()
+        && stderr(&gpu).contains("no GPU device")
+        && std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip")
+    {
+        eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {}", stderr(&gpu));
+        return;
+    }
+    assert!(gpu.status.success(), "{}", stderr(&gpu));
+    let cpu = run(&["-o", "cpu.exr"]);
+    assert!(cpu.status.success(), "{}", stderr(&cpu));
+    let o = ircache(&["compare", "gpu.exr", "cpu.exr", "--json"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rel = j["relMSE"].as_f64().unwrap();
+    assert!(rel < 1e-8, "GPU against CPU splatting: relMSE {rel}");
+
+    let o = ircache(
+        &[
+            "render", "--gpu", "--spp", "1", "--width", "8", "--height", "8", "-o", "ic.exr",
+        ],
+        &d,
+    );
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--integrator splat"), "{}", stderr(&o));
+    assert!(!d.join("ic.exr").exists());
+
+    // No Vulkan driver and only Vulkan allowed: no device.
+    let o = Command::new(env!("CARGO_BIN_EXE_ircache"))
+        .args([&base[..], &["--gpu", "-o", "none.exr"]].concat())
+        .env("VK_ICD_FILENAMES", d.join("no-such-driver.json"))
+        .env("WGPU_BACKEND", "vulkan")
+        .current_dir(&d)
+        .output()
+        .expect("runs");
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("no GPU device found"), "{}", stderr(&o));
+    assert!(!d.join("none.exr").exists());
+}

@@ -15,7 +15,7 @@ use ircache_render::irradiance_cache::IrradianceCache;
 use ircache_render::radiance_cache::lookup;
 use ircache_render::render::{RenderSettings, Sampling};
 use ircache_render::scene::Scene;
-use ircache_render::splatting::buffer::splat;
+use ircache_render::splatting::buffer::{splat, CpuSplatter};
 use ircache_render::splatting::{fill_misses, GBuffer, SplatBuffer};
 use ircache_scene::SceneDesc;
 
@@ -194,6 +194,7 @@ fn the_miss_search_covers_every_sample_and_keeps_its_budget() {
         &mut budgeted,
         &g,
         &mut buffer,
+        &CpuSplatter,
         3,
         7,
         s.filter.radius(),
@@ -211,6 +212,7 @@ fn the_miss_search_covers_every_sample_and_keeps_its_budget() {
         &mut full,
         &g,
         &mut buffer,
+        &CpuSplatter,
         3,
         usize::MAX,
         s.filter.radius(),

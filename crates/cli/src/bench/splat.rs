@@ -5,7 +5,8 @@
 //!   records (caches filled at two accuracies per size with 64 divisions, so that they fill quickly; the
 //!   splat cost depends on the records' screen footprints, not on their rays): one G-buffer,
 //!   then every record splatted, next to the lookup finding and blending the records of every
-//!   sample of the same G-buffer.
+//!   sample of the same G-buffer; and the GPU splatter (`--gpu`, `crates/gpu`) on the same
+//!   G-buffer where a device exists, with the samples whose irradiance differs from the CPU's.
 //! - A warm-cache frame at 640×480, 1 spp, the whole pixel pass: `splat` (G-buffer, splats,
 //!   shading) against `ic`'s lookup (camera rays, lookups, shading), same cache.
 //! - The walkthrough (`ircache view`'s frames, PNG encoding apart) at 512×512 on the Cornell box
@@ -79,8 +80,14 @@ fn best<T>(mut f: impl FnMut() -> T) -> (f64, T) {
     (best, out.expect("ran"))
 }
 
-/// Splat and lookup times over one G-buffer of `cache` at `s`'s size.
-fn frame(scene: &Scene, cache: &IrradianceCache, s: &RenderSettings) {
+/// Splat and lookup times over one G-buffer of `cache` at `s`'s size, and on `gpu` if given
+/// (its time includes the upload of records, samples and sums and their read-back).
+fn frame(
+    scene: &Scene,
+    cache: &IrradianceCache,
+    s: &RenderSettings,
+    gpu: Option<&dyn ircache_render::splatting::buffer::Splatter>,
+) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(2)
         .build()
@@ -107,6 +114,30 @@ fn frame(scene: &Scene, cache: &IrradianceCache, s: &RenderSettings) {
                 })
                 .count()
         });
+        if let Some(gpu) = gpu {
+            let (gpu_time, on_gpu) = best(|| {
+                let mut b = SplatBuffer::new(&g);
+                gpu.splat(&mut b, &g, cache, 0..n, &scene.camera, s.filter.radius());
+                b
+            });
+            let differing = on_gpu
+                .pixels
+                .iter()
+                .zip(&buffer.pixels)
+                .filter(|(a, b)| a.irradiance() != b.irradiance())
+                .count();
+            println!(
+                "  {:>4}×{:<4} {:>7} records on the GPU: {:>7.1} ms (CPU {:>7.1} ms); {} of {} \
+                 samples differ from the CPU's",
+                s.width,
+                s.height,
+                n,
+                gpu_time * 1e3,
+                splat_time * 1e3,
+                differing,
+                on_gpu.pixels.len()
+            );
+        }
         let splatted = buffer.pixels.iter().filter(|p| p.count > 0).count();
         let splats_per_sample = buffer.pixels.iter().map(|p| u64::from(p.count)).sum::<u64>()
             as f64
@@ -191,6 +222,17 @@ pub fn run_all(shared: &Path) -> Result<()> {
     desc.integrator.kind = "ic".into();
     let scene = Scene::build(&desc)?;
     println!("\nSplatting against lookup on sponza-sun (one bounce, 2 threads)");
+    // The GPU splatter where a device exists (`--gpu`'s: lavapipe where there is no GPU).
+    let gpu = match crate::gpu::splatter() {
+        Ok(g) => {
+            println!("  GPU: {}", g.device);
+            Some(g)
+        }
+        Err(e) => {
+            println!("  GPU not measured: {e:#}");
+            None
+        }
+    };
     // Accuracies that give about 10 K and 100 K records at each size (measured: the count grows
     // as a^-1.4 at 640×480 and a^-1.5 at 1080p, whose Tabellion radii are smaller in pixels).
     for (width, height, accuracies) in [
@@ -202,7 +244,12 @@ pub fn run_all(shared: &Path) -> Result<()> {
             let (ic, fill) = filled(&scene, &desc, &s, accuracy)?;
             let cache = ic.cache.clone().expect("filled");
             println!("  a {accuracy}, filled in {fill:.1} s:");
-            frame(&scene, &cache, &s);
+            frame(
+                &scene,
+                &cache,
+                &s,
+                gpu.as_ref().map(|g| g.splatter.as_ref()),
+            );
         }
     }
     // A warm-cache frame, the whole pixel pass.

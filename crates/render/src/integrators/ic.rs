@@ -43,6 +43,8 @@ pub struct IcIntegrator {
     pub exclusions: Exclusions,
     /// How the pixel pass finds the records of a camera path's first vertex.
     pub pixel_pass: PixelPass,
+    /// Where `splat` splats its records (`None`: on the CPU).
+    pub splatter: Option<Arc<dyn crate::splatting::buffer::Splatter>>,
 }
 
 /// How the pixel pass finds the records serving a camera path's first vertex.
@@ -167,6 +169,7 @@ impl IcIntegrator {
             force_reuse: false,
             exclusions: Exclusions::None,
             pixel_pass: PixelPass::Lookup,
+            splatter: None,
         })
     }
 

@@ -72,6 +72,12 @@ impl<R: CachedRecord> RecordStore<R> {
         &self.records
     }
 
+    /// The accuracy its errors are measured at and how.
+    #[must_use]
+    pub fn metric(&self) -> (ErrorMetric, f32) {
+        (self.metric, self.accuracy)
+    }
+
     /// Number of records.
     #[must_use]
     pub fn len(&self) -> usize {

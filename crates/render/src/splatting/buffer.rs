@@ -91,6 +91,65 @@ impl SplatBuffer {
     }
 }
 
+/// Where records are splatted: on the CPU ([`CpuSplatter`], [`splat`]) or on a GPU (the
+/// `ircache-gpu` crate, which implements this for its device). Every implementation adds the
+/// same sums to the same samples.
+pub trait Splatter: Send + Sync + std::fmt::Debug {
+    /// Splats level-0 records `ids` of `cache` into `buffer` over the samples of `g`, whose
+    /// film samples stray up to `filter_reach` pixels from their pixel centres.
+    fn splat(
+        &self,
+        buffer: &mut SplatBuffer,
+        g: &GBuffer,
+        cache: &IrradianceCache,
+        ids: Range<usize>,
+        camera: &crate::camera::Camera,
+        filter_reach: f32,
+    );
+}
+
+/// Splatting on the CPU's cores ([`splat`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CpuSplatter;
+
+impl Splatter for CpuSplatter {
+    fn splat(
+        &self,
+        buffer: &mut SplatBuffer,
+        g: &GBuffer,
+        cache: &IrradianceCache,
+        ids: Range<usize>,
+        camera: &crate::camera::Camera,
+        filter_reach: f32,
+    ) {
+        splat(buffer, g, cache, ids, camera, filter_reach);
+    }
+}
+
+/// Each record's pixel rectangle (x0, y0, x1, y1, exclusive ends) on a `w × h` film: the
+/// pixels whose samples may lie in the film rectangle of its influence sphere, `None` where
+/// that sphere is off the film or behind the camera. The same for every [`Splatter`].
+#[must_use]
+pub fn record_rects(
+    cache: &IrradianceCache,
+    ids: Range<usize>,
+    camera: &crate::camera::Camera,
+    (w, h): (usize, usize),
+    filter_reach: f32,
+) -> Vec<Option<[usize; 4]>> {
+    let Some(store) = cache.levels.first() else {
+        return Vec::new();
+    };
+    let to_camera: Mat4 = camera.to_world.inverse();
+    ids.into_par_iter()
+        .map(|id| {
+            let (centre, reach) = store.reach(id as u32);
+            let bounds = camera.sphere_bounds(&to_camera, centre, reach)?;
+            pixel_rect(bounds, w, h, filter_reach)
+        })
+        .collect()
+}
+
 /// The pixel rectangle (x0, y0, x1, y1), exclusive ends, whose samples may lie in the film
 /// rectangle `bounds`: samples stray up to `reach` pixels from their pixel's centre.
 fn pixel_rect(bounds: (Vec2, Vec2), w: usize, h: usize, reach: f32) -> Option<[usize; 4]> {
@@ -122,18 +181,9 @@ pub fn splat(
         return;
     };
     let (w, h) = (g.width, g.height);
-    let to_camera: Mat4 = camera.to_world.inverse();
     // Each record's rectangle, filed under the bands of rows it touches.
     let bands = h.div_ceil(TILE);
-    let rects: Vec<Option<[usize; 4]>> = ids
-        .clone()
-        .into_par_iter()
-        .map(|id| {
-            let (centre, reach) = store.reach(id as u32);
-            let bounds = camera.sphere_bounds(&to_camera, centre, reach)?;
-            pixel_rect(bounds, w, h, filter_reach)
-        })
-        .collect();
+    let rects = record_rects(cache, ids.clone(), camera, (w, h), filter_reach);
     let mut per_band: Vec<Vec<(u32, [usize; 4])>> = vec![Vec::new(); bands];
     for (id, rect) in ids.clone().zip(&rects) {
         if let Some(r) = rect {

@@ -1,4 +1,5 @@
-//! Radiance cache splatting (paper 001 ch. 4, Algorithms 3 and 4; NOTES-001 part C), on the CPU.
+//! Radiance cache splatting (paper 001 ch. 4, Algorithms 3 and 4; NOTES-001 part C), on the CPU,
+//! or on a GPU through the [`buffer::Splatter`] interface (the `ircache-gpu` crate).
 //!
 //! Instead of each pixel sample looking up the records that serve it, each record is splatted
 //! over the samples inside its zone of influence: a G-buffer holds the first vertex of every
@@ -8,7 +9,9 @@
 //!
 //! - [`gbuffer`]: one layer of first vertices (the camera rays and what they hit).
 //! - [`buffer`]: the splat buffer and splatting a range of records into it (Algorithm 3), in
-//!   parallel over bands of rows that own their pixels, so sums are deterministic.
+//!   parallel over bands of rows that own their pixels, so sums are deterministic; the
+//!   [`buffer::Splatter`] interface a GPU implements, and the records' film rectangles every
+//!   splatter uses.
 //! - [`pass`]: cache-miss detection on the splat buffer, coarse to fine (NOTES-001 §C.6), with
 //!   an optional budget of new records (§C.7), and the `splat` integrator's pixel pass.
 //! - [`walkthrough`]: the progressive walkthrough (§C.7): one layer a frame, a budget of new

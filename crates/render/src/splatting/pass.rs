@@ -18,7 +18,7 @@
 //! deeper levels, the cache file, the re-gathering of noisy records); the layers' misses are
 //! the samples off those centres that it left uncovered.
 
-use super::buffer::{splat, SplatBuffer};
+use super::buffer::{CpuSplatter, SplatBuffer, Splatter};
 use super::gbuffer::GBuffer;
 use crate::integrators::ic::{IcIntegrator, Splatted};
 use crate::integrators::RayCounts;
@@ -65,6 +65,7 @@ pub fn fill_misses(
     cache: &mut IrradianceCache,
     g: &GBuffer,
     buffer: &mut SplatBuffer,
+    splatter: &dyn Splatter,
     seed: u64,
     budget: usize,
     filter_reach: f32,
@@ -107,7 +108,7 @@ pub fn fill_misses(
                 &mut (),
             );
             let end = cache.levels[0].len();
-            splat(
+            splatter.splat(
                 buffer,
                 g,
                 cache,
@@ -125,6 +126,8 @@ pub fn fill_misses(
 pub struct Layer {
     g: Option<GBuffer>,
     buffer: Option<SplatBuffer>,
+    /// Where records are splatted (`None`: [`CpuSplatter`]).
+    pub splatter: Option<std::sync::Arc<dyn Splatter>>,
 }
 
 /// How the time of [`Layer::prepare`] went.
@@ -143,6 +146,15 @@ pub struct LayerTimes {
 }
 
 impl Layer {
+    /// A layer whose records are splatted by `splatter` (`None`: on the CPU).
+    #[must_use]
+    pub fn with_splatter(splatter: Option<std::sync::Arc<dyn Splatter>>) -> Layer {
+        Layer {
+            splatter,
+            ..Layer::default()
+        }
+    }
+
     /// The G-buffer (after [`Layer::prepare`]).
     #[must_use]
     pub fn gbuffer(&self) -> Option<&GBuffer> {
@@ -189,10 +201,21 @@ impl Layer {
         };
         let reach = settings.filter.radius();
         let splatted = cache.levels.first().map_or(0, |s| s.len());
-        splat(buffer, g, cache, 0..splatted, &scene.camera, reach);
+        let splatter: &dyn Splatter = self.splatter.as_deref().unwrap_or(&CpuSplatter);
+        splatter.splat(buffer, g, cache, 0..splatted, &scene.camera, reach);
         let splat_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let added = fill_misses(scene, cache, g, buffer, settings.seed, budget, reach, stats);
+        let added = fill_misses(
+            scene,
+            cache,
+            g,
+            buffer,
+            splatter,
+            settings.seed,
+            budget,
+            reach,
+            stats,
+        );
         LayerTimes {
             gbuffer,
             splat: splat_seconds,
@@ -283,7 +306,7 @@ pub fn render_layers(
         None => IrradianceCache::new(scene, &ic.params),
     };
     let mut stats = SplatStats::default();
-    let mut pass = Layer::default();
+    let mut pass = Layer::with_splatter(ic.splatter.clone());
     for layer in 0..samplers.spp {
         let times = pass.prepare(
             scene,

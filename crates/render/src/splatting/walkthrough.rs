@@ -98,6 +98,7 @@ impl Walkthrough {
             .clone()
             .map(|p| (p, cache.levels.iter().map(|l| l.len()).collect()));
         let samplers = settings.sampler();
+        let pass = Layer::with_splatter(ic.splatter.clone());
         Ok(Walkthrough {
             scene,
             ic,
@@ -107,7 +108,7 @@ impl Walkthrough {
             sum: vec![Rgb::ZERO; width * height],
             irradiance_sum: vec![Rgb::ZERO; width * height],
             layers: 0,
-            pass: Layer::default(),
+            pass,
             file,
             settings,
             stats: CacheStats::default(),

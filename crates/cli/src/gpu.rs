@@ -1,0 +1,52 @@
+//! `--gpu`: the GPU splatter (the `ircache-gpu` crate) behind the `gpu` feature, on by default.
+
+use anyhow::Result;
+use ircache_render::splatting::buffer::Splatter;
+use std::sync::Arc;
+
+/// A splatter on the GPU and a line saying where its calls ran.
+pub struct GpuSplatting {
+    /// The splatter, for the integrator or the walkthrough.
+    pub splatter: Arc<dyn Splatter>,
+    /// The device: name, kind, backend.
+    pub device: String,
+    /// "device: N calls on the GPU, M on the CPU (radiance records), K failed".
+    pub summary: Box<dyn Fn() -> String + Send + Sync>,
+}
+
+/// Opens the GPU and makes its splatter.
+///
+/// # Errors
+/// Without a device, or built without the `gpu` feature.
+#[cfg(feature = "gpu")]
+pub fn splatter() -> Result<GpuSplatting> {
+    use std::sync::atomic::Ordering;
+    let gpu = Arc::new(ircache_gpu::Gpu::new()?);
+    let device = gpu.describe();
+    let splatter = Arc::new(ircache_gpu::splat::GpuSplatter::new(gpu));
+    let counts = splatter.clone();
+    Ok(GpuSplatting {
+        splatter,
+        device: device.clone(),
+        summary: Box::new(move || {
+            format!(
+                "GPU {device}: {} splat calls on the GPU, {} on the CPU (radiance records, or \
+                 the GPU failed: {} failures)",
+                counts.gpu_calls.load(Ordering::Relaxed),
+                counts.cpu_calls.load(Ordering::Relaxed),
+                counts.failures.load(Ordering::Relaxed)
+            )
+        }),
+    })
+}
+
+/// Opens the GPU and makes its splatter.
+///
+/// # Errors
+/// Always: this build has no `gpu` feature.
+#[cfg(not(feature = "gpu"))]
+pub fn splatter() -> Result<GpuSplatting> {
+    anyhow::bail!(
+        "--gpu: this ircache was built without the gpu feature (cargo build --features gpu)"
+    )
+}

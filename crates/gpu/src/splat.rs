@@ -1,0 +1,338 @@
+//! Radiance cache splatting on the GPU (001 ch. 4, Algorithm 3; NOTES-001 §C.2), the pass of
+//! `shaders/splat.wgsl`: irradiance records over one layer of samples.
+//!
+//! The records' film rectangles are the CPU splatter's
+//! ([`ircache_render::splatting::buffer::record_rects`]); the CPU files each record under the
+//! 16 × 16 tiles its rectangle touches, in index order, and one invocation per sample walks its
+//! tile's list. So a sample meets the same records in the same order as on the CPU and the
+//! sums agree to the GPU's rounding, with no float blending, whose order no GPU fixes (the
+//! thesis blends splatted quads into a float target). Radiance records (their glossy part needs
+//! the rotation and BRDF coefficients on the GPU) are not there yet: a call that splats one
+//! runs on the CPU instead, counted in [`GpuSplatter::cpu_calls`].
+
+use crate::{Gpu, GpuError};
+use bytemuck::{Pod, Zeroable};
+use ircache_render::camera::Camera;
+use ircache_render::irradiance_cache::gather::IrradianceCache;
+use ircache_render::irradiance_cache::record::{ErrorMetric, GradientMode, NO_RADIANCE};
+use ircache_render::render::TILE;
+use ircache_render::splatting::buffer::{record_rects, splat, SplatBuffer, Splatter};
+use ircache_render::splatting::GBuffer;
+use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use wgpu::util::DeviceExt;
+
+/// A record as the shader reads it (`Record` in `splat.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuRecord {
+    p_r: [f32; 4],
+    n: [f32; 4],
+    e: [f32; 4],
+    gt: [[f32; 4]; 3],
+    gr: [[f32; 4]; 3],
+}
+
+/// A sample as the shader reads it (`Sample`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuSample {
+    p: [f32; 4],
+    n: [f32; 4],
+    n_bump: [f32; 4],
+}
+
+/// A sample's sums (`Sums`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuSums {
+    irradiance: [f32; 4],
+    count: u32,
+    min_error: f32,
+    pad: [u32; 2],
+}
+
+/// The pass's constants (`Params`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuParams {
+    width: u32,
+    height: u32,
+    tiles_x: u32,
+    metric: u32,
+    gradients: u32,
+    accuracy: f32,
+    pad: [u32; 2],
+}
+
+/// Splatting on a GPU: a [`Splatter`].
+#[derive(Debug)]
+pub struct GpuSplatter {
+    gpu: Arc<Gpu>,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    /// Calls that ran on the GPU.
+    pub gpu_calls: AtomicU64,
+    /// Calls that ran on the CPU instead: they splatted radiance records, or the GPU failed
+    /// (`failures`).
+    pub cpu_calls: AtomicU64,
+    /// Calls the GPU failed (read-back errors); the CPU did them.
+    pub failures: AtomicU64,
+}
+
+impl GpuSplatter {
+    /// The pass on `gpu`.
+    #[must_use]
+    pub fn new(gpu: Arc<Gpu>) -> GpuSplatter {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("splat.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/splat.wgsl").into()),
+        });
+        let storage = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("splat"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage(1, true),
+                storage(2, true),
+                storage(3, true),
+                storage(4, true),
+                storage(5, false),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("splat"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("splat"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("splat"),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            cache: None,
+        });
+        GpuSplatter {
+            gpu,
+            pipeline,
+            layout,
+            gpu_calls: AtomicU64::new(0),
+            cpu_calls: AtomicU64::new(0),
+            failures: AtomicU64::new(0),
+        }
+    }
+
+    /// The GPU's part of [`Splatter::splat`]: irradiance records only.
+    fn splat_on_gpu(
+        &self,
+        buffer: &mut SplatBuffer,
+        g: &GBuffer,
+        cache: &IrradianceCache,
+        ids: Range<usize>,
+        camera: &Camera,
+        filter_reach: f32,
+    ) -> Result<(), GpuError> {
+        let Some(store) = cache.levels.first() else {
+            return Ok(());
+        };
+        let (w, h) = (g.width, g.height);
+        let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let rects = record_rects(cache, ids.clone(), camera, (w, h), filter_reach);
+        // Tile lists in index order (compressed rows).
+        let tiles_of = |r: [usize; 4]| {
+            (r[1] / TILE..r[3].div_ceil(TILE)).flat_map(move |ty| {
+                (r[0] / TILE..r[2].div_ceil(TILE)).map(move |tx| ty * tiles_x + tx)
+            })
+        };
+        let mut start = vec![0u32; tiles_x * tiles_y + 1];
+        for &r in rects.iter().flatten() {
+            for t in tiles_of(r) {
+                start[t + 1] += 1;
+            }
+        }
+        for t in 0..tiles_x * tiles_y {
+            start[t + 1] += start[t];
+        }
+        let mut fill = start.clone();
+        let mut lists = vec![0u32; start[tiles_x * tiles_y] as usize];
+        for (k, r) in rects.iter().enumerate() {
+            if let Some(r) = *r {
+                for t in tiles_of(r) {
+                    lists[fill[t] as usize] = k as u32;
+                    fill[t] += 1;
+                }
+            }
+        }
+        if lists.is_empty() {
+            return Ok(());
+        }
+        let records: Vec<GpuRecord> = store.records()[ids]
+            .iter()
+            .map(|r| {
+                let v = |v: ircache_math::Vec3, w: f32| [v.x, v.y, v.z, w];
+                GpuRecord {
+                    p_r: v(r.p, r.r),
+                    n: v(r.n, 0.0),
+                    e: [r.e.r, r.e.g, r.e.b, 0.0],
+                    gt: r.grad_t.map(|g| v(g, 0.0)),
+                    gr: r.grad_r.map(|g| v(g, 0.0)),
+                }
+            })
+            .collect();
+        let samples: Vec<GpuSample> = g
+            .samples
+            .iter()
+            .map(|s| match &s.point {
+                Some(sp) => {
+                    let v = |v: ircache_math::Vec3, w: f32| [v.x, v.y, v.z, w];
+                    GpuSample {
+                        p: v(sp.it.p, 1.0),
+                        n: v(sp.n, 0.0),
+                        n_bump: v(sp.n_bump, 0.0),
+                    }
+                }
+                None => GpuSample::zeroed(),
+            })
+            .collect();
+        let sums: Vec<GpuSums> = buffer
+            .pixels
+            .iter()
+            .map(|p| GpuSums {
+                irradiance: [p.irradiance.r, p.irradiance.g, p.irradiance.b, p.weight],
+                count: p.count,
+                min_error: p.min_error,
+                pad: [0; 2],
+            })
+            .collect();
+        let (metric, accuracy) = store.metric();
+        let params = GpuParams {
+            width: w as u32,
+            height: h as u32,
+            tiles_x: tiles_x as u32,
+            metric: match metric {
+                ErrorMetric::Ward => 0,
+                ErrorMetric::Tabellion => 1,
+                ErrorMetric::Hessian => 2,
+            },
+            gradients: match cache.params.gradients {
+                GradientMode::None => 0,
+                GradientMode::Rotation => 1,
+                GradientMode::Full => 2,
+            },
+            accuracy,
+            pad: [0; 2],
+        };
+        let device = &self.gpu.device;
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let storage = wgpu::BufferUsages::STORAGE;
+        let params_buffer = init(
+            "params",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let records_buffer = init("records", bytemuck::cast_slice(&records), storage);
+        let samples_buffer = init("samples", bytemuck::cast_slice(&samples), storage);
+        let start_buffer = init("tile start", bytemuck::cast_slice(&start), storage);
+        let lists_buffer = init("tile records", bytemuck::cast_slice(&lists), storage);
+        let sums_buffer = init(
+            "sums",
+            bytemuck::cast_slice(&sums),
+            storage | wgpu::BufferUsages::COPY_SRC,
+        );
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("splat"),
+            layout: &self.layout,
+            entries: &[
+                (0, &params_buffer),
+                (1, &records_buffer),
+                (2, &samples_buffer),
+                (3, &start_buffer),
+                (4, &lists_buffer),
+                (5, &sums_buffer),
+            ]
+            .map(|(binding, b)| wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            }),
+        });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.dispatch_workgroups(tiles_x as u32, tiles_y as u32, 1);
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        let bytes = self.gpu.read_back(&sums_buffer)?;
+        self.gpu.check()?;
+        let sums: &[GpuSums] = bytemuck::cast_slice(&bytes);
+        for (p, s) in buffer.pixels.iter_mut().zip(sums) {
+            p.irradiance =
+                ircache_math::Rgb::new(s.irradiance[0], s.irradiance[1], s.irradiance[2]);
+            p.weight = s.irradiance[3];
+            p.count = s.count;
+            p.min_error = s.min_error;
+        }
+        Ok(())
+    }
+}
+
+impl Splatter for GpuSplatter {
+    fn splat(
+        &self,
+        buffer: &mut SplatBuffer,
+        g: &GBuffer,
+        cache: &IrradianceCache,
+        ids: Range<usize>,
+        camera: &Camera,
+        filter_reach: f32,
+    ) {
+        let radiance = cache.levels.first().is_some_and(|s| {
+            s.records()[ids.clone()]
+                .iter()
+                .any(|r| r.radiance != NO_RADIANCE)
+        });
+        if !radiance {
+            let before = buffer.clone();
+            match self.splat_on_gpu(buffer, g, cache, ids.clone(), camera, filter_reach) {
+                Ok(()) => {
+                    self.gpu_calls.fetch_add(1, Ordering::Relaxed);
+                    return;
+                }
+                Err(_) => {
+                    self.failures.fetch_add(1, Ordering::Relaxed);
+                    *buffer = before;
+                }
+            }
+        }
+        self.cpu_calls.fetch_add(1, Ordering::Relaxed);
+        splat(buffer, g, cache, ids, camera, filter_reach);
+    }
+}
