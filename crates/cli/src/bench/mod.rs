@@ -16,6 +16,7 @@
 
 mod cache_vs_path;
 mod peers;
+mod plane;
 mod radiance;
 mod splat;
 
@@ -49,7 +50,8 @@ pub struct BenchArgs {
     /// Which parts: all, rays, path, gather, ic, peers (ircache against Mitsuba 3 with
     /// multijitter, by rendering), cache (the cache against path tracing by rendering, and the
     /// cost of depth), radiance (radiance caching against tracing the same lobes and against
-    /// Mitsuba 3, by rendering), splat (splatting against the lookup: per record, per frame).
+    /// Mitsuba 3, by rendering), splat (splatting against the lookup: per record, per frame),
+    /// plane (records from a rasterised plane against the stratified gather, Table 4.1).
     #[arg(long, default_value = "all")]
     pub only: String,
 }
@@ -118,6 +120,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "splat" {
         splat::run_all(&shared)?;
+    }
+    if args.only == "all" || args.only == "plane" {
+        plane::run_all(&shared)?;
     }
     Ok(())
 }

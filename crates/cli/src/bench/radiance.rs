@@ -18,7 +18,7 @@ use ircache_scene::obj_scene::ObjCamera;
 use std::path::{Path, PathBuf};
 
 /// ircache's own scenes: `scenes/` beside the workspace.
-fn own_scenes() -> PathBuf {
+pub(super) fn own_scenes() -> PathBuf {
     let here = PathBuf::from("scenes");
     if here.join("cornell-rough").is_dir() {
         here

@@ -24,6 +24,7 @@ pub mod file;
 pub mod gather;
 pub mod hemisphere;
 pub mod params;
+pub mod plane;
 pub mod points;
 pub mod prepare;
 pub mod record;
