@@ -164,7 +164,7 @@ impl HemispherePlane {
         key: u64,
     ) -> Vec<Rgb> {
         let frame = Frame::from_z(sp.n);
-        let mut rng = Rng::keyed(g.seed, &[0x706c_616e_65, key, u64::from(level)]);
+        let mut rng = Rng::keyed(g.seed, &[0x0070_6c61_6e65, key, u64::from(level)]);
         let n = self.pixels;
         let mut out = vec![Rgb::ZERO; n * n];
         for j in 0..n {
