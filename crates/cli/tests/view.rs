@@ -284,6 +284,28 @@ fn view_serves_converging_frames_follows_controls_and_refuses_bad_requests() {
     assert_eq!(http(port, "GET", "/stats").status, 200);
 }
 
+/// `ircache view --gpu` splats on the GPU (lavapipe where there is no GPU): its frames converge
+/// to the CPU walkthrough's image.
+#[cfg(feature = "gpu")]
+#[test]
+fn view_on_the_gpu_converges_to_the_cpu_image() {
+    let dir = temp_dir("gpu");
+    let on_gpu = serve_with(24, &["--gpu"]);
+    let on_cpu = serve(24);
+    // The two run at their own pace: compare the images once both hold 256 layers.
+    let (_, a, png_a) = settle(on_gpu.port, 256);
+    let (_, _, png_b) = settle(on_cpu.port, 256);
+    assert!(a["records"].as_u64() > Some(0), "{a}");
+    let (error, lum) = against(
+        &decode(&png_a, &dir, "a.png"),
+        &decode(&png_b, &dir, "b.png"),
+    );
+    assert!(
+        error < 2e-3 && (lum - 1.0).abs() < 0.02,
+        "GPU against CPU walkthrough: blurred relMSE_trim {error}, lum {lum}"
+    );
+}
+
 /// With `--cache FILE`, "save cache" appends the walkthrough's records to the file, and a
 /// later walkthrough starts from them.
 #[test]
