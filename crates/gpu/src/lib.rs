@@ -4,6 +4,8 @@
 //! - [`splat`] (`shaders/splat.wgsl`): radiance cache splatting of irradiance records over a
 //!   layer of samples, a [`ircache_render::splatting::buffer::Splatter`] the `splat` integrator
 //!   and the walkthrough use in place of the CPU's.
+//! - [`visibility`] (`shaders/visibility.wgsl`): the scene's triangles rasterised through a view,
+//!   the nearest per pixel: a record's hemisphere plane filled by rasterising.
 //!
 //! Nothing else in ircache depends on this crate; the CLI uses it behind its `gpu` feature (on
 //! by default). Without a device, [`Gpu::new`] says so ([`GpuError::NoDevice`]). On machines
@@ -11,6 +13,7 @@
 //! the same shaders; the tests use it and say when no device exists.
 
 pub mod splat;
+pub mod visibility;
 
 use thiserror::Error;
 

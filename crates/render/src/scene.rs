@@ -256,6 +256,46 @@ impl Scene {
         Some(self.interaction(ray, &hit))
     }
 
+    /// The interaction where `ray` meets triangle `prim` of mesh shape `shape` (Möller and
+    /// Trumbore), as Embree would report it; `None` when it misses that triangle or the shape
+    /// is not a mesh. For hits found another way (a rasteriser's visibility).
+    #[must_use]
+    pub fn hit_triangle(&self, ray: &Ray, shape: u32, prim: u32) -> Option<Interaction> {
+        let ShapeGeometry::Mesh(mesh) = &self.shapes.get(shape as usize)?.geometry else {
+            return None;
+        };
+        let [i0, i1, i2] = *mesh.indices.get(prim as usize)?;
+        let p = |i: u32| mesh.positions[i as usize];
+        let (p0, p1, p2) = (p(i0), p(i1), p(i2));
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let q = ray.d.cross(e2);
+        let det = e1.dot(q);
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let s = ray.o - p0;
+        let u = s.dot(q) / det;
+        let r = s.cross(e1);
+        let v = ray.d.dot(r) / det;
+        let t = e2.dot(r) / det;
+        if !(0.0..=1.0).contains(&u)
+            || v < 0.0
+            || u + v > 1.0
+            || !(ray.t_min..=ray.t_max).contains(&t)
+        {
+            return None;
+        }
+        let hit = ircache_embree::Hit {
+            t,
+            geom_id: shape,
+            prim_id: prim,
+            u,
+            v,
+            ng: e1.cross(e2),
+        };
+        Some(self.interaction(ray, &hit))
+    }
+
     /// Builds the surface interaction of an Embree hit.
     pub fn interaction(&self, ray: &Ray, hit: &ircache_embree::Hit) -> Interaction {
         let shape = &self.shapes[hit.geom_id as usize];

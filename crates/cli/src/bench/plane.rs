@@ -156,5 +156,86 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
         100.0 * rms(1),
         params.divisions
     );
+    rasterised(&scene, &light, &g, &plane, &points[..RASTERISED])
+}
+
+/// Points whose planes are also rasterised.
+const RASTERISED: usize = 200;
+
+/// The same planes rasterised on the GPU (`ircache-gpu`'s visibility pass; lavapipe where there
+/// is no GPU): planes per second, rasterised alone and shaded, against one ray per pixel, and
+/// the border-compensated irradiance against the ray-cast plane's.
+#[cfg(feature = "gpu")]
+fn rasterised(
+    scene: &Scene,
+    light: &SceneRadiance,
+    g: &Gatherer,
+    plane: &HemispherePlane,
+    points: &[ShadingPoint],
+) -> Result<()> {
+    use ircache_gpu::visibility::PlaneVisibility;
+    let gpu = match ircache_gpu::Gpu::new() {
+        Ok(gpu) => std::sync::Arc::new(gpu),
+        Err(e) => {
+            println!("  rasterised: not measured ({e})");
+            return Ok(());
+        }
+    };
+    let device = gpu.describe();
+    let visibility = PlaneVisibility::new(gpu, scene);
+    let t = Instant::now();
+    for sp in points {
+        visibility.triangles(plane, sp)?;
+    }
+    let raster = t.elapsed().as_secs_f64();
+    let mut st = WorkState::new(1);
+    let mut squared = 0.0f64;
+    let mut fallbacks = 0;
+    let mut shaded = 0.0;
+    let mut traced = 0.0;
+    for (k, sp) in points.iter().enumerate() {
+        let t = Instant::now();
+        let (pixels, missed) =
+            visibility.record_plane(scene, light, g, &mut st, plane, sp, 0, k as u64)?;
+        shaded += t.elapsed().as_secs_f64();
+        fallbacks += missed;
+        let t = Instant::now();
+        let rays = plane.sample(g, &mut st, sp, 0, k as u64);
+        traced += t.elapsed().as_secs_f64();
+        let e = |l: &[ircache_math::Rgb]| {
+            f64::from(
+                plane
+                    .irradiance(l, PlaneEstimator::BorderCompensation)
+                    .luminance(),
+            )
+        };
+        let (a, b) = (e(&pixels), e(&rays));
+        if b > 0.0 {
+            squared += ((a - b) / b).powi(2);
+        }
+    }
+    let n = points.len() as f64;
+    println!(
+        "  rasterised on {device} ({} spheres as shells): {:.0} planes/s rasterised, {:.0} \
+         shaded (one thread), against {:.0} ray-cast (one thread); irradiance RMS {:.2} % from the \
+         ray-cast planes; {fallbacks} pixels traced (triangle edges, spheres)",
+        visibility.spheres,
+        n / raster,
+        n / shaded,
+        n / traced,
+        100.0 * (squared / n).sqrt()
+    );
+    Ok(())
+}
+
+#[cfg(not(feature = "gpu"))]
+fn rasterised(
+    _: &Scene,
+    _: &SceneRadiance,
+    _: &Gatherer,
+    _: &HemispherePlane,
+    _: &[ShadingPoint],
+) -> Result<()> {
+    println!("  rasterised: not measured (built without the gpu feature)");
     Ok(())
 }

@@ -23,7 +23,7 @@ use crate::radiance_cache::gather::RadianceCoefficients;
 use crate::radiance_cache::record::RadianceRecord;
 use crate::radiance_cache::RadianceCache;
 use crate::scene::{Interaction, Scene};
-use ircache_math::{Frame, Rgb, Rng, Vec2, Vec3};
+use ircache_math::{Frame, Ray, Rgb, Rng, Vec2, Vec3};
 use std::sync::Arc;
 
 /// The records of every bounce level, and the settings they were made with.
@@ -798,6 +798,30 @@ impl IncidentRadiance for SceneRadiance<'_> {
     ) -> Option<Incident> {
         let ray = self.scene.spawn_ray(&sp.it, d);
         let hit = self.scene.intersect(&ray)?;
+        Some(self.incident_at(cache, seed, st, &ray, hit, level, key, rng))
+    }
+
+    fn escaped(&self, d: Vec3) -> Rgb {
+        self.scene.lights.environment_radiance(d)
+    }
+}
+
+impl SceneRadiance<'_> {
+    /// What arrives along the gather ray `ray` from its first hit `hit` (found by the caller:
+    /// Embree, or a rasteriser's visibility), for a record at bounce `level`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn incident_at(
+        &self,
+        cache: &IrradianceCache,
+        seed: u64,
+        st: &mut WorkState,
+        ray: &Ray,
+        hit: Interaction,
+        level: u32,
+        key: u64,
+        rng: &mut Rng,
+    ) -> Incident {
+        let ray = *ray;
         let (distance, normal) = (hit.t, hit.ng);
         let params = &cache.params;
         let settings = PathSettings {
@@ -838,15 +862,11 @@ impl IncidentRadiance for SceneRadiance<'_> {
         };
         st.counts.gather_rays += rays.bounce + rays.gather;
         st.counts.shadow_rays += rays.shadow;
-        Some(Incident {
+        Incident {
             radiance,
             distance,
             normal,
-        })
-    }
-
-    fn escaped(&self, d: Vec3) -> Rgb {
-        self.scene.lights.environment_radiance(d)
+        }
     }
 }
 

@@ -1,0 +1,392 @@
+//! Visibility by rasterisation (001 §4.4.2, the thesis's record computation; NOTES-001 §C.4),
+//! the pass of `shaders/visibility.wgsl`: the scene's triangles through a view, each pixel
+//! keeping the nearest triangle. A record's plane
+//! ([`ircache_render::irradiance_cache::plane::HemispherePlane`]) is filled this way instead of
+//! by one ray per pixel: [`PlaneVisibility::record_plane`] rasterises the plane above a record
+//! and shades each pixel's surface on the CPU with the gather's own path continuation
+//! ([`SceneRadiance::incident_at`]), the hit found on the rasterised triangle. The thesis shades
+//! on the GPU too (direct light by shadow maps): not here yet. Analytic spheres are rasterised
+//! as a tessellated shell slightly larger than the sphere (so it covers every pixel the sphere
+//! does); a pixel that sees a shell is traced by Embree, which finds the sphere or what lies
+//! past its silhouette.
+
+use crate::Gpu;
+use bytemuck::{Pod, Zeroable};
+use ircache_math::{Frame, Rgb, Rng, Vec3};
+use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingPoint, WorkState};
+use ircache_render::irradiance_cache::plane::HemispherePlane;
+use ircache_render::scene::{Scene, ShapeGeometry};
+use std::sync::Arc;
+use wgpu::util::DeviceExt;
+
+/// A vertex as the shader reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuVertex {
+    position: [f32; 3],
+    triangle: u32,
+}
+
+/// The scene's triangles on the GPU and the pipeline that rasterises them.
+#[derive(Debug)]
+pub struct PlaneVisibility {
+    gpu: Arc<Gpu>,
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    vertices: wgpu::Buffer,
+    vertex_count: u32,
+    /// Per triangle index: (shape, primitive); primitive [`SPHERE`] for a sphere's shell.
+    triangles: Vec<(u32, u32)>,
+    /// Spheres rasterised as shells.
+    pub spheres: usize,
+    /// Near clipping distance (a fraction of the scene's size: scale-free).
+    near: f32,
+    far: f32,
+}
+
+/// The primitive of a sphere's shell triangles.
+pub const SPHERE: u32 = u32::MAX;
+
+/// Rings and segments of a sphere's shell.
+const SHELL_RINGS: usize = 12;
+const SHELL_SEGMENTS: usize = 24;
+
+/// Triangles of a latitude–longitude shell around a sphere, its vertices at 1/(cos(π/rings)
+/// cos(π/segments)) times the radius, so that every facet lies outside the sphere: the shell
+/// covers every direction the sphere does.
+fn sphere_shell(center: Vec3, radius: f32) -> Vec<[Vec3; 3]> {
+    use std::f32::consts::PI;
+    let grow = 1.0 / ((PI / SHELL_RINGS as f32).cos() * (PI / SHELL_SEGMENTS as f32).cos());
+    let r = radius * grow;
+    let vertex = |ring: usize, segment: usize| {
+        let theta = PI * ring as f32 / SHELL_RINGS as f32;
+        let phi = 2.0 * PI * segment as f32 / SHELL_SEGMENTS as f32;
+        center
+            + r * Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            )
+    };
+    let mut out = Vec::with_capacity(2 * SHELL_RINGS * SHELL_SEGMENTS);
+    for ring in 0..SHELL_RINGS {
+        for segment in 0..SHELL_SEGMENTS {
+            let (a, b) = (vertex(ring, segment), vertex(ring, segment + 1));
+            let (c, d) = (vertex(ring + 1, segment), vertex(ring + 1, segment + 1));
+            out.push([a, c, d]);
+            out.push([a, d, b]);
+        }
+    }
+    out
+}
+
+const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+impl PlaneVisibility {
+    /// Uploads `scene`'s triangles.
+    #[must_use]
+    pub fn new(gpu: Arc<Gpu>, scene: &Scene) -> PlaneVisibility {
+        let mut vertices = Vec::new();
+        let mut triangles = Vec::new();
+        let mut spheres = 0;
+        let mut push = |triangles: &mut Vec<(u32, u32)>, id: (u32, u32), tri: [Vec3; 3]| {
+            let triangle = triangles.len() as u32;
+            triangles.push(id);
+            for p in tri {
+                vertices.push(GpuVertex {
+                    position: [p.x, p.y, p.z],
+                    triangle,
+                });
+            }
+        };
+        for (shape_id, shape) in scene.shapes.iter().enumerate() {
+            match &shape.geometry {
+                ShapeGeometry::Mesh(mesh) => {
+                    for (prim, tri) in mesh.indices.iter().enumerate() {
+                        let p = tri.map(|v| mesh.positions[v as usize]);
+                        push(&mut triangles, (shape_id as u32, prim as u32), p);
+                    }
+                }
+                ShapeGeometry::Sphere { center, radius, .. } => {
+                    spheres += 1;
+                    for tri in sphere_shell(*center, *radius) {
+                        push(&mut triangles, (shape_id as u32, SPHERE), tri);
+                    }
+                }
+            }
+        }
+        let device = &gpu.device;
+        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("scene triangles"),
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("visibility.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/visibility.wgsl").into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("visibility"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("visibility"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("visibility"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vertex"),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                buffers: &[wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<GpuVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32],
+                }],
+            },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: None,
+                ..Default::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: wgpu::StencilState::default(),
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fragment"),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: FORMAT,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let (_, radius) = scene.lights.scene_bounds();
+        let radius = radius.max(f32::MIN_POSITIVE);
+        PlaneVisibility {
+            gpu: gpu.clone(),
+            pipeline,
+            layout,
+            vertices: vertex_buffer,
+            vertex_count: vertices.len() as u32,
+            triangles,
+            spheres,
+            near: 1e-5 * radius,
+            far: 4.0 * radius,
+        }
+    }
+
+    /// The triangle each pixel of `plane` above `sp` sees: (shape, primitive) or `None`, in the
+    /// plane's pixel order (row j from y = −s, column i from x = −s).
+    ///
+    /// # Errors
+    /// When the GPU fails.
+    pub fn triangles(
+        &self,
+        plane: &HemispherePlane,
+        sp: &ShadingPoint,
+    ) -> Result<Vec<Option<(u32, u32)>>, crate::GpuError> {
+        let n = plane.pixels as u32;
+        let frame = Frame::from_z(sp.n);
+        let (s, near, far) = (plane.half_size as f32, self.near, self.far);
+        // Camera space (frame.s, frame.t, n) from the record's position; x and y over s·z
+        // fill the clip square; depth (z − near)·far / ((far − near)·z).
+        let p = sp.it.p;
+        let row = |a: Vec3| [a.x, a.y, a.z, -a.dot(p)];
+        let (rx, ry, rz) = (row(frame.s), row(frame.t), row(frame.n));
+        let a = far / (far - near);
+        let to_clip_rows = [rx.map(|v| v / s), ry.map(|v| v / s), rz.map(|v| v * a), rz];
+        let mut to_clip = to_clip_rows;
+        to_clip[2][3] -= near * a;
+        // Column-major for WGSL.
+        let mut columns = [[0f32; 4]; 4];
+        for (r, row) in to_clip.iter().enumerate() {
+            for (c, v) in row.iter().enumerate() {
+                columns[c][r] = *v;
+            }
+        }
+        let device = &self.gpu.device;
+        let view = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("view"),
+            contents: bytemuck::cast_slice(&columns),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("visibility"),
+            layout: &self.layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: view.as_entire_binding(),
+            }],
+        });
+        let size = wgpu::Extent3d {
+            width: n,
+            height: n,
+            depth_or_array_layers: 1,
+        };
+        let texture = |format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("visibility"),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let ids = texture(
+            FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let depth = texture(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT);
+        let ids_view = ids.create_view(&wgpu::TextureViewDescriptor::default());
+        let depth_view = depth.create_view(&wgpu::TextureViewDescriptor::default());
+        let row_bytes = (4 * n).div_ceil(256) * 256;
+        let out = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("visibility out"),
+            size: u64::from(row_bytes * n),
+            usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("visibility"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &ids_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            pass.set_vertex_buffer(0, self.vertices.slice(..));
+            pass.draw(0..self.vertex_count, 0..1);
+        }
+        encoder.copy_texture_to_buffer(
+            ids.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &out,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row_bytes),
+                    rows_per_image: Some(n),
+                },
+            },
+            size,
+        );
+        self.gpu.queue.submit([encoder.finish()]);
+        let bytes = self.gpu.read_back(&out)?;
+        self.gpu.check()?;
+        let n = n as usize;
+        let mut result = vec![None; n * n];
+        for r in 0..n {
+            // Texture row r is NDC y = 1 − 2(r + ½)/N: plane row N − 1 − r.
+            let j = n - 1 - r;
+            let texels: &[u32] = bytemuck::cast_slice(&bytes[r * row_bytes as usize..][..4 * n]);
+            for (i, &id) in texels.iter().enumerate() {
+                result[j * n + i] = id
+                    .checked_sub(1)
+                    .and_then(|t| self.triangles.get(t as usize).copied());
+            }
+        }
+        Ok(result)
+    }
+
+    /// The radiance through each pixel's centre of `plane` above `sp`, as
+    /// [`HemispherePlane::sample`] gives it, with each pixel's surface found by rasterising and
+    /// its hit on the rasterised triangle (Embree where the pixel ray misses that triangle by
+    /// rounding at its edge, and where it sees a sphere's shell; counted in the second value).
+    ///
+    /// # Errors
+    /// When the GPU fails.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_plane(
+        &self,
+        scene: &Scene,
+        light: &SceneRadiance,
+        g: &Gatherer,
+        st: &mut WorkState,
+        plane: &HemispherePlane,
+        sp: &ShadingPoint,
+        level: u32,
+        key: u64,
+    ) -> Result<(Vec<Rgb>, usize), crate::GpuError> {
+        let seen = self.triangles(plane, sp)?;
+        let frame = Frame::from_z(sp.n);
+        let mut rng = Rng::keyed(g.seed, &[0x0070_6c61_6e65, key, u64::from(level)]);
+        let n = plane.pixels;
+        let mut out = vec![Rgb::ZERO; n * n];
+        let mut fallbacks = 0;
+        for j in 0..n {
+            for i in 0..n {
+                let d = frame.from_local(plane.direction(i, j));
+                if d.dot(sp.it.ng) * sp.n.dot(sp.it.ng).signum() <= 0.0 {
+                    continue;
+                }
+                let ray = scene.spawn_ray(&sp.it, d);
+                let key = ircache_render::irradiance_cache::gather::mix(key, (j * n + i) as u64);
+                let hit = match seen[j * n + i] {
+                    Some((_, SPHERE)) => {
+                        fallbacks += 1;
+                        scene.intersect(&ray)
+                    }
+                    Some((shape, prim)) => match scene.hit_triangle(&ray, shape, prim) {
+                        Some(h) => Some(h),
+                        None => {
+                            fallbacks += 1;
+                            scene.intersect(&ray)
+                        }
+                    },
+                    None => None,
+                };
+                st.counts.gather_rays += 1;
+                out[j * n + i] = match hit {
+                    Some(hit) => {
+                        light
+                            .incident_at(g.cache, g.seed, st, &ray, hit, level, key, &mut rng)
+                            .radiance
+                    }
+                    None => g.light.escaped(d),
+                };
+            }
+        }
+        Ok((out, fallbacks))
+    }
+}

@@ -1,0 +1,113 @@
+//! Records from a rasterised plane (issue 12): the triangles the GPU rasterises into a record's
+//! plane are the ones Embree's ray through each pixel centre hits, and the plane's irradiance
+//! shaded from them equals the ray-cast plane's, on the Cornell box at visible points. On
+//! lavapipe where there is no GPU; with no device the test fails and says so, unless
+//! `IRCACHE_GPU_TESTS=skip`.
+
+use ircache_gpu::visibility::PlaneVisibility;
+use ircache_gpu::{Gpu, GpuError};
+use ircache_math::{Rng, Vec2};
+use ircache_render::irradiance_cache::build::is_record_site;
+use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingPoint, WorkState};
+use ircache_render::irradiance_cache::params::Deeper;
+use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
+use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
+use ircache_render::scene::Scene;
+use std::sync::Arc;
+
+fn gpu() -> Option<Arc<Gpu>> {
+    match Gpu::new() {
+        Ok(g) => Some(Arc::new(g)),
+        Err(e @ GpuError::NoDevice(_))
+            if std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip") =>
+        {
+            eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {e}");
+            None
+        }
+        Err(e) => panic!("{e} (set IRCACHE_GPU_TESTS=skip to skip the GPU tests)"),
+    }
+}
+
+#[test]
+fn rasterised_planes_see_what_the_rays_see() {
+    let Some(gpu) = gpu() else { return };
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/scenes/cornell-box/scene.xml"
+    );
+    let desc = ircache_scene::load_scene(
+        std::path::Path::new(path),
+        &[("max_depth".into(), "3".into())],
+        &ircache_scene::obj_scene::ObjCamera::default(),
+    )
+    .expect("the shared cornell-box loads");
+    let scene = Scene::build(&desc).expect("scene builds");
+    let visibility = PlaneVisibility::new(gpu, &scene);
+    assert_eq!(visibility.spheres, 0);
+    let cache = IrradianceCache::new(&scene, &IcParams::default());
+    let light = SceneRadiance {
+        scene: &scene,
+        deeper: Deeper::PathTraced,
+    };
+    let g = Gatherer {
+        light: &light,
+        cache: &cache,
+        seed: 3,
+    };
+    let plane = HemispherePlane::new(64, 2.0);
+    let mut rng = Rng::new(5, 0);
+    let (mut pixels, mut agree, mut points) = (0usize, 0usize, 0usize);
+    let mut squared = 0.0f64;
+    while points < 12 {
+        let ray = scene
+            .camera
+            .generate_ray(Vec2::new(rng.next_f32(), rng.next_f32()));
+        let Some(it) = scene.intersect(&ray) else {
+            continue;
+        };
+        let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+        if !is_record_site(&bsdf, it.frame.to_local(-ray.d), false) {
+            continue;
+        }
+        let sp = ShadingPoint::facing(it, -ray.d);
+        points += 1;
+        let seen = visibility.triangles(&plane, &sp).expect("rasterised");
+        let frame = ircache_math::Frame::from_z(sp.n);
+        for j in 0..plane.pixels {
+            for i in 0..plane.pixels {
+                let d = frame.from_local(plane.direction(i, j));
+                let hit = scene.intersect(&scene.spawn_ray(&sp.it, d));
+                pixels += 1;
+                if hit.map(|h| (h.shape, h.prim)) == seen[j * plane.pixels + i] {
+                    agree += 1;
+                }
+            }
+        }
+        let key = points as u64;
+        let mut st = WorkState::new(1);
+        let (raster, _) = visibility
+            .record_plane(&scene, &light, &g, &mut st, &plane, &sp, 0, key)
+            .expect("shaded");
+        let traced = plane.sample(&g, &mut st, &sp, 0, key);
+        let e = |l: &[ircache_math::Rgb]| {
+            f64::from(
+                plane
+                    .irradiance(l, PlaneEstimator::BorderCompensation)
+                    .luminance(),
+            )
+        };
+        let (a, b) = (e(&raster), e(&traced));
+        squared += ((a - b) / b).powi(2);
+    }
+    let share = agree as f64 / pixels as f64;
+    eprintln!(
+        "{agree} of {pixels} pixels agree; RMS {}",
+        (squared / points as f64).sqrt()
+    );
+    assert!(
+        share > 0.99,
+        "{agree} of {pixels} pixels see the rays' triangle"
+    );
+    let rms = (squared / points as f64).sqrt();
+    assert!(rms < 0.01, "rasterised against ray-cast planes: RMS {rms}");
+}
