@@ -6,11 +6,10 @@
 
 use ircache_gpu::visibility::PlaneVisibility;
 use ircache_gpu::{Gpu, GpuError};
-use ircache_math::{Rng, Vec2};
-use ircache_render::irradiance_cache::build::is_record_site;
-use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingPoint, WorkState};
+use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
 use ircache_render::irradiance_cache::params::Deeper;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
+use ircache_render::irradiance_cache::points::visible_sites;
 use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
 use ircache_render::scene::Scene;
 use std::sync::Arc;
@@ -55,21 +54,9 @@ fn rasterised_planes_see_what_the_rays_see() {
         seed: 3,
     };
     let plane = HemispherePlane::new(64, 2.0);
-    let mut rng = Rng::new(5, 0);
     let (mut pixels, mut agree, mut points) = (0usize, 0usize, 0usize);
     let mut squared = 0.0f64;
-    while points < 12 {
-        let ray = scene
-            .camera
-            .generate_ray(Vec2::new(rng.next_f32(), rng.next_f32()));
-        let Some(it) = scene.intersect(&ray) else {
-            continue;
-        };
-        let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
-        if !is_record_site(&bsdf, it.frame.to_local(-ray.d), false) {
-            continue;
-        }
-        let sp = ShadingPoint::facing(it, -ray.d);
+    for sp in visible_sites(&scene, 12, 5) {
         points += 1;
         let seen = visibility.triangles(&plane, &sp).expect("rasterised");
         let frame = ircache_math::Frame::from_z(sp.n);

@@ -14,12 +14,11 @@
 //! the cache's default gather (512 cells) by the same measure.
 
 use anyhow::Result;
-use ircache_math::{Rng, Vec2};
-use ircache_render::irradiance_cache::build::is_record_site;
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingPoint, WorkState};
 use ircache_render::irradiance_cache::hemisphere::Stratification;
 use ircache_render::irradiance_cache::params::Deeper;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
+use ircache_render::irradiance_cache::points::visible_sites;
 use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
 use ircache_render::scene::Scene;
 use ircache_scene::obj_scene::ObjCamera;
@@ -67,21 +66,7 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
         seed: 7,
     };
     // The points: first record sites of random camera rays.
-    let mut rng = Rng::new(11, 0);
-    let mut points = Vec::with_capacity(POINTS);
-    while points.len() < POINTS {
-        let ray = scene
-            .camera
-            .generate_ray(Vec2::new(rng.next_f32(), rng.next_f32()));
-        let Some(it) = scene.intersect(&ray) else {
-            continue;
-        };
-        let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
-        if !is_record_site(&bsdf, it.frame.to_local(-ray.d), false) {
-            continue;
-        }
-        points.push(ShadingPoint::facing(it, -ray.d));
-    }
+    let points = visible_sites(&scene, POINTS, 11);
     let plane = HemispherePlane::new(64, 2.0);
     let estimators = [
         ("plane only", PlaneEstimator::PlaneOnly),

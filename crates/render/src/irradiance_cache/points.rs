@@ -39,6 +39,30 @@ pub struct PointIrradiance {
     pub grad_r: [Vec3; 3],
 }
 
+/// `count` record sites where camera rays through random film positions (a stream seeded by
+/// `seed`) first meet a surface the cache serves: the visible points of Table 4.1's protocol.
+#[must_use]
+pub fn visible_sites(scene: &Scene, count: usize, seed: u64) -> Vec<ShadingPoint> {
+    let mut rng = Rng::new(seed, 0);
+    let mut sites = Vec::with_capacity(count);
+    // A scene that shows no such surface gives what a bounded number of tries found.
+    let mut tries = 0usize;
+    while sites.len() < count && tries < 1000 * count.max(1) {
+        tries += 1;
+        let ray = scene
+            .camera
+            .generate_ray(Vec2::new(rng.next_f32(), rng.next_f32()));
+        let Some(it) = scene.intersect(&ray) else {
+            continue;
+        };
+        let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+        if super::build::is_record_site(&bsdf, it.frame.to_local(-ray.d), false) {
+            sites.push(ShadingPoint::facing(it, -ray.d));
+        }
+    }
+    sites
+}
+
 /// A query point as a surface interaction that rays can leave from.
 #[must_use]
 pub fn query_point(p: Vec3, n: Vec3) -> ShadingPoint {
