@@ -878,3 +878,66 @@ fn gpu_splatting_renders_the_cpu_image_and_says_what_it_cannot_do() {
     assert!(stderr(&o).contains("no GPU device found"), "{}", stderr(&o));
     assert!(!d.join("none.exr").exists());
 }
+
+/// Under a sky (a `constant` emitter) the irradiance at points is the same whether the records
+/// hold the sky (`--cached-environment all`: it is then indirect light, and the direct part
+/// leaves it out) or light samples estimate it (`off`); and with `all` the indirect part holds
+/// it.
+#[test]
+fn irradiance_at_points_under_a_sky_is_the_same_whether_the_records_hold_it() {
+    let d = temp_dir("sky-points");
+    let scene = d.join("sky.xml");
+    std::fs::write(
+        &scene,
+        r#"<scene version="3.0.0">
+  <integrator type="irrcache"><integer name="max_depth" value="3"/></integrator>
+  <sensor type="perspective"><transform name="to_world"><lookat origin="0,3,3" target="0,0,0" up="0,1,0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+  <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/><scale value="5"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+  <shape type="cube"><transform name="to_world"><scale value="0.5"/><translate value="0,0.5,0"/></transform>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.7"/></bsdf></shape>
+  <emitter type="constant"><rgb name="radiance" value="0.5"/></emitter>
+</scene>"#,
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    // On the floor beside the box, far from it, and on the box's side.
+    let points = "0.7 0 0 0 1 0\n3 0 3 0 1 0\n0.5 0.5 0 1 0 0\n";
+    let run = |environment: &str, indirect_only: bool| {
+        let mut args = vec![
+            scene,
+            "-ad",
+            "2048",
+            "--direct-samples",
+            "1024",
+            "--cached-environment",
+            environment,
+        ];
+        if indirect_only {
+            args.push("--indirect-only");
+        }
+        let o = irradiance(&args, points);
+        assert!(o.status.success(), "{}", stderr(&o));
+        numbers(&o)
+    };
+    let (held, sampled) = (run("all", false), run("off", false));
+    let (held_indirect, sampled_indirect) = (run("all", true), run("off", true));
+    for k in 0..3 {
+        let (a, b) = (held[k][1], sampled[k][1]);
+        assert!(
+            (a - b).abs() <= 0.03 * b,
+            "point {k}: held {a} vs sampled {b}"
+        );
+        // The open floor point sees sky over most of its hemisphere: π·0.5 in all.
+        assert!(
+            held_indirect[k][1] > sampled_indirect[k][1] + 0.3,
+            "point {k}"
+        );
+    }
+    let far = held[1][1];
+    assert!(
+        (far - std::f64::consts::PI * 0.5).abs() < 0.03 * far,
+        "open floor: {far} vs π/2"
+    );
+}
