@@ -156,32 +156,42 @@ impl Microfacet {
 }
 
 /// Slopes of the α = 1 Beckmann surface, distributed by visible projected area from a direction
-/// with cosine `cos_theta_i` (Mitsuba 3's `sample_visible_11`).
+/// with cosine `cos_theta_i` (Mitsuba's `sample_visible_11`): the x slope inverts the CDF
+/// C(x) = (1 + x + tan θᵢ e^{−erfinv(x)²}/√π) / (1 + c + tan θᵢ e^{−cot² θᵢ}/√π) over
+/// x = erf(slope) ∈ (−1, c], c = erf(cot θᵢ), by Newton's method kept inside a bisection bracket,
+/// from Mitsuba's fitted first guess x₀ = c − (1 + c)(1 − u)^{1 + θᵢ(−0.876 + θᵢ(0.4265 −
+/// 0.0594 θᵢ))}, until the CDF is within 1e-6 of u (one or two steps where the old guess, the
+/// θᵢ = π/2 solution, took four or five to a step of 1e-10).
 fn beckmann_visible_slope_11(cos_theta_i: f64, u: Vec2) -> Vec2 {
     let ux = f64::from(u.x).clamp(1e-6, 1.0 - 1e-6);
     let uy = f64::from(u.y).clamp(1e-6, 1.0 - 1e-6);
-    let cos_theta_i = cos_theta_i.max(1e-9);
-    let tan_theta_i = (1.0 - cos_theta_i * cos_theta_i).max(0.0).sqrt() / cos_theta_i;
-    let cot_theta_i = 1.0 / tan_theta_i;
-    // Search interval, parameterised in the erf() domain.
-    let maxval = erf(cot_theta_i);
-    // Initial guess: the analytic solution for θ_i = π/2.
-    let mut x = maxval - (maxval + 1.0) * erf((-ux.ln()).sqrt());
-    // Normalisation of the CDF.
-    let sx = ux * (1.0 + maxval + INV_SQRT_PI * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
-    // Newton iterations (guarded to stay in (−1, maxval]).
-    for _ in 0..5 {
+    let cos_theta_i = cos_theta_i.clamp(1e-9, 1.0);
+    let sin_theta_i = (1.0 - cos_theta_i * cos_theta_i).max(0.0).sqrt();
+    let tan_theta_i = sin_theta_i / cos_theta_i;
+    let cot_theta_i = cos_theta_i / sin_theta_i.max(1e-12);
+    let (mut lo, mut hi) = (-1.0f64, erf(cot_theta_i));
+    let theta_i = cos_theta_i.acos();
+    let fit = 1.0 + theta_i * (-0.876 + theta_i * (0.4265 - 0.0594 * theta_i));
+    let mut x = hi - (1.0 + hi) * (1.0 - ux).powf(fit);
+    let normalisation =
+        1.0 / (1.0 + hi + INV_SQRT_PI * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
+    for _ in 0..20 {
+        // Outside the bracket (or NaN): bisect.
+        if !(x >= lo && x <= hi) {
+            x = 0.5 * (lo + hi);
+        }
         let slope = erfinv(x);
-        let value = 1.0 + x + INV_SQRT_PI * tan_theta_i * (-slope * slope).exp() - sx;
-        let derivative = 1.0 - slope * tan_theta_i;
-        let step = value / derivative;
-        if !step.is_finite() {
+        let value =
+            normalisation * (1.0 + x + INV_SQRT_PI * tan_theta_i * (-slope * slope).exp()) - ux;
+        if value.abs() < 1e-6 {
             break;
         }
-        x = (x - step).clamp(-1.0 + 1e-15, maxval);
-        if step.abs() < 1e-10 {
-            break;
+        if value > 0.0 {
+            hi = x;
+        } else {
+            lo = x;
         }
+        x -= value / (normalisation * (1.0 - slope * tan_theta_i));
     }
     Vec2::new(erfinv(x) as f32, erfinv(2.0 * uy - 1.0) as f32)
 }
