@@ -30,10 +30,10 @@ pub fn splatter() -> Result<GpuSplatting> {
         device: device.clone(),
         summary: Box::new(move || {
             format!(
-                "GPU {device}: {} splat calls on the GPU, {} on the CPU (radiance records, or \
-                 the GPU failed: {} failures)",
+                "GPU {device}: {} splat calls on the GPU ({} with radiance records, whose glossy \
+                 sums the CPU added), {} failed and ran on the CPU",
                 counts.gpu_calls.load(Ordering::Relaxed),
-                counts.cpu_calls.load(Ordering::Relaxed),
+                counts.glossy_on_cpu.load(Ordering::Relaxed),
                 counts.failures.load(Ordering::Relaxed)
             )
         }),

@@ -6,9 +6,10 @@
 //! 16 × 16 tiles its rectangle touches, in index order, and one invocation per sample walks its
 //! tile's list. So a sample meets the same records in the same order as on the CPU and the
 //! sums agree to the GPU's rounding, with no float blending, whose order no GPU fixes (the
-//! thesis blends splatted quads into a float target). Radiance records (their glossy part needs
-//! the rotation and BRDF coefficients on the GPU) are not there yet: a call that splats one
-//! runs on the CPU instead, counted in [`GpuSplatter::cpu_calls`].
+//! thesis blends splatted quads into a float target). The glossy sums of radiance records (they
+//! need the rotation and the BRDF coefficients on the GPU) are not there yet: the CPU adds them
+//! ([`ircache_render::splatting::buffer::splat_glossy`]), counted in
+//! [`GpuSplatter::glossy_on_cpu`].
 
 use crate::{Gpu, GpuError};
 use bytemuck::{Pod, Zeroable};
@@ -16,7 +17,7 @@ use ircache_render::camera::Camera;
 use ircache_render::irradiance_cache::gather::IrradianceCache;
 use ircache_render::irradiance_cache::record::{ErrorMetric, GradientMode, NO_RADIANCE};
 use ircache_render::render::TILE;
-use ircache_render::splatting::buffer::{record_rects, splat, SplatBuffer, Splatter};
+use ircache_render::splatting::buffer::{record_rects, splat, splat_glossy, SplatBuffer, Splatter};
 use ircache_render::splatting::GBuffer;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -72,12 +73,11 @@ pub struct GpuSplatter {
     gpu: Arc<Gpu>,
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
-    /// Calls that ran on the GPU.
+    /// Calls whose irradiance sums the GPU made.
     pub gpu_calls: AtomicU64,
-    /// Calls that ran on the CPU instead: they splatted radiance records, or the GPU failed
-    /// (`failures`).
-    pub cpu_calls: AtomicU64,
-    /// Calls the GPU failed (read-back errors); the CPU did them.
+    /// Of those, calls whose radiance records' glossy sums the CPU added.
+    pub glossy_on_cpu: AtomicU64,
+    /// Calls the GPU failed (read-back or device errors); the CPU did them whole.
     pub failures: AtomicU64,
 }
 
@@ -138,7 +138,7 @@ impl GpuSplatter {
             pipeline,
             layout,
             gpu_calls: AtomicU64::new(0),
-            cpu_calls: AtomicU64::new(0),
+            glossy_on_cpu: AtomicU64::new(0),
             failures: AtomicU64::new(0),
         }
     }
@@ -314,25 +314,26 @@ impl Splatter for GpuSplatter {
         camera: &Camera,
         filter_reach: f32,
     ) {
-        let radiance = cache.levels.first().is_some_and(|s| {
-            s.records()[ids.clone()]
-                .iter()
-                .any(|r| r.radiance != NO_RADIANCE)
-        });
-        if !radiance {
-            let before = buffer.clone();
-            match self.splat_on_gpu(buffer, g, cache, ids.clone(), camera, filter_reach) {
-                Ok(()) => {
-                    self.gpu_calls.fetch_add(1, Ordering::Relaxed);
-                    return;
-                }
-                Err(_) => {
-                    self.failures.fetch_add(1, Ordering::Relaxed);
-                    *buffer = before;
+        let before = buffer.clone();
+        match self.splat_on_gpu(buffer, g, cache, ids.clone(), camera, filter_reach) {
+            Ok(()) => {
+                self.gpu_calls.fetch_add(1, Ordering::Relaxed);
+                // The radiance records' glossy sums on the CPU.
+                let radiance = cache.levels.first().is_some_and(|s| {
+                    s.records()[ids.clone()]
+                        .iter()
+                        .any(|r| r.radiance != NO_RADIANCE)
+                });
+                if radiance {
+                    self.glossy_on_cpu.fetch_add(1, Ordering::Relaxed);
+                    splat_glossy(buffer, g, cache, ids, camera, filter_reach);
                 }
             }
+            Err(_) => {
+                self.failures.fetch_add(1, Ordering::Relaxed);
+                *buffer = before;
+                splat(buffer, g, cache, ids, camera, filter_reach);
+            }
         }
-        self.cpu_calls.fetch_add(1, Ordering::Relaxed);
-        splat(buffer, g, cache, ids, camera, filter_reach);
     }
 }

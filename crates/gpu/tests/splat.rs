@@ -34,16 +34,23 @@ fn gpu() -> Option<Arc<Gpu>> {
 }
 
 fn cornell(size: u32, params: &[(&str, &str)]) -> SceneDesc {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/scenes/cornell-box/scene.xml"
-    );
+    scene_at(
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/scenes/cornell-box/scene.xml"
+        ),
+        size,
+        params,
+    )
+}
+
+fn scene_at(path: &str, size: u32, params: &[(&str, &str)]) -> SceneDesc {
     let mut desc = ircache_scene::load_scene(
         std::path::Path::new(path),
         &[("max_depth".into(), "3".into())],
         &ircache_scene::obj_scene::ObjCamera::default(),
     )
-    .expect("the shared cornell-box loads");
+    .expect("the scene loads");
     desc.integrator.kind = "splat".into();
     for (n, v) in params {
         desc.integrator.extra.push((
@@ -154,6 +161,50 @@ fn gpu_splatting_equals_the_cpu_splatter() {
         );
     }
     assert_eq!(splatter.failures.load(Ordering::Relaxed), 0);
-    assert_eq!(splatter.cpu_calls.load(Ordering::Relaxed), 0);
+    assert_eq!(splatter.glossy_on_cpu.load(Ordering::Relaxed), 0);
     assert!(splatter.gpu_calls.load(Ordering::Relaxed) >= 30);
+}
+
+/// With radiance records (ircache's cornell-rough, radiance cache on), the GPU's irradiance sums
+/// and the CPU's glossy sums together equal the CPU splatter's.
+#[test]
+fn gpu_splatting_with_radiance_records_equals_the_cpu_splatter() {
+    let Some(gpu) = gpu() else { return };
+    let splatter = GpuSplatter::new(gpu);
+    let desc = scene_at(
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenes/cornell-rough/scene.xml"
+        ),
+        40,
+        &[("radiance_cache", "on")],
+    );
+    let (scene, cache, s) = prepared(&desc);
+    let n = cache.levels[0].len();
+    assert!(!cache.radiance_records.is_empty());
+    let g = GBuffer::build(&scene, &cache, &s, &s.sampler(), 0);
+    let reach = s.filter.radius();
+    let mut cpu = SplatBuffer::new(&g);
+    CpuSplatter.splat(&mut cpu, &g, &cache, 0..n, &scene.camera, reach);
+    let mut on_gpu = SplatBuffer::new(&g);
+    splatter.splat(&mut on_gpu, &g, &cache, 0..n, &scene.camera, reach);
+    assert_eq!(splatter.glossy_on_cpu.load(Ordering::Relaxed), 1);
+    let mut glossy = 0;
+    for (i, (a, b)) in cpu.pixels.iter().zip(&on_gpu.pixels).enumerate() {
+        let near = |x: Option<ircache_math::Rgb>, y: Option<ircache_math::Rgb>| match (x, y) {
+            (Some(x), Some(y)) => {
+                let d = x - y;
+                d.r.abs().max(d.g.abs()).max(d.b.abs())
+                    <= 1e-4 * x.max_channel().max(y.max_channel()).max(1e-30)
+            }
+            (x, y) => x.is_none() && y.is_none(),
+        };
+        assert!(
+            near(a.irradiance(), b.irradiance()),
+            "sample {i}: irradiance"
+        );
+        assert!(near(a.glossy(), b.glossy()), "sample {i}: glossy");
+        glossy += usize::from(a.glossy().is_some());
+    }
+    assert!(glossy > 200, "{glossy} samples with glossy light");
 }

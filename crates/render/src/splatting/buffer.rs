@@ -177,6 +177,32 @@ pub fn splat(
     camera: &crate::camera::Camera,
     filter_reach: f32,
 ) {
+    splat_parts(buffer, g, cache, ids, camera, filter_reach, true);
+}
+
+/// The glossy part of [`splat`] alone (the radiance records' sums), for a splatter that adds
+/// the irradiance sums itself (the GPU's).
+pub fn splat_glossy(
+    buffer: &mut SplatBuffer,
+    g: &GBuffer,
+    cache: &IrradianceCache,
+    ids: Range<usize>,
+    camera: &crate::camera::Camera,
+    filter_reach: f32,
+) {
+    splat_parts(buffer, g, cache, ids, camera, filter_reach, false);
+}
+
+/// [`splat`], with the irradiance sums (`irradiance`) or without them.
+fn splat_parts(
+    buffer: &mut SplatBuffer,
+    g: &GBuffer,
+    cache: &IrradianceCache,
+    ids: Range<usize>,
+    camera: &crate::camera::Camera,
+    filter_reach: f32,
+    irradiance: bool,
+) {
     let Some(store) = cache.levels.first() else {
         return;
     };
@@ -224,11 +250,13 @@ pub fn splat(
                             continue;
                         }
                         let px = &mut pixels[i];
-                        let weight = store.weight(err, 1.0);
-                        px.irradiance += extrapolate(rec, sp.it.p, sp.n_bump, mode) * weight;
-                        px.weight += weight;
-                        px.count += 1;
-                        px.min_error = px.min_error.min(err);
+                        if irradiance {
+                            let weight = store.weight(err, 1.0);
+                            px.irradiance += extrapolate(rec, sp.it.p, sp.n_bump, mode) * weight;
+                            px.weight += weight;
+                            px.count += 1;
+                            px.min_error = px.min_error.min(err);
+                        }
                         let Some(r) = radiance else {
                             continue;
                         };
