@@ -8,7 +8,7 @@
 //! sums agree to the GPU's rounding, with no float blending, whose order no GPU fixes (the
 //! thesis blends splatted quads into a float target). The glossy sums of radiance records (they
 //! need the rotation and the BRDF coefficients on the GPU) are not there yet: the CPU adds them
-//! ([`ircache_render::splatting::buffer::splat_glossy`]), counted in
+//! ([`ircache_render::splatting::buffer::splat_parts`] with `Sums::Glossy`), counted in
 //! [`GpuSplatter::glossy_on_cpu`].
 
 use crate::{Gpu, GpuError};
@@ -17,7 +17,9 @@ use ircache_render::camera::Camera;
 use ircache_render::irradiance_cache::gather::IrradianceCache;
 use ircache_render::irradiance_cache::record::{ErrorMetric, GradientMode, NO_RADIANCE};
 use ircache_render::render::TILE;
-use ircache_render::splatting::buffer::{record_rects, splat, splat_glossy, SplatBuffer, Splatter};
+use ircache_render::splatting::buffer::{
+    record_rects, splat, splat_parts, SplatBuffer, Splatter, Sums,
+};
 use ircache_render::splatting::GBuffer;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -326,7 +328,7 @@ impl Splatter for GpuSplatter {
                 });
                 if radiance {
                     self.glossy_on_cpu.fetch_add(1, Ordering::Relaxed);
-                    splat_glossy(buffer, g, cache, ids, camera, filter_reach);
+                    splat_parts(buffer, g, cache, ids, camera, filter_reach, Sums::Glossy);
                 }
             }
             Err(_) => {

@@ -177,31 +177,28 @@ pub fn splat(
     camera: &crate::camera::Camera,
     filter_reach: f32,
 ) {
-    splat_parts(buffer, g, cache, ids, camera, filter_reach, true);
+    splat_parts(buffer, g, cache, ids, camera, filter_reach, Sums::All);
 }
 
-/// The glossy part of [`splat`] alone (the radiance records' sums), for a splatter that adds
-/// the irradiance sums itself (the GPU's).
-pub fn splat_glossy(
+/// Which sums a splat adds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sums {
+    /// Irradiance and glossy.
+    All,
+    /// The radiance records' glossy sums alone, for a splatter that adds the irradiance sums
+    /// itself (the GPU's).
+    Glossy,
+}
+
+/// [`splat`], adding the sums `sums`.
+pub fn splat_parts(
     buffer: &mut SplatBuffer,
     g: &GBuffer,
     cache: &IrradianceCache,
     ids: Range<usize>,
     camera: &crate::camera::Camera,
     filter_reach: f32,
-) {
-    splat_parts(buffer, g, cache, ids, camera, filter_reach, false);
-}
-
-/// [`splat`], with the irradiance sums (`irradiance`) or without them.
-fn splat_parts(
-    buffer: &mut SplatBuffer,
-    g: &GBuffer,
-    cache: &IrradianceCache,
-    ids: Range<usize>,
-    camera: &crate::camera::Camera,
-    filter_reach: f32,
-    irradiance: bool,
+    sums: Sums,
 ) {
     let Some(store) = cache.levels.first() else {
         return;
@@ -250,7 +247,7 @@ fn splat_parts(
                             continue;
                         }
                         let px = &mut pixels[i];
-                        if irradiance {
+                        if sums == Sums::All {
                             let weight = store.weight(err, 1.0);
                             px.irradiance += extrapolate(rec, sp.it.p, sp.n_bump, mode) * weight;
                             px.weight += weight;
