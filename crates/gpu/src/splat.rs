@@ -316,7 +316,8 @@ impl Splatter for GpuSplatter {
         camera: &Camera,
         filter_reach: f32,
     ) {
-        let before = buffer.clone();
+        // `splat_on_gpu` writes the buffer only once the GPU's sums are back and checked: a
+        // failure leaves it as it was.
         match self.splat_on_gpu(buffer, g, cache, ids.clone(), camera, filter_reach) {
             Ok(()) => {
                 self.gpu_calls.fetch_add(1, Ordering::Relaxed);
@@ -333,7 +334,6 @@ impl Splatter for GpuSplatter {
             }
             Err(_) => {
                 self.failures.fetch_add(1, Ordering::Relaxed);
-                *buffer = before;
                 splat(buffer, g, cache, ids, camera, filter_reach);
             }
         }

@@ -12,7 +12,7 @@
 
 use crate::Gpu;
 use bytemuck::{Pod, Zeroable};
-use ircache_math::{Frame, Rgb, Rng, Vec3};
+use ircache_math::{Frame, Rgb, Vec3};
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingPoint, WorkState};
 use ircache_render::irradiance_cache::plane::HemispherePlane;
 use ircache_render::scene::{Scene, ShapeGeometry};
@@ -349,44 +349,30 @@ impl PlaneVisibility {
         key: u64,
     ) -> Result<(Vec<Rgb>, usize), crate::GpuError> {
         let seen = self.triangles(plane, sp)?;
-        let frame = Frame::from_z(sp.n);
-        let mut rng = Rng::keyed(g.seed, &[0x0070_6c61_6e65, key, u64::from(level)]);
-        let n = plane.pixels;
-        let mut out = vec![Rgb::ZERO; n * n];
         let mut fallbacks = 0;
-        for j in 0..n {
-            for i in 0..n {
-                let d = frame.from_local(plane.direction(i, j));
-                if d.dot(sp.it.ng) * sp.n.dot(sp.it.ng).signum() <= 0.0 {
-                    continue;
+        let out = plane.sample_with(g.seed, sp, level, key, |k, d, key, rng| {
+            let ray = scene.spawn_ray(&sp.it, d);
+            let hit = match seen[k] {
+                Some((_, SPHERE)) => {
+                    fallbacks += 1;
+                    scene.intersect(&ray)
                 }
-                let ray = scene.spawn_ray(&sp.it, d);
-                let key = ircache_render::irradiance_cache::gather::mix(key, (j * n + i) as u64);
-                let hit = match seen[j * n + i] {
-                    Some((_, SPHERE)) => {
-                        fallbacks += 1;
-                        scene.intersect(&ray)
-                    }
-                    Some((shape, prim)) => match scene.hit_triangle(&ray, shape, prim) {
-                        Some(h) => Some(h),
-                        None => {
-                            fallbacks += 1;
-                            scene.intersect(&ray)
-                        }
-                    },
-                    None => None,
-                };
-                st.counts.gather_rays += 1;
-                out[j * n + i] = match hit {
-                    Some(hit) => {
-                        light
-                            .incident_at(g.cache, g.seed, st, &ray, hit, level, key, &mut rng)
-                            .radiance
-                    }
-                    None => g.light.escaped(d),
-                };
+                Some((shape, prim)) => scene.hit_triangle(&ray, shape, prim).or_else(|| {
+                    fallbacks += 1;
+                    scene.intersect(&ray)
+                }),
+                None => None,
+            };
+            st.counts.gather_rays += 1;
+            match hit {
+                Some(hit) => {
+                    light
+                        .incident_at(g.cache, g.seed, st, &ray, hit, level, key, rng)
+                        .radiance
+                }
+                None => g.light.escaped(d),
             }
-        }
+        });
         Ok((out, fallbacks))
     }
 }

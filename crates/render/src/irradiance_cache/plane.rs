@@ -126,18 +126,18 @@ impl HemispherePlane {
     /// Each pixel's weight under `estimator` (row-major): E = Σ w L.
     #[must_use]
     pub fn weights(&self, estimator: PlaneEstimator) -> Vec<f64> {
+        (0..self.plane.len())
+            .map(|k| self.weight(k, estimator))
+            .collect()
+    }
+
+    /// Pixel `k`'s weight under `estimator`.
+    #[inline]
+    fn weight(&self, k: usize, estimator: PlaneEstimator) -> f64 {
         match estimator {
-            PlaneEstimator::PlaneOnly => self.plane.clone(),
-            PlaneEstimator::Coverage => {
-                let f = coverage(self.half_size);
-                self.plane.iter().map(|w| w / f).collect()
-            }
-            PlaneEstimator::BorderCompensation => self
-                .plane
-                .iter()
-                .zip(&self.border)
-                .map(|(a, b)| a + b)
-                .collect(),
+            PlaneEstimator::PlaneOnly => self.plane[k],
+            PlaneEstimator::Coverage => self.plane[k] / coverage(self.half_size),
+            PlaneEstimator::BorderCompensation => self.plane[k] + self.border[k],
         }
     }
 
@@ -145,7 +145,8 @@ impl HemispherePlane {
     #[must_use]
     pub fn irradiance(&self, radiance: &[Rgb], estimator: PlaneEstimator) -> Rgb {
         let mut e = [0.0f64; 3];
-        for (w, l) in self.weights(estimator).iter().zip(radiance) {
+        for (k, l) in radiance.iter().enumerate().take(self.plane.len()) {
+            let w = self.weight(k, estimator);
             e[0] += w * f64::from(l.r);
             e[1] += w * f64::from(l.g);
             e[2] += w * f64::from(l.b);
@@ -163,8 +164,33 @@ impl HemispherePlane {
         level: u32,
         key: u64,
     ) -> Vec<Rgb> {
+        self.sample_with(g.seed, sp, level, key, |_, d, key, rng| {
+            st.counts.gather_rays += 1;
+            match g
+                .light
+                .incident(g.cache, g.seed, st, sp, d, level, key, rng)
+            {
+                Some(inc) => inc.radiance,
+                None => g.light.escaped(d),
+            }
+        })
+    }
+
+    /// The radiance `radiance(pixel, d, key, rng)` gives for each pixel above `sp` (row-major;
+    /// black below the geometric surface), `d` the world direction through the pixel's centre,
+    /// `key` the pixel's key in the record's streams and `rng` the record's stream: the one
+    /// pixel loop of [`HemispherePlane::sample`] and of a rasteriser's plane, so both draw the
+    /// same random numbers.
+    pub fn sample_with(
+        &self,
+        seed: u64,
+        sp: &ShadingPoint,
+        level: u32,
+        key: u64,
+        mut radiance: impl FnMut(usize, Vec3, u64, &mut Rng) -> Rgb,
+    ) -> Vec<Rgb> {
         let frame = Frame::from_z(sp.n);
-        let mut rng = Rng::keyed(g.seed, &[0x0070_6c61_6e65, key, u64::from(level)]);
+        let mut rng = Rng::keyed(seed, &[0x0070_6c61_6e65, key, u64::from(level)]);
         let n = self.pixels;
         let mut out = vec![Rgb::ZERO; n * n];
         for j in 0..n {
@@ -173,15 +199,8 @@ impl HemispherePlane {
                 if d.dot(sp.it.ng) * sp.n.dot(sp.it.ng).signum() <= 0.0 {
                     continue; // below the geometric surface
                 }
-                st.counts.gather_rays += 1;
-                let key = super::gather::mix(key, (j * n + i) as u64);
-                out[j * n + i] = match g
-                    .light
-                    .incident(g.cache, g.seed, st, sp, d, level, key, &mut rng)
-                {
-                    Some(inc) => inc.radiance,
-                    None => g.light.escaped(d),
-                };
+                let k = j * n + i;
+                out[k] = radiance(k, d, super::gather::mix(key, k as u64), &mut rng);
             }
         }
         out
