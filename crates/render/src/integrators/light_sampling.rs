@@ -130,10 +130,10 @@ pub fn sample_lights(
         };
         let wi = it.frame.to_local(ls.wi);
         let f = bsdf.eval(wo, wi);
-        let environment = !served.is_none() && scene.lights.is_environment(ls.light);
         if f.is_black() || ls.pdf <= 0.0 {
             continue;
         }
+        let environment = !served.is_none() && scene.lights.is_environment(ls.light);
         // Of the environment, the sample estimates what the cache did not serve.
         let rest = if environment {
             served.remainder(bsdf, wo, wi, f)
@@ -150,22 +150,23 @@ pub fn sample_lights(
         {
             continue;
         }
-        let weighted = if environment {
-            // The traced glossy part in it is weighed against its BSDF sample.
-            if !served.glossy && strategy == BsdfStrategy::Glossy && nb > 0 {
-                let w = mis_weight(fe * ls.pdf, fb * strategy.pdf(bsdf, wo, wi));
-                rest - bsdf.eval_glossy(wo, wi) * (1.0 - w)
-            } else {
-                rest
-            }
-        } else if ls.is_delta || nb == 0 {
-            f
+        // With the served parts off (`rest`), the traced glossy part is weighed against its BSDF
+        // sample as ever; only a remainder of the environment may be negative.
+        let weighted = if ls.is_delta || nb == 0 {
+            rest
         } else {
             let w = mis_weight(fe * ls.pdf, fb * strategy.pdf(bsdf, wo, wi));
             match strategy {
                 // The strategy's part is the whole BSDF: f·w, without evaluating it twice.
-                BsdfStrategy::All => f * w,
-                BsdfStrategy::Glossy => (f - bsdf.eval_glossy(wo, wi) * (1.0 - w)).max(Rgb::ZERO),
+                BsdfStrategy::All => rest * w,
+                BsdfStrategy::Glossy => {
+                    let x = rest - bsdf.eval_glossy(wo, wi) * (1.0 - w);
+                    if environment {
+                        x
+                    } else {
+                        x.max(Rgb::ZERO)
+                    }
+                }
             }
         };
         l += weighted * ls.radiance / (fe * ls.pdf);
