@@ -1,4 +1,5 @@
-//! `ircache compare A B`: the error measures of `shared/references/README.md`.
+//! `ircache compare A B`: the error measures of `shared/references/README.md`; with
+//! `--sequence`, the flicker and temporal error of frame sequences (`ircache_image::flicker`).
 
 use anyhow::Result;
 use clap::Args;
@@ -7,10 +8,20 @@ use std::path::PathBuf;
 /// Arguments of `ircache compare`.
 #[derive(Args, Debug)]
 pub struct CompareArgs {
-    /// The image to judge.
+    /// The image to judge (with --sequence, a file name whose run of `#` is the frame number).
     pub image: PathBuf,
-    /// The reference.
-    pub reference: PathBuf,
+    /// The reference (with --sequence, a name pattern as for the image; optional there: without
+    /// it only the flicker index is measured).
+    pub reference: Option<PathBuf>,
+    /// Measure frames A..B (both included) of a sequence: the flicker index; with a reference,
+    /// the high-pass temporal error, the mean relMSE, the relMSE near what moves, and probe
+    /// tracks (`NOTES-001.md` D.8).
+    #[arg(long, value_name = "A..B", value_parser = crate::animate::parse_frames)]
+    pub sequence: Option<(u32, u32)>,
+    /// With --sequence: a second, independent half of the reference (its noise then cancels
+    /// in the high-pass error; the relMSE is measured against the halves' mean).
+    #[arg(long, value_name = "PATTERN", requires = "sequence")]
+    pub reference_b: Option<PathBuf>,
     /// Write a false-colour PNG of the relative luminance error (red: brighter, blue: darker).
     #[arg(long, value_name = "FILE.png")]
     pub falsecolor: Option<PathBuf>,
@@ -34,8 +45,14 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             args.blur
         );
     }
+    if let Some(frames) = args.sequence {
+        return sequence(args, frames);
+    }
+    let Some(reference) = &args.reference else {
+        anyhow::bail!("compare needs a reference image (or --sequence A..B for the flicker index)");
+    };
     let a = ircache_image::read_image(&args.image)?;
-    let b = ircache_image::read_image(&args.reference)?;
+    let b = ircache_image::read_image(reference)?;
     let (a, b) = if args.blur > 0.0 {
         use ircache_image::blur::gaussian_blur;
         (gaussian_blur(&a, args.blur), gaussian_blur(&b, args.blur))
@@ -50,7 +67,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     if args.json {
         let j = serde_json::json!({
             "a": args.image.display().to_string(),
-            "b": args.reference.display().to_string(),
+            "b": reference.display().to_string(),
             "relMSE": m.rel_mse,
             "relMSE_trim": m.rel_mse_trim,
             "RMSE": m.rmse,
@@ -67,6 +84,89 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             "relMSE={:.6e}  relMSE_trim={:.6e}  RMSE={:.6e}  MRE_lum={:.6e}  lum_ratio={:.6}  mean_lum_a={:.6}  mean_lum_b={:.6}  nonfinite_a={}",
             m.rel_mse, m.rel_mse_trim, m.rmse, m.mre_lum, m.lum_ratio, m.mean_lum_a, m.mean_lum_b, m.nonfinite_a
         );
+    }
+    Ok(())
+}
+
+/// Reads frames `first..=last` of the sequence named by `pattern`.
+fn read_sequence(
+    pattern: &std::path::Path,
+    (first, last): (u32, u32),
+) -> Result<Vec<ircache_image::Image>> {
+    (first..=last)
+        .map(|f| {
+            let path = crate::animate::frame_path(pattern, f)?;
+            Ok(ircache_image::read_image(&path)?)
+        })
+        .collect()
+}
+
+/// `ircache compare --sequence`: the measures of `ircache_image::flicker`.
+fn sequence(args: &CompareArgs, frames: (u32, u32)) -> Result<()> {
+    use ircache_image::flicker::{
+        flicker_index, ghost_mask, high_pass_error, masked_rel_mse, probe_tracks,
+    };
+    let blur = |seq: Vec<ircache_image::Image>| -> Vec<ircache_image::Image> {
+        if args.blur > 0.0 {
+            seq.iter()
+                .map(|f| ircache_image::blur::gaussian_blur(f, args.blur))
+                .collect()
+        } else {
+            seq
+        }
+    };
+    let images = blur(read_sequence(&args.image, frames)?);
+    let mut j = serde_json::json!({
+        "frames": [frames.0, frames.1],
+        "blur": args.blur,
+        "flicker_index": flicker_index(&images)?,
+    });
+    if let Some(reference) = &args.reference {
+        let a = blur(read_sequence(reference, frames)?);
+        let b = match &args.reference_b {
+            Some(p) => blur(read_sequence(p, frames)?),
+            None => a.clone(),
+        };
+        let mean: Vec<ircache_image::Image> = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| {
+                let mut m = x.clone();
+                for (p, q) in m.pixels.iter_mut().zip(&y.pixels) {
+                    *p = (*p + *q) * 0.5;
+                }
+                m
+            })
+            .collect();
+        // Pixels near what moves: the reference changes there by over 10 %, dilated by 1/32
+        // of the width.
+        let dilate = (mean[0].width / 32).max(1);
+        let mask = ghost_mask(&mean, 0.1, dilate)?;
+        let (w, h) = (mean[0].width, mean[0].height);
+        // 16 probes on a 4×4 grid, each a 5×5 window (Fig. 5.10's temporal accuracy).
+        let probes: Vec<(usize, usize)> = (0..16)
+            .map(|i| ((2 * (i % 4) + 1) * w / 8, (2 * (i / 4) + 1) * h / 8))
+            .collect();
+        let tracks = probe_tracks(&images, &mean, &probes, 2)?;
+        let masked = mask.iter().filter(|&&m| m).count();
+        let ext = serde_json::json!({
+            "reference_flicker_index": flicker_index(&mean)?,
+            "high_pass_error": if images.len() >= 3 { Some(high_pass_error(&images, &a, &b)?) } else { None },
+            "rel_mse": masked_rel_mse(&images, &mean, None)?,
+            "rel_mse_near_motion": if masked > 0 { Some(masked_rel_mse(&images, &mean, Some(&mask))?) } else { None },
+            "pixels_near_motion": masked,
+            "probe_max_error": tracks.iter().map(|t| t.max_error).fold(0.0, f64::max),
+            "probe_max_step": tracks.iter().map(|t| t.max_step).fold(0.0, f64::max),
+        });
+        if let (Some(o), Some(e)) = (j.as_object_mut(), ext.as_object()) {
+            o.extend(e.clone());
+        }
+    }
+    if args.json {
+        println!("{j}");
+    } else if let Some(o) = j.as_object() {
+        let line: Vec<String> = o.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        println!("{}", line.join("  "));
     }
     Ok(())
 }

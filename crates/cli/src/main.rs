@@ -2,6 +2,8 @@
 //!
 //! - `ircache render [SCENE]` renders a Mitsuba 3 XML or Wavefront OBJ scene (a built-in Cornell
 //!   box when none is given) to OpenEXR, Radiance HDR or PNG.
+//! - `ircache animate ANIMATION` renders an animation's frames, its cache kept over time
+//!   (temporal radiance caching, age-based invalidation or a cache per frame).
 //! - `ircache compare A B` prints relMSE, relMSE_trim, RMSE and the mean-luminance ratio of A
 //!   against the reference B (the measures of `shared/tools/relmse.py`).
 //! - `ircache irradiance SCENE` prints irradiance at points (by the cache or by brute force).
@@ -9,6 +11,7 @@
 //! - `ircache bench` measures ray throughput and rendering speed.
 //! - `ircache view [SCENE]` serves the progressive walkthrough to a browser.
 
+mod animate;
 mod bench;
 mod cache_args;
 mod cache_info;
@@ -33,6 +36,8 @@ struct Cli {
 enum Command {
     /// Render a scene to an image.
     Render(Box<render::RenderArgs>),
+    /// Render an animation's frames with a cache kept over time.
+    Animate(Box<animate::AnimateArgs>),
     /// Compare an image against a reference.
     Compare(compare::CompareArgs),
     /// Irradiance at points read as lines "x y z nx ny nz" (Radiance's rtrace -I).
@@ -54,6 +59,7 @@ fn main() -> ExitCode {
     ));
     let result = match cli.command {
         Command::Render(a) => render::run(&a),
+        Command::Animate(a) => animate::run(&a),
         Command::Compare(a) => compare::run(&a),
         Command::Irradiance(a) => irradiance::run(&a),
         Command::Cache(c) => cache_info::run(&c),

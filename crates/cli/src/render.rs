@@ -165,10 +165,16 @@ pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
         width: args.width,
         height: args.height,
     };
-    let mut desc = match &args.scene {
+    let desc = match &args.scene {
         Some(path) => ircache_scene::load_scene(path, &defines, &obj_camera)?,
         None => load_builtin(&defines)?,
     };
+    apply_overrides(args, desc)
+}
+
+/// Applies the command line's overrides (size, samples, sampler, integrator, depth) to a
+/// loaded scene.
+pub fn apply_overrides(args: &RenderArgs, mut desc: SceneDesc) -> Result<SceneDesc> {
     if let Some(w) = args.width {
         desc.sensor.film.width = w;
     }
@@ -250,12 +256,8 @@ fn adaptive(args: &RenderArgs, spp: u32) -> Result<Option<Adaptive>> {
     Ok(Some(Adaptive { target, max_spp }))
 }
 
-/// Runs `ircache render`.
-pub fn run(args: &RenderArgs) -> Result<()> {
-    let t0 = Instant::now();
-    let output = args.output.clone().unwrap_or_else(|| default_output(args));
-    check_writable(&output)?;
-    let desc = load(args)?;
+/// The integrator the scene and the command line ask for, with the cache options applied.
+pub fn integrator(args: &RenderArgs, desc: &SceneDesc) -> Result<Integrator> {
     let mut integrator = Integrator::from_desc(&desc.integrator).map_err(anyhow::Error::msg)?;
     match &mut integrator {
         Integrator::Ic(ic) => {
@@ -270,6 +272,33 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         ),
         _ => {}
     }
+    Ok(integrator)
+}
+
+/// The render settings the scene and the command line ask for.
+pub fn settings(args: &RenderArgs, desc: &SceneDesc) -> Result<RenderSettings> {
+    Ok(RenderSettings {
+        width: desc.sensor.film.width as usize,
+        height: desc.sensor.film.height as usize,
+        spp: desc.sensor.spp,
+        seed: args.seed.unwrap_or(desc.sensor.sampler_seed),
+        threads: args.threads.unwrap_or(0),
+        filter: Filter::from_desc(&desc.sensor.film.filter),
+        band: args.tile,
+        sampling: Sampling {
+            adaptive: adaptive(args, desc.sensor.spp)?,
+            ..Sampling::from_desc(&desc.sensor).map_err(anyhow::Error::msg)?
+        },
+    })
+}
+
+/// Runs `ircache render`.
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let output = args.output.clone().unwrap_or_else(|| default_output(args));
+    check_writable(&output)?;
+    let desc = load(args)?;
+    let mut integrator = integrator(args, &desc)?;
     for aov in &args.aov {
         if !matches!(aov.as_str(), "irradiance" | "records" | "glossy") {
             bail!("--aov {aov}: expected irradiance, records or glossy");
@@ -297,19 +326,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     };
     let scene = Scene::build(&desc).context("building the scene")?;
     let load_seconds = t0.elapsed().as_secs_f64();
-    let settings = RenderSettings {
-        width: desc.sensor.film.width as usize,
-        height: desc.sensor.film.height as usize,
-        spp: desc.sensor.spp,
-        seed: args.seed.unwrap_or(desc.sensor.sampler_seed),
-        threads: args.threads.unwrap_or(0),
-        filter: Filter::from_desc(&desc.sensor.film.filter),
-        band: args.tile,
-        sampling: Sampling {
-            adaptive: adaptive(args, desc.sensor.spp)?,
-            ..Sampling::from_desc(&desc.sensor).map_err(anyhow::Error::msg)?
-        },
-    };
+    let settings = settings(args, &desc)?;
     if settings.sampling.adaptive.is_some() && settings.sampling.sampler != SamplerKind::Sobol {
         eprintln!(
             "note: --adaptive draws its samples from the sobol sampler (its prefixes stay \
@@ -364,7 +381,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 }
 
 /// Fails early, before any rendering, if the output file cannot be created.
-fn check_writable(path: &Path) -> Result<()> {
+pub fn check_writable(path: &Path) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),

@@ -23,6 +23,7 @@ pub mod blur;
 pub mod compare;
 pub mod exr;
 pub mod falsecolor;
+pub mod flicker;
 pub mod hdr;
 pub mod ldr;
 pub mod png;

@@ -8,6 +8,8 @@
 //! - [`integrators`]: `direct` and `path` (the unbiased reference).
 //! - [`irradiance_cache`]: Ward's irradiance cache with gradients (the `ic` integrator's records).
 //! - [`radiance_cache`]: radiance caching of glossy light in hemispherical harmonics (issue 10, begun).
+//! - [`splatting`]: radiance cache splatting and the progressive walkthrough (001 ch. 4).
+//! - [`temporal`]: animations: temporal radiance caching, age-based invalidation (001 ch. 5).
 //! - [`render`]: the parallel, deterministic tile loop.
 
 pub mod bsdf;
@@ -21,5 +23,6 @@ pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod splatting;
+pub mod temporal;
 pub mod testing;
 pub mod texture;

@@ -5,6 +5,7 @@
 //! space. The renderer builds its acceleration structure, materials and lights from that; nothing
 //! here knows about ray tracing.
 
+pub mod animation;
 pub mod desc;
 pub mod error;
 pub mod ior;

@@ -56,17 +56,37 @@ pub struct CacheStats {
     pub radiance_table_seconds: f64,
 }
 
-/// Where the pre-pass gathered each record it made: per level, (index in the level's store,
-/// point). Records read from a file or made by other processes have none.
+/// Where and how the pre-pass gathered a record it made: enough to gather it again with the
+/// same random numbers (temporal caching estimates a record's next frame that way).
+#[derive(Clone, Copy, Debug)]
+pub struct Site {
+    /// Index in its level's store.
+    pub index: usize,
+    /// The point it was gathered at.
+    pub point: ShadingPoint,
+    /// The gather's key.
+    pub key: u64,
+    /// Rays of a re-gather ([`regather_noisy`]); 0 for the cache's own divisions
+    /// ([`Gatherer::record_at`]).
+    pub rays: usize,
+}
+
+/// The records the pre-pass made, per level. Records read from a file or made by other
+/// processes have none.
 #[derive(Clone, Debug, Default)]
-pub struct Sites(pub Vec<Vec<(usize, ShadingPoint)>>);
+pub struct Sites(pub Vec<Vec<Site>>);
 
 impl Sites {
-    fn add(&mut self, level: usize, index: usize, sp: ShadingPoint) {
+    fn add(&mut self, level: usize, index: usize, point: ShadingPoint, key: u64) {
         if self.0.len() <= level {
             self.0.resize(level + 1, Vec::new());
         }
-        self.0[level].push((index, sp));
+        self.0[level].push(Site {
+            index,
+            point,
+            key,
+            rays: 0,
+        });
     }
 }
 
@@ -189,7 +209,7 @@ pub fn run_batch(
     hook: &mut (dyn BatchHook + Send),
 ) {
     take_in(cache, hook.before(), stats);
-    let results: Vec<Option<((Record, ShadingPoint), WorkState)>> = {
+    let results: Vec<Option<((Record, ShadingPoint, u64), WorkState)>> = {
         let light = SceneRadiance {
             scene,
             deeper: cache.params.deeper,
@@ -211,7 +231,7 @@ pub fn run_batch(
                 }
                 let mut st = WorkState::new(cache.levels.len());
                 let rec = g.record_at(&mut st, sp, level, key);
-                Some(((rec, *sp), st))
+                Some(((rec, *sp, key), st))
             })
             .collect()
     };
@@ -221,13 +241,13 @@ pub fn run_batch(
         counts.add(&st.counts);
         let mut radiance = std::mem::take(&mut st.radiance);
         // Deeper records first: they were made for the level-0 record's gather.
-        for (mut r, sp) in st.new_records.into_iter().chain(std::iter::once(rec)) {
+        for (mut r, sp, key) in st.new_records.into_iter().chain(std::iter::once(rec)) {
             cache.adopt_radiance(&mut r, &mut radiance, NO_RADIANCE);
             let store = &mut cache.levels[r.level as usize];
             if store.covers(r.p, r.n) {
                 stats.records_overlapping += 1;
             }
-            sites.add(r.level as usize, store.len(), sp);
+            sites.add(r.level as usize, store.len(), sp, key);
             store.insert(r);
             added.push(cache.stored(&r));
         }
@@ -281,6 +301,19 @@ pub fn fill_for_image(
     seed: u64,
     hook: &mut (dyn BatchHook + Send),
 ) -> CacheStats {
+    fill_sites_for_image(scene, cache, width, height, rows, seed, hook).0
+}
+
+/// [`fill_for_image`], also saying where and how each new record was gathered.
+pub fn fill_sites_for_image(
+    scene: &Scene,
+    cache: &mut IrradianceCache,
+    width: usize,
+    height: usize,
+    rows: std::ops::Range<usize>,
+    seed: u64,
+    hook: &mut (dyn BatchHook + Send),
+) -> (CacheStats, Sites) {
     let start = Instant::now();
     let mut stats = CacheStats::default();
     let coarsest = 32usize;
@@ -311,10 +344,10 @@ pub fn fill_for_image(
         }
         stride /= 2;
     }
-    regather_noisy(scene, cache, seed, &sites, &mut stats);
+    regather_noisy(scene, cache, seed, &mut sites, &mut stats);
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     stats.gather_seconds = start.elapsed().as_secs_f64();
-    stats
+    (stats, sites)
 }
 
 /// Fills `cache` for a list of query points, coarse to fine over their order (every 64th
@@ -339,7 +372,7 @@ pub fn fill_for_points(
         run_batch(scene, cache, seed, &batch, &mut stats, &mut sites, &mut ());
         stride /= 2;
     }
-    regather_noisy(scene, cache, seed, &sites, &mut stats);
+    regather_noisy(scene, cache, seed, &mut sites, &mut stats);
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     stats.gather_seconds = start.elapsed().as_secs_f64();
     stats
@@ -366,7 +399,7 @@ pub fn regather_noisy(
     scene: &Scene,
     cache: &mut IrradianceCache,
     seed: u64,
-    sites: &Sites,
+    sites: &mut Sites,
     stats: &mut CacheStats,
 ) {
     let params = cache.params.clone();
@@ -375,24 +408,34 @@ pub fn regather_noisy(
         return;
     }
     let cap = params.divisions + params.supersamples;
-    for (level, level_sites) in sites.0.iter().enumerate() {
-        let jobs: Vec<(usize, ShadingPoint, usize)> = {
+    for (level, level_sites) in sites.0.iter_mut().enumerate() {
+        let jobs: Vec<(usize, usize, ShadingPoint, usize)> = {
             let store = &cache.levels[level];
             let recs = store.records();
             level_sites
                 .par_iter()
-                .filter_map(|&(i, sp)| {
-                    let r = &recs[i];
-                    let worst = store
-                        .serving(r.p, r.n, 2.0)
-                        .into_iter()
-                        .filter(|&j| j as usize != i)
-                        .map(|j| recs[j as usize].ray_variance)
-                        .fold(0.0f32, f32::max);
-                    let need = (f64::from(worst) / f64::from(target * target)).ceil();
-                    (need >= REGATHER_AT * params.divisions as f64)
-                        .then(|| (i, sp, (need as usize).min(cap)))
-                })
+                .enumerate()
+                .filter_map(
+                    |(
+                        site,
+                        &Site {
+                            index: i,
+                            point: sp,
+                            ..
+                        },
+                    )| {
+                        let r = &recs[i];
+                        let worst = store
+                            .serving(r.p, r.n, 2.0)
+                            .into_iter()
+                            .filter(|&j| j as usize != i)
+                            .map(|j| recs[j as usize].ray_variance)
+                            .fold(0.0f32, f32::max);
+                        let need = (f64::from(worst) / f64::from(target * target)).ceil();
+                        (need >= REGATHER_AT * params.divisions as f64)
+                            .then(|| (site, i, sp, (need as usize).min(cap)))
+                    },
+                )
                 .collect()
         };
         if jobs.is_empty() {
@@ -407,19 +450,20 @@ pub fn regather_noisy(
             cache,
             seed,
         };
-        let fresh: Vec<(usize, Record, WorkState)> = jobs
+        let fresh: Vec<(usize, usize, Record, WorkState, u64, usize)> = jobs
             .par_iter()
             .with_max_len(1)
-            .map(|&(i, sp, rays)| {
+            .map(|&(site, i, sp, rays)| {
                 let mut st = WorkState::new(cache.levels.len());
                 let key = mix(0x7265_6761_7468_6572 ^ level as u64, i as u64);
                 let strata = super::hemisphere::Stratification::from_divisions(rays);
                 let rec = g.record_with(&mut st, &sp, level as u32, key, strata);
-                (i, rec, st)
+                (site, i, rec, st, key, rays)
             })
             .collect();
         let mut records = cache.levels[level].records().to_vec();
-        for (i, mut rec, mut st) in fresh {
+        for (site, i, mut rec, mut st, key, rays) in fresh {
+            (level_sites[site].key, level_sites[site].rays) = (key, rays);
             // The new coefficients take the old record's place in the list.
             cache.adopt_radiance(&mut rec, &mut st.radiance, records[i].radiance);
             let counts = st.counts;

@@ -315,8 +315,8 @@ impl GatherCounts {
 #[derive(Debug)]
 pub struct WorkState {
     overlay: Vec<Option<RecordStore>>,
-    /// Records made, in order, with the points they were gathered at.
-    pub new_records: Vec<(Record, ShadingPoint)>,
+    /// Records made, in order, with the points they were gathered at and their gathers' keys.
+    pub new_records: Vec<(Record, ShadingPoint, u64)>,
     /// Radiance coefficients of the records made (their [`Record::radiance`] indexes this
     /// until they are inserted into the cache, which moves these to its own list).
     pub radiance: Vec<RadianceRecord>,
@@ -779,7 +779,7 @@ impl Gatherer<'_> {
         let rec = self.record_at(st, sp, level, key);
         let store = st.overlay[lvl].get_or_insert_with(|| self.cache.empty_store());
         store.insert(rec);
-        st.new_records.push((rec, *sp));
+        st.new_records.push((rec, *sp, key));
         rec.e
     }
 }

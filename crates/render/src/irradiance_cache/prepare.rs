@@ -19,15 +19,9 @@ pub fn prepare_cache(
     settings: &RenderSettings,
     pool: &rayon::ThreadPool,
 ) -> Result<(IrradianceCache, CacheStats), RenderError> {
-    let mut cache = IrradianceCache::new(scene, &ic.params);
     let tables_start = std::time::Instant::now();
-    if ic.params.radiance_cache {
-        let tables = pool.install(|| RadianceCache::new(scene, ic.params.radiance_order));
-        cache.radiance = Some(Arc::new(tables));
-    }
+    let mut cache = empty_cache(scene, ic, settings.width, pool)?;
     let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
-    cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
-    cache.pixel_angle = 2.0 * scene.camera.tan_half_x / settings.width.max(1) as f32;
     let header = header(scene, ic, settings.width);
     let mut loaded = 0u64;
     let mut notes = Vec::new();
@@ -89,6 +83,24 @@ pub fn prepare_cache(
     stats.radiance_records = cache.radiance_records.len();
     stats.radiance_table_seconds = radiance_table_seconds;
     Ok((cache, stats))
+}
+
+/// An empty cache for a `width`-pixel-wide view of `scene` with `ic`'s settings: radiance
+/// caching's tables made, exclusions resolved, the pixel footprint set.
+pub fn empty_cache(
+    scene: &Scene,
+    ic: &IcIntegrator,
+    width: usize,
+    pool: &rayon::ThreadPool,
+) -> Result<IrradianceCache, RenderError> {
+    let mut cache = IrradianceCache::new(scene, &ic.params);
+    if ic.params.radiance_cache {
+        let tables = pool.install(|| RadianceCache::new(scene, ic.params.radiance_order));
+        cache.radiance = Some(Arc::new(tables));
+    }
+    cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
+    cache.pixel_angle = 2.0 * scene.camera.tan_half_x / width.max(1) as f32;
+    Ok(cache)
 }
 
 /// The header of a cache file for `scene` rendered by `ic` at `width` pixels across.

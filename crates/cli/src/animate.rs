@@ -1,0 +1,290 @@
+//! `ircache animate`: a frame sequence of an animated scene (`ircache_scene::animation`), its
+//! cache kept over time (`ircache_render::temporal`) or, for the `path` and `direct`
+//! integrators, each frame rendered on its own.
+
+use crate::render::{
+    apply_overrides, check_writable, integrator, parse_defines, settings, RenderArgs,
+};
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use ircache_render::integrators::Integrator;
+use ircache_render::render::render;
+use ircache_render::scene::Scene;
+use ircache_render::temporal::record::SlopeKind;
+use ircache_render::temporal::{CacheMode, FrameStats, SequenceCache, TemporalParams};
+use ircache_scene::animation::{load_animation, Animation};
+use ircache_scene::SceneDesc;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Arguments of `ircache animate`.
+#[derive(Args, Debug, Clone)]
+pub struct AnimateArgs {
+    /// Frames to render, `A..B` with both ends included (default: all the animation's frames).
+    #[arg(long, value_parser = parse_frames, value_name = "A..B")]
+    pub frames: Option<(u32, u32)>,
+    /// How the cache is kept over time: `temporal` (temporal radiance caching, 001 ch. 5:
+    /// lifespans from each record's change, temporal gradients, renewal at the same place),
+    /// `age` (000 §3.7.3: the oldest 1/--max-lifespan of the records gathered again each frame,
+    /// those that may see moving things first) or `per-frame` (a new cache each frame).
+    #[arg(long, default_value = "temporal", value_parser = CacheMode::parse)]
+    pub cache_mode: CacheMode,
+    /// Temporal accuracy a_t (001 eq. 5.6): the relative change of irradiance a record may
+    /// take over its life.
+    #[arg(long, default_value_t = 0.05)]
+    pub temporal_accuracy: f32,
+    /// Longest life of a record in frames (δt_max, 001 eq. 5.8).
+    #[arg(long, default_value_t = 10)]
+    pub max_lifespan: u32,
+    /// Temporal gradients: `interpolated` (towards the record's successor, 5.15–5.17: the
+    /// sequence is filled before the first frame is written), `extrapolated` (from the next
+    /// frame's estimate, 5.12–5.14) or `off`.
+    #[arg(long, default_value = "interpolated", value_parser = parse_gradients)]
+    pub temporal_gradients: SlopeKind,
+    /// Everything `ircache render` takes; SCENE is an `<animation>` file or a still scene
+    /// (which then needs --frames), and -o a file name whose run of `#` is the frame number
+    /// (default `frame-####.exr`).
+    #[command(flatten)]
+    pub render: RenderArgs,
+}
+
+/// Parses `A..B` (both included).
+pub fn parse_frames(s: &str) -> Result<(u32, u32), String> {
+    let err = || format!("expected A..B with 0 ≤ A ≤ B (both included), found \"{s}\"");
+    let (a, b) = s.split_once("..").ok_or_else(err)?;
+    let (a, b) = (
+        a.trim().parse::<u32>().map_err(|_| err())?,
+        b.trim().parse::<u32>().map_err(|_| err())?,
+    );
+    if a > b {
+        return Err(err());
+    }
+    Ok((a, b))
+}
+
+fn parse_gradients(s: &str) -> Result<SlopeKind, String> {
+    match s {
+        "interpolated" => Ok(SlopeKind::Interpolated),
+        "extrapolated" => Ok(SlopeKind::Extrapolated),
+        "off" => Ok(SlopeKind::Constant),
+        _ => Err(format!(
+            "unknown temporal gradients \"{s}\" (expected interpolated, extrapolated or off)"
+        )),
+    }
+}
+
+/// `pattern` with its last run of `#` replaced by `frame`, zero-padded to the run's length.
+pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
+    let s = pattern.to_string_lossy();
+    let Some(end) = s.rfind('#') else {
+        bail!(
+            "{}: the output name needs a run of # for the frame number (e.g. frame-####.exr)",
+            pattern.display()
+        );
+    };
+    let start = s[..end].rfind(|c| c != '#').map_or(0, |i| i + 1);
+    let width = end + 1 - start;
+    Ok(PathBuf::from(format!(
+        "{}{:0width$}{}",
+        &s[..start],
+        frame,
+        &s[end + 1..]
+    )))
+}
+
+/// Loads the animation (or a still scene as one that does not move) with the overrides.
+fn load(args: &RenderArgs) -> Result<(SceneDesc, Animation)> {
+    let defines = parse_defines(&args.define)?;
+    let Some(path) = &args.scene else {
+        bail!("ircache animate needs a scene: an <animation> file or a scene file");
+    };
+    let is_animation = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?
+        .lines()
+        .any(|l| l.trim_start().starts_with("<animation"));
+    let (desc, animation) = if is_animation {
+        load_animation(path, &defines)?
+    } else {
+        let desc = crate::render::load(args)?;
+        return Ok((desc, Animation::default()));
+    };
+    Ok((apply_overrides(args, desc)?, animation))
+}
+
+/// Runs `ircache animate`.
+pub fn run(args: &AnimateArgs) -> Result<()> {
+    let r = &args.render;
+    if r.tile.is_some() || r.gpu || !r.aov.is_empty() || r.adaptive.is_some() {
+        bail!("ircache animate does not take --tile, --gpu, --aov or --adaptive");
+    }
+    let t0 = Instant::now();
+    let (base, animation) = load(r)?;
+    let (first, last) = match (args.frames, animation.frames) {
+        (Some(f), _) => f,
+        (None, n) if n > 0 => (0, n - 1),
+        (None, _) => bail!("a still scene needs --frames A..B"),
+    };
+    let pattern = r
+        .output
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("frame-####.exr"));
+    check_writable(&frame_path(&pattern, first)?)?;
+    let integrator = integrator(r, &base)?;
+    let settings = settings(r, &base)?;
+    for note in &base.notes {
+        eprintln!("note: {note}");
+    }
+    let scene_at = |frame: u32| -> Result<Scene> {
+        Scene::build(&animation.scene_at(&base, frame as f32))
+            .with_context(|| format!("building the scene of frame {frame}"))
+    };
+    let write = |frame: u32, image: &ircache_image::Image| -> Result<PathBuf> {
+        let path = frame_path(&pattern, frame)?;
+        ircache_image::write_image(&path, image, r.exposure)?;
+        Ok(path)
+    };
+    let say = |line: String| {
+        if !r.quiet {
+            eprintln!("{line}");
+        }
+    };
+
+    let Integrator::Ic(ic) = &integrator else {
+        // No cache: every frame on its own.
+        for frame in first..=last {
+            let scene = scene_at(frame)?;
+            let out = render(&scene, &integrator, &settings, &|_| {})?;
+            let path = write(frame, &out.image)?;
+            say(format!(
+                "frame {frame}: {:.2} s -> {}",
+                out.seconds,
+                path.display()
+            ));
+        }
+        return Ok(());
+    };
+    let params = TemporalParams {
+        mode: args.cache_mode,
+        accuracy: args.temporal_accuracy,
+        max_lifespan: args.max_lifespan,
+        gradients: args.temporal_gradients,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(settings.threads)
+        .build()?;
+    let mut cache =
+        SequenceCache::new(ic, params, (settings.width, settings.height), settings.seed)?;
+    let mut fills: Vec<FrameStats> = Vec::new();
+    let mut render_seconds = Vec::new();
+    let mut render_frame = |cache: &SequenceCache, frame: u32, scene: &Scene| -> Result<()> {
+        let mut ic = ic.clone();
+        ic.seed = settings.seed;
+        ic.cache = Some(std::sync::Arc::new(
+            cache.cache_at(frame, scene, &animation, &pool)?,
+        ));
+        let out = render(scene, &Integrator::Ic(ic), &settings, &|_| {})?;
+        let path = write(frame, &out.image)?;
+        render_seconds.push(out.seconds);
+        say(format!(
+            "frame {frame}: pixels {:.2} s -> {}",
+            out.seconds,
+            path.display()
+        ));
+        Ok(())
+    };
+    let mut next = Some(scene_at(first)?);
+    for frame in first..=last {
+        let scene = next.take().context("the frame's scene")?;
+        next = if frame < last {
+            Some(scene_at(frame + 1)?)
+        } else {
+            None
+        };
+        let st = cache.fill_frame(frame, &scene, next.as_ref(), &animation, &pool)?;
+        say(format!(
+            "frame {frame}: {} records ({} carried, {} renewed, {} new, {} dropped), {} estimates, cache {:.2} s",
+            st.live, st.carried, st.renewed, st.new, st.dropped, st.estimates, st.seconds
+        ));
+        fills.push(st);
+        if !params.two_passes() {
+            render_frame(&cache, frame, &scene)?;
+        }
+    }
+    if params.two_passes() {
+        for frame in first..=last {
+            render_frame(&cache, frame, &scene_at(frame)?)?;
+        }
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    let gathers: usize = fills.iter().map(FrameStats::gathers).sum();
+    let records: usize = fills.iter().map(|f| f.renewed + f.new).sum();
+    say(format!(
+        "{} frames ({} cache): {records} records gathered, {} estimates, {:.1} M gather rays; \
+         cache {:.2} s, pixels {:.2} s, wall {wall:.2} s",
+        last - first + 1,
+        params.mode.name(),
+        gathers - records,
+        fills.iter().map(|f| f.gather_rays).sum::<u64>() as f64 * 1e-6,
+        fills.iter().map(|f| f.seconds).sum::<f64>(),
+        render_seconds.iter().sum::<f64>(),
+    ));
+    if let Some(path) = &r.stats {
+        write_stats(path, args, &fills, &render_seconds, wall)?;
+    }
+    Ok(())
+}
+
+fn write_stats(
+    path: &Path,
+    args: &AnimateArgs,
+    fills: &[FrameStats],
+    render_seconds: &[f64],
+    wall: f64,
+) -> Result<()> {
+    let frames: Vec<serde_json::Value> = fills
+        .iter()
+        .zip(render_seconds)
+        .map(|(f, px)| {
+            serde_json::json!({
+                "frame": f.frame, "live": f.live, "carried": f.carried, "renewed": f.renewed,
+                "new": f.new, "dropped": f.dropped, "estimates": f.estimates,
+                "gather_rays": f.gather_rays, "cache_seconds": f.seconds, "pixel_seconds": px,
+            })
+        })
+        .collect();
+    let json = serde_json::json!({
+        "cache_mode": args.cache_mode.name(),
+        "temporal_accuracy": args.temporal_accuracy,
+        "max_lifespan": args.max_lifespan,
+        "records_gathered": fills.iter().map(|f| f.renewed + f.new).sum::<usize>(),
+        "estimates": fills.iter().map(|f| f.estimates).sum::<usize>(),
+        "gather_rays": fills.iter().map(|f| f.gather_rays).sum::<u64>(),
+        "cache_seconds": fills.iter().map(|f| f.seconds).sum::<f64>(),
+        "pixel_seconds": render_seconds.iter().sum::<f64>(),
+        "wall_seconds": wall,
+        "frames": frames,
+    });
+    std::fs::write(path, serde_json::to_string_pretty(&json)? + "\n")
+        .with_context(|| format!("{}: cannot write statistics", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_paths() {
+        let p = |s: &str, f| frame_path(Path::new(s), f).map(|p| p.display().to_string());
+        assert_eq!(p("out/frame-####.exr", 7).unwrap(), "out/frame-0007.exr");
+        assert_eq!(p("a#b-##.png", 123).unwrap(), "a#b-123.png");
+        assert_eq!(p("x-#.exr", 42).unwrap(), "x-42.exr");
+        assert!(p("frame.exr", 1).is_err());
+    }
+
+    #[test]
+    fn frame_ranges() {
+        assert_eq!(parse_frames("0..29"), Ok((0, 29)));
+        assert!(parse_frames("5..2").is_err());
+        assert!(parse_frames("5").is_err());
+    }
+}

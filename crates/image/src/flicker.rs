@@ -1,0 +1,439 @@
+//! Flicker and temporal error of frame sequences (`NOTES-001.md` D.8; the thesis has no
+//! numerical measure, only videos and one probe's accuracy, Fig. 5.10). All on luminance.
+//!
+//! - [`flicker_index`]: FI = mean_t RMS_px(I_t − I_{t−1}) / mean(I), no reference needed; for a
+//!   still scene and camera, every change between frames is flicker.
+//! - [`high_pass_error`]: FHP = √(mean_{t,px}[(Δ²I_t − Δ²A_t)(Δ²I_t − Δ²B_t)]) / mean(R), with
+//!   Δ²X_t = X_{t+1} − 2X_t + X_{t−1} and A, B two independent halves of the reference R: smooth
+//!   (linear in time) changes cancel, pops from record replacement do not, and the reference's
+//!   noise cancels in expectation (the product of two independent errors has mean zero).
+//! - [`ghost_mask`] and [`masked_rel_mse`]: the relative error near what moves.
+//! - [`probe_tracks`]: per probe, the largest |I_t/R_t − 1| and the largest step of that ratio
+//!   between frames, on small box-filtered windows (Fig. 5.10's "temporal accuracy").
+
+use crate::compare::{luminance, pixel_rel_mse};
+use crate::Image;
+
+/// Why a sequence cannot be measured.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum FlickerError {
+    /// Fewer frames than the measure needs.
+    #[error("{found} frames: this measure needs at least {needed}")]
+    TooFewFrames {
+        /// Frames given.
+        found: usize,
+        /// Frames needed.
+        needed: usize,
+    },
+    /// Frames or references of different sizes.
+    #[error("frame {frame} is {width}×{height}, the first frame {first_width}×{first_height}")]
+    SizeMismatch {
+        /// The frame's index in the sequence.
+        frame: usize,
+        /// Its width.
+        width: usize,
+        /// Its height.
+        height: usize,
+        /// The first frame's width.
+        first_width: usize,
+        /// The first frame's height.
+        first_height: usize,
+    },
+    /// Sequences of different lengths.
+    #[error("{a} frames against {b} reference frames")]
+    LengthMismatch {
+        /// Frames.
+        a: usize,
+        /// Reference frames.
+        b: usize,
+    },
+}
+
+fn same_size(seqs: &[&[Image]]) -> Result<(), FlickerError> {
+    let first = &seqs[0][0];
+    for s in seqs {
+        if s.len() != seqs[0].len() {
+            return Err(FlickerError::LengthMismatch {
+                a: seqs[0].len(),
+                b: s.len(),
+            });
+        }
+        for (i, f) in s.iter().enumerate() {
+            if (f.width, f.height) != (first.width, first.height) {
+                return Err(FlickerError::SizeMismatch {
+                    frame: i,
+                    width: f.width,
+                    height: f.height,
+                    first_width: first.width,
+                    first_height: first.height,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+fn lum(img: &Image) -> Vec<f64> {
+    img.pixels.iter().map(|&c| luminance(c)).collect()
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
+}
+
+/// The static flicker index FI (see the module documentation).
+///
+/// # Errors
+/// Fewer than two frames, or frames of different sizes.
+pub fn flicker_index(frames: &[Image]) -> Result<f64, FlickerError> {
+    if frames.len() < 2 {
+        return Err(FlickerError::TooFewFrames {
+            found: frames.len(),
+            needed: 2,
+        });
+    }
+    same_size(&[frames])?;
+    let l: Vec<Vec<f64>> = frames.iter().map(lum).collect();
+    let level = mean(&l.iter().map(|f| mean(f)).collect::<Vec<_>>());
+    let rms: Vec<f64> = l
+        .windows(2)
+        .map(|w| {
+            let sq: Vec<f64> = w[1]
+                .iter()
+                .zip(&w[0])
+                .map(|(a, b)| (a - b) * (a - b))
+                .collect();
+            mean(&sq).sqrt()
+        })
+        .collect();
+    Ok(mean(&rms) / level.max(f64::MIN_POSITIVE))
+}
+
+/// Second differences in time of each pixel's luminance, frames 1 … n−2.
+fn second_differences(l: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    l.windows(3)
+        .map(|w| {
+            w[0].iter()
+                .zip(&w[1])
+                .zip(&w[2])
+                .map(|((a, b), c)| c - 2.0 * b + a)
+                .collect()
+        })
+        .collect()
+}
+
+/// The high-pass temporal error FHP against the reference halves `a` and `b` (the same
+/// sequence twice for a reference without halves: then the reference's noise is not
+/// cancelled). The mean product can come out negative where the error is below the
+/// reference's noise; FHP is then 0.
+///
+/// # Errors
+/// Fewer than three frames, or sequences of different lengths or sizes.
+pub fn high_pass_error(frames: &[Image], a: &[Image], b: &[Image]) -> Result<f64, FlickerError> {
+    if frames.len() < 3 {
+        return Err(FlickerError::TooFewFrames {
+            found: frames.len(),
+            needed: 3,
+        });
+    }
+    same_size(&[frames, a, b])?;
+    let li: Vec<Vec<f64>> = frames.iter().map(lum).collect();
+    let la: Vec<Vec<f64>> = a.iter().map(lum).collect();
+    let lb: Vec<Vec<f64>> = b.iter().map(lum).collect();
+    let (di, da, db) = (
+        second_differences(&li),
+        second_differences(&la),
+        second_differences(&lb),
+    );
+    let mut sum = 0.0;
+    let mut count = 0usize;
+    for ((i, a), b) in di.iter().zip(&da).zip(&db) {
+        for ((x, y), z) in i.iter().zip(a).zip(b) {
+            sum += (x - y) * (x - z);
+            count += 1;
+        }
+    }
+    let level = mean(
+        &la.iter()
+            .zip(&lb)
+            .map(|(a, b)| 0.5 * (mean(a) + mean(b)))
+            .collect::<Vec<_>>(),
+    );
+    Ok((sum / count.max(1) as f64).max(0.0).sqrt() / level.max(f64::MIN_POSITIVE))
+}
+
+/// The pixels near what moves: where the reference's luminance ranges over more than
+/// `threshold` of its mean across the sequence (after a 3×3 box filter against its noise),
+/// dilated by `dilate` pixels.
+///
+/// # Errors
+/// No frames, or frames of different sizes.
+pub fn ghost_mask(
+    reference: &[Image],
+    threshold: f64,
+    dilate: usize,
+) -> Result<Vec<bool>, FlickerError> {
+    if reference.is_empty() {
+        return Err(FlickerError::TooFewFrames {
+            found: 0,
+            needed: 1,
+        });
+    }
+    same_size(&[reference])?;
+    let (w, h) = (reference[0].width, reference[0].height);
+    let boxed: Vec<Vec<f64>> = reference
+        .iter()
+        .map(|f| box_filter(&lum(f), w, h, 1))
+        .collect();
+    let mut changing = vec![false; w * h];
+    for (i, c) in changing.iter_mut().enumerate() {
+        let (lo, hi, sum) = boxed
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY, 0.0), |(lo, hi, s), f| {
+                (lo.min(f[i]), hi.max(f[i]), s + f[i])
+            });
+        let m = sum / boxed.len() as f64;
+        *c = hi - lo > threshold * m.max(1e-12);
+    }
+    let d = dilate as isize;
+    let mut mask = vec![false; w * h];
+    for y in 0..h as isize {
+        for x in 0..w as isize {
+            if !changing[(y * w as isize + x) as usize] {
+                continue;
+            }
+            for yy in (y - d).max(0)..=(y + d).min(h as isize - 1) {
+                for xx in (x - d).max(0)..=(x + d).min(w as isize - 1) {
+                    mask[(yy * w as isize + xx) as usize] = true;
+                }
+            }
+        }
+    }
+    Ok(mask)
+}
+
+/// Mean over frames of relmse.py's per-pixel relMSE against `reference`, over the pixels of
+/// `mask` (all pixels when `None`).
+///
+/// # Errors
+/// Sequences of different lengths or sizes, or an empty sequence.
+pub fn masked_rel_mse(
+    frames: &[Image],
+    reference: &[Image],
+    mask: Option<&[bool]>,
+) -> Result<f64, FlickerError> {
+    if frames.is_empty() {
+        return Err(FlickerError::TooFewFrames {
+            found: 0,
+            needed: 1,
+        });
+    }
+    same_size(&[frames, reference])?;
+    let mut per_frame = Vec::with_capacity(frames.len());
+    for (f, r) in frames.iter().zip(reference) {
+        let (mut s, mut n) = (0.0, 0usize);
+        for (i, (&a, &b)) in f.pixels.iter().zip(&r.pixels).enumerate() {
+            if mask.is_none_or(|m| m[i]) {
+                s += pixel_rel_mse(a, b);
+                n += 1;
+            }
+        }
+        per_frame.push(s / n.max(1) as f64);
+    }
+    Ok(mean(&per_frame))
+}
+
+/// One probe's track against the reference.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProbeTrack {
+    /// Pixel column.
+    pub x: usize,
+    /// Pixel row.
+    pub y: usize,
+    /// Largest |I_t/R_t − 1| over the frames.
+    pub max_error: f64,
+    /// Largest |I_t/R_t − I_{t−1}/R_{t−1}|: a jump.
+    pub max_step: f64,
+}
+
+/// Tracks of the probes at `points`, each the mean over a (2r+1)² window.
+///
+/// # Errors
+/// Sequences of different lengths or sizes, or fewer than two frames.
+pub fn probe_tracks(
+    frames: &[Image],
+    reference: &[Image],
+    points: &[(usize, usize)],
+    r: usize,
+) -> Result<Vec<ProbeTrack>, FlickerError> {
+    if frames.len() < 2 {
+        return Err(FlickerError::TooFewFrames {
+            found: frames.len(),
+            needed: 2,
+        });
+    }
+    same_size(&[frames, reference])?;
+    let (w, h) = (frames[0].width, frames[0].height);
+    let window = |img: &Image, x: usize, y: usize| {
+        let (mut s, mut n) = (0.0, 0);
+        for yy in y.saturating_sub(r)..=(y + r).min(h - 1) {
+            for xx in x.saturating_sub(r)..=(x + r).min(w - 1) {
+                s += luminance(img.get(xx, yy));
+                n += 1;
+            }
+        }
+        s / f64::from(n)
+    };
+    Ok(points
+        .iter()
+        .map(|&(x, y)| {
+            let (x, y) = (x.min(w - 1), y.min(h - 1));
+            let ratios: Vec<f64> = frames
+                .iter()
+                .zip(reference)
+                .map(|(f, r)| window(f, x, y) / window(r, x, y).max(1e-12))
+                .collect();
+            ProbeTrack {
+                x,
+                y,
+                max_error: ratios.iter().map(|q| (q - 1.0).abs()).fold(0.0, f64::max),
+                max_step: ratios
+                    .windows(2)
+                    .map(|q| (q[1] - q[0]).abs())
+                    .fold(0.0, f64::max),
+            }
+        })
+        .collect())
+}
+
+/// A (2r+1)² box filter of a luminance plane, clamped at the borders.
+fn box_filter(l: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
+    let mut out = vec![0.0; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let (mut s, mut n) = (0.0, 0);
+            for yy in y.saturating_sub(r)..=(y + r).min(h - 1) {
+                for xx in x.saturating_sub(r)..=(x + r).min(w - 1) {
+                    s += l[yy * w + xx];
+                    n += 1;
+                }
+            }
+            out[y * w + x] = s / f64::from(n);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ircache_math::Rgb;
+
+    fn frame(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> Image {
+        let mut img = Image::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                img.set(x, y, Rgb::splat(f(x, y)));
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn flicker_index_of_alternating_frames() {
+        // Frames alternating between 0.9 and 1.1: every step is 0.2 over a mean of 1.
+        let seq: Vec<Image> = (0..6)
+            .map(|t| frame(4, 4, |_, _| if t % 2 == 0 { 0.9 } else { 1.1 }))
+            .collect();
+        assert!((flicker_index(&seq).unwrap() - 0.2).abs() < 1e-6);
+        let still: Vec<Image> = (0..6).map(|_| frame(4, 4, |x, _| x as f32)).collect();
+        assert_eq!(flicker_index(&still).unwrap(), 0.0);
+    }
+
+    #[test]
+    fn high_pass_error_ignores_linear_change_and_sees_a_pop() {
+        let reference: Vec<Image> = (0..8)
+            .map(|t| frame(4, 4, |_, _| 1.0 + 0.1 * t as f32))
+            .collect();
+        // Off by a constant and a linear drift: no high-pass error.
+        let drifting: Vec<Image> = (0..8)
+            .map(|t| frame(4, 4, |_, _| 1.2 + 0.12 * t as f32))
+            .collect();
+        assert!(high_pass_error(&drifting, &reference, &reference).unwrap() < 1e-6);
+        // A jump of 0.1 at frame 4 gives second differences +0.1 and −0.1.
+        let popping: Vec<Image> = (0..8)
+            .map(|t| {
+                frame(4, 4, |_, _| {
+                    1.0 + 0.1 * t as f32 + if t >= 4 { 0.1 } else { 0.0 }
+                })
+            })
+            .collect();
+        let fhp = high_pass_error(&popping, &reference, &reference).unwrap();
+        // mean of d² over 6 second differences, two of them ±0.1: √(0.02/6) / mean(R) (1.35).
+        let want = (0.02f64 / 6.0).sqrt() / 1.35;
+        assert!((fhp - want).abs() < 1e-5 * want, "{fhp} vs {want}");
+    }
+
+    #[test]
+    fn independent_reference_noise_cancels() {
+        // Two halves with independent ±0.05 noise around the truth, the frames exact: the mean
+        // product is near zero where the squared error against one half is not.
+        let mut state = 1u64;
+        let mut noise = || {
+            state = ircache_math::rng::mix64(state);
+            if state & 1 == 0 {
+                0.05
+            } else {
+                -0.05
+            }
+        };
+        let truth: Vec<Image> = (0..10).map(|_| frame(16, 16, |_, _| 1.0)).collect();
+        let mut half = || -> Vec<Image> {
+            (0..10)
+                .map(|_| {
+                    let mut f = frame(16, 16, |_, _| 1.0);
+                    for p in &mut f.pixels {
+                        *p = Rgb::splat(1.0 + noise());
+                    }
+                    f
+                })
+                .collect()
+        };
+        let (a, b) = (half(), half());
+        let cancelled = high_pass_error(&truth, &a, &b).unwrap();
+        let plain = high_pass_error(&truth, &a, &a).unwrap();
+        assert!(plain > 0.1, "{plain}");
+        assert!(cancelled < 0.3 * plain, "{cancelled} vs {plain}");
+    }
+
+    #[test]
+    fn ghost_mask_covers_the_moving_square_and_its_border() {
+        // A bright 2×2 square moving one pixel a frame along row 5.
+        let seq: Vec<Image> = (0..4)
+            .map(|t| {
+                frame(16, 12, move |x, y| {
+                    if (4..6).contains(&y) && (t + 2..t + 4).contains(&x) {
+                        5.0
+                    } else {
+                        1.0
+                    }
+                })
+            })
+            .collect();
+        let mask = ghost_mask(&seq, 0.1, 2).unwrap();
+        assert!(mask[5 * 16 + 4]);
+        assert!(mask[1 * 16 + 4], "dilated upwards");
+        assert!(!mask[11 * 16 + 15], "far corner");
+    }
+
+    #[test]
+    fn probe_tracks_find_the_jump() {
+        let reference: Vec<Image> = (0..5).map(|_| frame(8, 8, |_, _| 2.0)).collect();
+        let seq: Vec<Image> = (0..5)
+            .map(|t| frame(8, 8, |_, _| if t == 3 { 2.1 } else { 2.0 }))
+            .collect();
+        let tracks = probe_tracks(&seq, &reference, &[(3, 3)], 1).unwrap();
+        assert!((tracks[0].max_error - 0.05).abs() < 1e-6);
+        assert!((tracks[0].max_step - 0.05).abs() < 1e-6);
+    }
+}

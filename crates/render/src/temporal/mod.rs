@@ -1,0 +1,15 @@
+//! Animations with a cache reused over time (001 ch. 5, 000 §3.7.3; `NOTES-001.md` part D).
+//!
+//! - [`lifespan`]: how long a record serves, from its change over one frame (5.1–5.8).
+//! - [`record`]: a record over time: temporal gradients (5.9–5.17), motion with its shape.
+//! - [`sequence`]: the frame loop: temporal caching, age-based invalidation, or a new cache each
+//!   frame (`--cache-mode`).
+//!
+//! The flicker measures over frame sequences are in `ircache_image::flicker`; the animation
+//! format in `ircache_scene::animation`.
+
+pub mod lifespan;
+pub mod record;
+pub mod sequence;
+
+pub use sequence::{CacheMode, FrameStats, Motion, SequenceCache, TemporalParams};

@@ -1,0 +1,686 @@
+//! The cache of an animation, frame by frame (001 Algorithm 5 as `NOTES-001.md` D.6 completes
+//! it; 000 §3.7.3): which records go on to the next frame, which are gathered again at their
+//! place, which are dropped, and where new ones are needed.
+//!
+//! Each frame, the records that serve it are put into an ordinary [`IrradianceCache`] at their
+//! value for that frame (5.11) and moved with their shapes; the pre-pass
+//! ([`fill_sites_for_image`]) then gathers records only where none serves, so an unchanged
+//! scene costs nothing after its first frame but the records' renewal. What renews them is the
+//! [`CacheMode`]:
+//! - `Temporal`: each new record is gathered once more in the next frame's scene, with the same
+//!   random numbers (the CPU stand-in for §5.2.4's reprojection, which costs a gather here but
+//!   leaves no holes and no stale shadows), which gives its lifespan (5.3–5.8) and its
+//!   extrapolated temporal gradients (5.12–5.14). When it expires having served its last frame,
+//!   a successor is gathered at the same place (§5.2.3: the pattern of records, and so of
+//!   errors, stays still); one that served no pixel is dropped (§5.3's deletion). With
+//!   interpolated gradients (5.15–5.17) a record's slope runs to its successor's value, which
+//!   needs the whole sequence filled before any frame is rendered (two passes).
+//! - `Age`: records keep their value; each frame the oldest share (1/δt_max of them) is gathered
+//!   again at its place, those that may see a moving thing first (000 §3.7.3), and records that
+//!   served no pixel are dropped.
+//! - `PerFrame`: a new cache each frame (the baseline).
+//!
+//! Every frame's gathers draw on a seed of their own, as independent renders of the frames
+//! would; the pixel samples keep the animation's seed.
+
+use super::lifespan::{lifespan, relative_change};
+use super::record::{move_point, move_record, Slope, SlopeKind, TemporalRecord};
+use crate::integrators::ic::IcIntegrator;
+use crate::irradiance_cache::build::{fill_sites_for_image, first_diffuse_point, Site};
+use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, WorkState};
+use crate::irradiance_cache::hemisphere::Stratification;
+use crate::irradiance_cache::prepare::empty_cache;
+use crate::irradiance_cache::record::NO_RADIANCE;
+use crate::irradiance_cache::{IrradianceCache, Record};
+use crate::scene::{RenderError, Scene, ShapeGeometry};
+use ircache_math::{Mat4, Rgb, Vec2, Vec3};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// How an animation's cache is kept over time (`--cache-mode`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum CacheMode {
+    /// Temporal radiance caching (001 ch. 5).
+    #[default]
+    Temporal,
+    /// Age-based invalidation (000 §3.7.3).
+    Age,
+    /// A new cache every frame.
+    PerFrame,
+}
+
+impl CacheMode {
+    /// Parses `temporal`, `age` or `per-frame`.
+    pub fn parse(s: &str) -> Result<CacheMode, String> {
+        match s {
+            "temporal" => Ok(CacheMode::Temporal),
+            "age" => Ok(CacheMode::Age),
+            "per-frame" => Ok(CacheMode::PerFrame),
+            _ => Err(format!(
+                "unknown cache mode \"{s}\" (expected temporal, age or per-frame)"
+            )),
+        }
+    }
+
+    /// The name `parse` accepts.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            CacheMode::Temporal => "temporal",
+            CacheMode::Age => "age",
+            CacheMode::PerFrame => "per-frame",
+        }
+    }
+}
+
+/// Settings of an animation's cache.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TemporalParams {
+    /// How records are kept over time.
+    pub mode: CacheMode,
+    /// Temporal accuracy a_t (5.6): the relative change a record may accumulate.
+    pub accuracy: f32,
+    /// Longest life δt_max in frames (5.8); for the age-based cache, 1/δt_max of the records is
+    /// renewed each frame.
+    pub max_lifespan: u32,
+    /// Temporal gradients: [`SlopeKind::Interpolated`] (two passes) or
+    /// [`SlopeKind::Extrapolated`] (one); [`SlopeKind::Constant`] turns them off.
+    pub gradients: SlopeKind,
+}
+
+impl Default for TemporalParams {
+    /// `NOTES-001.md` G: a_t = 0.05 (the thesis's), δt_max = 10, interpolated gradients (the
+    /// thesis's Table 5.2).
+    fn default() -> Self {
+        TemporalParams {
+            mode: CacheMode::Temporal,
+            accuracy: 0.05,
+            max_lifespan: 10,
+            gradients: SlopeKind::Interpolated,
+        }
+    }
+}
+
+impl TemporalParams {
+    /// Whether the frames can only be rendered after the whole sequence is filled.
+    #[must_use]
+    pub fn two_passes(&self) -> bool {
+        self.mode == CacheMode::Temporal && self.gradients == SlopeKind::Interpolated
+    }
+}
+
+/// Where shapes go between frames.
+pub trait Motion: Sync {
+    /// The transform taking shape `shape` from frame `from` to frame `to`; `None` for a shape
+    /// that does not move.
+    fn motion(&self, shape: u32, from: u32, to: u32) -> Option<Mat4>;
+    /// The shapes that move.
+    fn moving_shapes(&self) -> Vec<u32>;
+}
+
+impl Motion for ircache_scene::animation::Animation {
+    fn motion(&self, shape: u32, from: u32, to: u32) -> Option<Mat4> {
+        self.is_moving(shape as usize)
+            .then(|| self.shape_motion(shape as usize, from as f32, to as f32))
+    }
+    fn moving_shapes(&self) -> Vec<u32> {
+        self.tracks
+            .iter()
+            .filter_map(|t| match t.target {
+                ircache_scene::animation::Target::Shape(i) => Some(i as u32),
+                ircache_scene::animation::Target::Camera => None,
+            })
+            .collect()
+    }
+}
+
+/// No motion (a still scene rendered as a sequence).
+impl Motion for () {
+    fn motion(&self, _: u32, _: u32, _: u32) -> Option<Mat4> {
+        None
+    }
+    fn moving_shapes(&self) -> Vec<u32> {
+        Vec::new()
+    }
+}
+
+/// What filling one frame did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// The frame.
+    pub frame: u32,
+    /// Records serving the frame.
+    pub live: usize,
+    /// Records carried over from earlier frames.
+    pub carried: usize,
+    /// Records gathered at the place of an expired one.
+    pub renewed: usize,
+    /// Records gathered where none served.
+    pub new: usize,
+    /// Records that expired (or were picked for renewal) without having served a pixel in
+    /// their last frame, and were dropped.
+    pub dropped: usize,
+    /// Gathers of the next frame for lifespans (temporal mode).
+    pub estimates: usize,
+    /// Hemisphere rays traced (all gathers).
+    pub gather_rays: u64,
+    /// Seconds.
+    pub seconds: f64,
+}
+
+impl FrameStats {
+    /// Every hemisphere gathered: records and next-frame estimates.
+    #[must_use]
+    pub fn gathers(&self) -> usize {
+        self.renewed + self.new + self.estimates
+    }
+}
+
+/// An animation's cache: every record any frame used, with its life.
+pub struct SequenceCache {
+    /// Temporal settings.
+    pub params: TemporalParams,
+    /// The cache's own settings (accuracy, divisions, exclusions ...).
+    pub ic: IcIntegrator,
+    /// Image width and height (the pre-pass's pixel grid).
+    pub size: (usize, usize),
+    /// The animation's seed.
+    pub seed: u64,
+    /// Every record made so far, by creation.
+    pub records: Vec<TemporalRecord>,
+    /// Whether each record served a pixel in the last frame filled.
+    used: Vec<bool>,
+}
+
+impl SequenceCache {
+    /// A cache for frames of `size` pixels.
+    ///
+    /// # Errors
+    /// Radiance records (`--radiance-cache on`) are not kept over time yet.
+    pub fn new(
+        ic: &IcIntegrator,
+        params: TemporalParams,
+        size: (usize, usize),
+        seed: u64,
+    ) -> Result<SequenceCache, RenderError> {
+        if ic.params.radiance_cache && params.mode != CacheMode::PerFrame {
+            return Err(RenderError::Invalid(format!(
+                "--cache-mode {}: radiance records (--radiance-cache on) are not kept over time \
+                 yet; use --cache-mode per-frame with them",
+                params.mode.name()
+            )));
+        }
+        if ic.cache_file.is_some() {
+            return Err(RenderError::Invalid(
+                "--cache FILE holds one frame's records: an animation keeps its own".into(),
+            ));
+        }
+        if !(params.accuracy > 0.0 && params.accuracy.is_finite()) || params.max_lifespan == 0 {
+            return Err(RenderError::Invalid(format!(
+                "temporal accuracy {} and longest life {}: expected a_t > 0 and δt_max ≥ 1",
+                params.accuracy, params.max_lifespan
+            )));
+        }
+        Ok(SequenceCache {
+            params,
+            ic: ic.clone(),
+            size,
+            seed,
+            records: Vec::new(),
+            used: Vec::new(),
+        })
+    }
+
+    /// The seed of frame `frame`'s gathers.
+    fn frame_seed(&self, frame: u32) -> u64 {
+        mix(self.seed ^ 0x7465_6d70_6f72_616c, u64::from(frame))
+    }
+
+    /// Record `i` as it is at `frame`, moved with its shape.
+    fn record_at(&self, i: usize, frame: u32, motion: &dyn Motion) -> Record {
+        let tr = &self.records[i];
+        let m = motion.motion(tr.site.point.it.shape, tr.born, frame);
+        tr.at(frame, m.as_ref())
+    }
+
+    /// The cache serving `frame`: the records alive then at their value for it (5.11).
+    ///
+    /// # Errors
+    /// As [`empty_cache`].
+    pub fn cache_at(
+        &self,
+        frame: u32,
+        scene: &Scene,
+        motion: &dyn Motion,
+        pool: &rayon::ThreadPool,
+    ) -> Result<IrradianceCache, RenderError> {
+        Ok(self.seeded(frame, scene, motion, pool)?.0)
+    }
+
+    /// [`Self::cache_at`] and, per level, the record behind each store index.
+    fn seeded(
+        &self,
+        frame: u32,
+        scene: &Scene,
+        motion: &dyn Motion,
+        pool: &rayon::ThreadPool,
+    ) -> Result<(IrradianceCache, Vec<Vec<u32>>), RenderError> {
+        let mut cache = empty_cache(scene, &self.ic, self.size.0, pool)?;
+        let mut slots = vec![Vec::new(); cache.levels.len()];
+        for (i, tr) in self.records.iter().enumerate() {
+            if tr.live_at(frame) {
+                let r = self.record_at(i, frame, motion);
+                let level = r.level as usize;
+                cache.levels[level].insert(r);
+                slots[level].push(i as u32);
+            }
+        }
+        Ok((cache, slots))
+    }
+
+    /// Fills frame `frame` (pass 1 of Algorithm 5): renews or drops the records that expired,
+    /// gathers where no record serves, and (temporal mode) estimates the new records' next
+    /// frame in `next`, the scene one frame later (`None` at the sequence's end).
+    ///
+    /// # Errors
+    /// As [`empty_cache`].
+    pub fn fill_frame(
+        &mut self,
+        frame: u32,
+        scene: &Scene,
+        next: Option<&Scene>,
+        motion: &dyn Motion,
+        pool: &rayon::ThreadPool,
+    ) -> Result<FrameStats, RenderError> {
+        let start = Instant::now();
+        let mut stats = FrameStats {
+            frame,
+            ..FrameStats::default()
+        };
+        let renew = self.expire(frame, scene, motion, &mut stats);
+        let (mut cache, mut slots) = self.seeded(frame, scene, motion, pool)?;
+        stats.carried = slots.iter().map(Vec::len).sum();
+        let seed = self.frame_seed(frame);
+        let first_new = self.records.len();
+
+        // Successors at the places of the renewed records (§5.2.3).
+        let deeper = cache.params.deeper;
+        let gathered: Vec<(usize, Record, WorkState, Site)> = {
+            let light = SceneRadiance { scene, deeper };
+            let g = Gatherer {
+                light: &light,
+                cache: &cache,
+                seed,
+            };
+            pool.install(|| {
+                renew
+                    .par_iter()
+                    .with_max_len(1)
+                    .map(|&k| {
+                        let old = &self.records[k];
+                        let m = motion.motion(old.site.point.it.shape, old.born, frame);
+                        let point = m.map_or(old.site.point, |m| move_point(&old.site.point, &m));
+                        let site = Site { point, ..old.site };
+                        let mut st = WorkState::new(cache.levels.len());
+                        let rec = gather(&g, &mut st, &site, old.record.level);
+                        (k, rec, st, site)
+                    })
+                    .collect()
+            })
+        };
+        for (k, rec, st, site) in gathered {
+            stats.gather_rays += st.counts.gather_rays;
+            // Deeper records the gather made first, as the pre-pass inserts them.
+            for (r, point, key) in st.new_records {
+                let level = r.level as usize;
+                let site = Site {
+                    index: cache.levels[level].len(),
+                    point,
+                    key,
+                    rays: 0,
+                };
+                self.add(&mut cache, &mut slots, r, site, seed, frame);
+            }
+            let level = rec.level as usize;
+            let site = Site {
+                index: cache.levels[level].len(),
+                ..site
+            };
+            let l = self.add(&mut cache, &mut slots, rec, site, seed, frame);
+            self.records[k].successor = Some(l as u32);
+            stats.renewed += 1;
+            if self.params.two_passes() {
+                // 5.15–5.17: k's slope runs to its successor's value, in k's orientation.
+                let old = self.records[k];
+                let back = motion.motion(old.site.point.it.shape, frame, old.born);
+                let succ = back.map_or(rec, |m| move_record(&rec, &m));
+                self.records[k].slope = Slope::between(&old.record, &succ, frame - old.born);
+                self.records[k].kind = SlopeKind::Interpolated;
+            }
+        }
+
+        // Records where none serves: the ordinary pre-pass over the frame's pixels.
+        let (w, h) = self.size;
+        let (fill, sites) =
+            pool.install(|| fill_sites_for_image(scene, &mut cache, w, h, 0..h, seed, &mut ()));
+        stats.gather_rays += fill.gather_rays;
+        for (level, level_sites) in sites.0.iter().enumerate() {
+            for site in level_sites {
+                let r = cache.levels[level].records()[site.index];
+                slots[level].push(self.records.len() as u32);
+                self.records.push(self.born(r, *site, seed, frame));
+                stats.new += 1;
+            }
+        }
+        // Records gathered again by the pre-pass's re-gather have their final values now.
+        for (level, ids) in slots.iter().enumerate() {
+            for (index, &id) in ids.iter().enumerate() {
+                if id as usize >= first_new {
+                    self.records[id as usize].record = cache.levels[level].records()[index];
+                }
+            }
+        }
+
+        self.set_lives(
+            frame, first_new, &cache, scene, next, motion, pool, &mut stats,
+        );
+        self.mark_used(frame, scene, &cache, &slots, pool);
+        stats.live = slots.iter().map(Vec::len).sum();
+        stats.seconds = start.elapsed().as_secs_f64();
+        Ok(stats)
+    }
+
+    /// Ends the lives that end before `frame`: returns the records to renew at their place;
+    /// the others that ended are dropped.
+    fn expire(
+        &mut self,
+        frame: u32,
+        scene: &Scene,
+        motion: &dyn Motion,
+        stats: &mut FrameStats,
+    ) -> Vec<usize> {
+        let Some(prev) = frame.checked_sub(1) else {
+            return Vec::new();
+        };
+        let used = |i: usize| self.used.get(i).copied().unwrap_or(false);
+        let mut renew = Vec::new();
+        match self.params.mode {
+            CacheMode::PerFrame => {}
+            CacheMode::Temporal => {
+                for (i, tr) in self.records.iter().enumerate() {
+                    if tr.last == prev && tr.successor.is_none() {
+                        if used(i) {
+                            renew.push(i);
+                        } else {
+                            stats.dropped += 1;
+                        }
+                    }
+                }
+            }
+            CacheMode::Age => {
+                let movers = movers(scene, motion);
+                let mut live = Vec::new();
+                for i in 0..self.records.len() {
+                    if !self.records[i].live_at(prev) || self.records[i].last != u32::MAX {
+                        continue;
+                    }
+                    if used(i) {
+                        live.push(i);
+                    } else {
+                        self.records[i].last = prev;
+                        stats.dropped += 1;
+                    }
+                }
+                for &i in &live {
+                    let tr = &self.records[i];
+                    let p = self.records[i].site.point.it.p;
+                    let n = self.records[i].record.n;
+                    let on_mover = movers.iter().any(|m| m.shape == tr.site.point.it.shape);
+                    self.records[i].sees_moving =
+                        on_mover || movers.iter().any(|m| m.seen_from(p, n));
+                }
+                // Those that see moving things first, then by age (000 §3.7.3); any record
+                // twice δt_max old is renewed whatever the share.
+                live.sort_by_key(|&i| (!self.records[i].sees_moving, self.records[i].born, i));
+                let share = live.len().div_ceil(self.params.max_lifespan as usize);
+                let too_old = 2 * self.params.max_lifespan;
+                for (rank, &i) in live.iter().enumerate() {
+                    if rank < share || frame - self.records[i].born >= too_old {
+                        self.records[i].last = prev;
+                        renew.push(i);
+                    }
+                }
+                renew.sort_unstable();
+            }
+        }
+        renew
+    }
+
+    /// Adds a record made at `frame` to the cache and the list; returns its index.
+    fn add(
+        &mut self,
+        cache: &mut IrradianceCache,
+        slots: &mut [Vec<u32>],
+        mut r: Record,
+        site: Site,
+        seed: u64,
+        frame: u32,
+    ) -> usize {
+        r.radiance = NO_RADIANCE;
+        let level = r.level as usize;
+        cache.levels[level].insert(r);
+        let i = self.records.len();
+        slots[level].push(i as u32);
+        self.records.push(self.born(r, site, seed, frame));
+        i
+    }
+
+    /// A record born at `frame`, serving that frame only until [`Self::set_lives`] says more.
+    fn born(&self, record: Record, site: Site, seed: u64, frame: u32) -> TemporalRecord {
+        TemporalRecord {
+            record,
+            site,
+            seed,
+            born: frame,
+            last: frame,
+            slope: Slope::default(),
+            kind: SlopeKind::Constant,
+            successor: None,
+            sees_moving: false,
+        }
+    }
+
+    /// Lives and slopes of the records made at `frame` (from index `first`).
+    #[allow(clippy::too_many_arguments)]
+    fn set_lives(
+        &mut self,
+        frame: u32,
+        first: usize,
+        cache: &IrradianceCache,
+        scene: &Scene,
+        next: Option<&Scene>,
+        motion: &dyn Motion,
+        pool: &rayon::ThreadPool,
+        stats: &mut FrameStats,
+    ) {
+        match (self.params.mode, next) {
+            (CacheMode::PerFrame, _) | (CacheMode::Temporal, None) => {}
+            (CacheMode::Age, _) => {
+                let movers = movers(scene, motion);
+                for tr in &mut self.records[first..] {
+                    tr.last = u32::MAX;
+                    let (p, n) = (tr.record.p, tr.record.n);
+                    tr.sees_moving = movers
+                        .iter()
+                        .any(|m| m.shape == tr.site.point.it.shape || m.seen_from(p, n));
+                }
+            }
+            (CacheMode::Temporal, Some(next)) => {
+                // The next frame, gathered with the same random numbers (CPU stand-in for
+                // §5.2.4's reprojection).
+                let light = SceneRadiance {
+                    scene: next,
+                    deeper: cache.params.deeper,
+                };
+                let estimates: Vec<(Record, u64)> = pool.install(|| {
+                    self.records[first..]
+                        .par_iter()
+                        .with_max_len(1)
+                        .map(|tr| {
+                            let g = Gatherer {
+                                light: &light,
+                                cache,
+                                seed: tr.seed,
+                            };
+                            let shape = tr.site.point.it.shape;
+                            let ahead = motion.motion(shape, frame, frame + 1);
+                            let point =
+                                ahead.map_or(tr.site.point, |m| move_point(&tr.site.point, &m));
+                            let site = Site { point, ..tr.site };
+                            let mut st = WorkState::new(cache.levels.len());
+                            let rec = gather(&g, &mut st, &site, tr.record.level);
+                            let back = motion.motion(shape, frame + 1, frame);
+                            (
+                                back.map_or(rec, |m| move_record(&rec, &m)),
+                                st.counts.gather_rays,
+                            )
+                        })
+                        .collect()
+                });
+                let floor = change_floor(&self.records[first..]);
+                let params = self.params;
+                for (tr, (next_rec, rays)) in self.records[first..].iter_mut().zip(estimates) {
+                    stats.estimates += 1;
+                    stats.gather_rays += rays;
+                    let change = relative_change(tr.record.e, next_rec.e, floor);
+                    tr.last = frame + lifespan(change, params.accuracy, params.max_lifespan);
+                    if params.gradients != SlopeKind::Constant {
+                        tr.slope = Slope::between(&tr.record, &next_rec, 1);
+                        tr.kind = SlopeKind::Extrapolated;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Marks the records that serve some pixel centre's first record site at `frame` (the CPU's
+    /// stand-in for §5.3's occlusion query); deeper levels' records count as used.
+    fn mark_used(
+        &mut self,
+        frame: u32,
+        scene: &Scene,
+        cache: &IrradianceCache,
+        slots: &[Vec<u32>],
+        pool: &rayon::ThreadPool,
+    ) {
+        let _ = frame;
+        let (w, h) = self.size;
+        let levels = cache.levels.len() as u32;
+        let inv = Vec2::new(1.0 / w as f32, 1.0 / h as f32);
+        let hits: Vec<u32> = pool.install(|| {
+            (0..w * h)
+                .into_par_iter()
+                .fold(Vec::new, |mut acc, i| {
+                    let film = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5) * inv;
+                    let ray = scene.camera.generate_ray(film);
+                    if let Some(sp) = first_diffuse_point(scene, &ray, levels) {
+                        acc.extend(cache.levels[0].serving(sp.it.p, sp.n, 1.0));
+                    }
+                    acc
+                })
+                .reduce(Vec::new, |mut a, b| {
+                    a.extend(b);
+                    a
+                })
+        });
+        self.used = vec![false; self.records.len()];
+        for id in hits {
+            self.used[slots[0][id as usize] as usize] = true;
+        }
+        for ids in slots.iter().skip(1) {
+            for &id in ids {
+                self.used[id as usize] = true;
+            }
+        }
+    }
+
+    /// Records gathered over the sequence (renewals and new records; not the estimates).
+    #[must_use]
+    pub fn records_made(&self) -> usize {
+        self.records.len()
+    }
+}
+
+/// Gathers a record at `site` for `level` as the site's gather did: its key, its rays.
+fn gather(g: &Gatherer, st: &mut WorkState, site: &Site, level: u8) -> Record {
+    let level = u32::from(level);
+    if site.rays > 0 {
+        let strata = Stratification::from_divisions(site.rays);
+        g.record_with(st, &site.point, level, site.key, strata)
+    } else {
+        g.record_at(st, &site.point, level, site.key)
+    }
+}
+
+/// The irradiance below which changes count against this floor instead (2 % of the records'
+/// mean, per channel's largest): a nearly black record's relative change is noise.
+fn change_floor(records: &[TemporalRecord]) -> f32 {
+    let sum = records
+        .iter()
+        .fold(Rgb::ZERO, |s, tr| s + tr.record.e.max(Rgb::ZERO));
+    0.02 * sum.max_channel() / records.len().max(1) as f32
+}
+
+/// A moving shape's bounding sphere at a frame.
+struct Mover {
+    shape: u32,
+    center: Vec3,
+    radius: f32,
+    emits: bool,
+}
+
+impl Mover {
+    /// Whether a record at (p, n) may see it: an emitter anywhere above the record's plane, any
+    /// other mover if it covers more than 1 % of the hemisphere's solid angle there (its bounding
+    /// sphere, occluders ignored: the test errs towards renewing).
+    fn seen_from(&self, p: Vec3, n: Vec3) -> bool {
+        let d = self.center - p;
+        let dist = d.length();
+        if dist <= self.radius {
+            return true;
+        }
+        if d.dot(n) < -self.radius {
+            return false;
+        }
+        let sin2 = (self.radius / dist).powi(2);
+        let solid_angle = 2.0 * std::f32::consts::PI * (1.0 - (1.0 - sin2).max(0.0).sqrt());
+        self.emits || solid_angle > 0.01 * 2.0 * std::f32::consts::PI
+    }
+}
+
+/// The shapes of `scene` that move, as bounding spheres.
+fn movers(scene: &Scene, motion: &dyn Motion) -> Vec<Mover> {
+    motion
+        .moving_shapes()
+        .into_iter()
+        .map(|shape| {
+            let s = &scene.shapes[shape as usize];
+            let (center, radius) = match &s.geometry {
+                ShapeGeometry::Sphere { center, radius, .. } => (*center, *radius),
+                ShapeGeometry::Mesh(m) => {
+                    let (lo, hi) = m.positions.iter().fold(
+                        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+                    );
+                    (0.5 * (lo + hi), 0.5 * (hi - lo).length())
+                }
+            };
+            Mover {
+                shape,
+                center,
+                radius,
+                emits: s.area_light.is_some(),
+            }
+        })
+        .collect()
+}
