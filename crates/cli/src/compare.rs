@@ -152,11 +152,11 @@ fn sequence(args: &CompareArgs, frames: (u32, u32)) -> Result<()> {
         let ext = serde_json::json!({
             "reference_flicker_index": flicker_index(&mean)?,
             "high_pass_error": if images.len() >= 3 { Some(high_pass_error(&images, &a, &b)?) } else { None },
-            "rel_mse": masked_rel_mse(&images, &mean, None)?,
-            "rel_mse_near_motion": if masked > 0 { Some(masked_rel_mse(&images, &mean, Some(&mask))?) } else { None },
+            "rel_mse_trim": masked_rel_mse(&images, &mean, None)?,
+            "rel_mse_trim_near_motion": if masked > 0 { Some(masked_rel_mse(&images, &mean, Some(&mask))?) } else { None },
             "pixels_near_motion": masked,
-            "probe_max_error": tracks.iter().map(|t| t.max_error).fold(0.0, f64::max),
-            "probe_max_step": tracks.iter().map(|t| t.max_step).fold(0.0, f64::max),
+            "probe_max_error": tracks.iter().filter(|t| t.still).map(|t| t.max_error).fold(0.0, f64::max),
+            "probe_max_step": tracks.iter().filter(|t| t.still).map(|t| t.max_step).fold(0.0, f64::max),
         });
         if let (Some(o), Some(e)) = (j.as_object_mut(), ext.as_object()) {
             o.extend(e.clone());

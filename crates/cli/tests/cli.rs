@@ -941,3 +941,148 @@ fn irradiance_at_points_under_a_sky_is_the_same_whether_the_records_hold_it() {
         "open floor: {far} vs π/2"
     );
 }
+
+/// The repository's `scenes/cube-in-box`.
+fn cube_in_box(file: &str) -> String {
+    format!(
+        "{}/../../scenes/cube-in-box/{file}",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+#[test]
+fn animate_writes_numbered_frames_same_seed_same_frames_and_compare_measures_them() {
+    let d = temp_dir("animate");
+    let anim = cube_in_box("animation.xml");
+    let run = |out: &str, mode: &str| {
+        ircache(
+            &[
+                "animate",
+                &anim,
+                "--frames",
+                "2..4",
+                "--width",
+                "24",
+                "--height",
+                "24",
+                "--spp",
+                "1",
+                "--cache-mode",
+                mode,
+                "-o",
+                out,
+                "-q",
+                "--stats",
+                "s.json",
+            ],
+            &d,
+        )
+    };
+    let o = run("a-###.exr", "temporal");
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in 2..=4 {
+        assert!(d.join(format!("a-{f:03}.exr")).is_file(), "frame {f}");
+    }
+    assert!(!d.join("a-001.exr").exists() && !d.join("a-005.exr").exists());
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.join("s.json")).unwrap()).unwrap();
+    assert_eq!(s["frames"].as_array().map(Vec::len), Some(3));
+    assert_eq!(s["cache_mode"], "temporal");
+    assert!(s["records_gathered"].as_u64() > Some(0));
+    // The same seed gives the same frames.
+    let o = run("b-###.exr", "temporal");
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in 2..=4 {
+        let a = std::fs::read(d.join(format!("a-{f:03}.exr"))).unwrap();
+        let b = std::fs::read(d.join(format!("b-{f:03}.exr"))).unwrap();
+        assert!(a == b, "frame {f} differs between two runs");
+    }
+    for mode in ["age", "per-frame"] {
+        let o = run(&format!("{mode}-#.exr"), mode);
+        assert!(o.status.success(), "{mode}: {}", stderr(&o));
+    }
+    // A sequence against itself: no error, no high-pass error; its flicker index is positive
+    // (the cube moves).
+    let o = ircache(
+        &[
+            "compare",
+            "--sequence",
+            "2..4",
+            "a-###.exr",
+            "b-###.exr",
+            "--json",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["rel_mse_trim"].as_f64(), Some(0.0));
+    assert_eq!(j["high_pass_error"].as_f64(), Some(0.0));
+    assert!(j["flicker_index"].as_f64() > Some(0.0));
+}
+
+#[test]
+fn animate_bad_input_names_the_place() {
+    let d = temp_dir("animate-bad");
+    let scene = cube_in_box("scene.xml");
+    let write = |name: &str, body: &str| {
+        std::fs::write(d.join(name), body).unwrap();
+        d.join(name).display().to_string()
+    };
+    let cases = [
+        (
+            write(
+                "unknown.xml",
+                &format!(
+                    "<animation version=\"1\" scene=\"{scene}\" frames=\"4\">\n  <move shape=\"Teapot\">\n    <key frame=\"0\"/>\n  </move>\n</animation>\n"
+                ),
+            ),
+            "unknown.xml:2:3",
+            "no shape with id \"Teapot\"",
+        ),
+        (
+            write(
+                "order.xml",
+                &format!(
+                    "<animation version=\"1\" scene=\"{scene}\" frames=\"4\">\n  <move shape=\"Cube\">\n    <key frame=\"3\"/>\n    <key frame=\"1\"/>\n  </move>\n</animation>\n"
+                ),
+            ),
+            "order.xml:4:5",
+            "increasing frame order",
+        ),
+        (
+            write(
+                "turn.xml",
+                &format!(
+                    "<animation version=\"1\" scene=\"{scene}\" frames=\"4\">\n  <move shape=\"Cube\">\n    <key frame=\"0\" rotate=\"0 1 0 0\"/>\n    <key frame=\"3\" rotate=\"0 1 0 200\"/>\n  </move>\n</animation>\n"
+                ),
+            ),
+            "turn.xml:4:5",
+            "less than 180°",
+        ),
+        (
+            write(
+                "missing.xml",
+                "<animation version=\"1\" scene=\"nowhere.xml\" frames=\"4\">\n</animation>\n",
+            ),
+            "missing.xml:1:1",
+            "nowhere.xml",
+        ),
+    ];
+    for (file, place, what) in cases {
+        let o = ircache(&["animate", &file, "-o", "f-#.exr", "-q"], &d);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{file}");
+        assert!(e.contains(place) && e.contains(what), "{file}: {e}");
+        assert!(!e.contains("panicked"), "{e}");
+        assert!(!d.join("f-0.exr").exists());
+    }
+    // A still scene needs --frames; an output name without # is refused before rendering.
+    let o = ircache(&["animate", &scene, "-q"], &d);
+    assert!(!o.status.success() && stderr(&o).contains("--frames"));
+    let o = ircache(
+        &["animate", &scene, "--frames", "0..1", "-o", "f.exr", "-q"],
+        &d,
+    );
+    assert!(!o.status.success() && stderr(&o).contains("run of #"));
+}

@@ -7,11 +7,13 @@
 //!   Δ²X_t = X_{t+1} − 2X_t + X_{t−1} and A, B two independent halves of the reference R: smooth
 //!   (linear in time) changes cancel, pops from record replacement do not, and the reference's
 //!   noise cancels in expectation (the product of two independent errors has mean zero).
-//! - [`ghost_mask`] and [`masked_rel_mse`]: the relative error near what moves.
+//! - [`ghost_mask`] and [`masked_rel_mse`]: relMSE_trim per frame, and near what moves.
 //! - [`probe_tracks`]: per probe, the largest |I_t/R_t − 1| and the largest step of that ratio
-//!   between frames, on small box-filtered windows (Fig. 5.10's "temporal accuracy").
+//!   between frames, on small box-filtered windows (Fig. 5.10's "temporal accuracy"), and
+//!   whether the probe stays on still surfaces (the reference's window never changes by more
+//!   than 10 % between frames: no moving silhouette crosses it).
 
-use crate::compare::{luminance, pixel_rel_mse};
+use crate::compare::{luminance, pixel_rel_mse, trim_keep};
 use crate::Image;
 
 /// Why a sequence cannot be measured.
@@ -212,8 +214,9 @@ pub fn ghost_mask(
     Ok(mask)
 }
 
-/// Mean over frames of relmse.py's per-pixel relMSE against `reference`, over the pixels of
-/// `mask` (all pixels when `None`).
+/// Mean over frames of relmse.py's relMSE_trim against `reference` (the per-pixel relMSE
+/// without each frame's worst 0.1 % of pixels: a path tracer's rare hits of a small bright
+/// emitter would otherwise decide it), over the pixels of `mask` (all pixels when `None`).
 ///
 /// # Errors
 /// Sequences of different lengths or sizes, or an empty sequence.
@@ -231,14 +234,17 @@ pub fn masked_rel_mse(
     same_size(&[frames, reference])?;
     let mut per_frame = Vec::with_capacity(frames.len());
     for (f, r) in frames.iter().zip(reference) {
-        let (mut s, mut n) = (0.0, 0usize);
-        for (i, (&a, &b)) in f.pixels.iter().zip(&r.pixels).enumerate() {
-            if mask.is_none_or(|m| m[i]) {
-                s += pixel_rel_mse(a, b);
-                n += 1;
-            }
-        }
-        per_frame.push(s / n.max(1) as f64);
+        let mut e: Vec<f64> = f
+            .pixels
+            .iter()
+            .zip(&r.pixels)
+            .enumerate()
+            .filter(|(i, _)| mask.is_none_or(|m| m[*i]))
+            .map(|(_, (&a, &b))| pixel_rel_mse(a, b))
+            .collect();
+        e.sort_unstable_by(f64::total_cmp);
+        let keep = trim_keep(e.len()).max(1).min(e.len());
+        per_frame.push(e[..keep].iter().sum::<f64>() / keep.max(1) as f64);
     }
     Ok(mean(&per_frame))
 }
@@ -254,6 +260,10 @@ pub struct ProbeTrack {
     pub max_error: f64,
     /// Largest |I_t/R_t − I_{t−1}/R_{t−1}|: a jump.
     pub max_step: f64,
+    /// The reference's window never changes by more than 10 % from one frame to the next: the
+    /// probe watches a still surface (a moving object's silhouette would make the ratio's
+    /// steps the reference's noise at an edge, not the cache's).
+    pub still: bool,
 }
 
 /// Tracks of the probes at `points`, each the mean over a (2r+1)² window.
@@ -288,10 +298,14 @@ pub fn probe_tracks(
         .iter()
         .map(|&(x, y)| {
             let (x, y) = (x.min(w - 1), y.min(h - 1));
+            let refs: Vec<f64> = reference
+                .iter()
+                .map(|r| window(r, x, y).max(1e-12))
+                .collect();
             let ratios: Vec<f64> = frames
                 .iter()
-                .zip(reference)
-                .map(|(f, r)| window(f, x, y) / window(r, x, y).max(1e-12))
+                .zip(&refs)
+                .map(|(f, r)| window(f, x, y) / r)
                 .collect();
             ProbeTrack {
                 x,
@@ -301,6 +315,7 @@ pub fn probe_tracks(
                     .windows(2)
                     .map(|q| (q[1] - q[0]).abs())
                     .fold(0.0, f64::max),
+                still: refs.windows(2).all(|q| (q[1] / q[0] - 1.0).abs() <= 0.1),
             }
         })
         .collect())
@@ -427,6 +442,32 @@ mod tests {
     }
 
     #[test]
+    fn masked_rel_mse_is_compare_s_rel_mse_trim_without_a_mask() {
+        let mut state = 7u64;
+        let mut noise = || {
+            state = ircache_math::rng::mix64(state);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut noisy = || {
+            let mut f = frame(40, 30, |_, _| 0.0);
+            for p in &mut f.pixels {
+                *p = Rgb::splat(0.5 + noise());
+            }
+            f
+        };
+        let a: Vec<Image> = (0..3).map(|_| noisy()).collect();
+        let b: Vec<Image> = (0..3).map(|_| noisy()).collect();
+        let want = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| crate::compare::compare(x, y).unwrap().rel_mse_trim)
+            .sum::<f64>()
+            / 3.0;
+        let got = masked_rel_mse(&a, &b, None).unwrap();
+        assert!((got - want).abs() < 1e-12 * want, "{got} vs {want}");
+    }
+
+    #[test]
     fn probe_tracks_find_the_jump() {
         let reference: Vec<Image> = (0..5).map(|_| frame(8, 8, |_, _| 2.0)).collect();
         let seq: Vec<Image> = (0..5)
@@ -435,5 +476,10 @@ mod tests {
         let tracks = probe_tracks(&seq, &reference, &[(3, 3)], 1).unwrap();
         assert!((tracks[0].max_error - 0.05).abs() < 1e-6);
         assert!((tracks[0].max_step - 0.05).abs() < 1e-6);
+        assert!(tracks[0].still);
+        // A reference that jumps by 20 % makes the probe not still.
+        let mut moving = reference.clone();
+        moving[2] = frame(8, 8, |_, _| 2.4);
+        assert!(!probe_tracks(&seq, &moving, &[(3, 3)], 1).unwrap()[0].still);
     }
 }

@@ -529,4 +529,93 @@ mod tests {
         assert!((p6 - t.motion(6.0).transform_point3(p0)).length() < 1e-5);
         assert_eq!(anim.shape_motion(1, 3.0, 6.0), Mat4::IDENTITY);
     }
+
+    /// Writes an animation of the repository's cube-in-box scene with `body` as its tracks.
+    fn animation_file(name: &str, body: &str) -> std::path::PathBuf {
+        let scene = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenes/cube-in-box/scene.xml"
+        );
+        let dir = std::env::temp_dir().join(format!("ircache-anim-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        std::fs::write(
+            &path,
+            format!(
+                "<animation version=\"1\" scene=\"{scene}\" frames=\"5\">\n{body}</animation>\n"
+            ),
+        )
+        .unwrap();
+        path
+    }
+
+    #[test]
+    fn camera_and_shape_tracks_move_the_scene() {
+        let path = animation_file(
+            "camera.xml",
+            "<camera><key frame=\"0\"/><key frame=\"4\" translate=\"0 0.4 0\"/></camera>\n\
+             <move shape=\"Light\"><key frame=\"0\"/><key frame=\"4\" translate=\"0.2 0 0\"/></move>\n",
+        );
+        let (desc, anim) = load_animation(&path, &[]).unwrap();
+        assert_eq!(anim.frames, 5);
+        let at2 = anim.scene_at(&desc, 2.0);
+        // The camera rose by half the final 0.4; its orientation kept.
+        let eye = |d: &SceneDesc| d.sensor.to_world.transform_point3(Vec3::ZERO);
+        assert!((eye(&at2) - eye(&desc) - Vec3::new(0.0, 0.2, 0.0)).length() < 1e-5);
+        assert_eq!(
+            at2.sensor.to_world.transform_vector3(Vec3::Z),
+            desc.sensor.to_world.transform_vector3(Vec3::Z)
+        );
+        // The light moved by 0.1 in x; every other shape stayed.
+        let light = desc
+            .shapes
+            .iter()
+            .position(|s| s.id.as_deref() == Some("Light"))
+            .unwrap();
+        for (i, (a, b)) in desc.shapes.iter().zip(&at2.shapes).enumerate() {
+            let (Geometry::Mesh(a), Geometry::Mesh(b)) = (&a.geometry, &b.geometry) else {
+                panic!("meshes")
+            };
+            let want = if i == light {
+                Vec3::new(0.1, 0.0, 0.0)
+            } else {
+                Vec3::ZERO
+            };
+            for (p, q) in a.positions.iter().zip(&b.positions) {
+                assert!((*q - *p - want).length() < 1e-5, "shape {i}");
+            }
+        }
+        assert!(anim.is_moving(light) && anim.moves_shapes());
+    }
+
+    #[test]
+    fn bad_tracks_are_errors_at_their_place() {
+        let cases = [
+            (
+                "<camera><key frame=\"0\" scale=\"2\"/></camera>\n",
+                "2:",
+                "cannot be scaled",
+            ),
+            ("<move shape=\"Cube\"></move>\n", "2:", "at least one <key>"),
+            (
+                "<move shape=\"Cube\"><key frame=\"0\" translate=\"1 2\"/></move>\n",
+                "2:",
+                "expected 3",
+            ),
+            ("<spin shape=\"Cube\"/>\n", "2:", "unexpected <spin>"),
+            (
+                "<move shape=\"Cube\" speed=\"2\"><key frame=\"0\"/></move>\n",
+                "2:",
+                "unexpected attribute speed",
+            ),
+        ];
+        for (i, (body, line, what)) in cases.iter().enumerate() {
+            let path = animation_file(&format!("bad{i}.xml"), body);
+            let e = load_animation(&path, &[]).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("bad{i}.xml:{line}")) && e.contains(what),
+                "{e}"
+            );
+        }
+    }
 }

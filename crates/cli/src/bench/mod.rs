@@ -13,12 +13,14 @@
 //! - `splat`: radiance cache splatting against the lookup (see [`splat`]).
 //! - `peers`: ircache's `path` and `ic` against Mitsuba 3 with `independent` and `multijitter`,
 //!   Mitsuba rendered at more samples until it reaches `ic`'s error (see [`peers`]).
+//! - `temporal`: animations, the cache kept over time, flicker measured (see [`temporal`]).
 
 mod cache_vs_path;
 mod peers;
 mod plane;
 mod radiance;
 mod splat;
+mod temporal;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -51,7 +53,9 @@ pub struct BenchArgs {
     /// multijitter, by rendering), cache (the cache against path tracing by rendering, and the
     /// cost of depth), radiance (radiance caching against tracing the same lobes and against
     /// Mitsuba 3, by rendering), splat (splatting against the lookup: per record, per frame),
-    /// plane (records from a rasterised plane against the stratified gather, Table 4.1).
+    /// plane (records from a rasterised plane against the stratified gather, Table 4.1),
+    /// temporal (animations: the cache kept over time against a cache per frame and against
+    /// Mitsuba 3 per frame, flicker measured).
     #[arg(long, default_value = "all")]
     pub only: String,
 }
@@ -123,6 +127,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "plane" {
         plane::run_all(&shared)?;
+    }
+    if args.only == "all" || args.only == "temporal" {
+        temporal::run_all(!args.no_mitsuba)?;
     }
     Ok(())
 }
@@ -401,9 +408,16 @@ print("ircache-mitsuba-seconds", time.time() - t)
 "#,
         scene = scene.display().to_string()
     );
+    run_mitsuba_script(&script, &[])
+}
+
+/// Runs a Python script driving Mitsuba 3 with `args`; returns the seconds it prints on its
+/// `ircache-mitsuba-seconds` line.
+fn run_mitsuba_script(script: &str, args: &[&std::ffi::OsStr]) -> Result<f64> {
     let out = std::process::Command::new("python3")
         .arg("-c")
         .arg(script)
+        .args(args)
         .envs(llvm_path().map(|p| ("DRJIT_LIBLLVM_PATH", p)))
         .output()
         .context("running python3")?;
@@ -425,6 +439,109 @@ print("ircache-mitsuba-seconds", time.time() - t)
         .unwrap_or("")
         .parse::<f64>()
         .with_context(|| format!("parsing Mitsuba's time from {s:?}"))
+}
+
+/// Renders frames `frames` of an animation with Mitsuba 3 (`multijitter` at `spp`, in passes
+/// of at most 64, seeds from `seed`, the same for every frame as `ircache animate`'s pixel
+/// samples and Mitsuba's default seed are), each frame's shapes moved by `motions` (per
+/// frame, (shape id, row-major world-to-world matrix)) through `mi.traverse`: meshes' vertices
+/// (and normals), spheres' `to_world`. Writes each frame to `pattern`'s name for it; returns
+/// the seconds of the frames' updates and renders (kernels compiled by a warm-up render first).
+pub(super) fn mitsuba_render_frames(
+    scene: &Path,
+    (width, height): (u32, u32),
+    (first, _): (u32, u32),
+    motions: &[Vec<(String, [f32; 16])>],
+    spp: u32,
+    seed: u32,
+    pattern: &Path,
+) -> Result<f64> {
+    let frames: Vec<serde_json::Value> = motions
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let f = first + i as u32;
+            Ok(serde_json::json!({
+                "frame": f,
+                "out": crate::animate::frame_path(pattern, f)?.display().to_string(),
+                "motions": m.iter().map(|(id, mat)| (id.clone(), mat.to_vec())).collect::<std::collections::BTreeMap<_, _>>(),
+            }))
+        })
+        .collect::<Result<_>>()?;
+    // Scenes name their sampler either as a `$sampler` default or literally (multijitter).
+    let text = std::fs::read_to_string(scene)?;
+    let mut defines = serde_json::json!({
+        "resx": width.to_string(), "resy": height.to_string(), "integrator": "path",
+    });
+    if text.contains("<default name=\"sampler\"") {
+        defines["sampler"] = "multijitter".into();
+    } else if !text.contains("<sampler type=\"multijitter\"") {
+        bail!(
+            "{}: its sampler is not multijitter and not a $sampler default",
+            scene.display()
+        );
+    }
+    let job = serde_json::json!({
+        "scene": scene.display().to_string(),
+        "defines": defines,
+        "spp": spp,
+        "seed": seed,
+        "frames": frames,
+    });
+    let job_file = std::env::temp_dir().join(format!("ircache-frames-{}.json", std::process::id()));
+    std::fs::write(&job_file, serde_json::to_string(&job)?)?;
+    let script = r#"
+import json, sys, time, numpy as np, mitsuba as mi
+mi.set_variant('llvm_ad_rgb')
+import drjit as dr
+job = json.load(open(sys.argv[1]))
+d = job['defines']
+s = mi.load_file(job['scene'], **d)
+params = mi.traverse(s)
+ids = sorted({k for f in job['frames'] for k in f['motions']})
+base = {}
+for sid in ids:
+    vp = sid + '.vertex_positions'
+    if vp in params:
+        n = sid + '.vertex_normals'
+        normals = np.array(params[n]).reshape(-1, 3) if n in params and dr.width(params[n]) > 0 else None
+        base[sid] = ('mesh', np.array(params[vp]).reshape(-1, 3), normals)
+    elif sid + '.to_world' in params:
+        t = params[sid + '.to_world']
+        base[sid] = ('to_world', np.array(t.matrix).reshape(4, 4), type(t))
+    else:
+        raise SystemExit('no parameters for shape ' + sid)
+img = mi.render(s, spp=4); dr.eval(img); dr.sync_thread()
+spp, total = job['spp'], 0.0
+for f in job['frames']:
+    t = time.time()
+    for sid, m in f['motions'].items():
+        M = np.array(m, dtype=np.float64).reshape(4, 4)
+        kind = base[sid]
+        if kind[0] == 'mesh':
+            p = kind[1] @ M[:3, :3].T + M[:3, 3]
+            params[sid + '.vertex_positions'] = mi.Float(p.astype(np.float32).ravel())
+            if kind[2] is not None:
+                n = kind[2] @ np.linalg.inv(M[:3, :3])
+                n /= np.linalg.norm(n, axis=1, keepdims=True)
+                params[sid + '.vertex_normals'] = mi.Float(n.astype(np.float32).ravel())
+        else:
+            params[sid + '.to_world'] = kind[2](mi.Matrix4f(M @ kind[1]))
+    params.update()
+    left, passes, acc = spp, 0, None
+    while left > 0:
+        n = min(64, left)
+        img = mi.render(s, spp=n, seed=job['seed'] * 1009 + passes) * (n / spp)
+        acc = img if acc is None else acc + img
+        dr.eval(acc); dr.sync_thread()
+        left -= n; passes += 1
+    total += time.time() - t
+    mi.Bitmap(acc).write(f['out'])
+print("ircache-mitsuba-seconds", total)
+"#;
+    let seconds = run_mitsuba_script(script, &[job_file.as_os_str()]);
+    let _ = std::fs::remove_file(&job_file);
+    seconds
 }
 
 /// Gather-ray throughput of the irradiance cache on Sponza.

@@ -1,0 +1,293 @@
+//! `ircache bench --only temporal`: animations (issue 13) with the cache kept over time, by
+//! rendering whole sequences, in the same run.
+//!
+//! For each animation: per-frame references from Mitsuba 3 (`multijitter`, two independent
+//! halves of `REFERENCE_SPP` each, the frames' motions applied to the shapes through
+//! `mi.traverse`, the matrices computed by ircache's own animation code); `ircache animate` (a
+//! process each, wall time) with the temporal cache (interpolated and extrapolated temporal
+//! gradients), the age-based cache and a cache per frame; the measures of
+//! `ircache_image::flicker`; then Mitsuba `multijitter` per frame at 4, 8, 16, … spp until its
+//! mean relMSE reaches the temporal cache's, the equal-error time interpolated between the two
+//! sequences that bracket it (log error against log time).
+
+use super::mitsuba_render_frames;
+use super::radiance::own_scenes;
+use anyhow::{bail, Context, Result};
+use ircache_image::flicker::{
+    flicker_index, ghost_mask, high_pass_error, masked_rel_mse, probe_tracks,
+};
+use ircache_image::Image;
+use ircache_scene::animation::{load_animation, Target};
+use std::path::Path;
+use std::time::Instant;
+
+/// Samples per pixel of each half of the references.
+const REFERENCE_SPP: u32 = 512;
+/// Samples per pixel of the cache's renders.
+const SPP: u32 = 16;
+
+/// One animation to measure.
+struct Case {
+    /// Label.
+    name: &'static str,
+    /// The `<animation>` file under `scenes/`.
+    file: &'static str,
+    /// Frames (both included).
+    frames: (u32, u32),
+    /// Image size.
+    size: (u32, u32),
+}
+
+/// What a sequence measured.
+#[derive(Clone, Copy, Debug, Default)]
+struct Measured {
+    seconds: f64,
+    flicker: f64,
+    high_pass: f64,
+    rel_mse: f64,
+    near_motion: f64,
+    probe_step: f64,
+    probe_error: f64,
+}
+
+fn read_frames(pattern: &Path, (a, b): (u32, u32)) -> Result<Vec<Image>> {
+    (a..=b)
+        .map(|f| {
+            let p = crate::animate::frame_path(pattern, f)?;
+            ircache_image::read_image(&p).with_context(|| format!("reading {}", p.display()))
+        })
+        .collect()
+}
+
+struct Reference {
+    a: Vec<Image>,
+    b: Vec<Image>,
+    mean: Vec<Image>,
+    mask: Vec<bool>,
+}
+
+fn measure(frames: &[Image], seconds: f64, r: &Reference) -> Result<Measured> {
+    let (w, h) = (frames[0].width, frames[0].height);
+    let probes: Vec<(usize, usize)> = (0..16)
+        .map(|i| ((2 * (i % 4) + 1) * w / 8, (2 * (i / 4) + 1) * h / 8))
+        .collect();
+    let tracks = probe_tracks(frames, &r.mean, &probes, 2)?;
+    let masked = r.mask.iter().any(|&m| m);
+    Ok(Measured {
+        seconds,
+        flicker: flicker_index(frames)?,
+        high_pass: high_pass_error(frames, &r.a, &r.b)?,
+        rel_mse: masked_rel_mse(frames, &r.mean, None)?,
+        near_motion: if masked {
+            masked_rel_mse(frames, &r.mean, Some(&r.mask))?
+        } else {
+            f64::NAN
+        },
+        probe_step: tracks
+            .iter()
+            .filter(|t| t.still)
+            .map(|t| t.max_step)
+            .fold(0.0, f64::max),
+        probe_error: tracks
+            .iter()
+            .filter(|t| t.still)
+            .map(|t| t.max_error)
+            .fold(0.0, f64::max),
+    })
+}
+
+fn show(label: &str, m: &Measured, extra: &str) {
+    println!(
+        "  {label:<34} {:>8.1} s  FI {:.2e}  FHP {:.2e}  relMSE_trim {:.3e}  near motion {:.3e}  probe step {:.3} err {:.3}  {extra}",
+        m.seconds, m.flicker, m.high_pass, m.rel_mse, m.near_motion, m.probe_step, m.probe_error
+    );
+}
+
+/// Runs the comparison.
+pub fn run_all(with_mitsuba: bool) -> Result<()> {
+    if !with_mitsuba {
+        println!("\nanimations: skipped (they need Mitsuba 3 for the references)");
+        return Ok(());
+    }
+    let own = own_scenes();
+    let cases = [
+        Case {
+            name: "still box",
+            file: "cube-in-box/still.xml",
+            frames: (0, 29),
+            size: (128, 128),
+        },
+        Case {
+            name: "cube in a box",
+            file: "cube-in-box/animation.xml",
+            frames: (0, 47),
+            size: (128, 128),
+        },
+        Case {
+            name: "moving light",
+            file: "cube-in-box/moving-light.xml",
+            frames: (0, 47),
+            size: (128, 128),
+        },
+        Case {
+            name: "lamp room, rolling sphere",
+            file: "lamp-room/animation.xml",
+            frames: (0, 23),
+            size: (128, 96),
+        },
+    ];
+    let work = std::env::temp_dir().join("ircache-bench-temporal");
+    std::fs::create_dir_all(&work)?;
+    let exe = std::env::current_exe()?;
+    println!(
+        "\nanimations ({SPP} spp; references Mitsuba multijitter 2 × {REFERENCE_SPP} spp per frame; \
+         FI flicker index, FHP high-pass temporal error, relMSE_trim per frame, near motion: pixels \
+         within 1/32 width of a >10 % change; probe: the largest step and error of 16 probes on a 4×4 grid, those no moving silhouette crosses)"
+    );
+    for case in cases {
+        let file = own.join(case.file);
+        let (desc, animation) = load_animation(&file, &[])?;
+        let dir = work.join(case.name.replace([' ', ','], "-"));
+        std::fs::create_dir_all(&dir)?;
+        let (w, h) = case.size;
+        println!(
+            "\n{} ({}, frames {}..{}, {w}×{h}, max_depth {})",
+            case.name, case.file, case.frames.0, case.frames.1, desc.integrator.max_depth
+        );
+        // The frames' motions, from ircache's own animation code.
+        let motions: Vec<Vec<(String, [f32; 16])>> = (case.frames.0..=case.frames.1)
+            .map(|f| {
+                animation
+                    .tracks
+                    .iter()
+                    .filter_map(|t| match t.target {
+                        Target::Shape(i) => Some((
+                            desc.shapes[i].id.clone().unwrap_or_default(),
+                            t.motion(f as f32).transpose().to_cols_array(),
+                        )),
+                        Target::Camera => None,
+                    })
+                    .collect()
+            })
+            .collect();
+        let scene_file = desc.source.clone();
+        let mitsuba = |spp: u32, seed: u32, pattern: &Path| -> Result<f64> {
+            mitsuba_render_frames(
+                &scene_file,
+                case.size,
+                case.frames,
+                &motions,
+                spp,
+                seed,
+                pattern,
+            )
+        };
+        // References: reused when a run with the same settings made them.
+        let (ra, rb) = (dir.join("ref-a-###.exr"), dir.join("ref-b-###.exr"));
+        let last = crate::animate::frame_path(&rb, case.frames.1)?;
+        if !last.exists() {
+            let t = Instant::now();
+            mitsuba(REFERENCE_SPP, 1, &ra)?;
+            mitsuba(REFERENCE_SPP, 2, &rb)?;
+            println!("  references made in {:.0} s", t.elapsed().as_secs_f64());
+        }
+        let a = read_frames(&ra, case.frames)?;
+        let b = read_frames(&rb, case.frames)?;
+        let mean: Vec<Image> = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| {
+                let mut m = x.clone();
+                for (p, q) in m.pixels.iter_mut().zip(&y.pixels) {
+                    *p = (*p + *q) * 0.5;
+                }
+                m
+            })
+            .collect();
+        let mask = ghost_mask(&mean, 0.1, (w as usize / 32).max(1))?;
+        let reference = Reference { a, b, mean, mask };
+        let frames_arg = format!("{}..{}", case.frames.0, case.frames.1);
+        let mut temporal = None;
+        for (label, mode, gradients) in [
+            ("temporal, interpolated", "temporal", "interpolated"),
+            ("temporal, extrapolated", "temporal", "extrapolated"),
+            ("age-based", "age", "off"),
+            ("cache per frame", "per-frame", "off"),
+        ] {
+            let pattern = dir.join(format!("{mode}-{gradients}-###.exr"));
+            let stats = dir.join(format!("{mode}-{gradients}.json"));
+            let t = Instant::now();
+            let out = std::process::Command::new(&exe)
+                .args([
+                    "animate",
+                    &file.display().to_string(),
+                    "--frames",
+                    &frames_arg,
+                ])
+                .args(["--width", &w.to_string(), "--height", &h.to_string()])
+                .args(["--spp", &SPP.to_string(), "--integrator", "ic", "-q"])
+                .args(["--cache-mode", mode, "--temporal-gradients", gradients])
+                .arg("-o")
+                .arg(&pattern)
+                .arg("--stats")
+                .arg(&stats)
+                .output()?;
+            let seconds = t.elapsed().as_secs_f64();
+            if !out.status.success() {
+                bail!("ircache animate: {}", String::from_utf8_lossy(&out.stderr));
+            }
+            let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats)?)?;
+            let m = measure(&read_frames(&pattern, case.frames)?, seconds, &reference)?;
+            show(
+                label,
+                &m,
+                &format!(
+                    "records {} (+{} estimates), cache {:.1} s",
+                    s["records_gathered"],
+                    s["estimates"],
+                    s["cache_seconds"].as_f64().unwrap_or(0.0)
+                ),
+            );
+            if mode == "temporal" && temporal.is_none() {
+                temporal = Some(m);
+            }
+        }
+        let temporal = temporal.context("the temporal run")?;
+        // Mitsuba at more samples until it reaches the temporal cache's relMSE.
+        let mut series: Vec<Measured> = Vec::new();
+        let mut spp = 4;
+        loop {
+            let pattern = dir.join(format!("mitsuba-{spp}-###.exr"));
+            let seconds = mitsuba(spp, 3, &pattern)?;
+            let m = measure(&read_frames(&pattern, case.frames)?, seconds, &reference)?;
+            show(&format!("Mitsuba multijitter, {spp} spp"), &m, "");
+            series.push(m);
+            if m.rel_mse <= temporal.rel_mse || seconds > 30.0 * temporal.seconds || spp >= 4096 {
+                break;
+            }
+            spp *= 2;
+        }
+        let equal = equal_error_seconds(&series, temporal.rel_mse);
+        match equal {
+            Some(t) => println!(
+                "  Mitsuba multijitter at the temporal cache's relMSE: {t:.1} s, {:.2}× the temporal cache's {:.1} s",
+                t / temporal.seconds,
+                temporal.seconds
+            ),
+            None => println!("  Mitsuba multijitter did not reach the temporal cache's relMSE within the cap"),
+        }
+    }
+    Ok(())
+}
+
+/// The time at which the series reaches `error`, interpolated between the two sequences that
+/// bracket it in log error against log time; `None` when none reaches it.
+fn equal_error_seconds(series: &[Measured], error: f64) -> Option<f64> {
+    let hit = series.iter().position(|m| m.rel_mse <= error)?;
+    if hit == 0 {
+        return Some(series[0].seconds);
+    }
+    let (p, q) = (&series[hit - 1], &series[hit]);
+    let s = (error.ln() - p.rel_mse.ln()) / (q.rel_mse.ln() - p.rel_mse.ln());
+    Some((p.seconds.ln() + s * (q.seconds.ln() - p.seconds.ln())).exp())
+}
