@@ -104,7 +104,7 @@ fn read_sequence(
 /// `ircache compare --sequence`: the measures of `ircache_image::flicker`.
 fn sequence(args: &CompareArgs, frames: (u32, u32)) -> Result<()> {
     use ircache_image::flicker::{
-        flicker_index, ghost_mask, high_pass_error, masked_rel_mse, probe_tracks,
+        emitter_mask, flicker_index, ghost_mask, high_pass_error, masked_rel_mse, probe_tracks,
     };
     let blur = |seq: Vec<ircache_image::Image>| -> Vec<ircache_image::Image> {
         if args.blur > 0.0 {
@@ -151,7 +151,7 @@ fn sequence(args: &CompareArgs, frames: (u32, u32)) -> Result<()> {
         let masked = mask.iter().filter(|&&m| m).count();
         let ext = serde_json::json!({
             "reference_flicker_index": flicker_index(&mean)?,
-            "high_pass_error": if images.len() >= 3 { Some(high_pass_error(&images, &a, &b)?) } else { None },
+            "high_pass_error": if images.len() >= 3 { Some(high_pass_error(&images, &a, &b, Some(&emitter_mask(&mean)?))?) } else { None },
             "rel_mse_trim": masked_rel_mse(&images, &mean, None)?,
             "rel_mse_trim_near_motion": if masked > 0 { Some(masked_rel_mse(&images, &mean, Some(&mask))?) } else { None },
             "pixels_near_motion": masked,

@@ -7,6 +7,8 @@
 //!   Δ²X_t = X_{t+1} − 2X_t + X_{t−1} and A, B two independent halves of the reference R: smooth
 //!   (linear in time) changes cancel, pops from record replacement do not, and the reference's
 //!   noise cancels in expectation (the product of two independent errors has mean zero).
+//!   Emitters in view are left out ([`emitter_mask`]): their edges' coverage noise at a few
+//!   samples per pixel would be all it measures where a light moves.
 //! - [`ghost_mask`] and [`masked_rel_mse`]: relMSE_trim per frame, and near what moves.
 //! - [`probe_tracks`]: per probe, the largest |I_t/R_t − 1| and the largest step of that ratio
 //!   between frames, on small box-filtered windows (Fig. 5.10's "temporal accuracy"), and
@@ -126,12 +128,17 @@ fn second_differences(l: &[Vec<f64>]) -> Vec<Vec<f64>> {
 
 /// The high-pass temporal error FHP against the reference halves `a` and `b` (the same
 /// sequence twice for a reference without halves: then the reference's noise is not
-/// cancelled). The mean product can come out negative where the error is below the
-/// reference's noise; FHP is then 0.
+/// cancelled), over the pixels `exclude` does not mark. The mean product can come out negative
+/// where the error is below the reference's noise; FHP is then 0.
 ///
 /// # Errors
 /// Fewer than three frames, or sequences of different lengths or sizes.
-pub fn high_pass_error(frames: &[Image], a: &[Image], b: &[Image]) -> Result<f64, FlickerError> {
+pub fn high_pass_error(
+    frames: &[Image],
+    a: &[Image],
+    b: &[Image],
+    exclude: Option<&[bool]>,
+) -> Result<f64, FlickerError> {
     if frames.len() < 3 {
         return Err(FlickerError::TooFewFrames {
             found: frames.len(),
@@ -150,7 +157,10 @@ pub fn high_pass_error(frames: &[Image], a: &[Image], b: &[Image]) -> Result<f64
     let mut sum = 0.0;
     let mut count = 0usize;
     for ((i, a), b) in di.iter().zip(&da).zip(&db) {
-        for ((x, y), z) in i.iter().zip(a).zip(b) {
+        for (px, ((x, y), z)) in i.iter().zip(a).zip(b).enumerate() {
+            if exclude.is_some_and(|m| m[px]) {
+                continue;
+            }
             sum += (x - y) * (x - z);
             count += 1;
         }
@@ -164,6 +174,52 @@ pub fn high_pass_error(frames: &[Image], a: &[Image], b: &[Image]) -> Result<f64
     Ok((sum / count.max(1) as f64).max(0.0).sqrt() / level.max(f64::MIN_POSITIVE))
 }
 
+/// Emitters in view: pixels brighter than 20 times their frame's median luminance in any
+/// reference frame, dilated by one pixel (their edges).
+///
+/// # Errors
+/// No frames, or frames of different sizes.
+pub fn emitter_mask(reference: &[Image]) -> Result<Vec<bool>, FlickerError> {
+    if reference.is_empty() {
+        return Err(FlickerError::TooFewFrames {
+            found: 0,
+            needed: 1,
+        });
+    }
+    same_size(&[reference])?;
+    let (w, h) = (reference[0].width, reference[0].height);
+    let mut bright = vec![false; w * h];
+    for f in reference {
+        let l = lum(f);
+        let mut sorted = l.clone();
+        sorted.sort_unstable_by(f64::total_cmp);
+        let median = sorted[sorted.len() / 2];
+        for (b, v) in bright.iter_mut().zip(&l) {
+            *b |= *v > 20.0 * median.max(f64::MIN_POSITIVE);
+        }
+    }
+    Ok(dilate(&bright, w, h, 1))
+}
+
+/// Marks every pixel within `d` pixels (a square) of a marked one.
+fn dilate(marked: &[bool], w: usize, h: usize, d: usize) -> Vec<bool> {
+    let d = d as isize;
+    let mut out = vec![false; w * h];
+    for y in 0..h as isize {
+        for x in 0..w as isize {
+            if !marked[(y * w as isize + x) as usize] {
+                continue;
+            }
+            for yy in (y - d).max(0)..=(y + d).min(h as isize - 1) {
+                for xx in (x - d).max(0)..=(x + d).min(w as isize - 1) {
+                    out[(yy * w as isize + xx) as usize] = true;
+                }
+            }
+        }
+    }
+    out
+}
+
 /// The pixels near what moves: where the reference's luminance ranges over more than
 /// `threshold` of its mean across the sequence (after a 3×3 box filter against its noise),
 /// dilated by `dilate` pixels.
@@ -173,7 +229,7 @@ pub fn high_pass_error(frames: &[Image], a: &[Image], b: &[Image]) -> Result<f64
 pub fn ghost_mask(
     reference: &[Image],
     threshold: f64,
-    dilate: usize,
+    dilate_by: usize,
 ) -> Result<Vec<bool>, FlickerError> {
     if reference.is_empty() {
         return Err(FlickerError::TooFewFrames {
@@ -197,21 +253,7 @@ pub fn ghost_mask(
         let m = sum / boxed.len() as f64;
         *c = hi - lo > threshold * m.max(1e-12);
     }
-    let d = dilate as isize;
-    let mut mask = vec![false; w * h];
-    for y in 0..h as isize {
-        for x in 0..w as isize {
-            if !changing[(y * w as isize + x) as usize] {
-                continue;
-            }
-            for yy in (y - d).max(0)..=(y + d).min(h as isize - 1) {
-                for xx in (x - d).max(0)..=(x + d).min(w as isize - 1) {
-                    mask[(yy * w as isize + xx) as usize] = true;
-                }
-            }
-        }
-    }
-    Ok(mask)
+    Ok(dilate(&changing, w, h, dilate_by))
 }
 
 /// Mean over frames of relmse.py's relMSE_trim against `reference` (the per-pixel relMSE
@@ -374,7 +416,7 @@ mod tests {
         let drifting: Vec<Image> = (0..8)
             .map(|t| frame(4, 4, |_, _| 1.2 + 0.12 * t as f32))
             .collect();
-        assert!(high_pass_error(&drifting, &reference, &reference).unwrap() < 1e-6);
+        assert!(high_pass_error(&drifting, &reference, &reference, None).unwrap() < 1e-6);
         // A jump of 0.1 at frame 4 gives second differences +0.1 and −0.1.
         let popping: Vec<Image> = (0..8)
             .map(|t| {
@@ -383,7 +425,7 @@ mod tests {
                 })
             })
             .collect();
-        let fhp = high_pass_error(&popping, &reference, &reference).unwrap();
+        let fhp = high_pass_error(&popping, &reference, &reference, None).unwrap();
         // mean of d² over 6 second differences, two of them ±0.1: √(0.02/6) / mean(R) (1.35).
         let want = (0.02f64 / 6.0).sqrt() / 1.35;
         assert!((fhp - want).abs() < 1e-5 * want, "{fhp} vs {want}");
@@ -415,8 +457,8 @@ mod tests {
                 .collect()
         };
         let (a, b) = (half(), half());
-        let cancelled = high_pass_error(&truth, &a, &b).unwrap();
-        let plain = high_pass_error(&truth, &a, &a).unwrap();
+        let cancelled = high_pass_error(&truth, &a, &b, None).unwrap();
+        let plain = high_pass_error(&truth, &a, &a, None).unwrap();
         assert!(plain > 0.1, "{plain}");
         assert!(cancelled < 0.3 * plain, "{cancelled} vs {plain}");
     }
@@ -465,6 +507,23 @@ mod tests {
             / 3.0;
         let got = masked_rel_mse(&a, &b, None).unwrap();
         assert!((got - want).abs() < 1e-12 * want, "{got} vs {want}");
+    }
+
+    #[test]
+    fn emitter_mask_leaves_out_a_moving_light_from_the_high_pass_error() {
+        // A light (100) moving a pixel a frame over a dim wall (0.1); the frames get the wall
+        // right and the light's position wrong by a pixel on odd frames.
+        let light_at =
+            |t: usize| move |x: usize, y: usize| if y == 4 && x == t + 2 { 100.0 } else { 0.1 };
+        let reference: Vec<Image> = (0..6).map(|t| frame(12, 8, light_at(t))).collect();
+        let frames: Vec<Image> = (0..6).map(|t| frame(12, 8, light_at(t + t % 2))).collect();
+        let mask = emitter_mask(&reference).unwrap();
+        assert!(mask[4 * 12 + 2] && mask[3 * 12 + 3] && !mask[0]);
+        assert!(high_pass_error(&frames, &reference, &reference, None).unwrap() > 1.0);
+        assert_eq!(
+            high_pass_error(&frames, &reference, &reference, Some(&mask)).unwrap(),
+            0.0
+        );
     }
 
     #[test]

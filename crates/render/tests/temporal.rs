@@ -217,3 +217,93 @@ fn moving_cube_temporal_cache_gathers_under_a_third_of_a_cache_per_frame() {
     // With the estimates, every hemisphere gathered still stays below the per-frame cache's.
     assert!(gathers(&temporal) < p);
 }
+
+/// `scenes/cornell-rough` (rough metal, rough plastics) with radiance caching on, its short box
+/// sliding 0.1 over `frames` frames.
+fn rough_with_radiance(frames: u32) -> (SceneDesc, Animation) {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/cornell-rough/scene.xml"
+    );
+    let dir = std::env::temp_dir().join(format!("ircache-temporal-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("rough.xml");
+    std::fs::write(
+        &path,
+        format!(
+            "<animation version=\"1\" scene=\"{scene}\" frames=\"{frames}\">\n\
+             <move shape=\"ShortBox\"><key frame=\"0\"/><key frame=\"{}\" translate=\"0.1 0 0\"/></move>\n\
+             </animation>\n",
+            frames - 1
+        ),
+    )
+    .unwrap();
+    let (mut desc, anim) =
+        load_animation(&path, &[("max_depth".into(), "3".into())]).expect("loads");
+    desc.integrator.kind = "irrcache".into();
+    desc.integrator.extra.push((
+        "radiance_cache".into(),
+        ircache_scene::ParamValue::String("on".into()),
+        ircache_scene::SourceLocation {
+            file: std::sync::Arc::new(path.clone()),
+            line: 1,
+            column: 1,
+        },
+    ));
+    desc.sensor.film.width = 32;
+    desc.sensor.film.height = 32;
+    desc.sensor.spp = 1;
+    (desc, anim)
+}
+
+#[test]
+fn radiance_records_keep_their_coefficients_over_time_and_renew_on_moving_shapes() {
+    let (desc, anim) = rough_with_radiance(6);
+    let short_box = desc
+        .shapes
+        .iter()
+        .position(|s| s.id.as_deref() == Some("ShortBox"))
+        .unwrap() as u32;
+    let p = params(CacheMode::Temporal);
+    // Still: the coefficients' estimate of the next frame equals them, so radiance records live
+    // the longest life too.
+    let (still, _, _) = run(&desc, &Animation::default(), p, 3, false);
+    let with = |c: &SequenceCache| {
+        (0..c.records.len())
+            .filter(|&i| c.radiance[i].is_some())
+            .count()
+    };
+    assert!(with(&still) > 10, "{} radiance records", with(&still));
+    for (r, c) in still.records.iter().zip(&still.radiance) {
+        if c.is_some() && r.born < 2 {
+            assert_eq!(r.last - r.born, p.max_lifespan - 1);
+        }
+    }
+    // Moving: records on the sliding box that hold radiance live one frame; the frames' caches
+    // point every record at its own coefficients; the images are finite.
+    let (moving, images, _) = run(&desc, &anim, p, 6, true);
+    let mut on_box = 0;
+    for (r, c) in moving.records.iter().zip(&moving.radiance) {
+        if c.is_some() && r.site.point.it.shape == short_box {
+            assert_eq!(
+                r.last, r.born,
+                "a radiance record on the moving box lived on"
+            );
+            on_box += 1;
+        }
+    }
+    assert!(on_box > 0);
+    let pool = rayon::ThreadPoolBuilder::new().build().unwrap();
+    let scene = Scene::build(&anim.scene_at(&desc, 4.0)).unwrap();
+    let c = moving.cache_at(4, &scene, &anim, &pool).unwrap();
+    let held = c.levels[0]
+        .records()
+        .iter()
+        .filter(|r| r.radiance != ircache_render::irradiance_cache::record::NO_RADIANCE)
+        .count();
+    assert_eq!(held, c.radiance_records.len());
+    assert!(held > 10);
+    for img in &images {
+        assert!(img.pixels.iter().all(|p| p.is_finite()));
+    }
+}

@@ -58,6 +58,9 @@ pub struct BenchArgs {
     /// Mitsuba 3 per frame, flicker measured).
     #[arg(long, default_value = "all")]
     pub only: String,
+    /// temporal: only the animations whose name contains this (still, cube, light, lamp).
+    #[arg(long)]
+    pub case: Option<String>,
 }
 
 /// Finds the shared folder with the scenes and references.
@@ -129,7 +132,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         plane::run_all(&shared)?;
     }
     if args.only == "all" || args.only == "temporal" {
-        temporal::run_all(!args.no_mitsuba)?;
+        temporal::run_all(!args.no_mitsuba, args.case.as_deref())?;
     }
     Ok(())
 }

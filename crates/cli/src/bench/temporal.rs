@@ -14,7 +14,7 @@ use super::mitsuba_render_frames;
 use super::radiance::own_scenes;
 use anyhow::{bail, Context, Result};
 use ircache_image::flicker::{
-    flicker_index, ghost_mask, high_pass_error, masked_rel_mse, probe_tracks,
+    emitter_mask, flicker_index, ghost_mask, high_pass_error, masked_rel_mse, probe_tracks,
 };
 use ircache_image::Image;
 use ircache_scene::animation::{load_animation, Target};
@@ -64,6 +64,7 @@ struct Reference {
     b: Vec<Image>,
     mean: Vec<Image>,
     mask: Vec<bool>,
+    emitters: Vec<bool>,
 }
 
 fn measure(frames: &[Image], seconds: f64, r: &Reference) -> Result<Measured> {
@@ -76,7 +77,7 @@ fn measure(frames: &[Image], seconds: f64, r: &Reference) -> Result<Measured> {
     Ok(Measured {
         seconds,
         flicker: flicker_index(frames)?,
-        high_pass: high_pass_error(frames, &r.a, &r.b)?,
+        high_pass: high_pass_error(frames, &r.a, &r.b, Some(&r.emitters))?,
         rel_mse: masked_rel_mse(frames, &r.mean, None)?,
         near_motion: if masked {
             masked_rel_mse(frames, &r.mean, Some(&r.mask))?
@@ -104,7 +105,7 @@ fn show(label: &str, m: &Measured, extra: &str) {
 }
 
 /// Runs the comparison.
-pub fn run_all(with_mitsuba: bool) -> Result<()> {
+pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
     if !with_mitsuba {
         println!("\nanimations: skipped (they need Mitsuba 3 for the references)");
         return Ok(());
@@ -141,10 +142,13 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
     let exe = std::env::current_exe()?;
     println!(
         "\nanimations ({SPP} spp; references Mitsuba multijitter 2 × {REFERENCE_SPP} spp per frame; \
-         FI flicker index, FHP high-pass temporal error, relMSE_trim per frame, near motion: pixels \
+         FI flicker index, FHP high-pass temporal error (emitters in view left out), relMSE_trim per frame, near motion: pixels \
          within 1/32 width of a >10 % change; probe: the largest step and error of 16 probes on a 4×4 grid, those no moving silhouette crosses)"
     );
     for case in cases {
+        if only.is_some_and(|o| !case.name.contains(o)) {
+            continue;
+        }
         let file = own.join(case.file);
         let (desc, animation) = load_animation(&file, &[])?;
         let dir = work.join(case.name.replace([' ', ','], "-"));
@@ -205,7 +209,14 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
             })
             .collect();
         let mask = ghost_mask(&mean, 0.1, (w as usize / 32).max(1))?;
-        let reference = Reference { a, b, mean, mask };
+        let emitters = emitter_mask(&mean)?;
+        let reference = Reference {
+            a,
+            b,
+            mean,
+            mask,
+            emitters,
+        };
         let frames_arg = format!("{}..{}", case.frames.0, case.frames.1);
         let mut temporal = None;
         for (label, mode, gradients) in [

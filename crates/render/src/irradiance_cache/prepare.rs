@@ -20,7 +20,7 @@ pub fn prepare_cache(
     pool: &rayon::ThreadPool,
 ) -> Result<(IrradianceCache, CacheStats), RenderError> {
     let tables_start = std::time::Instant::now();
-    let mut cache = empty_cache(scene, ic, settings.width, pool)?;
+    let mut cache = empty_cache(scene, ic, settings.width, None, pool)?;
     let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
     let header = header(scene, ic, settings.width);
     let mut loaded = 0u64;
@@ -86,17 +86,21 @@ pub fn prepare_cache(
 }
 
 /// An empty cache for a `width`-pixel-wide view of `scene` with `ic`'s settings: radiance
-/// caching's tables made, exclusions resolved, the pixel footprint set.
+/// caching's tables made (or `tables`, made for the same materials, reused), exclusions
+/// resolved, the pixel footprint set.
 pub fn empty_cache(
     scene: &Scene,
     ic: &IcIntegrator,
     width: usize,
+    tables: Option<&Arc<RadianceCache>>,
     pool: &rayon::ThreadPool,
 ) -> Result<IrradianceCache, RenderError> {
     let mut cache = IrradianceCache::new(scene, &ic.params);
     if ic.params.radiance_cache {
-        let tables = pool.install(|| RadianceCache::new(scene, ic.params.radiance_order));
-        cache.radiance = Some(Arc::new(tables));
+        cache.radiance = Some(match tables {
+            Some(t) => t.clone(),
+            None => Arc::new(pool.install(|| RadianceCache::new(scene, ic.params.radiance_order))),
+        });
     }
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     cache.pixel_angle = 2.0 * scene.camera.tan_half_x / width.max(1) as f32;

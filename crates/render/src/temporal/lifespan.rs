@@ -21,6 +21,31 @@ pub fn relative_change(e0: Rgb, e1: Rgb, floor: f32) -> f32 {
         .fold(0.0, f32::max)
 }
 
+/// |τ − 1| of radiance coefficients (001 eq. 5.7 as `NOTES-001.md` D.2 fixes it: a ratio of
+/// coefficients is undefined where they are zero or negative): per channel
+/// ‖Λ¹ − Λ⁰‖₂ / ‖Λ⁰‖₂, the largest; `a` and `b` hold `channels` equal runs (`[channel][i]`).
+#[must_use]
+pub fn coefficient_change(a: &[f64], b: &[f64], channels: usize) -> f32 {
+    let n = a.len() / channels.max(1);
+    if n == 0 || a.len() != b.len() {
+        return 0.0;
+    }
+    a.chunks(n)
+        .zip(b.chunks(n))
+        .map(|(x, y)| {
+            let d: f64 = x.iter().zip(y).map(|(p, q)| (q - p) * (q - p)).sum();
+            let norm: f64 = x.iter().map(|p| p * p).sum();
+            if norm > 0.0 {
+                (d / norm).sqrt()
+            } else if d > 0.0 {
+                f64::INFINITY
+            } else {
+                0.0
+            }
+        })
+        .fold(0.0, f64::max) as f32
+}
+
 /// The frames a record lives after its own (L of D.2): the last frame it serves is t₀ + L.
 /// `accuracy` is a_t; `max_lifespan` is δt_max ≥ 1 (1: every record lives one frame).
 #[must_use]
@@ -71,6 +96,17 @@ mod tests {
             }
             assert!(temporal_weight(change, l + 1) < 1.0 / a_t);
         }
+    }
+
+    #[test]
+    fn coefficient_change_is_a_norm_ratio_per_channel() {
+        // Channel 0: (3, 4) → (3, 4.5): 0.5/5; channel 1 unchanged.
+        let a = [3.0, 4.0, 1.0, 0.0];
+        let b = [3.0, 4.5, 1.0, 0.0];
+        assert!((coefficient_change(&a, &b, 2) - 0.1).abs() < 1e-7);
+        // Negative coefficients count by their size: (−3, −4) → (−3, −3.5) is also 0.1.
+        assert!((coefficient_change(&[-3.0, -4.0], &[-3.0, -3.5], 1) - 0.1).abs() < 1e-7);
+        assert_eq!(coefficient_change(&[0.0, 0.0], &[0.0, 0.0], 1), 0.0);
     }
 
     #[test]

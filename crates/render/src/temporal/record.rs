@@ -4,8 +4,10 @@
 
 use crate::irradiance_cache::build::Site;
 use crate::irradiance_cache::Record;
+use crate::radiance_cache::gather::RadianceCoefficients;
+use crate::radiance_cache::record::RadianceRecord;
 use crate::scene::Interaction;
-use ircache_math::{Frame, Mat4, Rgb, Vec3};
+use ircache_math::{Frame, Mat3, Mat4, Rgb, Vec3};
 
 /// Temporal gradients: the change per frame of the irradiance and of both spatial gradients
 /// (∇tE, ∇t∇r, ∇t∇p of 5.9–5.11), in the record's orientation at its creation.
@@ -90,6 +92,68 @@ impl TemporalRecord {
             Some(m) => move_record(&r, m),
             None => r,
         }
+    }
+}
+
+/// A radiance record over time (001 §5.2 for radiance caching): its coefficients at birth and
+/// the change per frame of each coefficient and gradient coefficient (no rotation term).
+#[derive(Clone, Debug)]
+pub struct RadianceTrack {
+    /// The record at birth.
+    pub born: RadianceRecord,
+    /// Change per frame (all zero: constant).
+    pub slope: RadianceCoefficients,
+}
+
+impl RadianceTrack {
+    /// A track that holds its value.
+    #[must_use]
+    pub fn constant(born: RadianceRecord) -> RadianceTrack {
+        let zero = |v: &Vec<f64>| vec![0.0; v.len()];
+        let r = &born.radiance;
+        let slope = RadianceCoefficients {
+            order: r.order,
+            coefficients: zero(&r.coefficients),
+            gradient_x: zero(&r.gradient_x),
+            gradient_y: zero(&r.gradient_y),
+        };
+        RadianceTrack { born, slope }
+    }
+
+    /// Sets the slope from the born coefficients to `later`'s, `frames` frames on (same frame).
+    pub fn slope_to(&mut self, later: &RadianceCoefficients, frames: u32) {
+        let k = 1.0 / f64::from(frames.max(1));
+        let d = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (y - x) * k).collect();
+        let r = &self.born.radiance;
+        self.slope = RadianceCoefficients {
+            order: r.order,
+            coefficients: d(&r.coefficients, &later.coefficients),
+            gradient_x: d(&r.gradient_x, &later.gradient_x),
+            gradient_y: d(&r.gradient_y, &later.gradient_y),
+        };
+    }
+
+    /// The record `frames` frames after its birth, moved by `motion` (its frame turned with it).
+    #[must_use]
+    pub fn at(&self, frames: u32, motion: Option<&Mat4>) -> RadianceRecord {
+        let t = f64::from(frames);
+        let add = |a: &[f64], s: &[f64]| a.iter().zip(s).map(|(x, y)| x + y * t).collect();
+        let (r, s) = (&self.born.radiance, &self.slope);
+        let mut out = RadianceRecord {
+            radiance: RadianceCoefficients {
+                order: r.order,
+                coefficients: add(&r.coefficients, &s.coefficients),
+                gradient_x: add(&r.gradient_x, &s.gradient_x),
+                gradient_y: add(&r.gradient_y, &s.gradient_y),
+            },
+            ..self.born.clone()
+        };
+        if let Some(m) = motion {
+            let (rot, _) = rotation_scale(m);
+            out.position = m.transform_point3(out.position.as_vec3()).as_dvec3();
+            out.frame = Mat3::from_mat4(rot).as_dmat3() * out.frame;
+        }
+        out
     }
 }
 

@@ -23,8 +23,8 @@
 //! Every frame's gathers draw on a seed of their own, as independent renders of the frames
 //! would; the pixel samples keep the animation's seed.
 
-use super::lifespan::{lifespan, relative_change};
-use super::record::{move_point, move_record, Slope, SlopeKind, TemporalRecord};
+use super::lifespan::{coefficient_change, lifespan, relative_change};
+use super::record::{move_point, move_record, RadianceTrack, Slope, SlopeKind, TemporalRecord};
 use crate::integrators::ic::IcIntegrator;
 use crate::irradiance_cache::build::{fill_sites_for_image, first_diffuse_point, Site};
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, WorkState};
@@ -32,6 +32,7 @@ use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::prepare::empty_cache;
 use crate::irradiance_cache::record::NO_RADIANCE;
 use crate::irradiance_cache::{IrradianceCache, Record};
+use crate::radiance_cache::record::RadianceRecord;
 use crate::scene::{RenderError, Scene, ShapeGeometry};
 use ircache_math::{Mat4, Rgb, Vec2, Vec3};
 use rayon::prelude::*;
@@ -188,28 +189,25 @@ pub struct SequenceCache {
     pub seed: u64,
     /// Every record made so far, by creation.
     pub records: Vec<TemporalRecord>,
+    /// The radiance coefficients of each record of `records` that holds them.
+    pub radiance: Vec<Option<RadianceTrack>>,
     /// Whether each record served a pixel in the last frame filled.
     used: Vec<bool>,
+    /// Radiance caching's tables, made with the first frame's cache.
+    tables: std::sync::OnceLock<std::sync::Arc<crate::radiance_cache::RadianceCache>>,
 }
 
 impl SequenceCache {
     /// A cache for frames of `size` pixels.
     ///
     /// # Errors
-    /// Radiance records (`--radiance-cache on`) are not kept over time yet.
+    /// A cache file, or temporal settings out of range.
     pub fn new(
         ic: &IcIntegrator,
         params: TemporalParams,
         size: (usize, usize),
         seed: u64,
     ) -> Result<SequenceCache, RenderError> {
-        if ic.params.radiance_cache && params.mode != CacheMode::PerFrame {
-            return Err(RenderError::Invalid(format!(
-                "--cache-mode {}: radiance records (--radiance-cache on) are not kept over time \
-                 yet; use --cache-mode per-frame with them",
-                params.mode.name()
-            )));
-        }
         if ic.cache_file.is_some() {
             return Err(RenderError::Invalid(
                 "--cache FILE holds one frame's records: an animation keeps its own".into(),
@@ -227,7 +225,9 @@ impl SequenceCache {
             size,
             seed,
             records: Vec::new(),
+            radiance: Vec::new(),
             used: Vec::new(),
+            tables: std::sync::OnceLock::new(),
         })
     }
 
@@ -265,11 +265,25 @@ impl SequenceCache {
         motion: &dyn Motion,
         pool: &rayon::ThreadPool,
     ) -> Result<(IrradianceCache, Vec<Vec<u32>>), RenderError> {
-        let mut cache = empty_cache(scene, &self.ic, self.size.0, pool)?;
+        // Radiance caching's tables depend on the materials only, which do not move.
+        let tables = self.tables.get();
+        let cache = empty_cache(scene, &self.ic, self.size.0, tables, pool)?;
+        if let (None, Some(t)) = (tables, &cache.radiance) {
+            let _ = self.tables.set(t.clone());
+        }
+        let mut cache = cache;
         let mut slots = vec![Vec::new(); cache.levels.len()];
         for (i, tr) in self.records.iter().enumerate() {
             if tr.live_at(frame) {
-                let r = self.record_at(i, frame, motion);
+                let mut r = self.record_at(i, frame, motion);
+                r.radiance = NO_RADIANCE;
+                if let Some(track) = &self.radiance[i] {
+                    let m = motion.motion(tr.site.point.it.shape, tr.born, frame);
+                    r.radiance = cache.radiance_records.len() as u32;
+                    cache
+                        .radiance_records
+                        .push(track.at(frame - tr.born, m.as_ref()));
+                }
                 let level = r.level as usize;
                 cache.levels[level].insert(r);
                 slots[level].push(i as u32);
@@ -331,22 +345,23 @@ impl SequenceCache {
         for (k, rec, st, site) in gathered {
             stats.gather_rays += st.counts.gather_rays;
             // Deeper records the gather made first, as the pre-pass inserts them.
-            for (r, point, key) in st.new_records {
+            let made = |r: &Record| st.radiance.get(r.radiance as usize).cloned();
+            for (r, point, key) in &st.new_records {
                 let level = r.level as usize;
                 let site = Site {
                     index: cache.levels[level].len(),
-                    point,
-                    key,
+                    point: *point,
+                    key: *key,
                     rays: 0,
                 };
-                self.add(&mut cache, &mut slots, r, site, seed, frame);
+                self.add(&mut cache, &mut slots, *r, made(r), site, seed, frame);
             }
             let level = rec.level as usize;
             let site = Site {
                 index: cache.levels[level].len(),
                 ..site
             };
-            let l = self.add(&mut cache, &mut slots, rec, site, seed, frame);
+            let l = self.add(&mut cache, &mut slots, rec, made(&rec), site, seed, frame);
             self.records[k].successor = Some(l as u32);
             stats.renewed += 1;
             if self.params.two_passes() {
@@ -356,6 +371,13 @@ impl SequenceCache {
                 let succ = back.map_or(rec, |m| move_record(&rec, &m));
                 self.records[k].slope = Slope::between(&old.record, &succ, frame - old.born);
                 self.records[k].kind = SlopeKind::Interpolated;
+                // Coefficients in the same frame only where neither moved.
+                if back.is_none() {
+                    let later = self.radiance[l].as_ref().map(|t| t.born.radiance.clone());
+                    if let (Some(track), Some(later)) = (&mut self.radiance[k], later) {
+                        track.slope_to(&later, frame - old.born);
+                    }
+                }
             }
         }
 
@@ -369,6 +391,13 @@ impl SequenceCache {
                 let r = cache.levels[level].records()[site.index];
                 slots[level].push(self.records.len() as u32);
                 self.records.push(self.born(r, *site, seed, frame));
+                self.radiance.push(
+                    cache
+                        .radiance_records
+                        .get(r.radiance as usize)
+                        .cloned()
+                        .map(RadianceTrack::constant),
+                );
                 stats.new += 1;
             }
         }
@@ -376,7 +405,11 @@ impl SequenceCache {
         for (level, ids) in slots.iter().enumerate() {
             for (index, &id) in ids.iter().enumerate() {
                 if id as usize >= first_new {
-                    self.records[id as usize].record = cache.levels[level].records()[index];
+                    let r = cache.levels[level].records()[index];
+                    self.records[id as usize].record = r;
+                    if let Some(c) = cache.radiance_records.get(r.radiance as usize) {
+                        self.radiance[id as usize] = Some(RadianceTrack::constant(c.clone()));
+                    }
                 }
             }
         }
@@ -456,22 +489,30 @@ impl SequenceCache {
         renew
     }
 
-    /// Adds a record made at `frame` to the cache and the list; returns its index.
+    /// Adds a record made at `frame` (with its radiance coefficients, if any) to the cache and
+    /// the list; returns its index.
+    #[allow(clippy::too_many_arguments)]
     fn add(
         &mut self,
         cache: &mut IrradianceCache,
         slots: &mut [Vec<u32>],
         mut r: Record,
+        radiance: Option<RadianceRecord>,
         site: Site,
         seed: u64,
         frame: u32,
     ) -> usize {
         r.radiance = NO_RADIANCE;
+        if let Some(c) = &radiance {
+            r.radiance = cache.radiance_records.len() as u32;
+            cache.radiance_records.push(c.clone());
+        }
         let level = r.level as usize;
         cache.levels[level].insert(r);
         let i = self.records.len();
         slots[level].push(i as u32);
         self.records.push(self.born(r, site, seed, frame));
+        self.radiance.push(radiance.map(RadianceTrack::constant));
         i
     }
 
@@ -522,7 +563,7 @@ impl SequenceCache {
                     scene: next,
                     deeper: cache.params.deeper,
                 };
-                let estimates: Vec<(Record, u64)> = pool.install(|| {
+                let estimates: Vec<(Record, Option<RadianceRecord>, u64)> = pool.install(|| {
                     self.records[first..]
                         .par_iter()
                         .with_max_len(1)
@@ -540,8 +581,10 @@ impl SequenceCache {
                             let mut st = WorkState::new(cache.levels.len());
                             let rec = gather(&g, &mut st, &site, tr.record.level);
                             let back = motion.motion(shape, frame + 1, frame);
+                            let radiance = st.radiance.get(rec.radiance as usize).cloned();
                             (
                                 back.map_or(rec, |m| move_record(&rec, &m)),
+                                radiance,
                                 st.counts.gather_rays,
                             )
                         })
@@ -549,10 +592,32 @@ impl SequenceCache {
                 });
                 let floor = change_floor(&self.records[first..]);
                 let params = self.params;
-                for (tr, (next_rec, rays)) in self.records[first..].iter_mut().zip(estimates) {
+                for (i, (next_rec, next_radiance, rays)) in (first..).zip(estimates) {
                     stats.estimates += 1;
                     stats.gather_rays += rays;
-                    let change = relative_change(tr.record.e, next_rec.e, floor);
+                    let tr = &mut self.records[i];
+                    let mut change = relative_change(tr.record.e, next_rec.e, floor);
+                    let moving = motion
+                        .motion(tr.site.point.it.shape, frame, frame + 1)
+                        .is_some();
+                    if let Some(track) = &mut self.radiance[i] {
+                        match next_radiance {
+                            // 5.7 with the norm ratio; the coefficients compare in one frame
+                            // only where the record did not turn.
+                            Some(next) if !moving => {
+                                let (a, b) = (&track.born.radiance, &next.radiance);
+                                change = change.max(coefficient_change(
+                                    &a.coefficients,
+                                    &b.coefficients,
+                                    3,
+                                ));
+                                if params.gradients != SlopeKind::Constant {
+                                    track.slope_to(b, 1);
+                                }
+                            }
+                            _ => change = f32::INFINITY,
+                        }
+                    }
                     tr.last = frame + lifespan(change, params.accuracy, params.max_lifespan);
                     if params.gradients != SlopeKind::Constant {
                         tr.slope = Slope::between(&tr.record, &next_rec, 1);
