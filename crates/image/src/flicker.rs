@@ -479,7 +479,7 @@ mod tests {
             .collect();
         let mask = ghost_mask(&seq, 0.1, 2).unwrap();
         assert!(mask[5 * 16 + 4]);
-        assert!(mask[1 * 16 + 4], "dilated upwards");
+        assert!(mask[16 + 4], "dilated upwards (row 1)");
         assert!(!mask[11 * 16 + 15], "far corner");
     }
 

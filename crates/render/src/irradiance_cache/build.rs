@@ -209,7 +209,9 @@ pub fn run_batch(
     hook: &mut (dyn BatchHook + Send),
 ) {
     take_in(cache, hook.before(), stats);
-    let results: Vec<Option<((Record, ShadingPoint, u64), WorkState)>> = {
+    // Per point: the record gathered there (with its point and key) and its work state.
+    type Gathered = Option<((Record, ShadingPoint, u64), WorkState)>;
+    let results: Vec<Gathered> = {
         let light = SceneRadiance {
             scene,
             deeper: cache.params.deeper,

@@ -51,9 +51,13 @@ pub fn coefficient_change(a: &[f64], b: &[f64], channels: usize) -> f32 {
 #[must_use]
 pub fn lifespan(change: f32, accuracy: f32, max_lifespan: u32) -> u32 {
     let cap = max_lifespan.max(1) - 1;
-    if !(change > 0.0) {
-        // No change (or a NaN, never trusted to extend a life): only δt_max bounds it.
-        return if change == 0.0 { cap } else { 0 };
+    if change.is_nan() {
+        // Never trusted to extend a life.
+        return 0;
+    }
+    if change <= 0.0 {
+        // No change: only δt_max bounds it.
+        return cap;
     }
     let frames = (accuracy / change).floor();
     if frames >= cap as f32 {
