@@ -1,7 +1,7 @@
 //! `ircache compare A B`: the error measures of `shared/references/README.md`; with
 //! `--sequence`, the flicker and temporal error of frame sequences (`ircache_image::flicker`).
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -89,23 +89,22 @@ pub fn run(args: &CompareArgs) -> Result<()> {
 }
 
 /// Reads frames `first..=last` of the sequence named by `pattern`.
-fn read_sequence(
+pub fn read_sequence(
     pattern: &std::path::Path,
     (first, last): (u32, u32),
 ) -> Result<Vec<ircache_image::Image>> {
     (first..=last)
         .map(|f| {
             let path = crate::animate::frame_path(pattern, f)?;
-            Ok(ircache_image::read_image(&path)?)
+            ircache_image::read_image(&path)
+                .with_context(|| format!("reading frame {f}: {}", path.display()))
         })
         .collect()
 }
 
 /// `ircache compare --sequence`: the measures of `ircache_image::flicker`.
 fn sequence(args: &CompareArgs, frames: (u32, u32)) -> Result<()> {
-    use ircache_image::flicker::{
-        emitter_mask, flicker_index, ghost_mask, high_pass_error, masked_rel_mse, probe_tracks,
-    };
+    use ircache_image::flicker::{flicker_index, report, ReferenceSequence};
     let blur = |seq: Vec<ircache_image::Image>| -> Vec<ircache_image::Image> {
         if args.blur > 0.0 {
             seq.iter()
@@ -127,36 +126,15 @@ fn sequence(args: &CompareArgs, frames: (u32, u32)) -> Result<()> {
             Some(p) => blur(read_sequence(p, frames)?),
             None => a.clone(),
         };
-        let mean: Vec<ircache_image::Image> = a
-            .iter()
-            .zip(&b)
-            .map(|(x, y)| {
-                let mut m = x.clone();
-                for (p, q) in m.pixels.iter_mut().zip(&y.pixels) {
-                    *p = (*p + *q) * 0.5;
-                }
-                m
-            })
-            .collect();
-        // Pixels near what moves: the reference changes there by over 10 %, dilated by 1/32
-        // of the width.
-        let dilate = (mean[0].width / 32).max(1);
-        let mask = ghost_mask(&mean, 0.1, dilate)?;
-        let (w, h) = (mean[0].width, mean[0].height);
-        // 16 probes on a 4×4 grid, each a 5×5 window (Fig. 5.10's temporal accuracy).
-        let probes: Vec<(usize, usize)> = (0..16)
-            .map(|i| ((2 * (i % 4) + 1) * w / 8, (2 * (i / 4) + 1) * h / 8))
-            .collect();
-        let tracks = probe_tracks(&images, &mean, &probes, 2)?;
-        let masked = mask.iter().filter(|&&m| m).count();
+        let r = report(&images, &ReferenceSequence::new(a, b)?)?;
         let ext = serde_json::json!({
-            "reference_flicker_index": flicker_index(&mean)?,
-            "high_pass_error": if images.len() >= 3 { Some(high_pass_error(&images, &a, &b, Some(&emitter_mask(&mean)?))?) } else { None },
-            "rel_mse_trim": masked_rel_mse(&images, &mean, None)?,
-            "rel_mse_trim_near_motion": if masked > 0 { Some(masked_rel_mse(&images, &mean, Some(&mask))?) } else { None },
-            "pixels_near_motion": masked,
-            "probe_max_error": tracks.iter().filter(|t| t.still).map(|t| t.max_error).fold(0.0, f64::max),
-            "probe_max_step": tracks.iter().filter(|t| t.still).map(|t| t.max_step).fold(0.0, f64::max),
+            "reference_flicker_index": r.reference_flicker_index,
+            "high_pass_error": r.high_pass_error,
+            "rel_mse_trim": r.rel_mse_trim,
+            "rel_mse_trim_near_motion": r.rel_mse_trim_near_motion,
+            "pixels_near_motion": r.pixels_near_motion,
+            "probe_max_error": r.probe_max_error,
+            "probe_max_step": r.probe_max_step,
         });
         if let (Some(o), Some(e)) = (j.as_object_mut(), ext.as_object()) {
             o.extend(e.clone());

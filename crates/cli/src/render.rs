@@ -5,10 +5,9 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use ircache_math::Vec3;
-use ircache_render::film::Filter;
 use ircache_render::integrators::ic::PixelPass;
 use ircache_render::integrators::Integrator;
-use ircache_render::render::{render, Adaptive, RenderOutput, RenderSettings, Sampling};
+use ircache_render::render::{render, Adaptive, RenderOutput, RenderSettings};
 use ircache_render::sampler::SamplerKind;
 use ircache_render::scene::Scene;
 use ircache_scene::obj_scene::ObjCamera;
@@ -277,19 +276,15 @@ pub fn integrator(args: &RenderArgs, desc: &SceneDesc) -> Result<Integrator> {
 
 /// The render settings the scene and the command line ask for.
 pub fn settings(args: &RenderArgs, desc: &SceneDesc) -> Result<RenderSettings> {
-    Ok(RenderSettings {
-        width: desc.sensor.film.width as usize,
-        height: desc.sensor.film.height as usize,
-        spp: desc.sensor.spp,
-        seed: args.seed.unwrap_or(desc.sensor.sampler_seed),
-        threads: args.threads.unwrap_or(0),
-        filter: Filter::from_desc(&desc.sensor.film.filter),
-        band: args.tile,
-        sampling: Sampling {
-            adaptive: adaptive(args, desc.sensor.spp)?,
-            ..Sampling::from_desc(&desc.sensor).map_err(anyhow::Error::msg)?
-        },
-    })
+    let mut s = RenderSettings::from_desc(
+        desc,
+        args.seed.unwrap_or(desc.sensor.sampler_seed),
+        args.threads.unwrap_or(0),
+    )
+    .map_err(anyhow::Error::msg)?;
+    s.band = args.tile;
+    s.sampling.adaptive = adaptive(args, desc.sensor.spp)?;
+    Ok(s)
 }
 
 /// Runs `ircache render`.

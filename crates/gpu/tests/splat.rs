@@ -9,7 +9,7 @@ use ircache_gpu::splat::GpuSplatter;
 use ircache_gpu::{Gpu, GpuError};
 use ircache_render::integrators::Integrator;
 use ircache_render::irradiance_cache::IrradianceCache;
-use ircache_render::render::{RenderSettings, Sampling};
+use ircache_render::render::RenderSettings;
 use ircache_render::scene::Scene;
 use ircache_render::splatting::buffer::{CpuSplatter, Splatter};
 use ircache_render::splatting::{GBuffer, SplatBuffer};
@@ -70,16 +70,7 @@ fn scene_at(path: &str, size: u32, params: &[(&str, &str)]) -> SceneDesc {
 }
 
 fn prepared(desc: &SceneDesc) -> (Scene, IrradianceCache, RenderSettings) {
-    let s = RenderSettings {
-        width: desc.sensor.film.width as usize,
-        height: desc.sensor.film.height as usize,
-        spp: desc.sensor.spp,
-        seed: 5,
-        threads: 2,
-        filter: ircache_render::film::Filter::from_desc(&desc.sensor.film.filter),
-        band: None,
-        sampling: Sampling::from_desc(&desc.sensor).expect("sampler"),
-    };
+    let s = RenderSettings::from_desc(desc, 5, 2).expect("sampler");
     let scene = Scene::build(desc).expect("scene builds");
     let integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
     let pool = rayon::ThreadPoolBuilder::new()

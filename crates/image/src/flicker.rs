@@ -77,6 +77,17 @@ fn same_size(seqs: &[&[Image]]) -> Result<(), FlickerError> {
     Ok(())
 }
 
+/// An error unless `seq` has at least `needed` frames.
+fn at_least(seq: &[Image], needed: usize) -> Result<(), FlickerError> {
+    if seq.len() < needed {
+        return Err(FlickerError::TooFewFrames {
+            found: seq.len(),
+            needed,
+        });
+    }
+    Ok(())
+}
+
 fn lum(img: &Image) -> Vec<f64> {
     img.pixels.iter().map(|&c| luminance(c)).collect()
 }
@@ -90,12 +101,7 @@ fn mean(v: &[f64]) -> f64 {
 /// # Errors
 /// Fewer than two frames, or frames of different sizes.
 pub fn flicker_index(frames: &[Image]) -> Result<f64, FlickerError> {
-    if frames.len() < 2 {
-        return Err(FlickerError::TooFewFrames {
-            found: frames.len(),
-            needed: 2,
-        });
-    }
+    at_least(frames, 2)?;
     same_size(&[frames])?;
     let l: Vec<Vec<f64>> = frames.iter().map(lum).collect();
     let level = mean(&l.iter().map(|f| mean(f)).collect::<Vec<_>>());
@@ -139,12 +145,7 @@ pub fn high_pass_error(
     b: &[Image],
     exclude: Option<&[bool]>,
 ) -> Result<f64, FlickerError> {
-    if frames.len() < 3 {
-        return Err(FlickerError::TooFewFrames {
-            found: frames.len(),
-            needed: 3,
-        });
-    }
+    at_least(frames, 3)?;
     same_size(&[frames, a, b])?;
     let li: Vec<Vec<f64>> = frames.iter().map(lum).collect();
     let la: Vec<Vec<f64>> = a.iter().map(lum).collect();
@@ -180,12 +181,7 @@ pub fn high_pass_error(
 /// # Errors
 /// No frames, or frames of different sizes.
 pub fn emitter_mask(reference: &[Image]) -> Result<Vec<bool>, FlickerError> {
-    if reference.is_empty() {
-        return Err(FlickerError::TooFewFrames {
-            found: 0,
-            needed: 1,
-        });
-    }
+    at_least(reference, 1)?;
     same_size(&[reference])?;
     let (w, h) = (reference[0].width, reference[0].height);
     let mut bright = vec![false; w * h];
@@ -231,12 +227,7 @@ pub fn ghost_mask(
     threshold: f64,
     dilate_by: usize,
 ) -> Result<Vec<bool>, FlickerError> {
-    if reference.is_empty() {
-        return Err(FlickerError::TooFewFrames {
-            found: 0,
-            needed: 1,
-        });
-    }
+    at_least(reference, 1)?;
     same_size(&[reference])?;
     let (w, h) = (reference[0].width, reference[0].height);
     let boxed: Vec<Vec<f64>> = reference
@@ -267,12 +258,7 @@ pub fn masked_rel_mse(
     reference: &[Image],
     mask: Option<&[bool]>,
 ) -> Result<f64, FlickerError> {
-    if frames.is_empty() {
-        return Err(FlickerError::TooFewFrames {
-            found: 0,
-            needed: 1,
-        });
-    }
+    at_least(frames, 1)?;
     same_size(&[frames, reference])?;
     let mut per_frame = Vec::with_capacity(frames.len());
     for (f, r) in frames.iter().zip(reference) {
@@ -318,12 +304,7 @@ pub fn probe_tracks(
     points: &[(usize, usize)],
     r: usize,
 ) -> Result<Vec<ProbeTrack>, FlickerError> {
-    if frames.len() < 2 {
-        return Err(FlickerError::TooFewFrames {
-            found: frames.len(),
-            needed: 2,
-        });
-    }
+    at_least(frames, 2)?;
     same_size(&[frames, reference])?;
     let (w, h) = (frames[0].width, frames[0].height);
     let window = |img: &Image, x: usize, y: usize| {
@@ -361,6 +342,112 @@ pub fn probe_tracks(
             }
         })
         .collect())
+}
+
+/// A reference sequence as two independent halves, and what the measures take from it.
+pub struct ReferenceSequence {
+    /// First half.
+    pub a: Vec<Image>,
+    /// Second half (the first again for a reference without halves).
+    pub b: Vec<Image>,
+    /// The halves' mean.
+    pub mean: Vec<Image>,
+    /// Pixels near what moves ([`ghost_mask`]: a change over 10 %, dilated by 1/32 of the width).
+    pub near_motion: Vec<bool>,
+    /// Emitters in view ([`emitter_mask`]).
+    pub emitters: Vec<bool>,
+}
+
+impl ReferenceSequence {
+    /// The reference from its halves.
+    ///
+    /// # Errors
+    /// No frames, or halves of different lengths or sizes.
+    pub fn new(a: Vec<Image>, b: Vec<Image>) -> Result<ReferenceSequence, FlickerError> {
+        at_least(&a, 1)?;
+        same_size(&[&a, &b])?;
+        let mean: Vec<Image> = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| {
+                let mut m = x.clone();
+                for (p, q) in m.pixels.iter_mut().zip(&y.pixels) {
+                    *p = (*p + *q) * 0.5;
+                }
+                m
+            })
+            .collect();
+        let near_motion = ghost_mask(&mean, 0.1, (mean[0].width / 32).max(1))?;
+        let emitters = emitter_mask(&mean)?;
+        Ok(ReferenceSequence {
+            a,
+            b,
+            mean,
+            near_motion,
+            emitters,
+        })
+    }
+}
+
+/// Every measure of a sequence against a reference (`NOTES-001.md` D.8).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SequenceReport {
+    /// [`flicker_index`] of the frames.
+    pub flicker_index: f64,
+    /// [`flicker_index`] of the reference's mean.
+    pub reference_flicker_index: f64,
+    /// [`high_pass_error`] with emitters left out (`None` below three frames).
+    pub high_pass_error: Option<f64>,
+    /// [`masked_rel_mse`] over the whole frames.
+    pub rel_mse_trim: f64,
+    /// [`masked_rel_mse`] near what moves (`None` where nothing moves).
+    pub rel_mse_trim_near_motion: Option<f64>,
+    /// Pixels near what moves.
+    pub pixels_near_motion: usize,
+    /// The largest step of the still probes of a 4×4 grid ([`probe_tracks`], 5×5 windows).
+    pub probe_max_step: f64,
+    /// Their largest error.
+    pub probe_max_error: f64,
+}
+
+/// Measures `frames` against `reference`.
+///
+/// # Errors
+/// Fewer than two frames, or sequences of different lengths or sizes.
+pub fn report(
+    frames: &[Image],
+    reference: &ReferenceSequence,
+) -> Result<SequenceReport, FlickerError> {
+    at_least(frames, 2)?;
+    same_size(&[frames, &reference.mean])?;
+    let (w, h) = (frames[0].width, frames[0].height);
+    let probes: Vec<(usize, usize)> = (0..16)
+        .map(|i| ((2 * (i % 4) + 1) * w / 8, (2 * (i / 4) + 1) * h / 8))
+        .collect();
+    let tracks = probe_tracks(frames, &reference.mean, &probes, 2)?;
+    let still = || tracks.iter().filter(|t| t.still);
+    let near = reference.near_motion.iter().filter(|&&m| m).count();
+    Ok(SequenceReport {
+        flicker_index: flicker_index(frames)?,
+        reference_flicker_index: flicker_index(&reference.mean)?,
+        high_pass_error: (frames.len() >= 3)
+            .then(|| {
+                high_pass_error(
+                    frames,
+                    &reference.a,
+                    &reference.b,
+                    Some(&reference.emitters),
+                )
+            })
+            .transpose()?,
+        rel_mse_trim: masked_rel_mse(frames, &reference.mean, None)?,
+        rel_mse_trim_near_motion: (near > 0)
+            .then(|| masked_rel_mse(frames, &reference.mean, Some(&reference.near_motion)))
+            .transpose()?,
+        pixels_near_motion: near,
+        probe_max_step: still().map(|t| t.max_step).fold(0.0, f64::max),
+        probe_max_error: still().map(|t| t.max_error).fold(0.0, f64::max),
+    })
 }
 
 /// A (2r+1)² box filter of a luminance plane, clamped at the borders.

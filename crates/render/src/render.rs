@@ -134,6 +134,28 @@ impl RenderSettings {
         }
     }
 
+    /// The settings a scene's sensor asks for (its film, samples, sampler and filter), with
+    /// `seed` and `threads`, the whole image, no adaptive sampling.
+    ///
+    /// # Errors
+    /// A sampler this renderer does not have.
+    pub fn from_desc(
+        desc: &ircache_scene::SceneDesc,
+        seed: u64,
+        threads: usize,
+    ) -> Result<RenderSettings, String> {
+        Ok(RenderSettings {
+            width: desc.sensor.film.width as usize,
+            height: desc.sensor.film.height as usize,
+            spp: desc.sensor.spp,
+            seed,
+            threads,
+            filter: Filter::from_desc(&desc.sensor.film.filter),
+            band: None,
+            sampling: Sampling::from_desc(&desc.sensor)?,
+        })
+    }
+
     /// The rows this render covers.
     #[must_use]
     pub fn rows(&self) -> std::ops::Range<usize> {

@@ -3,7 +3,6 @@
 #![allow(dead_code)]
 
 use ircache_math::{Mat4, Rgb, Vec3};
-use ircache_render::film::Filter;
 use ircache_render::integrators::Integrator;
 use ircache_render::render::{render, RenderOutput, RenderSettings};
 use ircache_render::scene::Scene;
@@ -85,8 +84,8 @@ pub fn path(max_depth: i32) -> IntegratorDesc {
 
 /// Renders a description with `threads` threads and seed `seed`.
 pub fn render_desc(desc: &SceneDesc, threads: usize, seed: u64) -> RenderOutput {
-    let sampling = ircache_render::render::Sampling::from_desc(&desc.sensor).expect("sampler");
-    render_sampled(desc, sampling, threads, seed)
+    let settings = RenderSettings::from_desc(desc, seed, threads).expect("sampler");
+    render_settings(desc, &settings)
 }
 
 /// Renders a description with the pixel sampling `sampling`.
@@ -96,19 +95,18 @@ pub fn render_sampled(
     threads: usize,
     seed: u64,
 ) -> RenderOutput {
+    let settings = RenderSettings {
+        sampling,
+        ..RenderSettings::from_desc(desc, seed, threads).expect("sampler")
+    };
+    render_settings(desc, &settings)
+}
+
+/// Renders a description with `settings`.
+fn render_settings(desc: &SceneDesc, settings: &RenderSettings) -> RenderOutput {
     let scene = Scene::build(desc).expect("scene builds");
     let integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
-    let settings = RenderSettings {
-        width: desc.sensor.film.width as usize,
-        height: desc.sensor.film.height as usize,
-        spp: desc.sensor.spp,
-        seed,
-        threads,
-        filter: Filter::from_desc(&desc.sensor.film.filter),
-        band: None,
-        sampling,
-    };
-    render(&scene, &integrator, &settings, &|_| {}).expect("render")
+    render(&scene, &integrator, settings, &|_| {}).expect("render")
 }
 
 /// Mean and standard error of the mean of each channel over the image's pixels.

@@ -13,7 +13,7 @@ use common::*;
 use ircache_render::integrators::Integrator;
 use ircache_render::irradiance_cache::IrradianceCache;
 use ircache_render::radiance_cache::lookup;
-use ircache_render::render::{RenderSettings, Sampling};
+use ircache_render::render::RenderSettings;
 use ircache_render::scene::Scene;
 use ircache_render::splatting::buffer::{splat, CpuSplatter};
 use ircache_render::splatting::{fill_misses, GBuffer, SplatBuffer};
@@ -43,16 +43,7 @@ fn cornell_rough(kind: &str, size: u32, spp: u32) -> SceneDesc {
 }
 
 fn settings(desc: &SceneDesc, threads: usize) -> RenderSettings {
-    RenderSettings {
-        width: desc.sensor.film.width as usize,
-        height: desc.sensor.film.height as usize,
-        spp: desc.sensor.spp,
-        seed: 5,
-        threads,
-        filter: ircache_render::film::Filter::from_desc(&desc.sensor.film.filter),
-        band: None,
-        sampling: Sampling::from_desc(&desc.sensor).expect("sampler"),
-    }
+    RenderSettings::from_desc(desc, 5, threads).expect("sampler")
 }
 
 /// The scene and its cache filled by the `ic` pre-pass.

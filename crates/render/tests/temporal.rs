@@ -11,7 +11,7 @@ use ircache_image::flicker::flicker_index;
 use ircache_image::Image;
 use ircache_math::Vec3;
 use ircache_render::integrators::Integrator;
-use ircache_render::render::{render, RenderSettings, Sampling};
+use ircache_render::render::{render, RenderSettings};
 use ircache_render::scene::Scene;
 use ircache_render::temporal::record::SlopeKind;
 use ircache_render::temporal::{CacheMode, FrameStats, SequenceCache, TemporalParams};
@@ -31,16 +31,7 @@ fn load(file: &str, size: u32, spp: u32) -> (SceneDesc, Animation) {
 }
 
 fn settings(desc: &SceneDesc) -> RenderSettings {
-    RenderSettings {
-        width: desc.sensor.film.width as usize,
-        height: desc.sensor.film.height as usize,
-        spp: desc.sensor.spp,
-        seed: 3,
-        threads: 0,
-        filter: ircache_render::film::Filter::from_desc(&desc.sensor.film.filter),
-        band: None,
-        sampling: Sampling::from_desc(&desc.sensor).expect("sampler"),
-    }
+    RenderSettings::from_desc(desc, 3, 0).expect("sampler")
 }
 
 /// Fills (and with `images`, renders) `frames` frames; returns the cache, the frames and the

@@ -12,10 +12,9 @@
 
 use super::mitsuba_render_frames;
 use super::radiance::own_scenes;
+use crate::compare::read_sequence as read_frames;
 use anyhow::{bail, Context, Result};
-use ircache_image::flicker::{
-    emitter_mask, flicker_index, ghost_mask, high_pass_error, masked_rel_mse, probe_tracks,
-};
+use ircache_image::flicker::{report, ReferenceSequence};
 use ircache_image::Image;
 use ircache_scene::animation::{load_animation, Target};
 use std::path::Path;
@@ -52,50 +51,16 @@ struct Measured {
     probe_error: f64,
 }
 
-fn read_frames(pattern: &Path, (a, b): (u32, u32)) -> Result<Vec<Image>> {
-    (a..=b)
-        .map(|f| {
-            let p = crate::animate::frame_path(pattern, f)?;
-            ircache_image::read_image(&p).with_context(|| format!("reading {}", p.display()))
-        })
-        .collect()
-}
-
-struct Reference {
-    a: Vec<Image>,
-    b: Vec<Image>,
-    mean: Vec<Image>,
-    mask: Vec<bool>,
-    emitters: Vec<bool>,
-}
-
-fn measure(frames: &[Image], seconds: f64, r: &Reference) -> Result<Measured> {
-    let (w, h) = (frames[0].width, frames[0].height);
-    let probes: Vec<(usize, usize)> = (0..16)
-        .map(|i| ((2 * (i % 4) + 1) * w / 8, (2 * (i / 4) + 1) * h / 8))
-        .collect();
-    let tracks = probe_tracks(frames, &r.mean, &probes, 2)?;
-    let masked = r.mask.iter().any(|&m| m);
+fn measure(frames: &[Image], seconds: f64, r: &ReferenceSequence) -> Result<Measured> {
+    let m = report(frames, r)?;
     Ok(Measured {
         seconds,
-        flicker: flicker_index(frames)?,
-        high_pass: high_pass_error(frames, &r.a, &r.b, Some(&r.emitters))?,
-        rel_mse: masked_rel_mse(frames, &r.mean, None)?,
-        near_motion: if masked {
-            masked_rel_mse(frames, &r.mean, Some(&r.mask))?
-        } else {
-            f64::NAN
-        },
-        probe_step: tracks
-            .iter()
-            .filter(|t| t.still)
-            .map(|t| t.max_step)
-            .fold(0.0, f64::max),
-        probe_error: tracks
-            .iter()
-            .filter(|t| t.still)
-            .map(|t| t.max_error)
-            .fold(0.0, f64::max),
+        flicker: m.flicker_index,
+        high_pass: m.high_pass_error.unwrap_or(f64::NAN),
+        rel_mse: m.rel_mse_trim,
+        near_motion: m.rel_mse_trim_near_motion.unwrap_or(f64::NAN),
+        probe_step: m.probe_max_step,
+        probe_error: m.probe_max_error,
     })
 }
 
@@ -204,28 +169,10 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             mitsuba(REFERENCE_SPP, 2, &rb)?;
             println!("  references made in {:.0} s", t.elapsed().as_secs_f64());
         }
-        let a = read_frames(&ra, case.frames)?;
-        let b = read_frames(&rb, case.frames)?;
-        let mean: Vec<Image> = a
-            .iter()
-            .zip(&b)
-            .map(|(x, y)| {
-                let mut m = x.clone();
-                for (p, q) in m.pixels.iter_mut().zip(&y.pixels) {
-                    *p = (*p + *q) * 0.5;
-                }
-                m
-            })
-            .collect();
-        let mask = ghost_mask(&mean, 0.1, (w as usize / 32).max(1))?;
-        let emitters = emitter_mask(&mean)?;
-        let reference = Reference {
-            a,
-            b,
-            mean,
-            mask,
-            emitters,
-        };
+        let reference = ReferenceSequence::new(
+            read_frames(&ra, case.frames)?,
+            read_frames(&rb, case.frames)?,
+        )?;
         let frames_arg = format!("{}..{}", case.frames.0, case.frames.1);
         let mut temporal = None;
         for (label, mode, gradients) in [

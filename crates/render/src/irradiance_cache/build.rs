@@ -293,21 +293,9 @@ pub fn phase_pixels(
         })
 }
 
-/// Fills `cache` for a `width`×`height` view of `scene` (run inside the caller's thread pool).
+/// Fills `cache` for a `width`×`height` view of `scene` (run inside the caller's thread pool);
+/// says where and how each new record was gathered.
 pub fn fill_for_image(
-    scene: &Scene,
-    cache: &mut IrradianceCache,
-    width: usize,
-    height: usize,
-    rows: std::ops::Range<usize>,
-    seed: u64,
-    hook: &mut (dyn BatchHook + Send),
-) -> CacheStats {
-    fill_sites_for_image(scene, cache, width, height, rows, seed, hook).0
-}
-
-/// [`fill_for_image`], also saying where and how each new record was gathered.
-pub fn fill_sites_for_image(
     scene: &Scene,
     cache: &mut IrradianceCache,
     width: usize,

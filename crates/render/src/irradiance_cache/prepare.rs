@@ -64,6 +64,7 @@ pub fn prepare_cache(
                 settings.seed,
                 hook,
             )
+            .0
         });
         if let Some(e) = shared.and_then(|s| s.failure) {
             return Err(e.into());

@@ -4,7 +4,7 @@
 //!
 //! Each frame, the records that serve it are put into an ordinary [`IrradianceCache`] at their
 //! value for that frame (5.11) and moved with their shapes; the pre-pass
-//! ([`fill_sites_for_image`]) then gathers records only where none serves, so an unchanged
+//! ([`fill_for_image`]) then gathers records only where none serves, so an unchanged
 //! scene costs nothing after its first frame but the records' renewal. What renews them is the
 //! [`CacheMode`]:
 //! - `Temporal`: each new record is gathered once more in the next frame's scene, with the same
@@ -26,7 +26,7 @@
 use super::lifespan::{coefficient_change, lifespan, relative_change};
 use super::record::{move_point, move_record, RadianceTrack, Slope, SlopeKind, TemporalRecord};
 use crate::integrators::ic::IcIntegrator;
-use crate::irradiance_cache::build::{fill_sites_for_image, first_diffuse_point, Site};
+use crate::irradiance_cache::build::{fill_for_image, first_diffuse_point, Site};
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::prepare::empty_cache;
@@ -384,7 +384,7 @@ impl SequenceCache {
         // Records where none serves: the ordinary pre-pass over the frame's pixels.
         let (w, h) = self.size;
         let (fill, sites) =
-            pool.install(|| fill_sites_for_image(scene, &mut cache, w, h, 0..h, seed, &mut ()));
+            pool.install(|| fill_for_image(scene, &mut cache, w, h, 0..h, seed, &mut ()));
         stats.gather_rays += fill.gather_rays;
         for (level, level_sites) in sites.0.iter().enumerate() {
             for site in level_sites {
