@@ -433,6 +433,8 @@ impl ShadingPoint {
 }
 
 const GATHER_SALT: u64 = 0x6761_7468_6572;
+/// Salt of each gather sample's own stream.
+const SAMPLE_SALT: u64 = 0x7361_6d70_6c65;
 
 /// Where the environment's light that a gather's escaping rays bring goes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -491,16 +493,7 @@ impl Gatherer<'_> {
         );
         for (j, k, local) in dirs {
             let idx = j * strata.azimuthal + k;
-            match self.sample(
-                st,
-                sp,
-                &frame,
-                ng,
-                local,
-                level,
-                mix(key, idx as u64),
-                &mut rng,
-            ) {
+            match self.sample(st, sp, &frame, ng, local, level, mix(key, idx as u64)) {
                 Found::Surface(l, t, n_hit) => {
                     h.radiance[idx] = l;
                     h.distance[idx] = t;
@@ -527,13 +520,15 @@ impl Gatherer<'_> {
                 level,
                 key,
                 environment,
-                &mut rng,
             );
         }
         (h, frame)
     }
 
-    /// One gather ray along the local direction `local`: what it finds.
+    /// One gather ray along the local direction `local`: what it finds. The sample's shading
+    /// draws on a stream of its own, keyed by `key`: what one sample draws never shifts
+    /// another's numbers, so two gathers with the same key differ only in the samples whose
+    /// scene differs (temporal caching's next-frame estimate relies on it).
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn sample(
@@ -545,16 +540,16 @@ impl Gatherer<'_> {
         local: Vec3,
         level: u32,
         key: u64,
-        rng: &mut Rng,
     ) -> Found {
         let d = frame.from_local(local);
         if d.dot(ng) <= 0.0 {
             return Found::Below;
         }
         st.counts.gather_rays += 1;
+        let mut rng = Rng::keyed(self.seed, &[SAMPLE_SALT, key, u64::from(level)]);
         match self
             .light
-            .incident(self.cache, self.seed, st, sp, d, level, key, rng)
+            .incident(self.cache, self.seed, st, sp, d, level, key, &mut rng)
         {
             Some(inc) => Found::Surface(inc.radiance, inc.distance, frame.to_local(inc.normal)),
             None => Found::Escaped(d),
@@ -582,13 +577,12 @@ impl Gatherer<'_> {
         level: u32,
         key: u64,
         environment: Escapes,
-        rng: &mut Rng,
     ) {
         let strata = h.strata;
         let target = self.cache.params.record_error * self.cache.params.accuracy;
         let cells = h.cells_to_refine(target, extra / 3);
         const LATTICE: [(f32, f32); 3] = [(0.5, 0.5), (0.5, 0.0), (0.0, 0.5)];
-        for (n, &idx) in cells.iter().enumerate() {
+        for &idx in &cells {
             let (j, k) = (idx / strata.azimuthal, idx % strata.azimuthal);
             let v = jitter[idx];
             let mut sum = h.radiance[idx];
@@ -596,8 +590,8 @@ impl Gatherer<'_> {
             for (q, (dx, dy)) in LATTICE.iter().enumerate() {
                 let u = Vec2::new((v.x + dx).fract(), (v.y + dy).fract());
                 let local = strata.direction(j, k, u);
-                let sample_key = mix(key, (strata.cells() + 3 * n + q) as u64);
-                match self.sample(st, sp, frame, ng, local, level, sample_key, rng) {
+                let sample_key = mix(key, (strata.cells() + 3 * idx + q) as u64);
+                match self.sample(st, sp, frame, ng, local, level, sample_key) {
                     Found::Surface(l, t, n_hit) => {
                         sum += l;
                         // The nearest surface in the cell moves its walls (3.42, 3.46).
