@@ -258,7 +258,7 @@ fn radiance_records_keep_their_coefficients_over_time_and_renew_on_moving_shapes
     let p = params(CacheMode::Temporal);
     // Still: the coefficients' estimate of the next frame equals them, so radiance records live
     // the longest life too.
-    let (still, _, _) = run(&desc, &Animation::default(), p, 3, false);
+    let (still, _, _) = run(&desc, &Animation::default(), p, 12, false);
     let with = |c: &SequenceCache| {
         (0..c.records.len())
             .filter(|&i| c.radiance[i].is_some())
@@ -266,10 +266,25 @@ fn radiance_records_keep_their_coefficients_over_time_and_renew_on_moving_shapes
     };
     assert!(with(&still) > 10, "{} radiance records", with(&still));
     for (r, c) in still.records.iter().zip(&still.radiance) {
-        if c.is_some() && r.born < 2 {
+        if c.is_some() && r.born < 11 {
             assert_eq!(r.last - r.born, p.max_lifespan - 1);
         }
     }
+    // Records on the rough-aluminium back wall hold radiance alone (no Lambertian part): they
+    // serve pixels too, so they are renewed at their place when they expire, not dropped.
+    let back_wall = desc
+        .shapes
+        .iter()
+        .position(|s| s.id.as_deref() == Some("BackWall"))
+        .unwrap() as u32;
+    let renewed_on_wall = still
+        .records
+        .iter()
+        .zip(&still.radiance)
+        .filter(|(r, c)| c.is_some() && r.site.point.it.shape == back_wall && r.born == 0)
+        .filter(|(r, _)| r.successor.is_some())
+        .count();
+    assert!(renewed_on_wall > 0, "no back-wall record renewed");
     // Moving: records on the sliding box that hold radiance live one frame; the frames' caches
     // point every record at its own coefficients; the images are finite.
     let (moving, images, _) = run(&desc, &anim, p, 6, true);

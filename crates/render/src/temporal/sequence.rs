@@ -26,7 +26,7 @@
 use super::lifespan::{coefficient_change, lifespan, relative_change};
 use super::record::{move_point, move_record, RadianceTrack, Slope, SlopeKind, TemporalRecord};
 use crate::integrators::ic::IcIntegrator;
-use crate::irradiance_cache::build::{fill_for_image, first_diffuse_point, Site};
+use crate::irradiance_cache::build::{fill_for_image, record_sites, Site};
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::prepare::empty_cache;
@@ -648,7 +648,9 @@ impl SequenceCache {
                 .fold(Vec::new, |mut acc, i| {
                     let film = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5) * inv;
                     let ray = scene.camera.generate_ray(film);
-                    if let Some(sp) = first_diffuse_point(scene, &ray, levels) {
+                    // The pixel's level-0 sites, radiance-cached glossy surfaces included.
+                    let sites = record_sites(scene, &ray, levels, cache.radiance.as_deref());
+                    for (_, sp) in sites.iter().filter(|(depth, _)| *depth == 0) {
                         acc.extend(cache.levels[0].serving(sp.it.p, sp.n, 1.0));
                     }
                     acc
