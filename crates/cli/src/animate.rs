@@ -42,8 +42,8 @@ pub struct AnimateArgs {
     #[arg(long, default_value = "interpolated", value_parser = parse_gradients)]
     pub temporal_gradients: SlopeKind,
     /// Everything `ircache render` takes; SCENE is an `<animation>` file or a still scene
-    /// (which then needs --frames), and -o a file name whose run of `#` is the frame number
-    /// (default `frame-####.exr`).
+    /// (which then needs --frames; none: the built-in Cornell box), and -o a file name whose
+    /// run of `#` is the frame number (default: the scene's name, `-####.exr`).
     #[command(flatten)]
     pub render: RenderArgs,
 }
@@ -96,7 +96,8 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
 fn load(args: &RenderArgs) -> Result<(SceneDesc, Animation)> {
     let defines = parse_defines(&args.define)?;
     let Some(path) = &args.scene else {
-        bail!("ircache animate needs a scene: an <animation> file or a scene file");
+        // The built-in Cornell box, still.
+        return Ok((crate::render::load(args)?, Animation::default()));
     };
     let is_animation = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read", path.display()))?
@@ -124,10 +125,12 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         (None, n) if n > 0 => (0, n - 1),
         (None, _) => bail!("a still scene needs --frames A..B"),
     };
-    let pattern = r
-        .output
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("frame-####.exr"));
+    // By default the scene's name (as `render` names its image) and the frame number.
+    let pattern = r.output.clone().unwrap_or_else(|| {
+        let name = crate::render::default_output(r);
+        let stem = name.file_stem().unwrap_or_default().to_string_lossy();
+        PathBuf::from(format!("{stem}-####.exr"))
+    });
     check_writable(&frame_path(&pattern, first)?)?;
     let integrator = integrator(r, &base)?;
     let settings = settings(r, &base)?;

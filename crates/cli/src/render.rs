@@ -219,7 +219,7 @@ fn load_builtin(defines: &[(String, String)]) -> Result<SceneDesc> {
     Ok(result?)
 }
 
-fn default_output(args: &RenderArgs) -> PathBuf {
+pub fn default_output(args: &RenderArgs) -> PathBuf {
     let stem = args
         .scene
         .as_ref()

@@ -1080,6 +1080,15 @@ fn animate_bad_input_names_the_place() {
     // A still scene needs --frames; an output name without # is refused before rendering.
     let o = ircache(&["animate", &scene, "-q"], &d);
     assert!(!o.status.success() && stderr(&o).contains("--frames"));
+    // No scene: the built-in Cornell box, still, its frames named after it.
+    let o = ircache(
+        &[
+            "animate", "--frames", "0..1", "--width", "8", "--height", "8", "--spp", "1", "-q",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(d.join("cornell-box-0000.exr").is_file() && d.join("cornell-box-0001.exr").is_file());
     let o = ircache(
         &["animate", &scene, "--frames", "0..1", "-o", "f.exr", "-q"],
         &d,
