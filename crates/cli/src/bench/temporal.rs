@@ -132,6 +132,12 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             "\n{} ({}, frames {}..{}, {w}×{h}, max_depth {})",
             case.name, case.file, case.frames.0, case.frames.1, desc.integrator.max_depth
         );
+        if animation.tracks.iter().any(|t| t.target == Target::Camera) {
+            bail!(
+                "{}: the Mitsuba frames move shapes only, not the camera",
+                file.display()
+            );
+        }
         // The frames' motions, from ircache's own animation code.
         let motions: Vec<Vec<(String, [f32; 16])>> = (case.frames.0..=case.frames.1)
             .map(|f| {
