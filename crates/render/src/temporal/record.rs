@@ -66,8 +66,6 @@ pub struct TemporalRecord {
     pub kind: SlopeKind,
     /// The record that replaced it at its place, if any.
     pub successor: Option<u32>,
-    /// Its gather may see something that moves (the age-based cache renews these first).
-    pub sees_moving: bool,
 }
 
 impl TemporalRecord {
@@ -248,7 +246,6 @@ mod tests {
             slope,
             kind: SlopeKind::Interpolated,
             successor: None,
-            sees_moving: false,
         };
         let at = tr.at(16, None);
         assert!((at.e.r - 1.6).abs() < 1e-6);

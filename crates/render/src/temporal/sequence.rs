@@ -236,13 +236,6 @@ impl SequenceCache {
         mix(self.seed ^ 0x7465_6d70_6f72_616c, u64::from(frame))
     }
 
-    /// Record `i` as it is at `frame`, moved with its shape.
-    fn record_at(&self, i: usize, frame: u32, motion: &dyn Motion) -> Record {
-        let tr = &self.records[i];
-        let m = motion.motion(tr.site.point.it.shape, tr.born, frame);
-        tr.at(frame, m.as_ref())
-    }
-
     /// The cache serving `frame`: the records alive then at their value for it (5.11).
     ///
     /// # Errors
@@ -275,10 +268,11 @@ impl SequenceCache {
         let mut slots = vec![Vec::new(); cache.levels.len()];
         for (i, tr) in self.records.iter().enumerate() {
             if tr.live_at(frame) {
-                let mut r = self.record_at(i, frame, motion);
+                // Moved with its shape.
+                let m = motion.motion(tr.site.point.it.shape, tr.born, frame);
+                let mut r = tr.at(frame, m.as_ref());
                 r.radiance = NO_RADIANCE;
                 if let Some(track) = &self.radiance[i] {
-                    let m = motion.motion(tr.site.point.it.shape, tr.born, frame);
                     r.radiance = cache.radiance_records.len() as u32;
                     cache
                         .radiance_records
@@ -382,6 +376,7 @@ impl SequenceCache {
         }
 
         // Records where none serves: the ordinary pre-pass over the frame's pixels.
+        let first_filled = self.records.len();
         let (w, h) = self.size;
         let (fill, sites) =
             pool.install(|| fill_for_image(scene, &mut cache, w, h, 0..h, seed, &mut ()));
@@ -401,23 +396,18 @@ impl SequenceCache {
                 stats.new += 1;
             }
         }
-        // Records gathered again by the pre-pass's re-gather have their final values now.
+        // The successors' radii as the pre-pass's records, inserted after them, clamped them
+        // (the pre-pass's own records were read after it, as they stay).
         for (level, ids) in slots.iter().enumerate() {
             for (index, &id) in ids.iter().enumerate() {
-                if id as usize >= first_new {
-                    let r = cache.levels[level].records()[index];
-                    self.records[id as usize].record = r;
-                    if let Some(c) = cache.radiance_records.get(r.radiance as usize) {
-                        self.radiance[id as usize] = Some(RadianceTrack::constant(c.clone()));
-                    }
+                if (first_new..first_filled).contains(&(id as usize)) {
+                    self.records[id as usize].record = cache.levels[level].records()[index];
                 }
             }
         }
 
-        self.set_lives(
-            frame, first_new, &cache, scene, next, motion, pool, &mut stats,
-        );
-        self.mark_used(frame, scene, &cache, &slots, pool);
+        self.set_lives(frame, first_new, &cache, next, motion, pool, &mut stats);
+        self.mark_used(scene, &cache, &slots, pool);
         stats.live = slots.iter().map(Vec::len).sum();
         stats.seconds = start.elapsed().as_secs_f64();
         Ok(stats)
@@ -464,17 +454,12 @@ impl SequenceCache {
                         stats.dropped += 1;
                     }
                 }
-                for &i in &live {
-                    let tr = &self.records[i];
-                    let p = self.records[i].site.point.it.p;
-                    let n = self.records[i].record.n;
-                    let on_mover = movers.iter().any(|m| m.shape == tr.site.point.it.shape);
-                    self.records[i].sees_moving =
-                        on_mover || movers.iter().any(|m| m.seen_from(p, n));
-                }
-                // Those that see moving things first, then by age (000 §3.7.3); any record
+                // Those that may see moving things first, then by age (000 §3.7.3); any record
                 // twice δt_max old is renewed whatever the share.
-                live.sort_by_key(|&i| (!self.records[i].sees_moving, self.records[i].born, i));
+                live.sort_by_cached_key(|&i| {
+                    let tr = &self.records[i];
+                    (!sees_moving(&movers, tr), tr.born, i)
+                });
                 let share = live.len().div_ceil(self.params.max_lifespan as usize);
                 let too_old = 2 * self.params.max_lifespan;
                 for (rank, &i) in live.iter().enumerate() {
@@ -527,7 +512,6 @@ impl SequenceCache {
             slope: Slope::default(),
             kind: SlopeKind::Constant,
             successor: None,
-            sees_moving: false,
         }
     }
 
@@ -538,7 +522,6 @@ impl SequenceCache {
         frame: u32,
         first: usize,
         cache: &IrradianceCache,
-        scene: &Scene,
         next: Option<&Scene>,
         motion: &dyn Motion,
         pool: &rayon::ThreadPool,
@@ -547,13 +530,9 @@ impl SequenceCache {
         match (self.params.mode, next) {
             (CacheMode::PerFrame, _) | (CacheMode::Temporal, None) => {}
             (CacheMode::Age, _) => {
-                let movers = movers(scene, motion);
+                // Until picked for renewal.
                 for tr in &mut self.records[first..] {
                     tr.last = u32::MAX;
-                    let (p, n) = (tr.record.p, tr.record.n);
-                    tr.sees_moving = movers
-                        .iter()
-                        .any(|m| m.shape == tr.site.point.it.shape || m.seen_from(p, n));
                 }
             }
             (CacheMode::Temporal, Some(next)) => {
@@ -563,43 +542,42 @@ impl SequenceCache {
                     scene: next,
                     deeper: cache.params.deeper,
                 };
-                let estimates: Vec<(Record, Option<RadianceRecord>, u64)> = pool.install(|| {
-                    self.records[first..]
-                        .par_iter()
-                        .with_max_len(1)
-                        .map(|tr| {
-                            let g = Gatherer {
-                                light: &light,
-                                cache,
-                                seed: tr.seed,
-                            };
-                            let shape = tr.site.point.it.shape;
-                            let ahead = motion.motion(shape, frame, frame + 1);
-                            let point =
-                                ahead.map_or(tr.site.point, |m| move_point(&tr.site.point, &m));
-                            let site = Site { point, ..tr.site };
-                            let mut st = WorkState::new(cache.levels.len());
-                            let rec = gather(&g, &mut st, &site, tr.record.level);
-                            let back = motion.motion(shape, frame + 1, frame);
-                            let radiance = st.radiance.get(rec.radiance as usize).cloned();
-                            (
-                                back.map_or(rec, |m| move_record(&rec, &m)),
-                                radiance,
-                                st.counts.gather_rays,
-                            )
-                        })
-                        .collect()
-                });
+                let estimates: Vec<(Record, Option<RadianceRecord>, bool, u64)> =
+                    pool.install(|| {
+                        self.records[first..]
+                            .par_iter()
+                            .with_max_len(1)
+                            .map(|tr| {
+                                let g = Gatherer {
+                                    light: &light,
+                                    cache,
+                                    seed: tr.seed,
+                                };
+                                let shape = tr.site.point.it.shape;
+                                let ahead = motion.motion(shape, frame, frame + 1);
+                                let point =
+                                    ahead.map_or(tr.site.point, |m| move_point(&tr.site.point, &m));
+                                let site = Site { point, ..tr.site };
+                                let mut st = WorkState::new(cache.levels.len());
+                                let rec = gather(&g, &mut st, &site, tr.record.level);
+                                let back = motion.motion(shape, frame + 1, frame);
+                                let radiance = st.radiance.get(rec.radiance as usize).cloned();
+                                (
+                                    back.map_or(rec, |m| move_record(&rec, &m)),
+                                    radiance,
+                                    ahead.is_some(),
+                                    st.counts.gather_rays,
+                                )
+                            })
+                            .collect()
+                    });
                 let floor = change_floor(&self.records[first..]);
                 let params = self.params;
-                for (i, (next_rec, next_radiance, rays)) in (first..).zip(estimates) {
+                for (i, (next_rec, next_radiance, moving, rays)) in (first..).zip(estimates) {
                     stats.estimates += 1;
                     stats.gather_rays += rays;
                     let tr = &mut self.records[i];
                     let mut change = relative_change(tr.record.e, next_rec.e, floor);
-                    let moving = motion
-                        .motion(tr.site.point.it.shape, frame, frame + 1)
-                        .is_some();
                     if let Some(track) = &mut self.radiance[i] {
                         match next_radiance {
                             // 5.7 with the norm ratio; the coefficients compare in one frame
@@ -628,17 +606,16 @@ impl SequenceCache {
         }
     }
 
-    /// Marks the records that serve some pixel centre's first record site at `frame` (the CPU's
-    /// stand-in for §5.3's occlusion query); deeper levels' records count as used.
+    /// Marks the records that serve some pixel centre's level-0 record site in the frame of
+    /// `scene` (the CPU's stand-in for §5.3's occlusion query); deeper levels' records count as
+    /// used.
     fn mark_used(
         &mut self,
-        frame: u32,
         scene: &Scene,
         cache: &IrradianceCache,
         slots: &[Vec<u32>],
         pool: &rayon::ThreadPool,
     ) {
-        let _ = frame;
         let (w, h) = self.size;
         let levels = cache.levels.len() as u32;
         let inv = Vec2::new(1.0 / w as f32, 1.0 / h as f32);
@@ -669,12 +646,6 @@ impl SequenceCache {
                 self.used[id as usize] = true;
             }
         }
-    }
-
-    /// Records gathered over the sequence (renewals and new records; not the estimates).
-    #[must_use]
-    pub fn records_made(&self) -> usize {
-        self.records.len()
     }
 }
 
@@ -723,6 +694,15 @@ impl Mover {
         let solid_angle = 2.0 * std::f32::consts::PI * (1.0 - (1.0 - sin2).max(0.0).sqrt());
         self.emits || solid_angle > 0.01 * 2.0 * std::f32::consts::PI
     }
+}
+
+/// Whether the record may see something that moves: it sits on a moving shape, or a mover is
+/// [`Mover::seen_from`] its position.
+fn sees_moving(movers: &[Mover], tr: &TemporalRecord) -> bool {
+    let (p, n) = (tr.site.point.it.p, tr.record.n);
+    movers
+        .iter()
+        .any(|m| m.shape == tr.site.point.it.shape || m.seen_from(p, n))
 }
 
 /// The shapes of `scene` that move, as bounding spheres.
