@@ -307,28 +307,22 @@ pub fn probe_tracks(
     at_least(frames, 2)?;
     same_size(&[frames, reference])?;
     let (w, h) = (frames[0].width, frames[0].height);
-    let window = |img: &Image, x: usize, y: usize| {
-        let (mut s, mut n) = (0.0, 0);
-        for yy in y.saturating_sub(r)..=(y + r).min(h - 1) {
-            for xx in x.saturating_sub(r)..=(x + r).min(w - 1) {
-                s += luminance(img.get(xx, yy));
-                n += 1;
-            }
-        }
-        s / f64::from(n)
-    };
+    let (lf, lr): (Vec<Vec<f64>>, Vec<Vec<f64>>) = (
+        frames.iter().map(lum).collect(),
+        reference.iter().map(lum).collect(),
+    );
     Ok(points
         .iter()
         .map(|&(x, y)| {
             let (x, y) = (x.min(w - 1), y.min(h - 1));
-            let refs: Vec<f64> = reference
+            let refs: Vec<f64> = lr
                 .iter()
-                .map(|r| window(r, x, y).max(1e-12))
+                .map(|l| window_mean(l, w, h, x, y, r).max(1e-12))
                 .collect();
-            let ratios: Vec<f64> = frames
+            let ratios: Vec<f64> = lf
                 .iter()
                 .zip(&refs)
-                .map(|(f, r)| window(f, x, y) / r)
+                .map(|(l, r_mean)| window_mean(l, w, h, x, y, r) / r_mean)
                 .collect();
             ProbeTrack {
                 x,
@@ -452,20 +446,21 @@ pub fn report(
 
 /// A (2r+1)² box filter of a luminance plane, clamped at the borders.
 fn box_filter(l: &[f64], w: usize, h: usize, r: usize) -> Vec<f64> {
-    let mut out = vec![0.0; w * h];
-    for y in 0..h {
-        for x in 0..w {
-            let (mut s, mut n) = (0.0, 0);
-            for yy in y.saturating_sub(r)..=(y + r).min(h - 1) {
-                for xx in x.saturating_sub(r)..=(x + r).min(w - 1) {
-                    s += l[yy * w + xx];
-                    n += 1;
-                }
-            }
-            out[y * w + x] = s / f64::from(n);
+    (0..w * h)
+        .map(|i| window_mean(l, w, h, i % w, i / w, r))
+        .collect()
+}
+
+/// The mean of a luminance plane over the (2r+1)² window at (x, y), clamped at the borders.
+fn window_mean(l: &[f64], w: usize, h: usize, x: usize, y: usize, r: usize) -> f64 {
+    let (mut s, mut n) = (0.0, 0);
+    for yy in y.saturating_sub(r)..=(y + r).min(h - 1) {
+        for xx in x.saturating_sub(r)..=(x + r).min(w - 1) {
+            s += l[yy * w + xx];
+            n += 1;
         }
     }
-    out
+    s / f64::from(n)
 }
 
 #[cfg(test)]

@@ -14,7 +14,7 @@ use super::mitsuba_render_frames;
 use super::radiance::own_scenes;
 use crate::compare::read_sequence as read_frames;
 use anyhow::{bail, Context, Result};
-use ircache_image::flicker::{report, ReferenceSequence};
+use ircache_image::flicker::{report, ReferenceSequence, SequenceReport};
 use ircache_image::Image;
 use ircache_scene::animation::{load_animation, Target};
 use std::path::Path;
@@ -39,35 +39,31 @@ struct Case {
     no_search: Option<&'static str>,
 }
 
-/// What a sequence measured.
-#[derive(Clone, Copy, Debug, Default)]
+/// What a sequence measured, and how long it took.
+#[derive(Clone, Copy, Debug)]
 struct Measured {
     seconds: f64,
-    flicker: f64,
-    high_pass: f64,
-    rel_mse: f64,
-    near_motion: f64,
-    probe_step: f64,
-    probe_error: f64,
+    report: SequenceReport,
 }
 
 fn measure(frames: &[Image], seconds: f64, r: &ReferenceSequence) -> Result<Measured> {
-    let m = report(frames, r)?;
     Ok(Measured {
         seconds,
-        flicker: m.flicker_index,
-        high_pass: m.high_pass_error.unwrap_or(f64::NAN),
-        rel_mse: m.rel_mse_trim,
-        near_motion: m.rel_mse_trim_near_motion.unwrap_or(f64::NAN),
-        probe_step: m.probe_max_step,
-        probe_error: m.probe_max_error,
+        report: report(frames, r)?,
     })
 }
 
 fn show(label: &str, m: &Measured, extra: &str) {
+    let r = &m.report;
     println!(
         "  {label:<34} {:>8.1} s  FI {:.2e}  FHP {:.2e}  relMSE_trim {:.3e}  near motion {:.3e}  probe step {:.3} err {:.3}  {extra}",
-        m.seconds, m.flicker, m.high_pass, m.rel_mse, m.near_motion, m.probe_step, m.probe_error
+        m.seconds,
+        r.flicker_index,
+        r.high_pass_error.unwrap_or(f64::NAN),
+        r.rel_mse_trim,
+        r.rel_mse_trim_near_motion.unwrap_or(f64::NAN),
+        r.probe_max_step,
+        r.probe_max_error
     );
 }
 
@@ -239,12 +235,15 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             let m = measure(&read_frames(&pattern, case.frames)?, seconds, &reference)?;
             show(&format!("Mitsuba multijitter, {spp} spp"), &m, "");
             series.push(m);
-            if m.rel_mse <= temporal.rel_mse || seconds > 30.0 * temporal.seconds || spp >= 4096 {
+            if m.report.rel_mse_trim <= temporal.report.rel_mse_trim
+                || seconds > 30.0 * temporal.seconds
+                || spp >= 4096
+            {
                 break;
             }
             spp *= 2;
         }
-        let equal = equal_error_seconds(&series, temporal.rel_mse);
+        let equal = equal_error_seconds(&series, temporal.report.rel_mse_trim);
         match equal {
             Some(t) => println!(
                 "  Mitsuba multijitter at the temporal cache's relMSE: {t:.1} s, {:.2}× the temporal cache's {:.1} s",
@@ -260,11 +259,12 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
 /// The time at which the series reaches `error`, interpolated between the two sequences that
 /// bracket it in log error against log time; `None` when none reaches it.
 fn equal_error_seconds(series: &[Measured], error: f64) -> Option<f64> {
-    let hit = series.iter().position(|m| m.rel_mse <= error)?;
+    let hit = series.iter().position(|m| m.report.rel_mse_trim <= error)?;
     if hit == 0 {
         return Some(series[0].seconds);
     }
     let (p, q) = (&series[hit - 1], &series[hit]);
-    let s = (error.ln() - p.rel_mse.ln()) / (q.rel_mse.ln() - p.rel_mse.ln());
+    let (pe, qe) = (p.report.rel_mse_trim, q.report.rel_mse_trim);
+    let s = (error.ln() - pe.ln()) / (qe.ln() - pe.ln());
     Some((p.seconds.ln() + s * (q.seconds.ln() - p.seconds.ln())).exp())
 }
