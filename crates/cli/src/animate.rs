@@ -12,7 +12,7 @@ use ircache_render::render::render;
 use ircache_render::scene::Scene;
 use ircache_render::temporal::record::SlopeKind;
 use ircache_render::temporal::{CacheMode, FrameStats, SequenceCache, TemporalParams};
-use ircache_scene::animation::{load_animation, Animation};
+use ircache_scene::animation::{is_animation, load_animation, Animation};
 use ircache_scene::SceneDesc;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -99,16 +99,10 @@ fn load(args: &RenderArgs) -> Result<(SceneDesc, Animation)> {
         // The built-in Cornell box, still.
         return Ok((crate::render::load(args)?, Animation::default()));
     };
-    let is_animation = std::fs::read_to_string(path)
-        .with_context(|| format!("{}: cannot read", path.display()))?
-        .lines()
-        .any(|l| l.trim_start().starts_with("<animation"));
-    let (desc, animation) = if is_animation {
-        load_animation(path, &defines)?
-    } else {
-        let desc = crate::render::load(args)?;
-        return Ok((desc, Animation::default()));
-    };
+    if !is_animation(path)? {
+        return Ok((crate::render::load(args)?, Animation::default()));
+    }
+    let (desc, animation) = load_animation(path, &defines)?;
     Ok((apply_overrides(args, desc)?, animation))
 }
 

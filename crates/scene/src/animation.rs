@@ -174,6 +174,26 @@ fn transform_geometry(g: &mut Geometry, m: &Mat4) {
     }
 }
 
+/// Whether `path` is an animation file: an `.xml` file whose root element is `<animation>`
+/// (anything else, malformed XML included, is left to the scene loaders to read or report).
+///
+/// # Errors
+/// An `.xml` file that cannot be read.
+pub fn is_animation(path: &Path) -> Result<bool, SceneError> {
+    let xml = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"));
+    if !xml {
+        return Ok(false);
+    }
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    Ok(roxmltree::Document::parse(&text)
+        .is_ok_and(|doc| doc.root_element().tag_name().name() == "animation"))
+}
+
 /// Reads an animation file and the scene it names (with `-D` overrides): the scene at rest and
 /// its motions.
 ///
@@ -586,6 +606,27 @@ mod tests {
             }
         }
         assert!(anim.is_moving(light) && anim.moves_shapes());
+    }
+
+    #[test]
+    fn animation_files_are_told_from_scenes_by_their_root() {
+        let anim = animation_file("root.xml", "");
+        assert!(is_animation(&anim).unwrap());
+        let scene = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenes/cube-in-box/scene.xml"
+        );
+        assert!(!is_animation(Path::new(scene)).unwrap());
+        // A scene whose comment mentions <animation> at a line's start is still a scene.
+        let dir = anim.parent().unwrap().to_path_buf();
+        let commented = dir.join("commented.xml");
+        std::fs::write(
+            &commented,
+            "<!--\n<animation> files move shapes\n-->\n<scene version=\"3.0.0\"/>\n",
+        )
+        .unwrap();
+        assert!(!is_animation(&commented).unwrap());
+        assert!(!is_animation(Path::new("model.obj")).unwrap());
     }
 
     #[test]
