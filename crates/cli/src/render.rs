@@ -437,6 +437,18 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
             c.pixel_seconds,
             c.uncached_samples
         );
+        if let Some(maps) = &c.cache.photons {
+            for map in std::iter::once(&maps.global).chain(&maps.caustic) {
+                eprintln!(
+                    "{:?} photon map: {} photons stored of {} emitted, {:.1} M rays, {:.2} s",
+                    map.kind,
+                    map.stats.stored,
+                    map.stats.emitted,
+                    map.stats.rays as f64 * 1e-6,
+                    map.seconds
+                );
+            }
+        }
         if let Some(sp) = &c.splat {
             eprintln!(
                 "splatting: {} layers, {} record splats, {} records gathered at misses; \
@@ -508,6 +520,18 @@ fn write_stats(
             "pixel_seconds": c.pixel_seconds,
             "uncached_samples": c.uncached_samples,
             "supersampled_cells": st.supersampled_cells,
+            "photon_maps": c.cache.photons.as_ref().map(|m| {
+                std::iter::once(&m.global)
+                    .chain(&m.caustic)
+                    .map(|map| serde_json::json!({
+                        "kind": format!("{:?}", map.kind).to_lowercase(),
+                        "stored": map.stats.stored,
+                        "emitted": map.stats.emitted,
+                        "rays": map.stats.rays,
+                        "seconds": map.seconds,
+                    }))
+                    .collect::<Vec<_>>()
+            }),
             // Every cache parameter, from the parameter table.
             "cache_params": p
                 .to_pairs()

@@ -9,6 +9,7 @@
 //! - [`irradiance_cache`]: Ward's irradiance cache with gradients (the `ic` integrator's records).
 //! - [`radiance_cache`]: radiance caching of glossy light in hemispherical harmonics (issue 10, begun).
 //! - [`splatting`]: radiance cache splatting and the progressive walkthrough (001 ch. 4).
+//! - [`photon_map`]: photon tracing, the global and caustic maps, density estimation (001 §2.4, ch. 6).
 //! - [`temporal`]: animations: temporal radiance caching, age-based invalidation (001 ch. 5).
 //! - [`render`]: the parallel, deterministic tile loop.
 
@@ -18,6 +19,7 @@ pub mod film;
 pub mod integrators;
 pub mod irradiance_cache;
 pub mod lights;
+pub mod photon_map;
 pub mod radiance_cache;
 pub mod render;
 pub mod sampler;

@@ -258,21 +258,62 @@ impl IndirectSource for PixelLookup<'_> {
         if cache.is_excluded(sp.it.shape) {
             return Some(cache.ambient * std::f32::consts::PI);
         }
+        // Caustics where records serve; the global map holds its own.
+        Some(match self.cached(scene, sp, depth, sampler, rays)? {
+            Served::Records(e) => e + cache.caustic_irradiance(sp, depth),
+            Served::Photons(e) => e,
+        })
+    }
+
+    fn glossy(&mut self, _: &Scene, sp: &ShadingPoint, depth: u32, wo: Vec3) -> Option<Rgb> {
+        if let (0, Some(l)) = (depth, self.splatted.glossy) {
+            return Some(l);
+        }
+        crate::radiance_cache::lookup::glossy(self.cache, sp, depth, wo)
+    }
+
+    fn held_environment(&self, sp: &ShadingPoint) -> HeldEnvironment {
+        self.cache.held_environment_at(sp)
+    }
+
+    fn ambient(&self) -> Rgb {
+        self.cache.ambient
+    }
+}
+
+impl PixelLookup<'_> {
+    /// The irradiance records serve at `sp` (caustics aside), or from the global photon map at a
+    /// vertex two or more bounces beyond the camera's first that no record reaches (the first
+    /// such vertex of a path seen through glossy or specular reflection is traced: its hits,
+    /// one bounce further, read the map, as a final gather).
+    fn cached(
+        &mut self,
+        scene: &Scene,
+        sp: &ShadingPoint,
+        depth: u32,
+        sampler: &mut dyn Sampler,
+        rays: &mut RayCounts,
+    ) -> Option<Served> {
+        let cache = self.cache;
         if depth == 0 {
             if let Some(e) = self.splatted.irradiance {
-                return Some(e);
+                return Some(Served::Records(e));
             }
             if self.splatted.trace_misses {
                 return None;
             }
         }
-        let store = cache.levels.get(depth as usize)?;
-        for threshold in [1.0, 2.0, 4.0] {
-            if let Some(i) =
-                store.interpolate(sp.it.p, sp.n, sp.n_bump, threshold, cache.params.gradients)
-            {
-                return Some(i.e);
+        if let Some(store) = cache.levels.get(depth as usize) {
+            for threshold in [1.0, 2.0, 4.0] {
+                if let Some(i) =
+                    store.interpolate(sp.it.p, sp.n, sp.n_bump, threshold, cache.params.gradients)
+                {
+                    return Some(Served::Records(i.e));
+                }
             }
+        }
+        if depth >= 2 {
+            return cache.photon_irradiance(sp, depth).map(Served::Photons);
         }
         if depth > 0 {
             return None;
@@ -294,21 +335,14 @@ impl IndirectSource for PixelLookup<'_> {
         let rec = g.record_with(&mut st, sp, 0, key, strata);
         rays.gather += st.counts.gather_rays;
         rays.shadow += st.counts.shadow_rays;
-        Some(rec.e)
+        Some(Served::Records(rec.e))
     }
+}
 
-    fn glossy(&mut self, _: &Scene, sp: &ShadingPoint, depth: u32, wo: Vec3) -> Option<Rgb> {
-        if let (0, Some(l)) = (depth, self.splatted.glossy) {
-            return Some(l);
-        }
-        crate::radiance_cache::lookup::glossy(self.cache, sp, depth, wo)
-    }
-
-    fn held_environment(&self, sp: &ShadingPoint) -> HeldEnvironment {
-        self.cache.held_environment_at(sp)
-    }
-
-    fn ambient(&self) -> Rgb {
-        self.cache.ambient
-    }
+/// Where a pixel-pass vertex's Lambertian indirect light came from.
+enum Served {
+    /// Irradiance records (caustics left to the caustic map).
+    Records(Rgb),
+    /// The global photon map (caustics included).
+    Photons(Rgb),
 }

@@ -53,6 +53,12 @@ pub trait IndirectSource {
         Rgb::ZERO
     }
 
+    /// True when caustics at the vertices it serves come from elsewhere (a caustic map): a
+    /// gather's paths then leave out emitters reached through delta lobes alone.
+    fn caustics_served(&self) -> bool {
+        false
+    }
+
     /// False when it never serves anything (plain path tracing skips the Lambertian split).
     fn serves(&self) -> bool {
         true
@@ -188,6 +194,9 @@ pub fn trace_path(
     let mut l = Rgb::ZERO;
     let mut eta = 1.0f32;
     let mut first = first;
+    // A gather's path while it has left only through delta lobes: the emission it finds is a
+    // caustic, which a caustic map serves instead where the source says so.
+    let mut caustic_chain = matches!(arrival, Arrival::Gather) && source.caustics_served();
     loop {
         if depth >= max_depth {
             break;
@@ -197,7 +206,7 @@ pub fn trace_path(
             None => scene.intersect(&ray),
         };
         let Some(it) = hit else {
-            if scene.lights.has_environment() {
+            if scene.lights.has_environment() && !caustic_chain {
                 let w = arrival.emission_weight(|p| scene.lights.pdf_environment(p, ray.d));
                 if w > 0.0 {
                     l += beta * scene.lights.environment_radiance(ray.d) * w;
@@ -207,7 +216,7 @@ pub fn trace_path(
         };
         let wo = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
-        if let Some(light) = shape.area_light {
+        if let Some(light) = shape.area_light.filter(|_| !caustic_chain) {
             let le = scene.lights.area_radiance(light, it.frame.n, wo);
             if !le.is_black() {
                 let w = arrival.emission_weight(|p| {
@@ -308,6 +317,7 @@ pub fn trace_path(
         }
         beta *= bs.weight;
         eta *= bs.eta;
+        caustic_chain &= bs.delta;
         arrival = Arrival::Bsdf {
             p: it.p,
             pdf: bs.pdf,

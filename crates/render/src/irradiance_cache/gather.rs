@@ -18,6 +18,7 @@ use crate::integrators::path_continuation::{
     trace_path, Arrival, IndirectSource, PathSettings, PathStart,
 };
 use crate::integrators::RayCounts;
+use crate::photon_map::PhotonMaps;
 use crate::radiance_cache::brdf::BrdfCoefficients;
 use crate::radiance_cache::gather::RadianceCoefficients;
 use crate::radiance_cache::record::RadianceRecord;
@@ -56,6 +57,9 @@ pub struct IrradianceCache {
     pub radiance_records: Vec<RadianceRecord>,
     /// Which records hold the environment's light ([`super::environment`]).
     pub environment: HeldEnvironment,
+    /// The photon maps (`--photons`, `--caustic-photons`): the global map serves the vertices
+    /// beyond a record's gather hits, the caustic map adds caustics where records serve.
+    pub photons: Option<Arc<PhotonMaps>>,
 }
 
 impl IrradianceCache {
@@ -175,11 +179,49 @@ impl IrradianceCache {
             radiance_records: Vec::new(),
             pixel_angle: 0.0,
             environment: HeldEnvironment::None,
+            photons: None,
         };
         cache.levels = (0..params.bounces.clamp(1, super::params::MAX_STORED_LEVELS))
             .map(|_| cache.empty_store())
             .collect();
         cache
+    }
+
+    /// Irradiance from the global photon map at a vertex at `depth` of a path, from photons that
+    /// can end there within the bounces (001 §2.4's final gather: a photon of b bounces ends
+    /// a path of depth + b + 2 vertices); `None` without a global map.
+    #[must_use]
+    pub fn photon_irradiance(&self, sp: &ShadingPoint, depth: u32) -> Option<Rgb> {
+        let maps = self.photons.as_ref().filter(|_| self.params.photons > 0)?;
+        let bounces = self.params.max_depth().saturating_sub(depth + 2);
+        let bounces = bounces.min(u32::from(u16::MAX)) as u16;
+        Some(
+            maps.global
+                .irradiance(sp.it.p, sp.n, bounces, &maps.global_lookup),
+        )
+    }
+
+    /// Irradiance of caustics from the caustic map at a vertex at `depth` where records serve
+    /// (zero without a caustic map).
+    #[must_use]
+    pub fn caustic_irradiance(&self, sp: &ShadingPoint, depth: u32) -> Rgb {
+        let Some((map, lookup)) = self
+            .photons
+            .as_ref()
+            .and_then(|m| m.caustic.as_ref().map(|c| (c, &m.caustic_lookup)))
+        else {
+            return Rgb::ZERO;
+        };
+        let bounces = self.params.max_depth().saturating_sub(depth + 2);
+        let bounces = bounces.min(u32::from(u16::MAX)) as u16;
+        map.irradiance(sp.it.p, sp.n, bounces, lookup)
+    }
+
+    /// True when a caustic map serves the caustics at records' vertices: their gathers leave
+    /// out emitters reached through delta lobes alone.
+    #[must_use]
+    pub fn caustics_served(&self) -> bool {
+        self.photons.as_ref().is_some_and(|m| m.caustic.is_some())
     }
 
     /// Which records serving `sp` hold the environment's light (none on excluded surfaces).
@@ -885,6 +927,11 @@ impl IndirectSource for GatherSource<'_, '_> {
         if g.cache.is_excluded(sp.it.shape) {
             return Some(g.cache.ambient * std::f32::consts::PI);
         }
+        if depth > 0 {
+            if let Some(e) = g.cache.photon_irradiance(sp, depth) {
+                return Some(e);
+            }
+        }
         match self.deeper {
             Deeper::Cache if (depth as usize) < g.cache.levels.len() => {
                 Some(g.irradiance(self.st, sp, depth, self.key))
@@ -895,6 +942,10 @@ impl IndirectSource for GatherSource<'_, '_> {
 
     fn ambient(&self) -> Rgb {
         self.gatherer.cache.ambient
+    }
+
+    fn caustics_served(&self) -> bool {
+        self.gatherer.cache.caustics_served()
     }
 
     fn held_environment(&self, sp: &ShadingPoint) -> HeldEnvironment {

@@ -154,6 +154,14 @@ pub struct IcParams {
     pub radiance_accuracy: f32,
     /// Whether records hold the environment's light (`--cached-environment`).
     pub cached_environment: CachedEnvironment,
+    /// Photons in the global map for the cached final gather (`--photons`); 0: off.
+    pub photons: u64,
+    /// Photons in the caustic map, read at the pixel (`--caustic-photons`); 0: off.
+    pub caustic_photons: u64,
+    /// Photons per global-map estimate (`--photon-lookup`).
+    pub photon_lookup: usize,
+    /// Largest lookup radius as a fraction of the scene size (`--photon-radius`).
+    pub photon_radius: f32,
 }
 
 impl Default for IcParams {
@@ -183,6 +191,11 @@ impl Default for IcParams {
             radiance_order: 10,
             radiance_accuracy: 0.35,
             cached_environment: CachedEnvironment::Auto,
+            photons: 0,
+            caustic_photons: 0,
+            // Mitsuba 0.6's photonmapper takes 120 for its global map, Radiance 50.
+            photon_lookup: 100,
+            photon_radius: 0.05,
         }
     }
 }
@@ -568,6 +581,63 @@ pub const PARAMS: &[ParamSpec] = &[
             Ok(())
         },
     },
+    ParamSpec {
+        name: "photons",
+        aliases: &[],
+        value: "N",
+        help: "photons in the global map (stored, after at least one bounce): a record's gather \
+               rays read the indirect light of the surfaces they hit from it instead of tracing \
+               on (Jensen's cached final gather, Radiance's -ap); 0: off",
+        shapes_records: true,
+        get: |p| p.photons.to_string(),
+        set: |p, v| {
+            p.photons = number(v, 0, 1_000_000_000, "a number of photons")?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "caustic_photons",
+        aliases: &[],
+        value: "N",
+        help: "photons in the caustic map (light through glass and off mirrors onto Lambertian \
+               surfaces), read at the pixel; the gather then leaves those paths out; 0: caustics \
+               come from the gather",
+        shapes_records: true,
+        get: |p| p.caustic_photons.to_string(),
+        set: |p, v| {
+            p.caustic_photons = number(v, 0, 1_000_000_000, "a number of photons")?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "photon_lookup",
+        aliases: &[],
+        value: "N",
+        help: "photons per estimate in the global map (the caustic map takes half as many)",
+        shapes_records: true,
+        get: |p| p.photon_lookup.to_string(),
+        set: |p, v| {
+            p.photon_lookup = number(v, 1, 100_000, "a number of photons")?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "photon_radius",
+        aliases: &[],
+        value: "F",
+        help: "largest photon lookup radius as a fraction of the scene size (the caustic \
+               map's a quarter of it)",
+        shapes_records: true,
+        get: |p| p.photon_radius.to_string(),
+        set: |p, v| {
+            let r: f32 = number(v, 0.0, 1.0, "a fraction of the scene size")?;
+            if r <= 0.0 {
+                return Err(format!("expected a fraction above 0, found {r}"));
+            }
+            p.photon_radius = r;
+            Ok(())
+        },
+    },
 ];
 
 /// The entry named `name` (its name, with dashes or underscores, or an alias).
@@ -605,6 +675,20 @@ impl IcParams {
             return Err(
                 "unbounded bounces (max_depth -1) need --deeper-bounces traced: give \
                  max_depth ≥ 2 or bounces for one cache per bounce level"
+                    .into(),
+            );
+        }
+        if self.photons > 0 && self.deeper == Deeper::Cache {
+            return Err(
+                "--photons serves the bounces beyond the records from the photon map: \
+                        it does not go with --deeper-bounces cache"
+                    .into(),
+            );
+        }
+        if self.caustic_photons > 0 && self.radiance_cache {
+            return Err(
+                "--caustic-photons does not go with --radiance-cache yet: radiance \
+                        records would lose the caustics they reflect"
                     .into(),
             );
         }

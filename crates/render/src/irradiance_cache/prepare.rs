@@ -6,6 +6,7 @@ use super::build::{fill_for_image, BatchHook};
 use super::file::{self, CacheFile, Header, Stored};
 use super::{CacheStats, IrradianceCache};
 use crate::integrators::ic::IcIntegrator;
+use crate::photon_map::{Lookup, PhotonMaps};
 use crate::radiance_cache::RadianceCache;
 use crate::render::RenderSettings;
 use crate::scene::{RenderError, Scene};
@@ -20,7 +21,7 @@ pub fn prepare_cache(
     pool: &rayon::ThreadPool,
 ) -> Result<(IrradianceCache, CacheStats), RenderError> {
     let tables_start = std::time::Instant::now();
-    let mut cache = empty_cache(scene, ic, settings.width, None, pool)?;
+    let mut cache = empty_cache(scene, ic, settings.width, None, settings.seed, pool)?;
     let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
     let header = header(scene, ic, settings.width);
     let mut loaded = 0u64;
@@ -88,12 +89,13 @@ pub fn prepare_cache(
 
 /// An empty cache for a `width`-pixel-wide view of `scene` with `ic`'s settings: radiance
 /// caching's tables made (or `tables`, made for the same materials, reused), exclusions
-/// resolved, the pixel footprint set.
+/// resolved, the pixel footprint set, the photon maps traced (on streams of `seed`).
 pub fn empty_cache(
     scene: &Scene,
     ic: &IcIntegrator,
     width: usize,
     tables: Option<&Arc<RadianceCache>>,
+    seed: u64,
     pool: &rayon::ThreadPool,
 ) -> Result<IrradianceCache, RenderError> {
     let mut cache = IrradianceCache::new(scene, &ic.params);
@@ -105,7 +107,48 @@ pub fn empty_cache(
     }
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     cache.pixel_angle = 2.0 * scene.camera.tan_half_x / width.max(1) as f32;
+    cache.photons = photon_maps(scene, &ic.params, seed, pool).map(Arc::new);
     Ok(cache)
+}
+
+/// The photon maps `params` ask for (`None` for none): the global map's photons serve vertices
+/// one bounce beyond a record, so they need at most `bounces − 1` bounces of their own.
+#[must_use]
+pub fn photon_maps(
+    scene: &Scene,
+    params: &super::IcParams,
+    seed: u64,
+    pool: &rayon::ThreadPool,
+) -> Option<PhotonMaps> {
+    if params.photons == 0 && params.caustic_photons == 0 {
+        return None;
+    }
+    let size = super::gather::scene_size(scene);
+    let radius = params.photon_radius * size;
+    let global = Lookup {
+        count: params.photon_lookup,
+        max_radius: radius,
+    };
+    let caustic = Lookup {
+        count: (params.photon_lookup / 2).max(1),
+        max_radius: radius * 0.25,
+    };
+    let bounces = params.bounces.saturating_sub(1).min(u32::from(u16::MAX)) as u16;
+    let photons = if params.bounces >= 2 {
+        params.photons
+    } else {
+        0
+    };
+    let seed = crate::irradiance_cache::gather::mix(seed, 0x7068_6f74_6f6e);
+    Some(pool.install(|| {
+        PhotonMaps::build(
+            scene,
+            (photons, params.caustic_photons),
+            bounces,
+            (global, caustic),
+            seed,
+        )
+    }))
 }
 
 /// The header of a cache file for `scene` rendered by `ic` at `width` pixels across.

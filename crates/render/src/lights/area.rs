@@ -17,8 +17,10 @@
 
 use super::rectangle::{Rectangle, SphericalRectangle};
 use super::{is_positive_finite, solid_angle_pdf};
-use ircache_math::sampling::{square_to_uniform_triangle, Distribution1D};
-use ircache_math::{Rgb, Vec2, Vec3};
+use ircache_math::sampling::{
+    square_to_cosine_hemisphere, square_to_uniform_triangle, Distribution1D,
+};
+use ircache_math::{Frame, Rgb, Vec2, Vec3, PI};
 use ircache_scene::TriangleMesh;
 
 /// A uniformly sampled point on an emitting surface with its normals.
@@ -165,6 +167,17 @@ impl MeshLight {
             None => ng,
         };
         SurfacePoint { p, ng, ns }
+    }
+
+    /// A photon start: a point uniform by area, a cosine-distributed direction about the
+    /// geometric normal turned to the emitting side; `(point, that normal, direction, flux
+    /// weight π L A)`, `None` where a bent shading normal leaves the direction unlit.
+    #[must_use]
+    pub fn sample_emission(&self, u_pos: Vec2, u_dir: Vec2) -> Option<(Vec3, Vec3, Vec3, Rgb)> {
+        let s = self.sample_position(u_pos);
+        let n = if s.ng.dot(s.ns) < 0.0 { -s.ng } else { s.ng };
+        let d = Frame::from_z(n).from_local(square_to_cosine_hemisphere(u_dir));
+        (d.dot(s.ns) > 0.0).then(|| (s.p, n, d, self.radiance * (PI * self.area)))
     }
 
     /// Samples a direction from `p_ref` towards the mesh: `(wi, distance, radiance, solid-angle pdf)`,

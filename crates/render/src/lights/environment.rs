@@ -111,6 +111,21 @@ impl EnvmapLight {
         (m1, m2)
     }
 
+    /// `∫ L dω` over the sphere per channel, each cell at the mean of its four corner texels.
+    #[must_use]
+    pub fn integral(&self) -> Rgb {
+        let w = self.width;
+        let l = |i: usize, j: usize| self.texels[j * w + i % w];
+        let mut sum = Rgb::ZERO;
+        for (j, omega) in self.cell_solid_angle.iter().enumerate() {
+            for i in 0..w {
+                let mean = (l(i, j) + l(i + 1, j) + l(i, j + 1) + l(i + 1, j + 1)) * 0.25;
+                sum += mean * *omega;
+            }
+        }
+        sum
+    }
+
     /// Builds the emitter and its sampling distributions from the radiance image.
     #[must_use]
     pub fn new(image: &Image, to_world: Mat4, scale: f32) -> Option<EnvmapLight> {

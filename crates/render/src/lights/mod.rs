@@ -25,6 +25,7 @@
 
 pub mod area;
 pub mod directional;
+pub mod emission;
 pub mod environment;
 pub mod point;
 pub mod rectangle;
@@ -34,7 +35,9 @@ pub mod spot;
 
 use area::MeshLight;
 use directional::DirectionalLight;
+use emission::{distant_origin, EmissionSample};
 use environment::{ConstantLight, EnvmapLight};
+use ircache_math::sampling::{square_to_uniform_sphere, Distribution1D};
 use ircache_math::{Rgb, Vec2, Vec3};
 use ircache_scene::{EmitterDesc, Geometry, SceneDesc};
 use point::PointLight;
@@ -128,6 +131,27 @@ impl Light {
     }
 }
 
+impl Light {
+    /// Emitted power (see [`emission`]); distant lights through the bounding sphere's disc of
+    /// radius `scene_radius`.
+    fn power(&self, scene_radius: f32) -> Rgb {
+        let disc = std::f32::consts::PI * scene_radius * scene_radius;
+        let pi = std::f32::consts::PI;
+        match self {
+            Light::Mesh(m) => m.radiance() * (pi * m.area()),
+            Light::Sphere(s) => {
+                let (_, r) = s.sphere();
+                s.radiance() * (pi * 4.0 * pi * r * r)
+            }
+            Light::Point(l) => l.intensity * (4.0 * pi),
+            Light::Spot(l) => l.power(),
+            Light::Directional(l) => l.irradiance * disc,
+            Light::Constant(c) => c.radiance * (4.0 * pi * disc),
+            Light::Envmap(e) => e.integral() * disc,
+        }
+    }
+}
+
 /// All emitters of a scene, with their selection.
 #[derive(Clone, Debug)]
 pub struct LightSet {
@@ -140,6 +164,8 @@ pub struct LightSet {
     env_lights: Vec<u32>,
     scene_center: Vec3,
     scene_radius: f32,
+    /// Emitters chosen for photons in proportion to their power's luminance.
+    by_power: Distribution1D,
 }
 
 impl LightSet {
@@ -213,7 +239,12 @@ impl LightSet {
         // Point lights get a bound of a millionth of the scene's size (scale-free).
         let point_radius2 = (scene_radius * 1e-6).powi(2).max(f32::MIN_POSITIVE);
         let bounds = lights.iter().map(|l| l.bound(point_radius2)).collect();
+        let powers: Vec<f32> = lights
+            .iter()
+            .map(|l| l.power(scene_radius).luminance())
+            .collect();
         LightSet {
+            by_power: Distribution1D::new(&powers),
             lights,
             bounds,
             shape_light,
@@ -279,6 +310,96 @@ impl LightSet {
             Light::Constant(c) => self.environment_sample(p, c.sample(u), light),
             Light::Envmap(e) => self.environment_sample(p, e.sample(u)?, light),
         }
+    }
+
+    /// Emitted power of light `light` (distant lights: through the disc of the scene's bounding
+    /// sphere, see [`emission`]).
+    #[must_use]
+    pub fn power(&self, light: u32) -> Rgb {
+        self.lights
+            .get(light as usize)
+            .map_or(Rgb::ZERO, |l| l.power(self.scene_radius))
+    }
+
+    /// A photon's start (see [`emission`]): an emitter chosen by `u_select` in proportion to its
+    /// power, a point on it by `u_position`, a direction by `u_direction`; the flux weight is
+    /// divided by the selection probability, so its mean is the total power. `None` for a sample
+    /// that carries nothing, or when no emitter emits.
+    #[must_use]
+    pub fn sample_emission(
+        &self,
+        u_select: f32,
+        u_position: Vec2,
+        u_direction: Vec2,
+    ) -> Option<EmissionSample> {
+        if self.lights.is_empty() || self.by_power.integral <= 0.0 {
+            return None;
+        }
+        let (index, probability, _) = self.by_power.sample(u_select);
+        if probability <= 0.0 {
+            return None;
+        }
+        let (center, radius) = (self.scene_center, self.scene_radius);
+        let distant = |direction: Vec3, flux: Rgb| {
+            let (origin, area) = distant_origin(direction, center, radius, u_position);
+            EmissionSample {
+                origin,
+                direction,
+                normal: None,
+                flux: flux * area,
+            }
+        };
+        let sample = match &self.lights[index] {
+            Light::Mesh(m) => {
+                let (origin, n, direction, flux) = m.sample_emission(u_position, u_direction)?;
+                EmissionSample {
+                    origin,
+                    direction,
+                    normal: Some(n),
+                    flux,
+                }
+            }
+            Light::Sphere(s) => {
+                let (origin, n, direction, flux) = s.sample_emission(u_position, u_direction);
+                EmissionSample {
+                    origin,
+                    direction,
+                    normal: Some(n),
+                    flux,
+                }
+            }
+            Light::Point(l) => EmissionSample {
+                origin: l.position,
+                direction: square_to_uniform_sphere(u_direction),
+                normal: None,
+                flux: l.intensity * (4.0 * std::f32::consts::PI),
+            },
+            Light::Spot(l) => {
+                let (origin, direction, flux) = l.sample_emission(u_direction)?;
+                EmissionSample {
+                    origin,
+                    direction,
+                    normal: None,
+                    flux,
+                }
+            }
+            Light::Directional(l) => distant(-l.wi, l.irradiance),
+            Light::Constant(c) => {
+                let towards = c.sample(u_direction);
+                distant(-towards, c.radiance / c.pdf())
+            }
+            Light::Envmap(e) => {
+                let towards = e.sample(u_direction)?;
+                let pdf = e.pdf(towards);
+                if !is_positive_finite(pdf) {
+                    return None;
+                }
+                distant(-towards, e.eval(towards) / pdf)
+            }
+        };
+        let flux = sample.flux / probability;
+        (!flux.is_black() && flux.to_array().iter().all(|c| c.is_finite()))
+            .then_some(EmissionSample { flux, ..sample })
     }
 
     /// The light chosen by `u_select` at `p` and its selection probability.

@@ -12,7 +12,7 @@
 //!   angle with `d² / |cos θ_light|`.
 
 use super::{is_positive_finite, solid_angle_pdf};
-use ircache_math::sampling::square_to_uniform_sphere;
+use ircache_math::sampling::{square_to_cosine_hemisphere, square_to_uniform_sphere};
 use ircache_math::{Frame, Rgb, Vec2, Vec3, PI};
 
 /// An emitting sphere.
@@ -51,6 +51,18 @@ impl SphereLight {
     #[must_use]
     pub fn radiance(&self) -> Rgb {
         self.radiance
+    }
+
+    /// A photon start: a point uniform by area, a cosine-distributed direction about the
+    /// emitting side's normal; `(point, normal, direction, flux weight π L A)`.
+    #[must_use]
+    pub fn sample_emission(&self, u_pos: Vec2, u_dir: Vec2) -> (Vec3, Vec3, Vec3, Rgb) {
+        let outward = square_to_uniform_sphere(u_pos);
+        let n = self.shading_normal(outward);
+        let p = self.center + outward * self.radius;
+        let d = Frame::from_z(n).from_local(square_to_cosine_hemisphere(u_dir));
+        let area = 4.0 * PI * self.radius * self.radius;
+        (p, n, d, self.radiance * (PI * area))
     }
 
     /// `(sin²θ_max, 1 − cos θ_max)` of the cone subtended from a point at squared distance

@@ -13,7 +13,8 @@
 //! normalised) and +z. Angles are given in degrees in the scene description.
 
 use super::is_positive_finite;
-use ircache_math::{Mat3, Mat4, Rgb, Vec3};
+use ircache_math::sampling::{square_to_uniform_cone, uniform_cone_pdf};
+use ircache_math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 
 /// A spot light.
 #[derive(Clone, Copy, Debug)]
@@ -74,6 +75,25 @@ impl SpotLight {
 
     /// The direction from `p_ref` towards the light: `(wi, distance, I·falloff/d²)`; `None` outside
     /// the cone or at the light's position.
+    /// Emitted power (see [`super::emission::spot_power`]).
+    #[must_use]
+    pub fn power(&self) -> Rgb {
+        super::emission::spot_power(self.intensity, self.beam, self.cutoff)
+    }
+
+    /// A photon direction uniform in the cutoff cone with its flux weight `I falloff / p_ω`.
+    #[must_use]
+    pub fn sample_emission(&self, u: Vec2) -> Option<(Vec3, Vec3, Rgb)> {
+        let local = square_to_uniform_cone(u, self.cos_cutoff);
+        let falloff = self.falloff(local);
+        if falloff <= 0.0 {
+            return None;
+        }
+        let direction = (self.world_to_local.inverse() * local).normalize();
+        let weight = self.intensity * (falloff / uniform_cone_pdf(self.cos_cutoff));
+        Some((self.position, direction, weight))
+    }
+
     #[inline]
     #[must_use]
     pub fn sample(&self, p_ref: Vec3) -> Option<(Vec3, f32, Rgb)> {

@@ -260,7 +260,7 @@ impl SequenceCache {
     ) -> Result<(IrradianceCache, Vec<Vec<u32>>), RenderError> {
         // Radiance caching's tables depend on the materials only, which do not move.
         let tables = self.tables.get();
-        let cache = empty_cache(scene, &self.ic, self.size.0, tables, pool)?;
+        let cache = empty_cache(scene, &self.ic, self.size.0, tables, self.seed, pool)?;
         if let (None, Some(t)) = (tables, &cache.radiance) {
             let _ = self.tables.set(t.clone());
         }

@@ -1,0 +1,65 @@
+//! Irradiance from photons by density estimation (Jensen, *Realistic Image Synthesis Using
+//! Photon Mapping*, eq. 7.6 with `cos`-free flux): `E(x) ≈ Σ Φ_p / (π r²)` over the `k` photons
+//! nearest to `x` that landed on the same side of the same surface, `r` the distance to the
+//! farthest of them, or the largest radius when fewer are found there.
+//!
+//! A photon counts when its stored normal is within 60° of the query's (`n_p · n > ½`: the
+//! same side of a thin wall, not the neighbouring wall of a corner) and it arrived from above
+//! the query's surface.
+
+use super::kd_tree::{KdTree, Neighbour};
+use super::photon::Photon;
+use ircache_math::{Rgb, Vec3};
+use std::cell::RefCell;
+
+/// How many photons a lookup takes and how far it looks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lookup {
+    /// Photons per estimate.
+    pub count: usize,
+    /// Largest radius searched (world units).
+    pub max_radius: f32,
+}
+
+thread_local! {
+    static FOUND: RefCell<Vec<Neighbour>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The irradiance stored in the precomputed photon nearest `p` within `max_radius` on the same
+/// side of the same surface (`None`: none there).
+#[must_use]
+pub fn nearest_precomputed(tree: &KdTree, p: Vec3, n: Vec3, max_radius: f32) -> Option<Rgb> {
+    let accept = |ph: &Photon| ph.normal.dot(n) > 0.5;
+    FOUND.with_borrow_mut(|found| {
+        tree.nearest(p.to_array(), 1, max_radius * max_radius, &accept, found);
+        found.first().map(|f| tree.photons[f.index as usize].flux)
+    })
+}
+
+/// `E(p)` on the side of unit normal `n` from photons of 1 to `max_bounces` bounces.
+#[must_use]
+pub fn irradiance(tree: &KdTree, p: Vec3, n: Vec3, max_bounces: u16, lookup: &Lookup) -> Rgb {
+    if tree.is_empty() || lookup.count == 0 {
+        return Rgb::ZERO;
+    }
+    let accept = |ph: &Photon| {
+        ph.bounces <= max_bounces && ph.normal.dot(n) > 0.5 && ph.incoming.dot(n) > 0.0
+    };
+    FOUND.with_borrow_mut(|found| {
+        let max2 = lookup.max_radius * lookup.max_radius;
+        tree.nearest(p.to_array(), lookup.count, max2, &accept, found);
+        let r2 = if found.len() == lookup.count {
+            found.last().map_or(max2, |n| n.distance2)
+        } else {
+            max2
+        };
+        if !(r2 > 0.0) {
+            return Rgb::ZERO;
+        }
+        let mut sum = Rgb::ZERO;
+        for f in found.iter() {
+            sum += tree.photons[f.index as usize].flux;
+        }
+        sum / (std::f32::consts::PI * r2)
+    })
+}

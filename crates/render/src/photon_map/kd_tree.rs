@@ -1,0 +1,215 @@
+//! A balanced kd-tree over photons, stored implicitly in the photon array itself (Jensen,
+//! *Realistic Image Synthesis Using Photon Mapping*, §6.3): the median of a range along its
+//! widest axis sits in the middle of the range, the halves on either side. Queries take a
+//! predicate, so that photons of the wrong side or bounce count are skipped during the search
+//! rather than after it (a k-nearest query that filters afterwards would come back short).
+
+use super::photon::Photon;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+/// Photons in kd-tree order with each node's split axis.
+#[derive(Clone, Debug, Default)]
+pub struct KdTree {
+    /// The photons, each range's median in its middle.
+    pub photons: Vec<Photon>,
+    /// Split axis of the node at each index.
+    axes: Vec<u8>,
+}
+
+/// A found photon: its index in [`KdTree::photons`] and squared distance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Neighbour {
+    /// Index into the tree's photons.
+    pub index: u32,
+    /// Squared distance to the query point.
+    pub distance2: f32,
+}
+
+impl Eq for Neighbour {}
+impl PartialOrd for Neighbour {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Neighbour {
+    fn cmp(&self, other: &Self) -> Ordering {
+        self.distance2
+            .total_cmp(&other.distance2)
+            .then(self.index.cmp(&other.index))
+    }
+}
+
+/// Ranges below this size are built on the calling thread.
+const PARALLEL_BUILD: usize = 1 << 14;
+
+impl KdTree {
+    /// Builds the tree, reordering `photons` (deterministically: the order depends on the input
+    /// only, not on the threads).
+    #[must_use]
+    pub fn build(mut photons: Vec<Photon>) -> KdTree {
+        let mut axes = vec![0u8; photons.len()];
+        build_range(&mut photons, &mut axes);
+        KdTree { photons, axes }
+    }
+
+    /// Number of photons.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.photons.len()
+    }
+
+    /// True when it holds no photon.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.photons.is_empty()
+    }
+
+    /// The (at most) `k` photons nearest to `q` within `sqrt(max_distance2)` that `accept`,
+    /// nearest first, into `out` (cleared first).
+    pub fn nearest(
+        &self,
+        q: [f32; 3],
+        k: usize,
+        max_distance2: f32,
+        accept: &dyn Fn(&Photon) -> bool,
+        out: &mut Vec<Neighbour>,
+    ) {
+        out.clear();
+        if k == 0 {
+            return;
+        }
+        let mut heap = BinaryHeap::with_capacity(k + 1);
+        let mut bound = max_distance2;
+        self.search(0, self.photons.len(), q, k, &mut bound, accept, &mut heap);
+        out.extend(heap.into_sorted_vec());
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn search(
+        &self,
+        lo: usize,
+        hi: usize,
+        q: [f32; 3],
+        k: usize,
+        bound: &mut f32,
+        accept: &dyn Fn(&Photon) -> bool,
+        heap: &mut BinaryHeap<Neighbour>,
+    ) {
+        if lo >= hi {
+            return;
+        }
+        let mid = lo + (hi - lo) / 2;
+        let photon = &self.photons[mid];
+        let axis = self.axes[mid] as usize;
+        let delta = q[axis] - photon.key()[axis];
+        let (near, far) = if delta < 0.0 {
+            ((lo, mid), (mid + 1, hi))
+        } else {
+            ((mid + 1, hi), (lo, mid))
+        };
+        self.search(near.0, near.1, q, k, bound, accept, heap);
+        let p = photon.key();
+        let distance2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+        if distance2 < *bound && accept(photon) {
+            heap.push(Neighbour {
+                index: mid as u32,
+                distance2,
+            });
+            if heap.len() > k {
+                heap.pop();
+            }
+            if heap.len() == k {
+                *bound = heap.peek().map_or(*bound, |n| n.distance2);
+            }
+        }
+        if delta * delta < *bound {
+            self.search(far.0, far.1, q, k, bound, accept, heap);
+        }
+    }
+}
+
+/// Puts the median along the widest axis of `photons` in the middle and recurses on the halves.
+fn build_range(photons: &mut [Photon], axes: &mut [u8]) {
+    if photons.len() <= 1 {
+        return;
+    }
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in photons.iter() {
+        for (c, v) in p.key().into_iter().enumerate() {
+            lo[c] = lo[c].min(v);
+            hi[c] = hi[c].max(v);
+        }
+    }
+    let extent = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+    let axis = (0..3)
+        .max_by(|&a, &b| extent[a].total_cmp(&extent[b]).then(b.cmp(&a)))
+        .unwrap_or(0);
+    let mid = photons.len() / 2;
+    photons.select_nth_unstable_by(mid, |a, b| {
+        a.key()[axis]
+            .total_cmp(&b.key()[axis])
+            .then(a.flux.r.total_cmp(&b.flux.r))
+    });
+    axes[mid] = axis as u8;
+    let (left, rest) = photons.split_at_mut(mid);
+    let (left_axes, rest_axes) = axes.split_at_mut(mid);
+    let (right, right_axes) = (&mut rest[1..], &mut rest_axes[1..]);
+    if left.len() > PARALLEL_BUILD {
+        rayon::join(
+            || build_range(left, left_axes),
+            || build_range(right, right_axes),
+        );
+    } else {
+        build_range(left, left_axes);
+        build_range(right, right_axes);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ircache_math::{Rgb, Rng, Vec3};
+
+    #[test]
+    fn nearest_matches_brute_force_with_a_predicate() {
+        let mut rng = Rng::new(3, 0);
+        let photons: Vec<Photon> = (0..5000)
+            .map(|i| Photon {
+                position: Vec3::new(rng.next_f32(), rng.next_f32() * 0.5, rng.next_f32() * 2.0),
+                normal: Vec3::Z,
+                incoming: Vec3::Z,
+                flux: Rgb::splat(1.0),
+                bounces: (i % 3) as u16,
+                distance: 1.0,
+            })
+            .collect();
+        let tree = KdTree::build(photons.clone());
+        assert_eq!(tree.len(), photons.len());
+        let accept = |p: &Photon| p.bounces != 1;
+        let mut out = Vec::new();
+        for _ in 0..200 {
+            let q = [rng.next_f32(), rng.next_f32() * 0.5, rng.next_f32() * 2.0];
+            let max2 = if rng.next_f32() < 0.5 {
+                0.01
+            } else {
+                f32::INFINITY
+            };
+            tree.nearest(q, 17, max2, &accept, &mut out);
+            let mut brute: Vec<f32> = photons
+                .iter()
+                .filter(|p| accept(p))
+                .map(|p| p.position.distance_squared(Vec3::from(q)))
+                .filter(|&d| d < max2)
+                .collect();
+            brute.sort_by(f32::total_cmp);
+            brute.truncate(17);
+            let found: Vec<f32> = out.iter().map(|n| n.distance2).collect();
+            assert_eq!(found.len(), brute.len());
+            for (a, b) in found.iter().zip(&brute) {
+                assert!((a - b).abs() <= 1e-6 * b.max(1e-6), "{a} {b}");
+            }
+            assert!(out.iter().all(|n| accept(&tree.photons[n.index as usize])));
+        }
+    }
+}

@@ -1,0 +1,181 @@
+//! Photon tracing (Jensen, *Realistic Image Synthesis Using Photon Mapping*, ch. 5; 001 §2.4):
+//! photons leave the emitters ([`crate::lights::emission`]), scatter through every BSDF with
+//! Russian roulette, and are stored where they land on a surface with a Lambertian part.
+//!
+//! - The **global** map keeps photons that scattered at least once before landing: the direct
+//!   light is always computed by light samples, so direct photons would count it twice
+//!   (NOTES-001 E.7).
+//! - The **caustic** map keeps photons that reached their surface through delta lobes only
+//!   (glass, mirrors: L S+ D), traced in a pass of their own so that it can be much denser.
+//!
+//! Flux through a BSDF: a photon arriving from `ω_in` leaves along `ω_out` sampled from the BSDF
+//! with `ω_in` in the place of the viewer, weight `f cos θ_out / p`; refraction does not scale
+//! flux by `η²` as it scales radiance, so the sample's radiance factor is undone. Shading-normal
+//! asymmetry (Veach §5.3) is not corrected.
+//!
+//! Parallel and deterministic: photon `i` draws from its own random stream, keyed by the seed
+//! and `i`; photons are traced in fixed batches and kept in emission order, whatever the
+//! threads. Each pass emits batches until it has stored the number asked for (as Radiance's
+//! `-apg` and Mitsuba 0.6's `globalPhotons` count stored photons), at most
+//! [`MAX_EMITTED_PER_STORED`] times as many emitted; the flux of every photon is divided by the
+//! number emitted in its pass.
+
+use super::photon::Photon;
+use crate::scene::Scene;
+use ircache_math::ray::offset_ray_origin;
+use ircache_math::{Ray, Rgb, Rng};
+use rayon::prelude::*;
+
+/// Which photons a pass keeps.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapKind {
+    /// Photons after at least one bounce, any lobes.
+    Global,
+    /// Photons after one or more delta-lobe bounces only.
+    Caustic,
+}
+
+/// What a tracing pass did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraceStats {
+    /// Photons emitted (the flux divisor).
+    pub emitted: u64,
+    /// Photons stored.
+    pub stored: u64,
+    /// Rays traced.
+    pub rays: u64,
+}
+
+/// A pass gives up after emitting this many photons per photon asked for (a scene whose light
+/// rarely reaches a Lambertian surface, or has no glass for caustics).
+pub const MAX_EMITTED_PER_STORED: u64 = 64;
+
+/// Photons of one pass never bounce more than this (their flux is negligible by then).
+const MAX_BOUNCES: u16 = 256;
+
+/// Photons per batch (the unit of parallel work and of the stopping rule).
+const BATCH: u64 = 1 << 14;
+
+const PHOTON_SALT: u64 = 0x7068_6f74_6f6e;
+
+/// Traces photons until `wanted` are stored in a map of `kind`, keeping only those that can
+/// serve a path of `max_bounces` bounces before landing. Returns the photons (flux divided by
+/// the number emitted) and what it did.
+#[must_use]
+pub fn trace_photons(
+    scene: &Scene,
+    kind: MapKind,
+    wanted: u64,
+    max_bounces: u16,
+    seed: u64,
+) -> (Vec<Photon>, TraceStats) {
+    let mut stats = TraceStats::default();
+    let mut photons: Vec<Photon> = Vec::new();
+    if wanted == 0 || scene.lights.is_empty() || max_bounces == 0 {
+        return (photons, stats);
+    }
+    let max_bounces = max_bounces.min(MAX_BOUNCES);
+    let limit = wanted.saturating_mul(MAX_EMITTED_PER_STORED);
+    while (photons.len() as u64) < wanted && stats.emitted < limit {
+        let first = stats.emitted;
+        let batches: Vec<(Vec<Photon>, u64)> = (0..4u64)
+            .into_par_iter()
+            .map(|part| {
+                let mut out = Vec::new();
+                let mut rays = 0;
+                let quarter = BATCH / 4;
+                for i in first + part * quarter..first + (part + 1) * quarter {
+                    rays += trace_one(scene, kind, max_bounces, seed, i, &mut out);
+                }
+                (out, rays)
+            })
+            .collect();
+        for (batch, rays) in batches {
+            photons.extend(batch);
+            stats.rays += rays;
+        }
+        stats.emitted += BATCH;
+    }
+    let scale = 1.0 / stats.emitted as f32;
+    for p in &mut photons {
+        p.flux = p.flux * scale;
+    }
+    stats.stored = photons.len() as u64;
+    (photons, stats)
+}
+
+/// Traces photon `index`, appending what it stores to `out`; returns the rays traced.
+fn trace_one(
+    scene: &Scene,
+    kind: MapKind,
+    max_bounces: u16,
+    seed: u64,
+    index: u64,
+    out: &mut Vec<Photon>,
+) -> u64 {
+    let mut rng = Rng::keyed(seed, &[PHOTON_SALT, index]);
+    let Some(emitted) = scene
+        .lights
+        .sample_emission(rng.next_f32(), rng.next_2d(), rng.next_2d())
+    else {
+        return 0;
+    };
+    let origin = match emitted.normal {
+        Some(n) => offset_ray_origin(emitted.origin, n, emitted.direction, scene.scale),
+        None => emitted.origin,
+    };
+    let mut ray = Ray::new(origin, emitted.direction);
+    let mut flux: Rgb = emitted.flux;
+    let mut rays = 0u64;
+    let mut bounces: u16 = 0;
+    loop {
+        rays += 1;
+        let Some(it) = scene.intersect(&ray) else {
+            break;
+        };
+        let incoming = -ray.d;
+        let shape = &scene.shapes[it.shape as usize];
+        let bsdf = scene.materials[shape.material].at(it.uv);
+        let wo_local = it.frame.to_local(incoming);
+        if bounces >= 1 && !bsdf.lambertian_albedo(wo_local).is_black() {
+            let normal = if it.ng.dot(incoming) < 0.0 {
+                -it.ng
+            } else {
+                it.ng
+            };
+            out.push(Photon {
+                position: it.p,
+                normal,
+                incoming,
+                flux,
+                bounces,
+                distance: it.t,
+            });
+        }
+        if bounces + 1 > max_bounces {
+            break;
+        }
+        let Some(bs) = bsdf.sample(wo_local, rng.next_f32(), rng.next_2d()) else {
+            break;
+        };
+        // A caustic photon leaves the pass at its first non-delta bounce.
+        if kind == MapKind::Caustic && !bs.delta {
+            break;
+        }
+        let wo = it.frame.from_local(bs.wi);
+        if (wo.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
+            break;
+        }
+        // Flux is not scaled by η² across a refraction (radiance is).
+        let weight = bs.weight * (bs.eta * bs.eta);
+        // Russian roulette keeps the flux per photon about even (Jensen §5.2.1).
+        let q = weight.max_channel().min(1.0);
+        if !(q > 0.0) || rng.next_f32() >= q {
+            break;
+        }
+        flux = flux * weight / q;
+        bounces += 1;
+        ray = scene.spawn_ray(&it, wo);
+    }
+    rays
+}
