@@ -448,6 +448,14 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
                     map.seconds
                 );
             }
+            if st.photon_records > 0 {
+                eprintln!(
+                    "photon records: {} in {:.2} s ({:.2} ms each)",
+                    st.photon_records,
+                    st.photon_record_seconds,
+                    1e3 * st.photon_record_seconds / st.photon_records as f64
+                );
+            }
         }
         if let Some(sp) = &c.splat {
             eprintln!(
@@ -520,6 +528,8 @@ fn write_stats(
             "pixel_seconds": c.pixel_seconds,
             "uncached_samples": c.uncached_samples,
             "supersampled_cells": st.supersampled_cells,
+            "photon_records": st.photon_records,
+            "photon_record_seconds": st.photon_record_seconds,
             "photon_maps": c.cache.photons.as_ref().map(|m| {
                 std::iter::once(&m.global)
                     .chain(&m.caustic)

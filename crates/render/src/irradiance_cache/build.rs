@@ -54,6 +54,10 @@ pub struct CacheStats {
     pub radiance_records: usize,
     /// Seconds spent making radiance caching's tables (BRDFs in HSH, tilt matrices).
     pub radiance_table_seconds: f64,
+    /// Records made from photons before the pre-pass (`--photon-records on`).
+    pub photon_records: u64,
+    /// Seconds spent making them.
+    pub photon_record_seconds: f64,
 }
 
 /// Where and how the pre-pass gathered a record it made: enough to gather it again with the

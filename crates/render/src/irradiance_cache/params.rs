@@ -162,6 +162,8 @@ pub struct IcParams {
     pub photon_lookup: usize,
     /// Largest lookup radius as a fraction of the scene size (`--photon-radius`).
     pub photon_radius: f32,
+    /// Records made from photons before the pre-pass (`--photon-records`, 001 ch. 6).
+    pub photon_records: bool,
 }
 
 impl Default for IcParams {
@@ -196,6 +198,7 @@ impl Default for IcParams {
             // Mitsuba 0.6's photonmapper takes 120 for its global map, Radiance 50.
             photon_lookup: 100,
             photon_radius: 0.05,
+            photon_records: false,
         }
     }
 }
@@ -638,6 +641,21 @@ pub const PARAMS: &[ParamSpec] = &[
             Ok(())
         },
     },
+    ParamSpec {
+        name: "photon_records",
+        aliases: &[],
+        value: "on|off",
+        help: "make first-bounce records from the global map's photons before the pre-pass \
+               (001 ch. 6: a record wherever no record reaches a photon, its irradiance and \
+               gradients from the photons of its zone); the pre-pass then gathers records only \
+               where photons left holes. Needs --photons",
+        shapes_records: true,
+        get: |p| if p.photon_records { "on" } else { "off" }.to_string(),
+        set: |p, v| {
+            p.photon_records = on_off(v)?;
+            Ok(())
+        },
+    },
 ];
 
 /// The entry named `name` (its name, with dashes or underscores, or an alias).
@@ -684,6 +702,9 @@ impl IcParams {
                         it does not go with --deeper-bounces cache"
                     .into(),
             );
+        }
+        if self.photon_records && self.photons == 0 {
+            return Err("--photon-records on needs photons: give --photons N".into());
         }
         if self.caustic_photons > 0 && self.radiance_cache {
             return Err(

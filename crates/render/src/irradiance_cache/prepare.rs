@@ -49,6 +49,9 @@ pub fn prepare_cache(
             })
         }
     };
+    let photon_start = std::time::Instant::now();
+    let placed = photon_records(&mut cache);
+    let photon_record_seconds = photon_start.elapsed().as_secs_f64();
     let mut stats = if ic.params.bounces > 0 {
         let mut none = ();
         let hook: &mut (dyn BatchHook + Send) = match shared.as_mut() {
@@ -80,6 +83,8 @@ pub fn prepare_cache(
         }
     }
     stats.records_loaded = loaded;
+    stats.photon_records = placed.records;
+    stats.photon_record_seconds = photon_record_seconds;
     stats.notes = notes;
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     stats.radiance_records = cache.radiance_records.len();
@@ -111,6 +116,34 @@ pub fn empty_cache(
     Ok(cache)
 }
 
+/// With `--photon-records on`, fills the first level with records made from the global map's
+/// photons (001 Algorithm 6).
+fn photon_records(cache: &mut IrradianceCache) -> crate::photon_map::records::PlacementStats {
+    use crate::photon_map::records::{place_records, PhotonRecordSettings};
+    let params = &cache.params;
+    let Some(maps) = cache.photons.clone().filter(|_| params.photon_records) else {
+        return Default::default();
+    };
+    if cache.levels.is_empty() {
+        return Default::default();
+    }
+    let settings = PhotonRecordSettings {
+        accuracy: params.accuracy,
+        lookup: params.photon_lookup,
+        // From the smallest record's reach to the photon lookups' largest radius.
+        zone_limits: (
+            params.accuracy * cache.r_min,
+            maps.global_lookup
+                .max_radius
+                .max(params.accuracy * cache.r_min),
+        ),
+        max_bounces: params.bounces.min(u32::from(u16::MAX)) as u16,
+        without_caustics: maps.caustic.is_some(),
+        metric: params.error_metric,
+    };
+    place_records(&maps.global.tree, &mut cache.levels[0], &settings)
+}
+
 /// The photon maps `params` ask for (`None` for none): the global map's photons serve vertices
 /// one bounce beyond a record, so they need at most `bounces − 1` bounces of their own.
 #[must_use]
@@ -133,18 +166,22 @@ pub fn photon_maps(
         count: (params.photon_lookup / 2).max(1),
         max_radius: radius * 0.25,
     };
-    let bounces = params.bounces.saturating_sub(1).min(u32::from(u16::MAX)) as u16;
-    let photons = if params.bounces >= 2 {
-        params.photons
+    // Gather hits, one bounce beyond the camera's surfaces, take photons of up to `bounces − 1`
+    // bounces; photon records at the camera's surfaces up to `bounces`.
+    let wide = |b: u32| b.min(u32::from(u16::MAX)) as u16;
+    let gather_bounces = wide(params.bounces.saturating_sub(1));
+    let bounces = if params.photon_records {
+        wide(params.bounces)
     } else {
-        0
+        gather_bounces
     };
+    let photons = if bounces >= 1 { params.photons } else { 0 };
     let seed = crate::irradiance_cache::gather::mix(seed, 0x7068_6f74_6f6e);
     Some(pool.install(|| {
         PhotonMaps::build(
             scene,
             (photons, params.caustic_photons),
-            bounces,
+            (bounces, gather_bounces),
             (global, caustic),
             seed,
         )

@@ -182,6 +182,7 @@ mod tests {
                 flux: Rgb::splat(1.0),
                 bounces: (i % 3) as u16,
                 distance: 1.0,
+                caustic: false,
             })
             .collect();
         let tree = KdTree::build(photons.clone());

@@ -6,6 +6,7 @@
 //! - [`trace`]: emission and tracing, parallel and deterministic; the global and caustic maps.
 //! - [`kd_tree`]: the balanced kd-tree with filtered nearest-neighbour queries.
 //! - [`estimate`]: irradiance from the nearest photons (Jensen eq. 7.6 with the disc area).
+//! - [`records`]: photon-mapped irradiance records, Algorithms 6 and 7 of 001 ch. 6.
 //! - [`hull`]: the convex hull of photons on a tangent plane with Efron's correction
 //!   (NOTES-001 E.4), for photon-mapped irradiance records.
 //!
@@ -18,6 +19,7 @@ pub mod estimate;
 pub mod hull;
 pub mod kd_tree;
 pub mod photon;
+pub mod records;
 pub mod trace;
 
 pub use estimate::Lookup;
@@ -37,6 +39,8 @@ pub struct PhotonMap {
     pub tree: KdTree,
     /// The most bounces its photons took.
     pub max_bounces: u16,
+    /// The bounces the precomputed irradiance takes.
+    pub precomputed_bounces: u16,
     /// Irradiance estimated in advance at every [`PRECOMPUTED_STRIDE`]th photon (in the
     /// photons' `flux`), for lookups that take all the map's bounces (Christensen, "Faster
     /// photon map global illumination", JGT 1999): the nearest such photon on the same side
@@ -53,8 +57,8 @@ pub const PRECOMPUTED_STRIDE: usize = 4;
 
 impl PhotonMap {
     /// Traces `wanted` photons of `kind` that serve paths of up to `max_bounces` bounces before
-    /// they land, and builds their tree; with `precompute`, the irradiance at every
-    /// [`PRECOMPUTED_STRIDE`]th photon from `lookup`.
+    /// they land, and builds their tree; with `precompute`, the irradiance from photons of up
+    /// to its bounces at every [`PRECOMPUTED_STRIDE`]th photon, looked up as it says.
     #[must_use]
     pub fn build(
         scene: &Scene,
@@ -62,19 +66,26 @@ impl PhotonMap {
         wanted: u64,
         max_bounces: u16,
         seed: u64,
-        precompute: Option<&Lookup>,
+        precompute: Option<(&Lookup, u16)>,
     ) -> Self {
         use rayon::prelude::*;
         let start = std::time::Instant::now();
         let (photons, stats) = trace_photons(scene, kind, wanted, max_bounces, seed);
         let tree = KdTree::build(photons);
-        let precomputed = precompute.filter(|_| !tree.is_empty()).map(|lookup| {
+        let precomputed_bounces = precompute.map_or(max_bounces, |(_, b)| b.min(max_bounces));
+        let precomputed = precompute.filter(|_| !tree.is_empty()).map(|(lookup, _)| {
             let at: Vec<Photon> = tree
                 .photons
                 .par_iter()
                 .step_by(PRECOMPUTED_STRIDE)
                 .map(|ph| Photon {
-                    flux: estimate::irradiance(&tree, ph.position, ph.normal, max_bounces, lookup),
+                    flux: estimate::irradiance(
+                        &tree,
+                        ph.position,
+                        ph.normal,
+                        precomputed_bounces,
+                        lookup,
+                    ),
                     ..*ph
                 })
                 .collect();
@@ -84,6 +95,7 @@ impl PhotonMap {
             kind,
             tree,
             max_bounces,
+            precomputed_bounces,
             precomputed,
             stats,
             seconds: start.elapsed().as_secs_f64(),
@@ -95,11 +107,10 @@ impl PhotonMap {
     /// takes the same bounces, else a density estimate.
     #[must_use]
     pub fn irradiance(&self, p: Vec3, n: Vec3, max_bounces: u16, lookup: &Lookup) -> Rgb {
-        if let Some(pre) = self
-            .precomputed
-            .as_ref()
-            .filter(|_| max_bounces >= self.max_bounces)
-        {
+        if let Some(pre) = self.precomputed.as_ref().filter(|_| {
+            max_bounces == self.precomputed_bounces
+                || (max_bounces >= self.max_bounces && self.precomputed_bounces == self.max_bounces)
+        }) {
             if let Some(e) = estimate::nearest_precomputed(pre, p, n, lookup.max_radius) {
                 return e;
             }
@@ -123,14 +134,15 @@ pub struct PhotonMaps {
 }
 
 impl PhotonMaps {
-    /// Traces `global` photons of up to `max_bounces` bounces and, when `caustic` > 0, that
-    /// many caustic photons of up to `max_bounces + 1` (a caustic lands one bounce nearer the
-    /// camera than the global map's photons are read), on independent streams of `seed`.
+    /// Traces `global` photons of up to `max_bounces` bounces, their irradiance precomputed for
+    /// lookups of `gather_bounces` (at gather hits), and, when `caustic` > 0, that many
+    /// caustic photons of up to `gather_bounces + 1` (a caustic lands one bounce nearer the
+    /// camera than the gather hits), on independent streams of `seed`.
     #[must_use]
     pub fn build(
         scene: &Scene,
         (global, caustic): (u64, u64),
-        max_bounces: u16,
+        (max_bounces, gather_bounces): (u16, u16),
         (global_lookup, caustic_lookup): (Lookup, Lookup),
         seed: u64,
     ) -> PhotonMaps {
@@ -140,11 +152,11 @@ impl PhotonMaps {
             global,
             max_bounces,
             seed,
-            Some(&global_lookup),
+            Some((&global_lookup, gather_bounces)),
         );
         // Caustics are sharp and seen directly: estimated at the pixel, never precomputed.
         let caustic = (caustic > 0).then(|| {
-            let bounces = max_bounces.saturating_add(1);
+            let bounces = gather_bounces.saturating_add(1);
             let seed = seed ^ CAUSTIC_SALT;
             PhotonMap::build(scene, MapKind::Caustic, caustic, bounces, seed, None)
         });

@@ -17,6 +17,8 @@ pub struct Photon {
     pub bounces: u16,
     /// Length of its last flight: from the surface (or emitter) it left to here.
     pub distance: f32,
+    /// It came through delta lobes alone (a caustic photon).
+    pub caustic: bool,
 }
 
 impl Photon {

@@ -33,6 +33,8 @@ pub enum MapKind {
     Global,
     /// Photons after one or more delta-lobe bounces only.
     Caustic,
+    /// Every photon, direct ones too (a view of the photons, and tests).
+    All,
 }
 
 /// What a tracing pass did.
@@ -128,6 +130,7 @@ fn trace_one(
     let mut flux: Rgb = emitted.flux;
     let mut rays = 0u64;
     let mut bounces: u16 = 0;
+    let mut delta_only = true;
     loop {
         rays += 1;
         let Some(it) = scene.intersect(&ray) else {
@@ -137,7 +140,7 @@ fn trace_one(
         let shape = &scene.shapes[it.shape as usize];
         let bsdf = scene.materials[shape.material].at(it.uv);
         let wo_local = it.frame.to_local(incoming);
-        if bounces >= 1 && !bsdf.lambertian_albedo(wo_local).is_black() {
+        if (bounces >= 1 || kind == MapKind::All) && !bsdf.lambertian_albedo(wo_local).is_black() {
             let normal = if it.ng.dot(incoming) < 0.0 {
                 -it.ng
             } else {
@@ -150,6 +153,7 @@ fn trace_one(
                 flux,
                 bounces,
                 distance: it.t,
+                caustic: bounces >= 1 && delta_only,
             });
         }
         if bounces + 1 > max_bounces {
@@ -162,6 +166,7 @@ fn trace_one(
         if kind == MapKind::Caustic && !bs.delta {
             break;
         }
+        delta_only &= bs.delta;
         let wo = it.frame.from_local(bs.wi);
         if (wo.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
             break;
