@@ -186,3 +186,16 @@ pub fn two_sided_quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>) -> ShapeDesc {
         location: here(),
     }
 }
+
+/// Lambert's form factor from a differential area at `x` with normal `n` to a polygon above
+/// its tangent plane: (1/2π) |Σ_i β_i n·Γ_i|.
+pub fn form_factor(x: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
+    let mut s = 0.0f64;
+    for i in 0..poly.len() {
+        let a = (poly[i] - x).normalize().as_dvec3();
+        let b = (poly[(i + 1) % poly.len()] - x).normalize().as_dvec3();
+        let beta = a.dot(b).clamp(-1.0, 1.0).acos();
+        s += beta * n.as_dvec3().dot(a.cross(b).normalize());
+    }
+    (s.abs() / (2.0 * std::f64::consts::PI)) as f32
+}

@@ -105,19 +105,6 @@ fn ic_desc(params: &[(&str, &str)]) -> IntegratorDesc {
     }
 }
 
-/// Lambert's form factor from a differential area at `x` with normal `n` to a polygon above
-/// its tangent plane: (1/2π) |Σ_i β_i n·Γ_i|.
-fn form_factor(x: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
-    let mut s = 0.0f64;
-    for i in 0..poly.len() {
-        let a = (poly[i] - x).normalize().as_dvec3();
-        let b = (poly[(i + 1) % poly.len()] - x).normalize().as_dvec3();
-        let beta = a.dot(b).clamp(-1.0, 1.0).acos();
-        s += beta * n.as_dvec3().dot(a.cross(b).normalize());
-    }
-    (s.abs() / (2.0 * std::f64::consts::PI)) as f32
-}
-
 /// Exact indirect irradiance on the open box's floor (walls radiate ρ·av = 1, hole and occluder
 /// nothing).
 fn exact(x: Vec3, n: Vec3) -> f32 {

@@ -25,15 +25,52 @@ thread_local! {
     static FOUND: RefCell<Vec<Neighbour>> = const { RefCell::new(Vec::new()) };
 }
 
-/// The irradiance stored in the precomputed photon nearest `p` within `max_radius` on the same
-/// side of the same surface (`None`: none there).
+/// The index of the photon nearest `p` within `max_radius` on the same side of the same
+/// surface (`None`: none there).
 #[must_use]
-pub fn nearest_precomputed(tree: &KdTree, p: Vec3, n: Vec3, max_radius: f32) -> Option<Rgb> {
+pub fn nearest_on_side(tree: &KdTree, p: Vec3, n: Vec3, max_radius: f32) -> Option<usize> {
     let accept = |ph: &Photon| ph.normal.dot(n) > 0.5;
     FOUND.with_borrow_mut(|found| {
         tree.nearest(p.to_array(), 1, max_radius * max_radius, &accept, found);
-        found.first().map(|f| tree.photons[f.index as usize].flux)
+        found.first().map(|f| f.index as usize)
     })
+}
+
+/// `E(p)` for each bounce limit `0..columns` (the last: every photon), over the one disc of the
+/// `lookup.count` nearest photons of any bounces.
+#[must_use]
+pub fn irradiance_by_bounces(
+    tree: &KdTree,
+    p: Vec3,
+    n: Vec3,
+    columns: usize,
+    lookup: &Lookup,
+) -> Vec<Rgb> {
+    let mut by = vec![Rgb::ZERO; columns];
+    let accept = |ph: &Photon| ph.normal.dot(n) > 0.5 && ph.incoming.dot(n) > 0.0;
+    FOUND.with_borrow_mut(|found| {
+        let max2 = lookup.max_radius * lookup.max_radius;
+        tree.nearest(p.to_array(), lookup.count, max2, &accept, found);
+        let r2 = if found.len() == lookup.count {
+            found.last().map_or(max2, |n| n.distance2)
+        } else {
+            max2
+        };
+        if !(r2 > 0.0) {
+            return;
+        }
+        for f in found.iter() {
+            let ph = &tree.photons[f.index as usize];
+            by[usize::from(ph.bounces).min(columns - 1)] += ph.flux;
+        }
+        let norm = 1.0 / (std::f32::consts::PI * r2);
+        let mut acc = Rgb::ZERO;
+        for e in &mut by {
+            acc += *e * norm;
+            *e = acc;
+        }
+    });
+    by
 }
 
 /// `E(p)` on the side of unit normal `n` from photons of 1 to `max_bounces` bounces.

@@ -39,26 +39,40 @@ pub struct PhotonMap {
     pub tree: KdTree,
     /// The most bounces its photons took.
     pub max_bounces: u16,
-    /// The bounces the precomputed irradiance takes.
-    pub precomputed_bounces: u16,
-    /// Irradiance estimated in advance at every [`PRECOMPUTED_STRIDE`]th photon (in the
-    /// photons' `flux`), for lookups that take all the map's bounces (Christensen, "Faster
-    /// photon map global illumination", JGT 1999): the nearest such photon on the same side
-    /// answers, one nearest-neighbour search instead of a density estimate.
-    pub precomputed: Option<KdTree>,
+    /// Irradiance estimated in advance at every [`PRECOMPUTED_STRIDE`]th photon (Christensen,
+    /// "Faster photon map global illumination", JGT 1999): the nearest such photon on the same
+    /// side answers a lookup, one nearest-neighbour search instead of a density estimate.
+    pub precomputed: Option<Precomputed>,
     /// How it was traced.
     pub stats: TraceStats,
     /// Seconds spent tracing and building it.
     pub seconds: f64,
 }
 
+/// Precomputed irradiance: for each photon of `tree`, one estimate per bounce limit `0..C`
+/// (photons of at most that many bounces, over the disc of the nearest photons of all
+/// bounces), the last column all of the map's photons.
+#[derive(Clone, Debug)]
+pub struct Precomputed {
+    /// Where the estimates were made (their flux unused).
+    pub tree: KdTree,
+    /// `tree.len() × columns` estimates, row by row in tree order.
+    pub irradiance: Vec<Rgb>,
+    /// Bounce limits per row.
+    pub columns: usize,
+}
+
 /// One photon in this many gets its irradiance estimated in advance.
 pub const PRECOMPUTED_STRIDE: usize = 4;
 
+/// Bounce limits the precomputed table tells apart (beyond, all photons: by then their share
+/// of the light is small).
+const PRECOMPUTED_LIMITS: u16 = 16;
+
 impl PhotonMap {
     /// Traces `wanted` photons of `kind` that serve paths of up to `max_bounces` bounces before
-    /// they land, and builds their tree; with `precompute`, the irradiance from photons of up
-    /// to its bounces at every [`PRECOMPUTED_STRIDE`]th photon, looked up as it says.
+    /// they land, and builds their tree; with `precompute`, the irradiance at every
+    /// [`PRECOMPUTED_STRIDE`]th photon with those lookups.
     #[must_use]
     pub fn build(
         scene: &Scene,
@@ -66,56 +80,62 @@ impl PhotonMap {
         wanted: u64,
         max_bounces: u16,
         seed: u64,
-        precompute: Option<(&Lookup, u16)>,
+        precompute: Option<&Lookup>,
     ) -> Self {
-        use rayon::prelude::*;
         let start = std::time::Instant::now();
         let (photons, stats) = trace_photons(scene, kind, wanted, max_bounces, seed);
         let tree = KdTree::build(photons);
-        let precomputed_bounces = precompute.map_or(max_bounces, |(_, b)| b.min(max_bounces));
-        let precomputed = precompute.filter(|_| !tree.is_empty()).map(|(lookup, _)| {
-            let at: Vec<Photon> = tree
-                .photons
-                .par_iter()
-                .step_by(PRECOMPUTED_STRIDE)
-                .map(|ph| Photon {
-                    flux: estimate::irradiance(
-                        &tree,
-                        ph.position,
-                        ph.normal,
-                        precomputed_bounces,
-                        lookup,
-                    ),
-                    ..*ph
-                })
-                .collect();
-            KdTree::build(at)
-        });
+        let precomputed = precompute
+            .filter(|_| !tree.is_empty())
+            .map(|lookup| precompute_irradiance(&tree, max_bounces, lookup));
         PhotonMap {
             kind,
             tree,
             max_bounces,
-            precomputed_bounces,
             precomputed,
             stats,
             seconds: start.elapsed().as_secs_f64(),
         }
     }
 
-    /// Irradiance at `p` on the side of unit normal `n` from photons that landed after 1 to
-    /// `max_bounces` bounces (see [`estimate`]): the precomputed estimate nearest `p` where it
-    /// takes the same bounces, else a density estimate.
+    /// Irradiance at `p` on the side of unit normal `n` from photons that landed after at most
+    /// `max_bounces` bounces (see [`estimate`]): from the precomputed estimate nearest `p`
+    /// where there is one, else a density estimate.
     #[must_use]
     pub fn irradiance(&self, p: Vec3, n: Vec3, max_bounces: u16, lookup: &Lookup) -> Rgb {
-        if let Some(pre) = self.precomputed.as_ref().filter(|_| {
-            max_bounces == self.precomputed_bounces
-                || (max_bounces >= self.max_bounces && self.precomputed_bounces == self.max_bounces)
-        }) {
-            if let Some(e) = estimate::nearest_precomputed(pre, p, n, lookup.max_radius) {
-                return e;
+        if let Some(pre) = &self.precomputed {
+            if let Some(i) = estimate::nearest_on_side(&pre.tree, p, n, lookup.max_radius) {
+                let column = usize::from(max_bounces).min(pre.columns - 1);
+                return pre.irradiance[i * pre.columns + column];
             }
         }
         estimate::irradiance(&self.tree, p, n, max_bounces, lookup)
+    }
+}
+
+/// Estimates the irradiance at every [`PRECOMPUTED_STRIDE`]th photon of `tree`, per bounce
+/// limit.
+fn precompute_irradiance(tree: &KdTree, max_bounces: u16, lookup: &Lookup) -> Precomputed {
+    use rayon::prelude::*;
+    let at = KdTree::build(
+        tree.photons
+            .iter()
+            .step_by(PRECOMPUTED_STRIDE)
+            .copied()
+            .collect(),
+    );
+    let columns = usize::from(max_bounces.min(PRECOMPUTED_LIMITS)) + 1;
+    let irradiance: Vec<Rgb> = at
+        .photons
+        .par_iter()
+        .flat_map_iter(|ph| {
+            estimate::irradiance_by_bounces(tree, ph.position, ph.normal, columns, lookup)
+        })
+        .collect();
+    Precomputed {
+        tree: at,
+        irradiance,
+        columns,
     }
 }
 
@@ -134,10 +154,10 @@ pub struct PhotonMaps {
 }
 
 impl PhotonMaps {
-    /// Traces `global` photons of up to `max_bounces` bounces, their irradiance precomputed for
-    /// lookups of `gather_bounces` (at gather hits), and, when `caustic` > 0, that many
-    /// caustic photons of up to `gather_bounces + 1` (a caustic lands one bounce nearer the
-    /// camera than the gather hits), on independent streams of `seed`.
+    /// Traces `global` photons of up to `max_bounces` bounces, their irradiance precomputed,
+    /// and, when `caustic` > 0, that many caustic photons of up to `gather_bounces + 1` (a
+    /// caustic lands one bounce nearer the camera than the gather hits of records), on
+    /// independent streams of `seed`.
     #[must_use]
     pub fn build(
         scene: &Scene,
@@ -152,7 +172,7 @@ impl PhotonMaps {
             global,
             max_bounces,
             seed,
-            Some((&global_lookup, gather_bounces)),
+            Some(&global_lookup),
         );
         // Caustics are sharp and seen directly: estimated at the pixel, never precomputed.
         let caustic = (caustic > 0).then(|| {

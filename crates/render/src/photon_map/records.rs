@@ -133,6 +133,29 @@ pub fn bin_photons(
     h
 }
 
+/// The photons of a zone around `p` (unit normal `n`) in [`cells_for`] their number, over
+/// their Efron-corrected hull area on the tangent plane; `None` for a degenerate hull.
+/// `irradiance()` of the cells is 6.2's `Σ Φ / Â`.
+#[must_use]
+pub fn zone_cells(photons: &[&Photon], p: Vec3, n: Vec3) -> Option<(Frame, HemisphereSamples)> {
+    let frame = Frame::from_z(n);
+    let projected: Vec<Vec2> = photons
+        .iter()
+        .map(|ph| {
+            let l = frame.to_local(ph.position - p);
+            Vec2::new(l.x, l.y)
+        })
+        .collect();
+    let area = corrected_hull_area(&projected);
+    if !(area > 0.0) {
+        return None;
+    }
+    Some((
+        frame,
+        bin_photons(photons, &frame, area, cells_for(photons.len())),
+    ))
+}
+
 /// Algorithm 7: the record at `p` (unit normal `n`, the side photons land on), or `None` where
 /// fewer than three photons lie in its zone.
 #[must_use]
@@ -169,23 +192,11 @@ pub fn photon_record(
     if found.len() < 3 {
         return None;
     }
-    let frame = Frame::from_z(n);
     let photons: Vec<&Photon> = found
         .iter()
         .map(|f| &tree.photons[f.index as usize])
         .collect();
-    let projected: Vec<Vec2> = photons
-        .iter()
-        .map(|ph| {
-            let l = frame.to_local(ph.position - p);
-            Vec2::new(l.x, l.y)
-        })
-        .collect();
-    let area = corrected_hull_area(&projected);
-    if !(area > 0.0) {
-        return None;
-    }
-    let cells = bin_photons(&photons, &frame, area, cells_for(photons.len()));
+    let (frame, cells) = zone_cells(&photons, p, n)?;
     let e = cells.irradiance();
     let mut grad_t = to_world(
         &cells.translational_gradient_ward_heckbert(),

@@ -73,7 +73,7 @@ pub fn trace_photons(
 ) -> (Vec<Photon>, TraceStats) {
     let mut stats = TraceStats::default();
     let mut photons: Vec<Photon> = Vec::new();
-    if wanted == 0 || scene.lights.is_empty() || max_bounces == 0 {
+    if wanted == 0 || scene.lights.is_empty() || (max_bounces == 0 && kind != MapKind::All) {
         return (photons, stats);
     }
     let max_bounces = max_bounces.min(MAX_BOUNCES);

@@ -1,0 +1,284 @@
+//! Photon mapping against closed forms and the path tracer (issue 14, NOTES-001 E.6): emitted
+//! power, irradiance on a plane under a constant sky (inside and at the edge, disc and hull
+//! estimates), photon-cell gradients against Lambert's formula, and caustics through a glass
+//! sphere.
+
+mod common;
+
+use common::*;
+use ircache_math::{Rgb, Rng, Vec3};
+use ircache_render::lights::LightSet;
+use ircache_render::photon_map::records::zone_cells;
+use ircache_render::photon_map::{MapKind, Photon, PhotonMap};
+use ircache_render::scene::Scene;
+use ircache_scene::*;
+use std::f32::consts::PI;
+use std::sync::Arc;
+
+/// A one-sided quad from corners in order (normal by the right-hand rule).
+fn quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> ShapeDesc {
+    ShapeDesc {
+        id: None,
+        geometry: Geometry::Mesh(TriangleMesh {
+            positions: corners.to_vec(),
+            normals: None,
+            uvs: None,
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+        }),
+        bsdf,
+        emitter,
+        location: here(),
+    }
+}
+
+/// The square `|x|, |z| ≤ half` at height 0, facing up.
+fn floor(half: f32) -> ShapeDesc {
+    let h = half;
+    quad(
+        [
+            Vec3::new(-h, 0.0, -h),
+            Vec3::new(-h, 0.0, h),
+            Vec3::new(h, 0.0, h),
+            Vec3::new(h, 0.0, -h),
+        ],
+        diffuse(Rgb::splat(0.5)),
+        None,
+    )
+}
+
+/// Mean flux weight of `n` emission samples.
+fn mean_flux(set: &LightSet, n: u32) -> Rgb {
+    let mut rng = Rng::new(7, 0);
+    let mut sum = [0.0f64; 3];
+    for _ in 0..n {
+        if let Some(s) = set.sample_emission(rng.next_f32(), rng.next_2d(), rng.next_2d()) {
+            assert!((s.direction.length() - 1.0).abs() < 1e-4);
+            for (acc, c) in sum.iter_mut().zip(s.flux.to_array()) {
+                *acc += f64::from(c);
+            }
+        }
+    }
+    let m = sum.map(|v| (v / f64::from(n)) as f32);
+    Rgb::new(m[0], m[1], m[2])
+}
+
+fn assert_close(a: Rgb, b: Rgb, tol: f32, what: &str) {
+    for (x, y) in a.to_array().into_iter().zip(b.to_array()) {
+        assert!((x / y - 1.0).abs() < tol, "{what}: {a:?} against {b:?}");
+    }
+}
+
+fn lights(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>) -> LightSet {
+    LightSet::new(
+        &light_scene(shapes, emitters),
+        Vec3::new(0.5, 0.0, 0.0),
+        2.0,
+    )
+}
+
+#[test]
+fn emitted_photons_carry_each_lights_power() {
+    let i = Rgb::new(1.0, 2.0, 3.0);
+    let point = lights(
+        vec![],
+        vec![EmitterDesc::Point {
+            position: Vec3::ZERO,
+            intensity: i,
+        }],
+    );
+    assert_close(mean_flux(&point, 1000), i * (4.0 * PI), 1e-5, "point");
+
+    // Spot: the falloff, integrated by the samples, against the closed form.
+    let spot = lights(
+        vec![],
+        vec![EmitterDesc::Spot {
+            to_world: ircache_math::Mat4::from_rotation_x(0.7),
+            intensity: i,
+            cutoff_angle: 40.0,
+            beam_width: 15.0,
+        }],
+    );
+    let expect =
+        ircache_render::lights::emission::spot_power(i, 15f32.to_radians(), 40f32.to_radians());
+    assert_close(mean_flux(&spot, 400_000), expect, 5e-3, "spot");
+
+    // Distant lights through the disc of the bounding sphere (radius 2).
+    let e = Rgb::new(2.0, 1.0, 0.5);
+    let sun = lights(
+        vec![],
+        vec![EmitterDesc::Directional {
+            direction: Vec3::new(1.0, -2.0, 0.5),
+            irradiance: e,
+        }],
+    );
+    assert_close(mean_flux(&sun, 1000), e * (PI * 4.0), 1e-5, "directional");
+    let l = Rgb::new(0.5, 0.25, 1.0);
+    let sky = lights(vec![], vec![EmitterDesc::Constant { radiance: l }]);
+    assert_close(
+        mean_flux(&sky, 1000),
+        l * (4.0 * PI * PI * 4.0),
+        1e-5,
+        "constant",
+    );
+
+    // An emitting sphere (radius 0.5) and quad (area 2): π L A each. Selected by power, the
+    // set's mean is their sum; each light's power() says the same.
+    let sphere = emitting_shape(
+        Geometry::Sphere {
+            center: Vec3::new(3.0, 0.0, 0.0),
+            radius: 0.5,
+            flip_normals: false,
+        },
+        l,
+    );
+    let panel = quad(
+        [
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(2.0, 1.0, 0.0),
+            Vec3::new(2.0, 1.0, 1.0),
+            Vec3::new(0.0, 1.0, 1.0),
+        ],
+        diffuse(Rgb::ZERO),
+        Some(e),
+    );
+    let both = lights(vec![sphere, panel], vec![]);
+    let expect = l * (PI * 4.0 * PI * 0.25) + e * (PI * 2.0);
+    assert_close(both.power(0) + both.power(1), expect, 1e-5, "power()");
+    assert_close(mean_flux(&both, 400_000), expect, 1e-2, "sphere and quad");
+}
+
+/// The photons of `map` within `radius` of `p` on the side of `n`.
+fn zone<'a>(map: &'a PhotonMap, p: Vec3, n: Vec3, radius: f32) -> Vec<&'a Photon> {
+    let mut found = Vec::new();
+    let accept = |ph: &Photon| ph.normal.dot(n) > 0.5;
+    map.tree.nearest(
+        p.to_array(),
+        usize::MAX,
+        radius * radius,
+        &accept,
+        &mut found,
+    );
+    found
+        .iter()
+        .map(|f| &map.tree.photons[f.index as usize])
+        .collect()
+}
+
+fn flux_sum(photons: &[&Photon]) -> Rgb {
+    photons.iter().fold(Rgb::ZERO, |s, p| s + p.flux)
+}
+
+/// NOTES-001 E-T2: under a constant sky of radiance L a plane receives E = πL. Inside, the disc
+/// and hull estimates agree with it; at the edge the disc estimate sees half the photons over
+/// the whole disc (E/2), the Efron-corrected hull all of E. Each ring of photon cells holds
+/// radiance L.
+#[test]
+fn a_plane_under_a_constant_sky_gets_pi_l_from_photons_at_its_edge_too() {
+    let l = 0.5;
+    let desc = light_scene(
+        vec![floor(1.0)],
+        vec![EmitterDesc::Constant {
+            radiance: Rgb::splat(l),
+        }],
+    );
+    let scene = Scene::build(&desc).expect("scene");
+    let map = PhotonMap::build(&scene, MapKind::All, 200_000, 0, 5, None);
+    assert!(map.tree.len() >= 200_000);
+    assert!(map.tree.photons.iter().all(|p| p.bounces == 0));
+    let expect = Rgb::splat(PI * l);
+    let r = 0.2;
+    let up = Vec3::Y;
+
+    let inside = zone(&map, Vec3::ZERO, up, r);
+    let disc = flux_sum(&inside) / (PI * r * r);
+    assert_close(disc, expect, 0.04, "disc estimate inside");
+    let (_, cells) = zone_cells(&inside, Vec3::ZERO, up).expect("cells");
+    assert_close(cells.irradiance(), expect, 0.04, "hull estimate inside");
+    let (m, n) = (cells.strata.polar, cells.strata.azimuthal);
+    for j in 0..m {
+        let ring = (0..n).fold(Rgb::ZERO, |s, k| s + cells.radiance[j * n + k]) / n as f32;
+        assert_close(ring, Rgb::splat(l), 0.12, &format!("radiance of ring {j}"));
+    }
+
+    let edge = Vec3::new(1.0 - 1e-4, 0.0, 0.3);
+    let half = zone(&map, edge, up, r);
+    let disc = flux_sum(&half) / (PI * r * r);
+    assert_close(disc, expect * 0.5, 0.06, "disc estimate at the edge (half)");
+    let (_, cells) = zone_cells(&half, edge, up).expect("cells");
+    assert_close(
+        cells.irradiance(),
+        expect,
+        0.05,
+        "hull estimate at the edge",
+    );
+    // At a corner a quarter of the disc holds photons: the hull still finds the area.
+    let corner = Vec3::new(1.0 - 1e-4, 0.0, 1.0 - 1e-4);
+    let quarter = zone(&map, corner, up, r);
+    let (_, cells) = zone_cells(&quarter, corner, up).expect("cells");
+    assert_close(
+        cells.irradiance(),
+        expect,
+        0.06,
+        "hull estimate at a corner",
+    );
+}
+
+/// NOTES-001 E-T3: the translational and rotational gradients from photon cells (Ward–Heckbert
+/// from the photons' arrival directions and flight distances) against central differences of
+/// the exact irradiance under a square emitter (Lambert's formula).
+#[test]
+fn photon_cell_gradients_match_central_differences_of_the_exact_irradiance() {
+    let le = 2.0;
+    let panel = [
+        Vec3::new(0.0, 1.0, -0.5),
+        Vec3::new(1.0, 1.0, -0.5),
+        Vec3::new(1.0, 1.0, 0.5),
+        Vec3::new(0.0, 1.0, 0.5),
+    ];
+    let light = quad(panel, diffuse(Rgb::ZERO), Some(Rgb::splat(le)));
+    let desc = light_scene(vec![floor(2.0), light], vec![]);
+    let scene = Scene::build(&desc).expect("scene");
+    let map = PhotonMap::build(&scene, MapKind::All, 600_000, 0, 9, None);
+    let exact = |x: Vec3, n: Vec3| PI * le * form_factor(x, n, &panel);
+
+    let p = Vec3::new(-0.1, 0.0, 0.1);
+    let up = Vec3::Y;
+    let photons = zone(&map, p, up, 0.12);
+    let (frame, cells) = zone_cells(&photons, p, up).expect("cells");
+    let e = cells.irradiance().g;
+    assert!(
+        (e / exact(p, up) - 1.0).abs() < 0.04,
+        "E {e} against {}",
+        exact(p, up)
+    );
+
+    let local = cells.translational_gradient_ward_heckbert()[1];
+    let grad_t = frame.s * local.x + frame.t * local.y;
+    let h = 1e-3;
+    let fd = Vec3::new(
+        (exact(p + Vec3::X * h, up) - exact(p - Vec3::X * h, up)) / (2.0 * h),
+        0.0,
+        (exact(p + Vec3::Z * h, up) - exact(p - Vec3::Z * h, up)) / (2.0 * h),
+    );
+    assert!(
+        (grad_t - fd).length() < 0.15 * fd.length(),
+        "translational gradient {grad_t:?} against {fd:?}"
+    );
+
+    let local = cells.rotational_gradient()[1];
+    let grad_r = frame.s * local.x + frame.t * local.y;
+    // E(n) ≈ E + (n_i × n)·∇_r: a rotation by ε about the unit axis a gives n_i × n = ε a.
+    let tilt = |axis: Vec3, angle: f32| {
+        let n = ircache_math::Mat3::from_axis_angle(axis, angle) * up;
+        exact(p, n)
+    };
+    let fd_r = Vec3::new(
+        (tilt(Vec3::X, h) - tilt(Vec3::X, -h)) / (2.0 * h),
+        0.0,
+        (tilt(Vec3::Z, h) - tilt(Vec3::Z, -h)) / (2.0 * h),
+    );
+    assert!(
+        (grad_r - fd_r).length() < 0.15 * fd_r.length(),
+        "rotational gradient {grad_r:?} against {fd_r:?}"
+    );
+}
