@@ -91,8 +91,10 @@ pub struct RenderArgs {
     /// NAME-irradiance.exr), `records` (level-0 record positions as red dots over the image, cyan
     /// for records that also hold radiance, NAME-records.exr) and `glossy` (with
     /// --radiance-cache on: the indirect light the first surface's cached glossy lobe reflects
-    /// towards the camera, from the radiance records, NAME-glossy.exr). Repeat or separate with
-    /// commas.
+    /// towards the camera, from the radiance records, NAME-glossy.exr) and `photons` (with
+    /// --photons or --caustic-photons: the indirect irradiance the photon maps give at the first
+    /// diffuse surface, the global map's and the caustic map's, NAME-photons.exr). Repeat or
+    /// separate with commas.
     #[arg(long, value_delimiter = ',')]
     pub aov: Vec<String>,
     /// Render only band i of n equal bands of rows (0-based, `--tile 2/4`), the rest black: n
@@ -295,8 +297,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let desc = load(args)?;
     let mut integrator = integrator(args, &desc)?;
     for aov in &args.aov {
-        if !matches!(aov.as_str(), "irradiance" | "records" | "glossy") {
-            bail!("--aov {aov}: expected irradiance, records or glossy");
+        if !matches!(
+            aov.as_str(),
+            "irradiance" | "records" | "glossy" | "photons"
+        ) {
+            bail!("--aov {aov}: expected irradiance, records, glossy or photons");
+        }
+        if aov == "photons"
+            && !matches!(&integrator, Integrator::Ic(ic)
+                if ic.params.photons > 0 || ic.params.caustic_photons > 0)
+        {
+            bail!("--aov photons needs photon maps: give --photons N or --caustic-photons N");
         }
         if !matches!(integrator, Integrator::Ic(_)) {
             bail!("--aov {aov} needs the ic integrator");
@@ -587,6 +598,7 @@ fn write_aovs(
                 aov::irradiance_image(scene, &report.cache, settings.width, settings.height)
             }
             "glossy" => aov::glossy_image(scene, &report.cache, settings.width, settings.height),
+            "photons" => aov::photon_image(scene, &report.cache, settings.width, settings.height),
             _ => aov::record_overlay(scene, &report.cache, image),
         };
         let stem = output

@@ -148,7 +148,7 @@ fn emitted_photons_carry_each_lights_power() {
 }
 
 /// The photons of `map` within `radius` of `p` on the side of `n`.
-fn zone<'a>(map: &'a PhotonMap, p: Vec3, n: Vec3, radius: f32) -> Vec<&'a Photon> {
+fn zone(map: &PhotonMap, p: Vec3, n: Vec3, radius: f32) -> Vec<&Photon> {
     let mut found = Vec::new();
     let accept = |ph: &Photon| ph.normal.dot(n) > 0.5;
     map.tree.nearest(
@@ -372,23 +372,23 @@ fn caustics_through_a_glass_sphere_match_the_path_tracer() {
 
     let mut few = camera;
     few.spp = 64;
-    for (what, params) in [("caustic map", vec![("caustic_photons", "200000")])] {
-        let out = render_desc(
-            &scene(few.clone(), ic(6, &params), shapes.clone(), vec![]),
-            0,
-            1,
-        );
-        let caustic = masked_mean(&out.image, &mask);
-        let mean = masked_mean(&out.image, &vec![true; lum.len()]);
-        assert!(
-            (caustic / path_caustic - 1.0).abs() < 0.08,
-            "{what}: caustic {caustic} against the path tracer's {path_caustic}"
-        );
-        assert!(
-            (mean / path_mean - 1.0).abs() < 0.02,
-            "{what}: mean {mean} against the path tracer's {path_mean}"
-        );
-    }
+    let what = "caustic map";
+    let params = [("caustic_photons", "200000")];
+    let out = render_desc(
+        &scene(few.clone(), ic(6, &params), shapes.clone(), vec![]),
+        0,
+        1,
+    );
+    let caustic = masked_mean(&out.image, &mask);
+    let mean = masked_mean(&out.image, &vec![true; lum.len()]);
+    assert!(
+        (caustic / path_caustic - 1.0).abs() < 0.08,
+        "{what}: caustic {caustic} against the path tracer's {path_caustic}"
+    );
+    assert!(
+        (mean / path_mean - 1.0).abs() < 0.02,
+        "{what}: mean {mean} against the path tracer's {path_mean}"
+    );
 }
 
 /// A closed diffuse room lit by a small ceiling panel: inward-facing walls, floor and ceiling.

@@ -17,6 +17,7 @@
 
 mod cache_vs_path;
 mod peers;
+mod photons;
 mod plane;
 mod radiance;
 mod splat;
@@ -55,7 +56,8 @@ pub struct BenchArgs {
     /// Mitsuba 3, by rendering), splat (splatting against the lookup: per record, per frame),
     /// plane (records from a rasterised plane against the stratified gather, Table 4.1),
     /// temporal (animations: the cache kept over time against a cache per frame and against
-    /// Mitsuba 3 per frame, flicker measured).
+    /// Mitsuba 3 per frame, flicker measured), photons (the final gather, caustic map and
+    /// photon records against the cache without photons and Mitsuba 3, by rendering).
     #[arg(long, default_value = "all")]
     pub only: String,
     /// temporal: only the animations whose name contains this (still, cube, light, lamp).
@@ -130,6 +132,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "plane" {
         plane::run_all(&shared)?;
+    }
+    if args.only == "all" || args.only == "photons" {
+        photons::run_all(!args.no_mitsuba)?;
     }
     if args.only == "all" || args.only == "temporal" {
         temporal::run_all(!args.no_mitsuba, args.case.as_deref())?;
@@ -372,21 +377,25 @@ pub(super) fn llvm_path() -> Option<String> {
 
 /// Times Mitsuba 3's render of the same scene (kernels compiled by a warm-up run first).
 fn mitsuba_time(scene: &Path, spp: u32) -> Result<f64> {
-    mitsuba_render(scene, spp, None, 3, None)
+    mitsuba_render(scene, spp, None, 3, None, &[])
 }
 
 /// Renders the scene with Mitsuba 3 at `spp` (in passes of at most 64 spp with different
 /// seeds, averaged, as the references were made), writing the image to `out` if given; returns
 /// the render time (kernels compiled by a warm-up run first).
-/// `sampler` overrides the scene's `$sampler` default.
+/// `sampler` overrides the scene's `$sampler` default, `defines` others (`resx`, `resy`).
 pub(super) fn mitsuba_render(
     scene: &Path,
     spp: u32,
     out: Option<&Path>,
     max_depth: u32,
     sampler: Option<&str>,
+    defines: &[(&str, &str)],
 ) -> Result<f64> {
-    let sampler = sampler.map_or(String::new(), |s| format!(", sampler={s:?}"));
+    let mut sampler = sampler.map_or(String::new(), |s| format!(", sampler={s:?}"));
+    for (name, value) in defines {
+        sampler += &format!(", {name}={value:?}");
+    }
     let save = match out {
         Some(p) => format!("mi.Bitmap(acc).write({:?})", p.display().to_string()),
         None => String::new(),
@@ -811,7 +820,7 @@ fn ic(shared: &Path, args: &BenchArgs) -> Result<()> {
         let m_spp = (c1 / (err - c0)).ceil() as u32;
         let tmp =
             std::env::temp_dir().join(format!("ircache-bench-{}-{name}.exr", std::process::id()));
-        match mitsuba_render(&scene_path, m_spp, Some(&tmp), 3, None) {
+        match mitsuba_render(&scene_path, m_spp, Some(&tmp), 3, None, &[]) {
             Ok(t) => {
                 let m = ircache_image::read_image(&tmp)
                     .map_err(anyhow::Error::from)

@@ -20,9 +20,16 @@ use std::path::Path;
 
 /// Mitsuba 3 at `spp` with `sampler` (a process of its own, kernels compiled by a warm-up
 /// render first): the time and the image's figures against `reference`.
-fn mitsuba(scene: &Path, depth: u32, sampler: &str, spp: u32, reference: &Image) -> Result<Point> {
+fn mitsuba(
+    scene: &Path,
+    depth: u32,
+    sampler: &str,
+    spp: u32,
+    reference: &Image,
+    defines: &[(&str, &str)],
+) -> Result<Point> {
     let tmp = std::env::temp_dir().join(format!("ircache-peers-{}.exr", std::process::id()));
-    let seconds = mitsuba_render(scene, spp, Some(&tmp), depth, Some(sampler))?;
+    let seconds = mitsuba_render(scene, spp, Some(&tmp), depth, Some(sampler), defines)?;
     let img =
         ircache_image::read_image(&tmp).with_context(|| format!("reading {}", tmp.display()))?;
     let _ = std::fs::remove_file(&tmp);
@@ -30,10 +37,13 @@ fn mitsuba(scene: &Path, depth: u32, sampler: &str, spp: u32, reference: &Image)
 }
 
 /// Mitsuba 3 `multijitter` at 16, 32, 64, … spp until a render reaches `error` (and `blurred`,
-/// when given) or takes longer than `cap` seconds, each printed by `show`.
+/// when given) or takes longer than `cap` seconds, each printed by `show`; `defines` set the
+/// scene's defaults (`resx`, `resy`).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn multijitter_series(
     scene: &Path,
     depth: u32,
+    defines: &[(&str, &str)],
     reference: &Image,
     error: f64,
     blurred: Option<f64>,
@@ -43,7 +53,7 @@ pub(super) fn multijitter_series(
     let mut series = Vec::new();
     let mut spp = 16;
     loop {
-        let p = mitsuba(scene, depth, "multijitter", spp, reference)?;
+        let p = mitsuba(scene, depth, "multijitter", spp, reference, defines)?;
         show(&format!("Mitsuba multijitter, {spp} spp"), &p);
         series.push(p);
         if (p.error <= error && blurred.is_none_or(|b| p.blurred <= b))
@@ -88,7 +98,7 @@ pub fn run_all(shared: &Path) -> Result<()> {
         let ic = measure(&run(&scene, &desc, "ic", 16, &[])?, &reference)?;
         show("ircache ic, defaults, 16 spp", &ic);
         let mut mi_series = Vec::new();
-        match mitsuba(&scene_path, depth, "independent", 64, &reference) {
+        match mitsuba(&scene_path, depth, "independent", 64, &reference, &[]) {
             Ok(p) => show("Mitsuba independent, 64 spp", &p),
             Err(e) => {
                 println!("  Mitsuba 3 not measured: {e:#}");
@@ -98,6 +108,7 @@ pub fn run_all(shared: &Path) -> Result<()> {
         mi_series.extend(multijitter_series(
             &scene_path,
             depth,
+            &[],
             &reference,
             ic.error,
             Some(ic.blurred),

@@ -93,8 +93,16 @@ pub fn run_all(shared: &Path, with_mitsuba: bool) -> Result<()> {
         if !with_mitsuba {
             continue;
         }
-        let mi = match multijitter_series(scene_path, 5, &reference, cached.error, None, cap, &show)
-        {
+        let mi = match multijitter_series(
+            scene_path,
+            5,
+            &[],
+            &reference,
+            cached.error,
+            None,
+            cap,
+            &show,
+        ) {
             Ok(mi) => mi,
             Err(e) => {
                 println!("  Mitsuba 3 not measured: {e:#}");

@@ -1,6 +1,6 @@
-//! Seeing the cache: the interpolated indirect irradiance per pixel, the glossy light shaded
-//! from radiance records, and the record positions drawn as dots over an image (as in 004's
-//! first figure).
+//! Seeing the cache: the interpolated indirect irradiance per pixel, the photon maps'
+//! irradiance, the glossy light shaded from radiance records, and the record positions drawn as
+//! dots over an image (as in 004's first figure).
 
 use super::build::first_diffuse_point;
 use super::gather::{IrradianceCache, ShadingPoint};
@@ -26,6 +26,27 @@ pub fn irradiance_image(
                 })
             })
             .map_or(Rgb::ZERO, |i| i.e)
+    })
+}
+
+/// The indirect irradiance the photon maps give at each pixel centre's first diffuse surface:
+/// the global map's (photons of one or more bounces, as a gather hit reads them) plus the
+/// caustic map's (black without maps).
+#[must_use]
+pub fn photon_image(scene: &Scene, cache: &IrradianceCache, width: usize, height: usize) -> Image {
+    let Some(maps) = cache.photons.as_deref() else {
+        return Image::new(width, height);
+    };
+    per_pixel_centre(scene, width, height, |ray| {
+        first_diffuse_point(scene, ray, 1).map_or(Rgb::ZERO, |sp| {
+            let global = maps
+                .global
+                .irradiance(sp.it.p, sp.n, u16::MAX, &maps.global_lookup);
+            let caustic = maps.caustic.as_ref().map_or(Rgb::ZERO, |c| {
+                c.irradiance(sp.it.p, sp.n, u16::MAX, &maps.caustic_lookup)
+            });
+            global + caustic
+        })
     })
 }
 

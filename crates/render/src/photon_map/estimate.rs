@@ -9,6 +9,7 @@
 
 use super::kd_tree::{KdTree, Neighbour};
 use super::photon::Photon;
+use crate::lights::is_positive_finite;
 use ircache_math::{Rgb, Vec3};
 use std::cell::RefCell;
 
@@ -56,7 +57,7 @@ pub fn irradiance_by_bounces(
         } else {
             max2
         };
-        if !(r2 > 0.0) {
+        if !is_positive_finite(r2) {
             return;
         }
         for f in found.iter() {
@@ -90,7 +91,7 @@ pub fn irradiance(tree: &KdTree, p: Vec3, n: Vec3, max_bounces: u16, lookup: &Lo
         } else {
             max2
         };
-        if !(r2 > 0.0) {
+        if !is_positive_finite(r2) {
             return Rgb::ZERO;
         }
         let mut sum = Rgb::ZERO;

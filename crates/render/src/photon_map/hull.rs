@@ -4,6 +4,7 @@
 //! `Â = A_hull / (1 − V/(n+1))` with `V` the hull's vertex count. Photon-mapped irradiance
 //! records (001 eq. 6.2) divide the zone's flux by it.
 
+use crate::lights::is_positive_finite;
 use ircache_math::Vec2;
 
 /// Convex hull of `points` (Andrew's monotone chain), counter-clockwise, without collinear
@@ -59,7 +60,7 @@ pub fn polygon_area(polygon: &[Vec2]) -> f32 {
 pub fn corrected_hull_area(points: &[Vec2]) -> f32 {
     let hull = convex_hull(points);
     let area = polygon_area(&hull);
-    if hull.len() < 3 || !(area > 0.0) {
+    if hull.len() < 3 || !is_positive_finite(area) {
         return 0.0;
     }
     let n = points.len() as f32;

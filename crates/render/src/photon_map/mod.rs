@@ -189,4 +189,4 @@ impl PhotonMaps {
     }
 }
 
-const CAUSTIC_SALT: u64 = 0x6361_7573_7469_63;
+const CAUSTIC_SALT: u64 = 0x0063_6175_7374_6963;

@@ -21,6 +21,7 @@ use super::photon::Photon;
 use crate::irradiance_cache::hemisphere::{to_world, HemisphereSamples, Stratification};
 use crate::irradiance_cache::record::{ErrorMetric, Record, NO_RADIANCE};
 use crate::irradiance_cache::store::RecordStore;
+use crate::lights::is_positive_finite;
 use ircache_math::{Frame, Rgb, Vec2, Vec3};
 
 /// What records are made from and how far they reach.
@@ -147,7 +148,7 @@ pub fn zone_cells(photons: &[&Photon], p: Vec3, n: Vec3) -> Option<(Frame, Hemis
         })
         .collect();
     let area = corrected_hull_area(&projected);
-    if !(area > 0.0) {
+    if !is_positive_finite(area) {
         return None;
     }
     Some((

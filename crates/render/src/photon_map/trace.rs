@@ -21,6 +21,7 @@
 //! number emitted in its pass.
 
 use super::photon::Photon;
+use crate::lights::is_positive_finite;
 use crate::scene::Scene;
 use ircache_math::ray::offset_ray_origin;
 use ircache_math::{Ray, Rgb, Rng};
@@ -100,7 +101,7 @@ pub fn trace_photons(
     }
     let scale = 1.0 / stats.emitted as f32;
     for p in &mut photons {
-        p.flux = p.flux * scale;
+        p.flux *= scale;
     }
     stats.stored = photons.len() as u64;
     (photons, stats)
@@ -175,7 +176,7 @@ fn trace_one(
         let weight = bs.weight * (bs.eta * bs.eta);
         // Russian roulette keeps the flux per photon about even (Jensen §5.2.1).
         let q = weight.max_channel().min(1.0);
-        if !(q > 0.0) || rng.next_f32() >= q {
+        if !is_positive_finite(q) || rng.next_f32() >= q {
             break;
         }
         flux = flux * weight / q;
