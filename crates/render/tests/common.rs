@@ -168,8 +168,8 @@ pub fn emitting_shape(geometry: Geometry, radiance: Rgb) -> ShapeDesc {
     }
 }
 
-/// A quad from four corners in order, as two triangles, `twosided` with `bsdf` on both sides.
-pub fn two_sided_quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>) -> ShapeDesc {
+/// A one-sided quad from corners in order (normal by the right-hand rule).
+pub fn quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> ShapeDesc {
     ShapeDesc {
         id: None,
         geometry: Geometry::Mesh(TriangleMesh {
@@ -178,13 +178,19 @@ pub fn two_sided_quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>) -> ShapeDesc {
             uvs: None,
             indices: vec![[0, 1, 2], [0, 2, 3]],
         }),
-        bsdf: Arc::new(BsdfDesc::TwoSided {
-            front: bsdf,
-            back: None,
-        }),
-        emitter: None,
+        bsdf,
+        emitter,
         location: here(),
     }
+}
+
+/// A quad from four corners in order, as two triangles, `twosided` with `bsdf` on both sides.
+pub fn two_sided_quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>) -> ShapeDesc {
+    let two_sided = Arc::new(BsdfDesc::TwoSided {
+        front: bsdf,
+        back: None,
+    });
+    quad(corners, two_sided, None)
 }
 
 /// Lambert's form factor from a differential area at `x` with normal `n` to a polygon above

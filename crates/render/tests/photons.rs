@@ -15,22 +15,6 @@ use ircache_scene::*;
 use std::f32::consts::PI;
 use std::sync::Arc;
 
-/// A one-sided quad from corners in order (normal by the right-hand rule).
-fn quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> ShapeDesc {
-    ShapeDesc {
-        id: None,
-        geometry: Geometry::Mesh(TriangleMesh {
-            positions: corners.to_vec(),
-            normals: None,
-            uvs: None,
-            indices: vec![[0, 1, 2], [0, 2, 3]],
-        }),
-        bsdf,
-        emitter,
-        location: here(),
-    }
-}
-
 /// The square `|x|, |z| ≤ half` at height 0, facing up.
 fn floor(half: f32) -> ShapeDesc {
     let h = half;

@@ -37,6 +37,38 @@ pub fn nearest_on_side(tree: &KdTree, p: Vec3, n: Vec3, max_radius: f32) -> Opti
     })
 }
 
+/// Calls `f` with the photons a density estimate at `p` takes (the `lookup.count` nearest that
+/// `accept`, within the largest radius) and the squared radius of their disc: the farthest
+/// one's, or the largest radius when fewer are found. `None` for an empty disc.
+fn with_disc<T>(
+    tree: &KdTree,
+    p: Vec3,
+    accept: &dyn Fn(&Photon) -> bool,
+    lookup: &Lookup,
+    f: impl FnOnce(&[Neighbour], f32) -> T,
+) -> Option<T> {
+    if tree.is_empty() || lookup.count == 0 {
+        return None;
+    }
+    FOUND.with_borrow_mut(|found| {
+        let max2 = lookup.max_radius * lookup.max_radius;
+        tree.nearest(p.to_array(), lookup.count, max2, accept, found);
+        let r2 = if found.len() == lookup.count {
+            found.last().map_or(max2, |n| n.distance2)
+        } else {
+            max2
+        };
+        is_positive_finite(r2).then(|| f(found, r2))
+    })
+}
+
+/// A photon lands on the side of `n` of the same surface: normals within 60°, arriving from
+/// above.
+#[inline]
+fn same_side(ph: &Photon, n: Vec3) -> bool {
+    ph.normal.dot(n) > 0.5 && ph.incoming.dot(n) > 0.0
+}
+
 /// `E(p)` for each bounce limit `0..columns` (the last: every photon), over the one disc of the
 /// `lookup.count` nearest photons of any bounces.
 #[must_use]
@@ -48,19 +80,8 @@ pub fn irradiance_by_bounces(
     lookup: &Lookup,
 ) -> Vec<Rgb> {
     let mut by = vec![Rgb::ZERO; columns];
-    let accept = |ph: &Photon| ph.normal.dot(n) > 0.5 && ph.incoming.dot(n) > 0.0;
-    FOUND.with_borrow_mut(|found| {
-        let max2 = lookup.max_radius * lookup.max_radius;
-        tree.nearest(p.to_array(), lookup.count, max2, &accept, found);
-        let r2 = if found.len() == lookup.count {
-            found.last().map_or(max2, |n| n.distance2)
-        } else {
-            max2
-        };
-        if !is_positive_finite(r2) {
-            return;
-        }
-        for f in found.iter() {
+    with_disc(tree, p, &|ph| same_side(ph, n), lookup, |found, r2| {
+        for f in found {
             let ph = &tree.photons[f.index as usize];
             by[usize::from(ph.bounces).min(columns - 1)] += ph.flux;
         }
@@ -74,30 +95,15 @@ pub fn irradiance_by_bounces(
     by
 }
 
-/// `E(p)` on the side of unit normal `n` from photons of 1 to `max_bounces` bounces.
+/// `E(p)` on the side of unit normal `n` from photons of at most `max_bounces` bounces.
 #[must_use]
 pub fn irradiance(tree: &KdTree, p: Vec3, n: Vec3, max_bounces: u16, lookup: &Lookup) -> Rgb {
-    if tree.is_empty() || lookup.count == 0 {
-        return Rgb::ZERO;
-    }
-    let accept = |ph: &Photon| {
-        ph.bounces <= max_bounces && ph.normal.dot(n) > 0.5 && ph.incoming.dot(n) > 0.0
-    };
-    FOUND.with_borrow_mut(|found| {
-        let max2 = lookup.max_radius * lookup.max_radius;
-        tree.nearest(p.to_array(), lookup.count, max2, &accept, found);
-        let r2 = if found.len() == lookup.count {
-            found.last().map_or(max2, |n| n.distance2)
-        } else {
-            max2
-        };
-        if !is_positive_finite(r2) {
-            return Rgb::ZERO;
-        }
-        let mut sum = Rgb::ZERO;
-        for f in found.iter() {
-            sum += tree.photons[f.index as usize].flux;
-        }
+    let accept = |ph: &Photon| ph.bounces <= max_bounces && same_side(ph, n);
+    with_disc(tree, p, &accept, lookup, |found, r2| {
+        let sum = found
+            .iter()
+            .fold(Rgb::ZERO, |s, f| s + tree.photons[f.index as usize].flux);
         sum / (std::f32::consts::PI * r2)
     })
+    .unwrap_or(Rgb::ZERO)
 }
