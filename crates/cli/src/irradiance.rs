@@ -168,6 +168,9 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
     }
     out.flush()?;
     if let Some(st) = stats {
+        for note in &st.notes {
+            eprintln!("note: {note}");
+        }
         eprintln!(
             "irradiance cache: {} records for {} points ({} computed, {:.1} M gather rays, {:.2} s)",
             st.records(),

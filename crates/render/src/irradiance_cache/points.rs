@@ -130,9 +130,14 @@ pub fn irradiance_at_points(
 ) -> (Vec<PointIrradiance>, Option<CacheStats>) {
     let points: Vec<ShadingPoint> = queries.iter().map(|&(p, n)| query_point(p, n)).collect();
     let mut cache = IrradianceCache::new(scene, params);
+    cache.photons = super::prepare::photon_maps(scene, params, seed).map(std::sync::Arc::new);
     let stats = match method {
         PointMethod::Cache if params.bounces > 0 => {
-            Some(fill_for_points(scene, &mut cache, &points, seed))
+            let placed = super::prepare::photon_records(&mut cache);
+            let mut stats = fill_for_points(scene, &mut cache, &points, seed);
+            stats.photon_records = placed.records;
+            stats.notes.extend(super::prepare::photon_note(params));
+            Some(stats)
         }
         _ => None,
     };

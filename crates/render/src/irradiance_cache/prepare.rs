@@ -85,6 +85,7 @@ pub fn prepare_cache(
     stats.records_loaded = loaded;
     stats.photon_records = placed.records;
     stats.photon_record_seconds = photon_record_seconds;
+    notes.extend(photon_note(&ic.params));
     stats.notes = notes;
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     stats.radiance_records = cache.radiance_records.len();
@@ -112,13 +113,15 @@ pub fn empty_cache(
     }
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     cache.pixel_angle = 2.0 * scene.camera.tan_half_x / width.max(1) as f32;
-    cache.photons = photon_maps(scene, &ic.params, seed, pool).map(Arc::new);
+    cache.photons = pool
+        .install(|| photon_maps(scene, &ic.params, seed))
+        .map(Arc::new);
     Ok(cache)
 }
 
 /// With `--photon-records on`, fills the first level with records made from the global map's
 /// photons (001 Algorithm 6).
-fn photon_records(cache: &mut IrradianceCache) -> crate::photon_map::records::PlacementStats {
+pub fn photon_records(cache: &mut IrradianceCache) -> crate::photon_map::records::PlacementStats {
     use crate::photon_map::records::{place_records, PhotonRecordSettings};
     let params = &cache.params;
     let Some(maps) = cache.photons.clone().filter(|_| params.photon_records) else {
@@ -144,15 +147,25 @@ fn photon_records(cache: &mut IrradianceCache) -> crate::photon_map::records::Pl
     place_records(&maps.global.tree, &mut cache.levels[0], &settings)
 }
 
+/// What a user should hear when `--photons` has nothing to serve: with fewer than two bounces a
+/// gather hit has no indirect light of its own (and without photon records the map stays
+/// empty).
+#[must_use]
+pub fn photon_note(params: &super::IcParams) -> Option<String> {
+    (params.photons > 0 && params.bounces < 2 && !params.photon_records).then(|| {
+        format!(
+            "--photons {} does nothing at {} bounce(s): the surfaces records' gather rays hit \
+             have no indirect light to read from photons (give -ab 2 or more, or \
+             --photon-records on)",
+            params.photons, params.bounces
+        )
+    })
+}
+
 /// The photon maps `params` ask for (`None` for none): the global map's photons serve vertices
 /// one bounce beyond a record, so they need at most `bounces − 1` bounces of their own.
 #[must_use]
-pub fn photon_maps(
-    scene: &Scene,
-    params: &super::IcParams,
-    seed: u64,
-    pool: &rayon::ThreadPool,
-) -> Option<PhotonMaps> {
+pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option<PhotonMaps> {
     if params.photons == 0 && params.caustic_photons == 0 {
         return None;
     }
@@ -177,15 +190,13 @@ pub fn photon_maps(
     };
     let photons = if bounces >= 1 { params.photons } else { 0 };
     let seed = crate::irradiance_cache::gather::mix(seed, 0x7068_6f74_6f6e);
-    Some(pool.install(|| {
-        PhotonMaps::build(
-            scene,
-            (photons, params.caustic_photons),
-            (bounces, gather_bounces),
-            (global, caustic),
-            seed,
-        )
-    }))
+    Some(PhotonMaps::build(
+        scene,
+        (photons, params.caustic_photons),
+        (bounces, gather_bounces),
+        (global, caustic),
+        seed,
+    ))
 }
 
 /// The header of a cache file for `scene` rendered by `ic` at `width` pixels across.
