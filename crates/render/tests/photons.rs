@@ -479,3 +479,26 @@ fn final_gather_and_photon_records_match_the_path_tracer_in_a_room() {
         assert_close(mean, expect, 0.02, what);
     }
 }
+
+/// Same seed, same image: photon tracing, the trees, the precomputed irradiance and the photon
+/// records do not depend on the threads.
+#[test]
+fn photon_mapped_images_do_not_depend_on_the_threads() {
+    let mut camera = sensor(
+        Vec3::new(0.0, 1.0, 0.95),
+        Vec3::new(0.0, 0.9, -1.0),
+        70.0,
+        16,
+        4,
+    );
+    camera.spp = 4;
+    let params = [
+        ("photons", "30000"),
+        ("caustic_photons", "2000"),
+        ("photon_records", "on"),
+    ];
+    let desc = scene(camera, ic(5, &params), room(), vec![]);
+    let one = render_desc(&desc, 1, 7);
+    let two = render_desc(&desc, 2, 7);
+    assert_eq!(one.image.pixels, two.image.pixels);
+}
