@@ -26,17 +26,6 @@ thread_local! {
     static FOUND: RefCell<Vec<Neighbour>> = const { RefCell::new(Vec::new()) };
 }
 
-/// The index of the photon nearest `p` within `max_radius` on the same side of the same
-/// surface (`None`: none there).
-#[must_use]
-pub fn nearest_on_side(tree: &KdTree, p: Vec3, n: Vec3, max_radius: f32) -> Option<usize> {
-    let accept = |ph: &Photon| ph.normal.dot(n) > 0.5;
-    FOUND.with_borrow_mut(|found| {
-        tree.nearest(p.to_array(), 1, max_radius * max_radius, &accept, found);
-        found.first().map(|f| f.index as usize)
-    })
-}
-
 /// Calls `f` with the photons a density estimate at `p` takes (the `lookup.count` nearest that
 /// `accept`, within the largest radius) and the squared radius of their disc: the farthest
 /// one's, or the largest radius when fewer are found. `None` for an empty disc.

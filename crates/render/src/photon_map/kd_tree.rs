@@ -8,13 +8,35 @@ use super::photon::Photon;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-/// Photons in kd-tree order with each node's split axis.
-#[derive(Clone, Debug, Default)]
-pub struct KdTree {
-    /// The photons, each range's median in its middle.
-    pub photons: Vec<Photon>,
+/// What a kd-tree holds: anything with a position.
+pub trait Located: Send {
+    /// Its position.
+    fn key(&self) -> [f32; 3];
+}
+
+impl Located for Photon {
+    #[inline]
+    fn key(&self) -> [f32; 3] {
+        Photon::key(self)
+    }
+}
+
+/// Items (photons by default) in kd-tree order with each node's split axis.
+#[derive(Clone, Debug)]
+pub struct KdTree<T = Photon> {
+    /// The items, each range's median in its middle.
+    pub photons: Vec<T>,
     /// Split axis of the node at each index.
     axes: Vec<u8>,
+}
+
+impl<T> Default for KdTree<T> {
+    fn default() -> Self {
+        KdTree {
+            photons: Vec::new(),
+            axes: Vec::new(),
+        }
+    }
 }
 
 /// A found photon: its index in [`KdTree::photons`] and squared distance.
@@ -43,11 +65,11 @@ impl Ord for Neighbour {
 /// Ranges below this size are built on the calling thread.
 const PARALLEL_BUILD: usize = 1 << 14;
 
-impl KdTree {
+impl<T: Located> KdTree<T> {
     /// Builds the tree, reordering `photons` (deterministically: the order depends on the input
     /// only, not on the threads).
     #[must_use]
-    pub fn build(mut photons: Vec<Photon>) -> KdTree {
+    pub fn build(mut photons: Vec<T>) -> KdTree<T> {
         let mut axes = vec![0u8; photons.len()];
         build_range(&mut photons, &mut axes);
         KdTree { photons, axes }
@@ -72,7 +94,7 @@ impl KdTree {
         q: [f32; 3],
         k: usize,
         max_distance2: f32,
-        accept: &dyn Fn(&Photon) -> bool,
+        accept: &dyn Fn(&T) -> bool,
         out: &mut Vec<Neighbour>,
     ) {
         out.clear();
@@ -85,6 +107,51 @@ impl KdTree {
         out.extend(heap.into_sorted_vec());
     }
 
+    /// The index of the item nearest to `q` within `sqrt(max_distance2)` that `accept`s (the
+    /// one-neighbour query, without a heap).
+    #[must_use]
+    pub fn nearest_one(
+        &self,
+        q: [f32; 3],
+        max_distance2: f32,
+        accept: &dyn Fn(&T) -> bool,
+    ) -> Option<usize> {
+        let mut best = (max_distance2, usize::MAX);
+        self.search_one(0, self.photons.len(), q, accept, &mut best);
+        (best.1 != usize::MAX).then_some(best.1)
+    }
+
+    fn search_one(
+        &self,
+        lo: usize,
+        hi: usize,
+        q: [f32; 3],
+        accept: &dyn Fn(&T) -> bool,
+        best: &mut (f32, usize),
+    ) {
+        if lo >= hi {
+            return;
+        }
+        let mid = lo + (hi - lo) / 2;
+        let item = &self.photons[mid];
+        let p = item.key();
+        let axis = self.axes[mid] as usize;
+        let delta = q[axis] - p[axis];
+        let (near, far) = if delta < 0.0 {
+            ((lo, mid), (mid + 1, hi))
+        } else {
+            ((mid + 1, hi), (lo, mid))
+        };
+        self.search_one(near.0, near.1, q, accept, best);
+        let distance2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+        if distance2 < best.0 && accept(item) {
+            *best = (distance2, mid);
+        }
+        if delta * delta < best.0 {
+            self.search_one(far.0, far.1, q, accept, best);
+        }
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn search(
         &self,
@@ -93,7 +160,7 @@ impl KdTree {
         q: [f32; 3],
         k: usize,
         bound: &mut f32,
-        accept: &dyn Fn(&Photon) -> bool,
+        accept: &dyn Fn(&T) -> bool,
         heap: &mut BinaryHeap<Neighbour>,
     ) {
         if lo >= hi {
@@ -101,15 +168,15 @@ impl KdTree {
         }
         let mid = lo + (hi - lo) / 2;
         let photon = &self.photons[mid];
+        let p = photon.key();
         let axis = self.axes[mid] as usize;
-        let delta = q[axis] - photon.key()[axis];
+        let delta = q[axis] - p[axis];
         let (near, far) = if delta < 0.0 {
             ((lo, mid), (mid + 1, hi))
         } else {
             ((mid + 1, hi), (lo, mid))
         };
         self.search(near.0, near.1, q, k, bound, accept, heap);
-        let p = photon.key();
         let distance2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
         if distance2 < *bound && accept(photon) {
             heap.push(Neighbour {
@@ -130,7 +197,7 @@ impl KdTree {
 }
 
 /// Puts the median along the widest axis of `photons` in the middle and recurses on the halves.
-fn build_range(photons: &mut [Photon], axes: &mut [u8]) {
+fn build_range<T: Located>(photons: &mut [T], axes: &mut [u8]) {
     if photons.len() <= 1 {
         return;
     }
@@ -146,11 +213,7 @@ fn build_range(photons: &mut [Photon], axes: &mut [u8]) {
         .max_by(|&a, &b| extent[a].total_cmp(&extent[b]).then(b.cmp(&a)))
         .unwrap_or(0);
     let mid = photons.len() / 2;
-    photons.select_nth_unstable_by(mid, |a, b| {
-        a.key()[axis]
-            .total_cmp(&b.key()[axis])
-            .then(a.flux.r.total_cmp(&b.flux.r))
-    });
+    photons.select_nth_unstable_by(mid, |a, b| a.key()[axis].total_cmp(&b.key()[axis]));
     axes[mid] = axis as u8;
     let (left, rest) = photons.split_at_mut(mid);
     let (left_axes, rest_axes) = axes.split_at_mut(mid);
@@ -211,6 +274,8 @@ mod tests {
                 assert!((a - b).abs() <= 1e-6 * b.max(1e-6), "{a} {b}");
             }
             assert!(out.iter().all(|n| accept(&tree.photons[n.index as usize])));
+            let one = tree.nearest_one(q, max2, &accept);
+            assert_eq!(one.map(|i| i as u32), out.first().map(|n| n.index));
         }
     }
 }

@@ -49,13 +49,30 @@ pub struct PhotonMap {
     pub seconds: f64,
 }
 
-/// Precomputed irradiance: for each photon of `tree`, one estimate per bounce limit `0..C`
+/// Where an irradiance estimate was made in advance: a photon's position and normal (compact,
+/// for a fast nearest search).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EstimatePoint {
+    /// Position.
+    pub position: Vec3,
+    /// The photon's normal.
+    pub normal: Vec3,
+}
+
+impl kd_tree::Located for EstimatePoint {
+    #[inline]
+    fn key(&self) -> [f32; 3] {
+        self.position.to_array()
+    }
+}
+
+/// Precomputed irradiance: for each point of `tree`, one estimate per bounce limit `0..C`
 /// (photons of at most that many bounces, over the disc of the nearest photons of all
 /// bounces), the last column all of the map's photons.
 #[derive(Clone, Debug)]
 pub struct Precomputed {
-    /// Where the estimates were made (their flux unused).
-    pub tree: KdTree,
+    /// Where the estimates were made.
+    pub tree: KdTree<EstimatePoint>,
     /// `tree.len() × columns` estimates, row by row in tree order.
     pub irradiance: Vec<Rgb>,
     /// Bounce limits per row.
@@ -104,7 +121,9 @@ impl PhotonMap {
     #[must_use]
     pub fn irradiance(&self, p: Vec3, n: Vec3, max_bounces: u16, lookup: &Lookup) -> Rgb {
         if let Some(pre) = &self.precomputed {
-            if let Some(i) = estimate::nearest_on_side(&pre.tree, p, n, lookup.max_radius) {
+            let radius2 = lookup.max_radius * lookup.max_radius;
+            let same_side = |e: &EstimatePoint| e.normal.dot(n) > 0.5;
+            if let Some(i) = pre.tree.nearest_one(p.to_array(), radius2, &same_side) {
                 let column = usize::from(max_bounces).min(pre.columns - 1);
                 return pre.irradiance[i * pre.columns + column];
             }
@@ -121,7 +140,10 @@ fn precompute_irradiance(tree: &KdTree, max_bounces: u16, lookup: &Lookup) -> Pr
         tree.photons
             .iter()
             .step_by(PRECOMPUTED_STRIDE)
-            .copied()
+            .map(|ph| EstimatePoint {
+                position: ph.position,
+                normal: ph.normal,
+            })
             .collect(),
     );
     let columns = usize::from(max_bounces.min(PRECOMPUTED_LIMITS)) + 1;
