@@ -195,6 +195,25 @@ fn a_plane_under_a_constant_sky_gets_pi_l_from_photons_at_its_edge_too() {
         0.05,
         "hull estimate at the edge",
     );
+    // The density estimate the renderer uses takes the hull where the photons fill clearly less
+    // than their disc: no edge darkening either.
+    let lookup = ircache_render::photon_map::Lookup {
+        count: 200,
+        max_radius: 0.5,
+        hull: true,
+    };
+    assert_close(
+        map.irradiance(Vec3::ZERO, up, 0, &lookup),
+        expect,
+        0.05,
+        "estimate inside",
+    );
+    assert_close(
+        map.irradiance(edge, up, 0, &lookup),
+        expect,
+        0.06,
+        "estimate at the edge",
+    );
     // At a corner a quarter of the disc holds photons: the hull still finds the area.
     let corner = Vec3::new(1.0 - 1e-4, 0.0, 1.0 - 1e-4);
     let quarter = zone(&map, corner, up, r);

@@ -703,6 +703,11 @@ mod tests {
             ("cached_environment", "all"),
             ("radiance_order", "5"),
             ("radiance_accuracy", "0.2"),
+            ("photons", "1000"),
+            ("caustic_photons", "1000"),
+            ("photon_lookup", "50"),
+            ("photon_radius", "0.1"),
+            ("photon_records", "on"),
         ];
         for spec in crate::irradiance_cache::params::PARAMS {
             let listed = changed.iter().find(|(n, _)| *n == spec.name);

@@ -174,10 +174,12 @@ pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option
     let global = Lookup {
         count: params.photon_lookup,
         max_radius: radius,
+        hull: true,
     };
     let caustic = Lookup {
         count: (params.photon_lookup / 2).max(1),
         max_radius: radius * 0.25,
+        hull: false,
     };
     // Gather hits, one bounce beyond the camera's surfaces, take photons of up to `bounces − 1`
     // bounces; photon records at the camera's surfaces up to `bounces`.

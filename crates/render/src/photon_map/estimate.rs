@@ -6,11 +6,18 @@
 //! A photon counts when its stored normal is within 60° of the query's (`n_p · n > ½`: the
 //! same side of a thin wall, not the neighbouring wall of a corner) and it arrived from above
 //! the query's surface.
+//!
+//! At an edge or a corner the photons fill only part of the disc, and the disc's area darkens
+//! the estimate there (Jensen's boundary bias; gather rays meet such places often). Where the
+//! photons' convex hull on the tangent plane, corrected by Efron's identity ([`super::hull`]),
+//! covers clearly less than the disc (under 70 %: ten times the corrected hull's spread at a
+//! hundred photons), it takes the disc's place, for smooth light only ([`Lookup::hull`]).
 
+use super::hull::corrected_hull_area;
 use super::kd_tree::{KdTree, Neighbour};
 use super::photon::Photon;
 use crate::lights::is_positive_finite;
-use ircache_math::{Rgb, Vec3};
+use ircache_math::{Frame, Rgb, Vec2, Vec3};
 use std::cell::RefCell;
 
 /// How many photons a lookup takes and how far it looks.
@@ -20,6 +27,10 @@ pub struct Lookup {
     pub count: usize,
     /// Largest radius searched (world units).
     pub max_radius: f32,
+    /// Where the photons cover clearly less than their disc, divide by their corrected hull's
+    /// area (smooth light: the global map); a caustic's photons crowd where it is bright, and
+    /// their hull would concentrate it further.
+    pub hull: bool,
 }
 
 thread_local! {
@@ -27,11 +38,13 @@ thread_local! {
 }
 
 /// Calls `f` with the photons a density estimate at `p` takes (the `lookup.count` nearest that
-/// `accept`, within the largest radius) and the squared radius of their disc: the farthest
-/// one's, or the largest radius when fewer are found. `None` for an empty disc.
+/// `accept`, within the largest radius) and the area they cover: their disc's (out to the
+/// farthest, or the largest radius when fewer are found), or their corrected hull's where that
+/// is clearly smaller. `None` for an empty disc.
 fn with_disc<T>(
     tree: &KdTree,
     p: Vec3,
+    n: Vec3,
     accept: &dyn Fn(&Photon) -> bool,
     lookup: &Lookup,
     f: impl FnOnce(&[Neighbour], f32) -> T,
@@ -47,8 +60,39 @@ fn with_disc<T>(
         } else {
             max2
         };
-        is_positive_finite(r2).then(|| f(found, r2))
+        if !is_positive_finite(r2) {
+            return None;
+        }
+        let area = covered_area(tree, found, p, n, r2, lookup.hull);
+        Some(f(found, area))
     })
+}
+
+/// Fewest photons whose hull is trusted (E.4's table: the corrected hull's spread is 11 % at
+/// 30, 36 % at 10).
+const HULL_MIN_PHOTONS: usize = 30;
+
+/// The area the disc's photons cover: `π r²`, or their corrected hull where it is clearly
+/// smaller (see the module documentation).
+fn covered_area(tree: &KdTree, found: &[Neighbour], p: Vec3, n: Vec3, r2: f32, hull: bool) -> f32 {
+    let disc = std::f32::consts::PI * r2;
+    if !hull || found.len() < HULL_MIN_PHOTONS {
+        return disc;
+    }
+    let frame = Frame::from_z(n);
+    let projected: Vec<Vec2> = found
+        .iter()
+        .map(|f| {
+            let l = frame.to_local(tree.photons[f.index as usize].position - p);
+            Vec2::new(l.x, l.y)
+        })
+        .collect();
+    let covered = corrected_hull_area(&projected);
+    if covered > 0.0 && covered < 0.7 * disc {
+        covered
+    } else {
+        disc
+    }
 }
 
 /// A photon lands on the side of `n` of the same surface: normals within 60°, arriving from
@@ -69,12 +113,12 @@ pub fn irradiance_by_bounces(
     lookup: &Lookup,
 ) -> Vec<Rgb> {
     let mut by = vec![Rgb::ZERO; columns];
-    with_disc(tree, p, &|ph| same_side(ph, n), lookup, |found, r2| {
+    with_disc(tree, p, n, &|ph| same_side(ph, n), lookup, |found, area| {
         for f in found {
             let ph = &tree.photons[f.index as usize];
             by[usize::from(ph.bounces).min(columns - 1)] += ph.flux;
         }
-        let norm = 1.0 / (std::f32::consts::PI * r2);
+        let norm = 1.0 / area;
         let mut acc = Rgb::ZERO;
         for e in &mut by {
             acc += *e * norm;
@@ -88,11 +132,11 @@ pub fn irradiance_by_bounces(
 #[must_use]
 pub fn irradiance(tree: &KdTree, p: Vec3, n: Vec3, max_bounces: u16, lookup: &Lookup) -> Rgb {
     let accept = |ph: &Photon| ph.bounces <= max_bounces && same_side(ph, n);
-    with_disc(tree, p, &accept, lookup, |found, r2| {
+    with_disc(tree, p, n, &accept, lookup, |found, area| {
         let sum = found
             .iter()
             .fold(Rgb::ZERO, |s, f| s + tree.photons[f.index as usize].flux);
-        sum / (std::f32::consts::PI * r2)
+        sum / area
     })
     .unwrap_or(Rgb::ZERO)
 }
