@@ -521,3 +521,63 @@ fn photon_mapped_images_do_not_depend_on_the_threads() {
     let two = render_desc(&desc, 2, 7);
     assert_eq!(one.image.pixels, two.image.pixels);
 }
+
+/// Caustic photons are aimed at the bounding spheres of delta surfaces: their mean flux is the
+/// flux the lights send into those spheres (a point light: I times the cones' solid angle; a
+/// directional light: E times the cross-sections), as the mixture's density promises. (The
+/// choice between two targets of unequal size leaves the mean a standard error of 0.13 % at
+/// 200 000 samples: 1 % is seven of them.)
+#[test]
+fn aimed_photons_carry_the_flux_that_enters_their_targets() {
+    use ircache_render::lights::emission::Targets;
+    let spheres = vec![
+        (Vec3::new(2.0, 0.0, 0.0), 0.5),
+        (Vec3::new(0.0, 3.0, 0.0), 1.0),
+    ];
+    let targets = Targets::new(spheres.clone(), Vec3::ZERO, 5.0);
+    let mean = |set: &LightSet| {
+        let mut rng = Rng::new(3, 1);
+        let n = 200_000;
+        let mut sum = 0.0f64;
+        for _ in 0..n {
+            let u = (rng.next_f32(), rng.next_f32());
+            if let Some(s) = set.sample_emission_towards(&targets, u, rng.next_2d(), rng.next_2d())
+            {
+                sum += f64::from(s.flux.g);
+            }
+        }
+        sum / f64::from(n)
+    };
+    let i = 2.0;
+    let point = lights(
+        vec![],
+        vec![EmitterDesc::Point {
+            position: Vec3::ZERO,
+            intensity: Rgb::splat(i),
+        }],
+    );
+    let cone = |d: f32, r: f32| {
+        2.0 * std::f64::consts::PI * f64::from(1.0 - (1.0 - r * r / (d * d)).sqrt())
+    };
+    let expect = f64::from(i) * (cone(2.0, 0.5) + cone(3.0, 1.0));
+    let got = mean(&point);
+    assert!(
+        (got / expect - 1.0).abs() < 1e-2,
+        "point: {got} against {expect}"
+    );
+
+    let e = 1.5;
+    let sun = lights(
+        vec![],
+        vec![EmitterDesc::Directional {
+            direction: Vec3::new(0.0, 0.0, -1.0),
+            irradiance: Rgb::splat(e),
+        }],
+    );
+    let expect = f64::from(e) * std::f64::consts::PI * (0.25 + 1.0);
+    let got = mean(&sun);
+    assert!(
+        (got / expect - 1.0).abs() < 1e-2,
+        "directional: {got} against {expect}"
+    );
+}

@@ -293,6 +293,25 @@ impl Bsdf {
         }
     }
 
+    /// True when the BSDF has a Dirac delta lobe (smooth glass, mirrors, a smooth coating):
+    /// light through it makes caustics.
+    #[must_use]
+    pub fn has_delta(&self) -> bool {
+        let delta = |l: &Lobe| {
+            matches!(
+                l,
+                Lobe::Conductor(_)
+                    | Lobe::Dielectric(_)
+                    | Lobe::ThinDielectric(_)
+                    | Lobe::Plastic(_)
+            )
+        };
+        match self {
+            Bsdf::Single(l) => delta(l),
+            Bsdf::TwoSided { front, back } => delta(front) || delta(back),
+        }
+    }
+
     /// True when the BSDF is purely Lambertian (on both sides, for `twosided`).
     #[must_use]
     pub fn is_diffuse_only(&self) -> bool {

@@ -16,7 +16,9 @@
 //!   disc of the scene's bounding sphere perpendicular to it, started outside the sphere;
 //!   `Φ = E π R²` for a directional light, `π R² ∫ L dω` for an environment.
 
-use ircache_math::sampling::square_to_disk_concentric;
+use ircache_math::sampling::{
+    square_to_disk_concentric, square_to_uniform_cone, square_to_uniform_sphere,
+};
 use ircache_math::{Frame, Rgb, Vec2, Vec3};
 
 /// A photon's start.
@@ -58,6 +60,104 @@ pub fn distant_origin(direction: Vec3, center: Vec3, radius: f32, u: Vec2) -> (V
     let d = square_to_disk_concentric(u) * radius;
     let origin = center + frame.from_local(Vec3::new(d.x, d.y, 0.0)) - direction * (2.0 * radius);
     (origin, std::f32::consts::PI * radius * radius)
+}
+
+/// Spheres photons are aimed at: the bounding spheres of the surfaces with delta lobes, for
+/// caustic photons (Jensen's projection maps, §5.1.6, with spheres for maps). A direction is
+/// drawn uniformly in the cone of one sphere, chosen uniformly; its density is the mixture over
+/// all the cones that hold it, so overlapping targets are counted right. Distant light is
+/// aimed through one target's cross-section disc, with the mixture's density over the plane.
+#[derive(Clone, Debug, Default)]
+pub struct Targets {
+    spheres: Vec<(Vec3, f32)>,
+    /// Distant light starts this far behind a target (outside the scene).
+    back: f32,
+}
+
+impl Targets {
+    /// Targets `spheres` in a scene of bounding sphere `(center, radius)`.
+    #[must_use]
+    pub fn new(spheres: Vec<(Vec3, f32)>, center: Vec3, radius: f32) -> Targets {
+        let back = spheres
+            .iter()
+            .map(|(c, r)| (*c - center).length() + r)
+            .fold(0.0f32, f32::max)
+            + 2.0 * radius;
+        Targets { spheres, back }
+    }
+
+    /// True when there is nothing to aim at.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.spheres.is_empty()
+    }
+
+    fn pick(&self, u: f32) -> (Vec3, f32) {
+        let i = ((u * self.spheres.len() as f32) as usize).min(self.spheres.len() - 1);
+        self.spheres[i]
+    }
+
+    /// `(cos θ_max, 1 − cos θ_max)` of the cone of `(c, r)` from `o`; `None` from inside.
+    fn cone(o: Vec3, (c, r): (Vec3, f32)) -> Option<(f32, f32)> {
+        let d2 = (c - o).length_squared();
+        let r2 = r * r;
+        if d2 <= r2 {
+            return None;
+        }
+        let sin2 = r2 / d2;
+        let cos = (1.0 - sin2).max(0.0).sqrt();
+        Some((cos, sin2 / (1.0 + cos)))
+    }
+
+    /// A direction from `o` towards one target (`u_pick` chooses it), uniform in its cone.
+    #[must_use]
+    pub fn sample_direction(&self, o: Vec3, u_pick: f32, u: Vec2) -> Vec3 {
+        let target = self.pick(u_pick);
+        match Self::cone(o, target) {
+            Some((cos_max, _)) => Frame::from_z((target.0 - o).normalize())
+                .from_local(square_to_uniform_cone(u, cos_max)),
+            None => square_to_uniform_sphere(u),
+        }
+    }
+
+    /// The density of [`Targets::sample_direction`] at the unit direction `w` from `o`.
+    #[must_use]
+    pub fn direction_pdf(&self, o: Vec3, w: Vec3) -> f32 {
+        let mut sum = 0.0;
+        for &target in &self.spheres {
+            sum += match Self::cone(o, target) {
+                Some((cos_max, one_minus)) => {
+                    if w.dot((target.0 - o).normalize()) >= cos_max {
+                        1.0 / (2.0 * std::f32::consts::PI * one_minus)
+                    } else {
+                        0.0
+                    }
+                }
+                None => 1.0 / (4.0 * std::f32::consts::PI),
+            };
+        }
+        sum / self.spheres.len() as f32
+    }
+
+    /// A start for distant light travelling along `d`: a point uniform on one target's
+    /// cross-section disc, moved back outside the scene; with the mixture's density over the
+    /// plane across `d` there.
+    #[must_use]
+    pub fn sample_disc(&self, d: Vec3, u_pick: f32, u: Vec2) -> (Vec3, f32) {
+        let (c, r) = self.pick(u_pick);
+        let frame = Frame::from_z(d);
+        let off = square_to_disk_concentric(u) * r;
+        let on_disc = c + frame.from_local(Vec3::new(off.x, off.y, 0.0));
+        let mut density = 0.0;
+        for &(ci, ri) in &self.spheres {
+            let to = ci - on_disc;
+            let across = (to - d * to.dot(d)).length_squared();
+            if across <= ri * ri * (1.0 + 1e-5) {
+                density += 1.0 / (std::f32::consts::PI * ri * ri);
+            }
+        }
+        (on_disc - d * self.back, density / self.spheres.len() as f32)
+    }
 }
 
 #[cfg(test)]

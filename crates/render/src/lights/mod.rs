@@ -35,7 +35,7 @@ pub mod spot;
 
 use area::MeshLight;
 use directional::DirectionalLight;
-use emission::{distant_origin, EmissionSample};
+use emission::{distant_origin, EmissionSample, Targets};
 use environment::{ConstantLight, EnvmapLight};
 use ircache_math::sampling::{square_to_uniform_sphere, Distribution1D};
 use ircache_math::{Rgb, Vec2, Vec3};
@@ -395,6 +395,88 @@ impl LightSet {
                     return None;
                 }
                 distant(-towards, e.eval(towards) / pdf)
+            }
+        };
+        let flux = sample.flux / probability;
+        (!flux.is_black() && flux.to_array().iter().all(|c| c.is_finite()))
+            .then_some(EmissionSample { flux, ..sample })
+    }
+
+    /// [`LightSet::sample_emission`] aimed at `targets` (caustic photons): the light chosen by
+    /// power, a point on it, a direction towards one target (`u_pick`), the flux weight divided
+    /// by the densities of all three.
+    #[must_use]
+    pub fn sample_emission_towards(
+        &self,
+        targets: &Targets,
+        (u_select, u_pick): (f32, f32),
+        u_position: Vec2,
+        u_direction: Vec2,
+    ) -> Option<EmissionSample> {
+        if self.lights.is_empty() || self.by_power.integral <= 0.0 || targets.is_empty() {
+            return None;
+        }
+        let (index, probability, _) = self.by_power.sample(u_select);
+        if probability <= 0.0 {
+            return None;
+        }
+        let from_surface = |p: Vec3, n: Vec3, ns: Vec3, radiance: Rgb, area: f32| {
+            let w = targets.sample_direction(p, u_pick, u_direction);
+            let cos = n.dot(w);
+            let pdf = targets.direction_pdf(p, w);
+            (cos > 0.0 && ns.dot(w) > 0.0 && is_positive_finite(pdf)).then(|| EmissionSample {
+                origin: p,
+                direction: w,
+                normal: Some(n),
+                flux: radiance * (cos * area / pdf),
+            })
+        };
+        let from_point = |p: Vec3, intensity: &dyn Fn(Vec3) -> Rgb| {
+            let w = targets.sample_direction(p, u_pick, u_direction);
+            let pdf = targets.direction_pdf(p, w);
+            is_positive_finite(pdf).then(|| EmissionSample {
+                origin: p,
+                direction: w,
+                normal: None,
+                flux: intensity(w) / pdf,
+            })
+        };
+        let distant = |direction: Vec3, radiance_over_pdf: Rgb| {
+            let (origin, density) = targets.sample_disc(direction, u_pick, u_position);
+            is_positive_finite(density).then(|| EmissionSample {
+                origin,
+                direction,
+                normal: None,
+                flux: radiance_over_pdf / density,
+            })
+        };
+        let sample = match &self.lights[index] {
+            Light::Mesh(m) => {
+                let s = m.sample_position(u_position);
+                let n = if s.ng.dot(s.ns) < 0.0 { -s.ng } else { s.ng };
+                from_surface(s.p, n, s.ns, m.radiance(), m.area())?
+            }
+            Light::Sphere(s) => {
+                let (p, n) = s.sample_position(u_position);
+                from_surface(p, n, n, s.radiance(), s.area())?
+            }
+            Light::Point(l) => from_point(l.position, &|_| l.intensity)?,
+            Light::Spot(l) => {
+                let (p, _) = l.intensity_towards(Vec3::Z);
+                from_point(p, &|w| l.intensity_towards(w).1)?
+            }
+            Light::Directional(l) => distant(-l.wi, l.irradiance)?,
+            Light::Constant(c) => {
+                let towards = c.sample(u_direction);
+                distant(-towards, c.radiance / c.pdf())?
+            }
+            Light::Envmap(e) => {
+                let towards = e.sample(u_direction)?;
+                let pdf = e.pdf(towards);
+                if !is_positive_finite(pdf) {
+                    return None;
+                }
+                distant(-towards, e.eval(towards) / pdf)?
             }
         };
         let flux = sample.flux / probability;

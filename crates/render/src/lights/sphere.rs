@@ -57,12 +57,25 @@ impl SphereLight {
     /// emitting side's normal; `(point, normal, direction, flux weight π L A)`.
     #[must_use]
     pub fn sample_emission(&self, u_pos: Vec2, u_dir: Vec2) -> (Vec3, Vec3, Vec3, Rgb) {
-        let outward = square_to_uniform_sphere(u_pos);
-        let n = self.shading_normal(outward);
-        let p = self.center + outward * self.radius;
+        let (p, n) = self.sample_position(u_pos);
         let d = Frame::from_z(n).from_local(square_to_cosine_hemisphere(u_dir));
-        let area = 4.0 * PI * self.radius * self.radius;
-        (p, n, d, self.radiance * (PI * area))
+        (p, n, d, self.radiance * (PI * self.area()))
+    }
+
+    /// A point uniform by area (density `1 / area()`) with the normal of the emitting side.
+    #[must_use]
+    pub fn sample_position(&self, u: Vec2) -> (Vec3, Vec3) {
+        let outward = square_to_uniform_sphere(u);
+        (
+            self.center + outward * self.radius,
+            self.shading_normal(outward),
+        )
+    }
+
+    /// Surface area.
+    #[must_use]
+    pub fn area(&self) -> f32 {
+        4.0 * PI * self.radius * self.radius
     }
 
     /// `(sin²θ_max, 1 − cos θ_max)` of the cone subtended from a point at squared distance

@@ -6,7 +6,9 @@
 //!   light is always computed by light samples, so direct photons would count it twice
 //!   (NOTES-001 E.7).
 //! - The **caustic** map keeps photons that reached their surface through delta lobes only
-//!   (glass, mirrors: L S+ D), traced in a pass of their own so that it can be much denser.
+//!   (glass, mirrors: L S+ D), traced in a pass of their own so that it can be much denser, and
+//!   aimed at the bounding spheres of the surfaces with delta lobes
+//!   ([`crate::lights::emission::Targets`]); a scene without such surfaces has no caustic photons.
 //!
 //! Flux through a BSDF: a photon arriving from `ω_in` leaves along `ω_out` sampled from the BSDF
 //! with `ω_in` in the place of the viewer, weight `f cos θ_out / p`; refraction does not scale
@@ -21,10 +23,11 @@
 //! number emitted in its pass.
 
 use super::photon::Photon;
+use crate::lights::emission::Targets;
 use crate::lights::is_positive_finite;
-use crate::scene::Scene;
+use crate::scene::{Scene, ShapeGeometry};
 use ircache_math::ray::offset_ray_origin;
-use ircache_math::{Ray, Rgb, Rng};
+use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 use rayon::prelude::*;
 
 /// Which photons a pass keeps.
@@ -78,6 +81,11 @@ pub fn trace_photons(
         return (photons, stats);
     }
     let max_bounces = max_bounces.min(MAX_BOUNCES);
+    // Caustic photons are aimed at the surfaces with delta lobes; without any, there are none.
+    let targets = (kind == MapKind::Caustic).then(|| caustic_targets(scene));
+    if targets.as_ref().is_some_and(Targets::is_empty) {
+        return (photons, stats);
+    }
     let limit = wanted.saturating_mul(MAX_EMITTED_PER_STORED);
     while (photons.len() as u64) < wanted && stats.emitted < limit {
         let first = stats.emitted;
@@ -88,7 +96,15 @@ pub fn trace_photons(
                 let mut rays = 0;
                 let quarter = BATCH / 4;
                 for i in first + part * quarter..first + (part + 1) * quarter {
-                    rays += trace_one(scene, kind, max_bounces, seed, i, &mut out);
+                    rays += trace_one(
+                        scene,
+                        kind,
+                        targets.as_ref(),
+                        max_bounces,
+                        seed,
+                        i,
+                        &mut out,
+                    );
                 }
                 (out, rays)
             })
@@ -107,20 +123,53 @@ pub fn trace_photons(
     (photons, stats)
 }
 
+/// The bounding spheres of the shapes whose material has a delta lobe (emitters left out).
+#[must_use]
+pub fn caustic_targets(scene: &Scene) -> Targets {
+    let spheres = scene
+        .shapes
+        .iter()
+        .filter(|s| s.area_light.is_none())
+        .filter(|s| scene.materials[s.material].at(Vec2::ZERO).has_delta())
+        .filter_map(|s| match &s.geometry {
+            ShapeGeometry::Sphere { center, radius, .. } => Some((*center, *radius)),
+            ShapeGeometry::Mesh(m) => {
+                let (lo, hi) = m.positions.iter().fold(
+                    (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                    |(lo, hi), &p| (lo.min(p), hi.max(p)),
+                );
+                (lo.x <= hi.x).then(|| ((lo + hi) * 0.5, (hi - lo).length() * 0.5))
+            }
+        })
+        .filter(|&(_, r)| r > 0.0 && r.is_finite())
+        .collect();
+    Targets::new(spheres, scene.center, scene.radius)
+}
+
 /// Traces photon `index`, appending what it stores to `out`; returns the rays traced.
 fn trace_one(
     scene: &Scene,
     kind: MapKind,
+    targets: Option<&Targets>,
     max_bounces: u16,
     seed: u64,
     index: u64,
     out: &mut Vec<Photon>,
 ) -> u64 {
     let mut rng = Rng::keyed(seed, &[PHOTON_SALT, index]);
-    let Some(emitted) = scene
-        .lights
-        .sample_emission(rng.next_f32(), rng.next_2d(), rng.next_2d())
-    else {
+    let (u_select, u_pick) = (rng.next_f32(), rng.next_f32());
+    let (u_position, u_direction) = (rng.next_2d(), rng.next_2d());
+    let emitted = match targets {
+        Some(t) => {
+            scene
+                .lights
+                .sample_emission_towards(t, (u_select, u_pick), u_position, u_direction)
+        }
+        None => scene
+            .lights
+            .sample_emission(u_select, u_position, u_direction),
+    };
+    let Some(emitted) = emitted else {
         return 0;
     };
     let origin = match emitted.normal {
