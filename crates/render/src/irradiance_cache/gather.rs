@@ -62,6 +62,10 @@ pub struct IrradianceCache {
     pub photons: Option<Arc<PhotonMaps>>,
 }
 
+/// A ray shorter than this many photon-disc radii goes on past the photon map (see
+/// [`IrradianceCache::photon_irradiance`]).
+const SHORT_RAY: f32 = 1.0;
+
 impl IrradianceCache {
     /// An empty cache for `scene`.
     #[must_use]
@@ -189,16 +193,19 @@ impl IrradianceCache {
 
     /// Irradiance from the global photon map at a vertex at `depth` of a path, from photons that
     /// can end there within the bounces (001 §2.4's final gather: a photon of b bounces ends
-    /// a path of depth + b + 2 vertices); `None` without a global map.
+    /// a path of depth + b + 2 vertices); `None` without a global map, and where the ray that
+    /// found the vertex is shorter than the estimate's disc is wide (Jensen's rule for short
+    /// gather rays: near a corner the disc averages light the vertex does not get, −4 to −6 %
+    /// measured 2 cm below a Cornell box's ceiling), so the path goes on there.
     #[must_use]
     pub fn photon_irradiance(&self, sp: &ShadingPoint, depth: u32) -> Option<Rgb> {
         let maps = self.photons.as_ref().filter(|_| self.params.photons > 0)?;
         let bounces = self.params.max_depth().saturating_sub(depth + 2);
         let bounces = bounces.min(u32::from(u16::MAX)) as u16;
-        Some(
+        let (e, radius) =
             maps.global
-                .irradiance(sp.it.p, sp.n, bounces, &maps.global_lookup),
-        )
+                .irradiance_and_radius(sp.it.p, sp.n, bounces, &maps.global_lookup);
+        (sp.it.t >= SHORT_RAY * radius).then_some(e)
     }
 
     /// Irradiance of caustics from the caustic map at a vertex at `depth` where records serve

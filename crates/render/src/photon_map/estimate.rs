@@ -47,7 +47,7 @@ fn with_disc<T>(
     n: Vec3,
     accept: &dyn Fn(&Photon) -> bool,
     lookup: &Lookup,
-    f: impl FnOnce(&[Neighbour], f32) -> T,
+    f: impl FnOnce(&[Neighbour], f32, f32) -> T,
 ) -> Option<T> {
     if tree.is_empty() || lookup.count == 0 {
         return None;
@@ -64,7 +64,7 @@ fn with_disc<T>(
             return None;
         }
         let area = covered_area(tree, found, p, n, r2, lookup.hull);
-        Some(f(found, area))
+        Some(f(found, area, r2.sqrt()))
     })
 }
 
@@ -103,7 +103,7 @@ fn same_side(ph: &Photon, n: Vec3) -> bool {
 }
 
 /// `E(p)` for each bounce limit `0..columns` (the last: every photon), over the one disc of the
-/// `lookup.count` nearest photons of any bounces.
+/// `lookup.count` nearest photons of any bounces, and the disc's radius.
 #[must_use]
 pub fn irradiance_by_bounces(
     tree: &KdTree,
@@ -111,32 +111,48 @@ pub fn irradiance_by_bounces(
     n: Vec3,
     columns: usize,
     lookup: &Lookup,
-) -> Vec<Rgb> {
+) -> (Vec<Rgb>, f32) {
     let mut by = vec![Rgb::ZERO; columns];
-    with_disc(tree, p, n, &|ph| same_side(ph, n), lookup, |found, area| {
-        for f in found {
-            let ph = &tree.photons[f.index as usize];
-            by[usize::from(ph.bounces).min(columns - 1)] += ph.flux;
-        }
-        let norm = 1.0 / area;
-        let mut acc = Rgb::ZERO;
-        for e in &mut by {
-            acc += *e * norm;
-            *e = acc;
-        }
-    });
-    by
+    let mut radius = lookup.max_radius;
+    with_disc(
+        tree,
+        p,
+        n,
+        &|ph| same_side(ph, n),
+        lookup,
+        |found, area, r| {
+            radius = r;
+            for f in found {
+                let ph = &tree.photons[f.index as usize];
+                by[usize::from(ph.bounces).min(columns - 1)] += ph.flux;
+            }
+            let norm = 1.0 / area;
+            let mut acc = Rgb::ZERO;
+            for e in &mut by {
+                acc += *e * norm;
+                *e = acc;
+            }
+        },
+    );
+    (by, radius)
 }
 
-/// `E(p)` on the side of unit normal `n` from photons of at most `max_bounces` bounces.
+/// `E(p)` on the side of unit normal `n` from photons of at most `max_bounces` bounces, and the
+/// radius of the disc it took them from.
 #[must_use]
-pub fn irradiance(tree: &KdTree, p: Vec3, n: Vec3, max_bounces: u16, lookup: &Lookup) -> Rgb {
+pub fn irradiance(
+    tree: &KdTree,
+    p: Vec3,
+    n: Vec3,
+    max_bounces: u16,
+    lookup: &Lookup,
+) -> (Rgb, f32) {
     let accept = |ph: &Photon| ph.bounces <= max_bounces && same_side(ph, n);
-    with_disc(tree, p, n, &accept, lookup, |found, area| {
+    with_disc(tree, p, n, &accept, lookup, |found, area, r| {
         let sum = found
             .iter()
             .fold(Rgb::ZERO, |s, f| s + tree.photons[f.index as usize].flux);
-        sum / area
+        (sum / area, r)
     })
-    .unwrap_or(Rgb::ZERO)
+    .unwrap_or((Rgb::ZERO, lookup.max_radius))
 }

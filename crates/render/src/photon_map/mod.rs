@@ -75,6 +75,8 @@ pub struct Precomputed {
     pub tree: KdTree<EstimatePoint>,
     /// `tree.len() × columns` estimates, row by row in tree order.
     pub irradiance: Vec<Rgb>,
+    /// Radius of each estimate's disc.
+    pub radii: Vec<f32>,
     /// Bounce limits per row.
     pub columns: usize,
 }
@@ -120,12 +122,24 @@ impl PhotonMap {
     /// where there is one, else a density estimate.
     #[must_use]
     pub fn irradiance(&self, p: Vec3, n: Vec3, max_bounces: u16, lookup: &Lookup) -> Rgb {
+        self.irradiance_and_radius(p, n, max_bounces, lookup).0
+    }
+
+    /// [`PhotonMap::irradiance`] with the radius of the disc its photons came from.
+    #[must_use]
+    pub fn irradiance_and_radius(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        max_bounces: u16,
+        lookup: &Lookup,
+    ) -> (Rgb, f32) {
         if let Some(pre) = &self.precomputed {
             let radius2 = lookup.max_radius * lookup.max_radius;
             let same_side = |e: &EstimatePoint| e.normal.dot(n) > 0.5;
             if let Some(i) = pre.tree.nearest_one(p.to_array(), radius2, &same_side) {
                 let column = usize::from(max_bounces).min(pre.columns - 1);
-                return pre.irradiance[i * pre.columns + column];
+                return (pre.irradiance[i * pre.columns + column], pre.radii[i]);
             }
         }
         estimate::irradiance(&self.tree, p, n, max_bounces, lookup)
@@ -147,16 +161,17 @@ fn precompute_irradiance(tree: &KdTree, max_bounces: u16, lookup: &Lookup) -> Pr
             .collect(),
     );
     let columns = usize::from(max_bounces.min(PRECOMPUTED_LIMITS)) + 1;
-    let irradiance: Vec<Rgb> = at
+    let rows: Vec<(Vec<Rgb>, f32)> = at
         .photons
         .par_iter()
-        .flat_map_iter(|ph| {
-            estimate::irradiance_by_bounces(tree, ph.position, ph.normal, columns, lookup)
-        })
+        .map(|ph| estimate::irradiance_by_bounces(tree, ph.position, ph.normal, columns, lookup))
         .collect();
+    let radii = rows.iter().map(|(_, r)| *r).collect();
+    let irradiance = rows.into_iter().flat_map(|(row, _)| row).collect();
     Precomputed {
         tree: at,
         irradiance,
+        radii,
         columns,
     }
 }
