@@ -103,7 +103,25 @@ impl<T: Located> KdTree<T> {
         }
         let mut heap = BinaryHeap::with_capacity(k + 1);
         let mut bound = max_distance2;
-        self.search(0, self.photons.len(), q, k, &mut bound, accept, &mut heap);
+        self.descend(
+            0,
+            self.photons.len(),
+            q,
+            &mut bound,
+            &mut |index, distance2| {
+                if !accept(&self.photons[index]) {
+                    return None;
+                }
+                heap.push(Neighbour {
+                    index: index as u32,
+                    distance2,
+                });
+                if heap.len() > k {
+                    heap.pop();
+                }
+                (heap.len() == k).then(|| heap.peek().map_or(distance2, |n| n.distance2))
+            },
+        );
         out.extend(heap.into_sorted_vec());
     }
 
@@ -116,59 +134,38 @@ impl<T: Located> KdTree<T> {
         max_distance2: f32,
         accept: &dyn Fn(&T) -> bool,
     ) -> Option<usize> {
-        let mut best = (max_distance2, usize::MAX);
-        self.search_one(0, self.photons.len(), q, accept, &mut best);
-        (best.1 != usize::MAX).then_some(best.1)
+        let mut best = None;
+        let mut bound = max_distance2;
+        self.descend(
+            0,
+            self.photons.len(),
+            q,
+            &mut bound,
+            &mut |index, distance2| {
+                accept(&self.photons[index]).then(|| {
+                    best = Some(index);
+                    distance2
+                })
+            },
+        );
+        best
     }
 
-    fn search_one(
+    /// Visits the items of `lo..hi` within `sqrt(bound)` of `q`, nearer halves first; `visit`
+    /// sees each one's index and squared distance and may return a new, smaller bound.
+    fn descend(
         &self,
         lo: usize,
         hi: usize,
         q: [f32; 3],
-        accept: &dyn Fn(&T) -> bool,
-        best: &mut (f32, usize),
-    ) {
-        if lo >= hi {
-            return;
-        }
-        let mid = lo + (hi - lo) / 2;
-        let item = &self.photons[mid];
-        let p = item.key();
-        let axis = self.axes[mid] as usize;
-        let delta = q[axis] - p[axis];
-        let (near, far) = if delta < 0.0 {
-            ((lo, mid), (mid + 1, hi))
-        } else {
-            ((mid + 1, hi), (lo, mid))
-        };
-        self.search_one(near.0, near.1, q, accept, best);
-        let distance2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
-        if distance2 < best.0 && accept(item) {
-            *best = (distance2, mid);
-        }
-        if delta * delta < best.0 {
-            self.search_one(far.0, far.1, q, accept, best);
-        }
-    }
-
-    #[allow(clippy::too_many_arguments)]
-    fn search(
-        &self,
-        lo: usize,
-        hi: usize,
-        q: [f32; 3],
-        k: usize,
         bound: &mut f32,
-        accept: &dyn Fn(&T) -> bool,
-        heap: &mut BinaryHeap<Neighbour>,
+        visit: &mut dyn FnMut(usize, f32) -> Option<f32>,
     ) {
         if lo >= hi {
             return;
         }
         let mid = lo + (hi - lo) / 2;
-        let photon = &self.photons[mid];
-        let p = photon.key();
+        let p = self.photons[mid].key();
         let axis = self.axes[mid] as usize;
         let delta = q[axis] - p[axis];
         let (near, far) = if delta < 0.0 {
@@ -176,22 +173,15 @@ impl<T: Located> KdTree<T> {
         } else {
             ((mid + 1, hi), (lo, mid))
         };
-        self.search(near.0, near.1, q, k, bound, accept, heap);
+        self.descend(near.0, near.1, q, bound, visit);
         let distance2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
-        if distance2 < *bound && accept(photon) {
-            heap.push(Neighbour {
-                index: mid as u32,
-                distance2,
-            });
-            if heap.len() > k {
-                heap.pop();
-            }
-            if heap.len() == k {
-                *bound = heap.peek().map_or(*bound, |n| n.distance2);
+        if distance2 < *bound {
+            if let Some(b) = visit(mid, distance2) {
+                *bound = b;
             }
         }
         if delta * delta < *bound {
-            self.search(far.0, far.1, q, k, bound, accept, heap);
+            self.descend(far.0, far.1, q, bound, visit);
         }
     }
 }
