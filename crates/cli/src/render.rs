@@ -449,15 +449,8 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
             c.uncached_samples
         );
         if let Some(maps) = &c.cache.photons {
-            for map in std::iter::once(&maps.global).chain(&maps.caustic) {
-                eprintln!(
-                    "{:?} photon map: {} photons stored of {} emitted, {:.1} M rays, {:.2} s",
-                    map.kind,
-                    map.stats.stored,
-                    map.stats.emitted,
-                    map.stats.rays as f64 * 1e-6,
-                    map.seconds
-                );
+            for map in maps.maps() {
+                eprintln!("{map}");
             }
             if st.photon_records > 0 {
                 eprintln!(
@@ -542,8 +535,7 @@ fn write_stats(
             "photon_records": st.photon_records,
             "photon_record_seconds": st.photon_record_seconds,
             "photon_maps": c.cache.photons.as_ref().map(|m| {
-                std::iter::once(&m.global)
-                    .chain(&m.caustic)
+                m.maps()
                     .map(|map| serde_json::json!({
                         "kind": format!("{:?}", map.kind).to_lowercase(),
                         "stored": map.stats.stored,

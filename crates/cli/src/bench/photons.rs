@@ -56,11 +56,8 @@ fn cache_line(out: &RenderOutput) -> String {
         );
     }
     if let Some(maps) = &c.cache.photons {
-        for map in std::iter::once(&maps.global).chain(&maps.caustic) {
-            line += &format!(
-                "; {:?} map {} photons of {} emitted in {:.2} s",
-                map.kind, map.stats.stored, map.stats.emitted, map.seconds
-            );
+        for map in maps.maps() {
+            line += &format!("; {map}");
         }
     }
     line

@@ -192,16 +192,14 @@ impl IrradianceCache {
     }
 
     /// Irradiance from the global photon map at a vertex at `depth` of a path, from photons that
-    /// can end there within the bounces (001 §2.4's final gather: a photon of b bounces ends
-    /// a path of depth + b + 2 vertices); `None` without a global map, and where the ray that
+    /// can end there within the bounces (001 §2.4's final gather); `None` without a global map, and where the ray that
     /// found the vertex is shorter than the estimate's disc is wide (Jensen's rule for short
     /// gather rays: near a corner the disc averages light the vertex does not get, −4 to −6 %
     /// measured 2 cm below a Cornell box's ceiling), so the path goes on there.
     #[must_use]
     pub fn photon_irradiance(&self, sp: &ShadingPoint, depth: u32) -> Option<Rgb> {
         let maps = self.photons.as_ref().filter(|_| self.params.photons > 0)?;
-        let bounces = self.params.max_depth().saturating_sub(depth + 2);
-        let bounces = bounces.min(u32::from(u16::MAX)) as u16;
+        let bounces = self.photon_bounces(depth);
         let (e, radius) =
             maps.global
                 .irradiance_and_radius(sp.it.p, sp.n, bounces, &maps.global_lookup);
@@ -219,9 +217,13 @@ impl IrradianceCache {
         else {
             return Rgb::ZERO;
         };
-        let bounces = self.params.max_depth().saturating_sub(depth + 2);
-        let bounces = bounces.min(u32::from(u16::MAX)) as u16;
-        map.irradiance(sp.it.p, sp.n, bounces, lookup)
+        map.irradiance(sp.it.p, sp.n, self.photon_bounces(depth), lookup)
+    }
+
+    /// The most bounces a photon landing at a vertex at `depth` may have taken: one of b
+    /// bounces ends a path of depth + b + 2 vertices, which `max_depth` bounds.
+    fn photon_bounces(&self, depth: u32) -> u16 {
+        crate::photon_map::bounce_limit(self.params.max_depth().saturating_sub(depth + 2))
     }
 
     /// True when a caustic map serves the caustics at records' vertices: their gathers leave

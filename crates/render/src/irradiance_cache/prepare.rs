@@ -6,7 +6,7 @@ use super::build::{fill_for_image, BatchHook};
 use super::file::{self, CacheFile, Header, Stored};
 use super::{CacheStats, IrradianceCache};
 use crate::integrators::ic::IcIntegrator;
-use crate::photon_map::{Lookup, PhotonMaps};
+use crate::photon_map::{bounce_limit, Lookup, PhotonMaps};
 use crate::radiance_cache::RadianceCache;
 use crate::render::RenderSettings;
 use crate::scene::{RenderError, Scene};
@@ -140,7 +140,7 @@ pub fn photon_records(cache: &mut IrradianceCache) -> crate::photon_map::records
                 .max_radius
                 .max(params.accuracy * cache.r_min),
         ),
-        max_bounces: params.bounces.min(u32::from(u16::MAX)) as u16,
+        max_bounces: bounce_limit(params.bounces),
         without_caustics: maps.caustic.is_some(),
         metric: params.error_metric,
     };
@@ -183,10 +183,9 @@ pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option
     };
     // Gather hits, one bounce beyond the camera's surfaces, take photons of up to `bounces − 1`
     // bounces; photon records at the camera's surfaces up to `bounces`.
-    let wide = |b: u32| b.min(u32::from(u16::MAX)) as u16;
-    let gather_bounces = wide(params.bounces.saturating_sub(1));
+    let gather_bounces = bounce_limit(params.bounces.saturating_sub(1));
     let bounces = if params.photon_records {
-        wide(params.bounces)
+        bounce_limit(params.bounces)
     } else {
         gather_bounces
     };

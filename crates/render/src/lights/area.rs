@@ -34,6 +34,18 @@ pub struct SurfacePoint {
     pub ns: Vec3,
 }
 
+impl SurfacePoint {
+    /// The geometric normal turned to the emitting side (the shading normal's).
+    #[must_use]
+    pub fn emitting_normal(&self) -> Vec3 {
+        if self.ng.dot(self.ns) < 0.0 {
+            -self.ng
+        } else {
+            self.ng
+        }
+    }
+}
+
 /// An emitting triangle mesh.
 #[derive(Clone, Debug)]
 pub struct MeshLight {
@@ -175,7 +187,7 @@ impl MeshLight {
     #[must_use]
     pub fn sample_emission(&self, u_pos: Vec2, u_dir: Vec2) -> Option<(Vec3, Vec3, Vec3, Rgb)> {
         let s = self.sample_position(u_pos);
-        let n = if s.ng.dot(s.ns) < 0.0 { -s.ng } else { s.ng };
+        let n = s.emitting_normal();
         let d = Frame::from_z(n).from_local(square_to_cosine_hemisphere(u_dir));
         (d.dot(s.ns) > 0.0).then(|| (s.p, n, d, self.radiance * (PI * self.area)))
     }

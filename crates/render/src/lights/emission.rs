@@ -56,10 +56,14 @@ pub fn spot_power(intensity: Rgb, beam: f32, cutoff: f32) -> Rgb {
 /// inverse).
 #[must_use]
 pub fn distant_origin(direction: Vec3, center: Vec3, radius: f32, u: Vec2) -> (Vec3, f32) {
-    let frame = Frame::from_z(direction);
-    let d = square_to_disk_concentric(u) * radius;
-    let origin = center + frame.from_local(Vec3::new(d.x, d.y, 0.0)) - direction * (2.0 * radius);
+    let origin = point_on_disc(direction, center, radius, u) - direction * (2.0 * radius);
     (origin, std::f32::consts::PI * radius * radius)
+}
+
+/// A point uniform on the disc of `(center, radius)` across the unit direction `direction`.
+fn point_on_disc(direction: Vec3, center: Vec3, radius: f32, u: Vec2) -> Vec3 {
+    let d = square_to_disk_concentric(u) * radius;
+    center + Frame::from_z(direction).from_local(Vec3::new(d.x, d.y, 0.0))
 }
 
 /// Spheres photons are aimed at: the bounding spheres of the surfaces with delta lobes, for
@@ -145,9 +149,7 @@ impl Targets {
     #[must_use]
     pub fn sample_disc(&self, d: Vec3, u_pick: f32, u: Vec2) -> (Vec3, f32) {
         let (c, r) = self.pick(u_pick);
-        let frame = Frame::from_z(d);
-        let off = square_to_disk_concentric(u) * r;
-        let on_disc = c + frame.from_local(Vec3::new(off.x, off.y, 0.0));
+        let on_disc = point_on_disc(d, c, r, u);
         let mut density = 0.0;
         for &(ci, ri) in &self.spheres {
             let to = ci - on_disc;

@@ -132,6 +132,22 @@ impl Light {
 }
 
 impl Light {
+    /// For a distant light: a direction of travel drawn with `u` and the radiance (irradiance
+    /// for a directional light) over its density; `None` for other lights or a direction that
+    /// carries nothing.
+    fn sample_distant(&self, u: Vec2) -> Option<(Vec3, Rgb)> {
+        match self {
+            Light::Directional(l) => Some((-l.wi, l.irradiance)),
+            Light::Constant(c) => Some((-c.sample(u), c.radiance / c.pdf())),
+            Light::Envmap(e) => {
+                let towards = e.sample(u)?;
+                let pdf = e.pdf(towards);
+                is_positive_finite(pdf).then(|| (-towards, e.eval(towards) / pdf))
+            }
+            _ => None,
+        }
+    }
+
     /// Emitted power (see [`emission`]); distant lights through the bounding sphere's disc of
     /// radius `scene_radius`.
     fn power(&self, scene_radius: f32) -> Rgb {
@@ -139,10 +155,7 @@ impl Light {
         let pi = std::f32::consts::PI;
         match self {
             Light::Mesh(m) => m.radiance() * (pi * m.area()),
-            Light::Sphere(s) => {
-                let (_, r) = s.sphere();
-                s.radiance() * (pi * 4.0 * pi * r * r)
-            }
+            Light::Sphere(s) => s.radiance() * (pi * s.area()),
             Light::Point(l) => l.intensity * (4.0 * pi),
             Light::Spot(l) => l.power(),
             Light::Directional(l) => l.irradiance * disc,
@@ -332,13 +345,6 @@ impl LightSet {
         u_position: Vec2,
         u_direction: Vec2,
     ) -> Option<EmissionSample> {
-        if self.lights.is_empty() || self.by_power.integral <= 0.0 {
-            return None;
-        }
-        let (index, probability, _) = self.by_power.sample(u_select);
-        if probability <= 0.0 {
-            return None;
-        }
         let (center, radius) = (self.scene_center, self.scene_radius);
         let distant = |direction: Vec3, flux: Rgb| {
             let (origin, area) = distant_origin(direction, center, radius, u_position);
@@ -349,57 +355,45 @@ impl LightSet {
                 flux: flux * area,
             }
         };
-        let sample = match &self.lights[index] {
+        self.emit(u_select, |light| match light {
             Light::Mesh(m) => {
                 let (origin, n, direction, flux) = m.sample_emission(u_position, u_direction)?;
-                EmissionSample {
+                Some(EmissionSample {
                     origin,
                     direction,
                     normal: Some(n),
                     flux,
-                }
+                })
             }
             Light::Sphere(s) => {
                 let (origin, n, direction, flux) = s.sample_emission(u_position, u_direction);
-                EmissionSample {
+                Some(EmissionSample {
                     origin,
                     direction,
                     normal: Some(n),
                     flux,
-                }
+                })
             }
-            Light::Point(l) => EmissionSample {
+            Light::Point(l) => Some(EmissionSample {
                 origin: l.position,
                 direction: square_to_uniform_sphere(u_direction),
                 normal: None,
                 flux: l.intensity * (4.0 * std::f32::consts::PI),
-            },
+            }),
             Light::Spot(l) => {
                 let (origin, direction, flux) = l.sample_emission(u_direction)?;
-                EmissionSample {
+                Some(EmissionSample {
                     origin,
                     direction,
                     normal: None,
                     flux,
-                }
+                })
             }
-            Light::Directional(l) => distant(-l.wi, l.irradiance),
-            Light::Constant(c) => {
-                let towards = c.sample(u_direction);
-                distant(-towards, c.radiance / c.pdf())
+            Light::Directional(_) | Light::Constant(_) | Light::Envmap(_) => {
+                let (direction, flux) = light.sample_distant(u_direction)?;
+                Some(distant(direction, flux))
             }
-            Light::Envmap(e) => {
-                let towards = e.sample(u_direction)?;
-                let pdf = e.pdf(towards);
-                if !is_positive_finite(pdf) {
-                    return None;
-                }
-                distant(-towards, e.eval(towards) / pdf)
-            }
-        };
-        let flux = sample.flux / probability;
-        (!flux.is_black() && flux.to_array().iter().all(|c| c.is_finite()))
-            .then_some(EmissionSample { flux, ..sample })
+        })
     }
 
     /// [`LightSet::sample_emission`] aimed at `targets` (caustic photons): the light chosen by
@@ -413,11 +407,7 @@ impl LightSet {
         u_position: Vec2,
         u_direction: Vec2,
     ) -> Option<EmissionSample> {
-        if self.lights.is_empty() || self.by_power.integral <= 0.0 || targets.is_empty() {
-            return None;
-        }
-        let (index, probability, _) = self.by_power.sample(u_select);
-        if probability <= 0.0 {
+        if targets.is_empty() {
             return None;
         }
         let from_surface = |p: Vec3, n: Vec3, ns: Vec3, radiance: Rgb, area: f32| {
@@ -450,35 +440,43 @@ impl LightSet {
                 flux: radiance_over_pdf / density,
             })
         };
-        let sample = match &self.lights[index] {
+        self.emit(u_select, |light| match light {
             Light::Mesh(m) => {
                 let s = m.sample_position(u_position);
-                let n = if s.ng.dot(s.ns) < 0.0 { -s.ng } else { s.ng };
-                from_surface(s.p, n, s.ns, m.radiance(), m.area())?
+                from_surface(s.p, s.emitting_normal(), s.ns, m.radiance(), m.area())
             }
             Light::Sphere(s) => {
                 let (p, n) = s.sample_position(u_position);
-                from_surface(p, n, n, s.radiance(), s.area())?
+                from_surface(p, n, n, s.radiance(), s.area())
             }
-            Light::Point(l) => from_point(l.position, &|_| l.intensity)?,
+            Light::Point(l) => from_point(l.position, &|_| l.intensity),
             Light::Spot(l) => {
-                let (p, _) = l.intensity_towards(Vec3::Z);
-                from_point(p, &|w| l.intensity_towards(w).1)?
+                let (p, _) = l.position_and_intensity();
+                from_point(p, &|w| l.intensity_towards(w))
             }
-            Light::Directional(l) => distant(-l.wi, l.irradiance)?,
-            Light::Constant(c) => {
-                let towards = c.sample(u_direction);
-                distant(-towards, c.radiance / c.pdf())?
+            Light::Directional(_) | Light::Constant(_) | Light::Envmap(_) => {
+                let (direction, flux) = light.sample_distant(u_direction)?;
+                distant(direction, flux)
             }
-            Light::Envmap(e) => {
-                let towards = e.sample(u_direction)?;
-                let pdf = e.pdf(towards);
-                if !is_positive_finite(pdf) {
-                    return None;
-                }
-                distant(-towards, e.eval(towards) / pdf)?
-            }
-        };
+        })
+    }
+
+    /// Picks an emitter in proportion to its power with `u_select` and lets `sample` start a
+    /// photon from it; divides the flux by the selection probability. `None` when no emitter
+    /// emits or the sample carries nothing finite.
+    fn emit(
+        &self,
+        u_select: f32,
+        sample: impl FnOnce(&Light) -> Option<EmissionSample>,
+    ) -> Option<EmissionSample> {
+        if self.lights.is_empty() || self.by_power.integral <= 0.0 {
+            return None;
+        }
+        let (index, probability, _) = self.by_power.sample(u_select);
+        if probability <= 0.0 {
+            return None;
+        }
+        let sample = sample(&self.lights[index])?;
         let flux = sample.flux / probability;
         (!flux.is_black() && flux.to_array().iter().all(|c| c.is_finite()))
             .then_some(EmissionSample { flux, ..sample })

@@ -81,13 +81,10 @@ impl SpotLight {
         super::emission::spot_power(self.intensity, self.beam, self.cutoff)
     }
 
-    /// Intensity towards the unit world direction `w` (falloff included), and the position.
+    /// Intensity towards the unit world direction `w` (falloff included).
     #[must_use]
-    pub fn intensity_towards(&self, w: Vec3) -> (Vec3, Rgb) {
-        (
-            self.position,
-            self.intensity * self.falloff(self.world_to_local * w),
-        )
+    pub fn intensity_towards(&self, w: Vec3) -> Rgb {
+        self.intensity * self.falloff(self.world_to_local * w)
     }
 
     /// A photon direction uniform in the cutoff cone with its flux weight `I falloff / p_ω`.

@@ -13,11 +13,11 @@
 //! covers clearly less than the disc (under 70 %: ten times the corrected hull's spread at a
 //! hundred photons), it takes the disc's place, for smooth light only ([`Lookup::hull`]).
 
-use super::hull::corrected_hull_area;
+use super::hull::corrected_area_on_plane;
 use super::kd_tree::{KdTree, Neighbour};
 use super::photon::Photon;
 use crate::lights::is_positive_finite;
-use ircache_math::{Frame, Rgb, Vec2, Vec3};
+use ircache_math::{Frame, Rgb, Vec3};
 use std::cell::RefCell;
 
 /// How many photons a lookup takes and how far it looks.
@@ -79,15 +79,10 @@ fn covered_area(tree: &KdTree, found: &[Neighbour], p: Vec3, n: Vec3, r2: f32, h
     if !hull || found.len() < HULL_MIN_PHOTONS {
         return disc;
     }
-    let frame = Frame::from_z(n);
-    let projected: Vec<Vec2> = found
+    let positions = found
         .iter()
-        .map(|f| {
-            let l = frame.to_local(tree.photons[f.index as usize].position - p);
-            Vec2::new(l.x, l.y)
-        })
-        .collect();
-    let covered = corrected_hull_area(&projected);
+        .map(|f| tree.photons[f.index as usize].position);
+    let covered = corrected_area_on_plane(&Frame::from_z(n), p, positions);
     if covered > 0.0 && covered < 0.7 * disc {
         covered
     } else {
@@ -98,7 +93,8 @@ fn covered_area(tree: &KdTree, found: &[Neighbour], p: Vec3, n: Vec3, r2: f32, h
 /// A photon lands on the side of `n` of the same surface: normals within 60°, arriving from
 /// above.
 #[inline]
-fn same_side(ph: &Photon, n: Vec3) -> bool {
+#[must_use]
+pub fn same_side(ph: &Photon, n: Vec3) -> bool {
     ph.normal.dot(n) > 0.5 && ph.incoming.dot(n) > 0.0
 }
 

@@ -5,7 +5,7 @@
 //! records (001 eq. 6.2) divide the zone's flux by it.
 
 use crate::lights::is_positive_finite;
-use ircache_math::Vec2;
+use ircache_math::{Frame, Vec2, Vec3};
 
 /// Convex hull of `points` (Andrew's monotone chain), counter-clockwise, without collinear
 /// points; fewer than three points give them back as they are.
@@ -17,26 +17,25 @@ pub fn convex_hull(points: &[Vec2]) -> Vec<Vec2> {
     if p.len() < 3 {
         return p;
     }
-    let cross = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
-    let mut hull: Vec<Vec2> = Vec::with_capacity(2 * p.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &Vec2>> = if pass == 0 {
-            Box::new(p.iter())
-        } else {
-            Box::new(p.iter().rev())
-        };
-        for &q in iter {
-            while hull.len() >= start + 2
-                && cross(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(q);
-        }
-        hull.pop();
-    }
+    // Lower chain left to right, upper chain right to left, each without its last point.
+    let mut hull = half_hull(p.iter());
+    hull.extend(half_hull(p.iter().rev()));
     hull
+}
+
+/// One chain of the monotone-chain hull over points in sorted order, its last point dropped
+/// (the next chain starts there).
+fn half_hull<'a>(points: impl Iterator<Item = &'a Vec2>) -> Vec<Vec2> {
+    let cross = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
+    let mut chain: Vec<Vec2> = Vec::new();
+    for &q in points {
+        while chain.len() >= 2 && cross(chain[chain.len() - 2], chain[chain.len() - 1], q) <= 0.0 {
+            chain.pop();
+        }
+        chain.push(q);
+    }
+    chain.pop();
+    chain
 }
 
 /// Area of a simple polygon (shoelace formula), positive for counter-clockwise order.
@@ -52,6 +51,23 @@ pub fn polygon_area(polygon: &[Vec2]) -> f32 {
         twice += f64::from(a.x) * f64::from(b.y) - f64::from(b.x) * f64::from(a.y);
     }
     (0.5 * twice) as f32
+}
+
+/// [`corrected_hull_area`] of `positions` projected onto the plane through `p` across
+/// `frame`'s normal.
+#[must_use]
+pub fn corrected_area_on_plane(
+    frame: &Frame,
+    p: Vec3,
+    positions: impl Iterator<Item = Vec3>,
+) -> f32 {
+    let projected: Vec<Vec2> = positions
+        .map(|x| {
+            let l = frame.to_local(x - p);
+            Vec2::new(l.x, l.y)
+        })
+        .collect();
+    corrected_hull_area(&projected)
 }
 
 /// The area the points were drawn from, estimated from their hull with Efron's correction;

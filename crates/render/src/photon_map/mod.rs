@@ -176,6 +176,13 @@ fn precompute_irradiance(tree: &KdTree, max_bounces: u16, lookup: &Lookup) -> Pr
     }
 }
 
+/// A bounce count as photons store it (`u32::MAX`, unbounded, and anything past `u16::MAX`
+/// become `u16::MAX`).
+#[must_use]
+pub fn bounce_limit(bounces: u32) -> u16 {
+    u16::try_from(bounces).unwrap_or(u16::MAX)
+}
+
 /// The global and caustic maps of a scene with their lookup sizes.
 #[derive(Clone, Debug)]
 pub struct PhotonMaps {
@@ -190,7 +197,27 @@ pub struct PhotonMaps {
     pub caustic_lookup: Lookup,
 }
 
+impl std::fmt::Display for PhotonMap {
+    /// `Global map: N photons stored of M emitted, R M rays, S s`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:?} map: {} photons stored of {} emitted, {:.1} M rays, {:.2} s",
+            self.kind,
+            self.stats.stored,
+            self.stats.emitted,
+            self.stats.rays as f64 * 1e-6,
+            self.seconds
+        )
+    }
+}
+
 impl PhotonMaps {
+    /// The global map, then the caustic map if there is one.
+    pub fn maps(&self) -> impl Iterator<Item = &PhotonMap> {
+        std::iter::once(&self.global).chain(&self.caustic)
+    }
+
     /// Traces `global` photons of up to `max_bounces` bounces, their irradiance precomputed,
     /// and, when `caustic` > 0, that many caustic photons of up to `gather_bounces + 1` (a
     /// caustic lands one bounce nearer the camera than the gather hits of records), on

@@ -15,14 +15,15 @@
 //! Photons straight from the emitters are never in the global map (the direct light is
 //! sampled), and caustic photons are left out when a caustic map serves caustics.
 
-use super::hull::corrected_hull_area;
+use super::estimate::same_side;
+use super::hull::corrected_area_on_plane;
 use super::kd_tree::{KdTree, Neighbour};
 use super::photon::Photon;
 use crate::irradiance_cache::hemisphere::{to_world, HemisphereSamples, Stratification};
 use crate::irradiance_cache::record::{ErrorMetric, Record, NO_RADIANCE};
 use crate::irradiance_cache::store::RecordStore;
 use crate::lights::is_positive_finite;
-use ircache_math::{Frame, Rgb, Vec2, Vec3};
+use ircache_math::{Frame, Rgb, Vec3};
 
 /// What records are made from and how far they reach.
 #[derive(Clone, Copy, Debug)]
@@ -140,14 +141,7 @@ pub fn bin_photons(
 #[must_use]
 pub fn zone_cells(photons: &[&Photon], p: Vec3, n: Vec3) -> Option<(Frame, HemisphereSamples)> {
     let frame = Frame::from_z(n);
-    let projected: Vec<Vec2> = photons
-        .iter()
-        .map(|ph| {
-            let l = frame.to_local(ph.position - p);
-            Vec2::new(l.x, l.y)
-        })
-        .collect();
-    let area = corrected_hull_area(&projected);
+    let area = corrected_area_on_plane(&frame, p, photons.iter().map(|ph| ph.position));
     if !is_positive_finite(area) {
         return None;
     }
@@ -170,8 +164,7 @@ pub fn photon_record(
     let accept = |ph: &Photon| {
         ph.bounces <= settings.max_bounces
             && !(settings.without_caustics && ph.caustic)
-            && ph.normal.dot(n) > 0.5
-            && ph.incoming.dot(n) > 0.0
+            && same_side(ph, n)
     };
     let (lo, hi) = settings.zone_limits;
     tree.nearest(p.to_array(), settings.lookup, hi * hi, &accept, found);
