@@ -150,6 +150,7 @@ mod tests {
 
     fn sensor(fov: f32, axis: FovAxis, to_world: Mat4) -> SensorDesc {
         SensorDesc {
+            medium: None,
             to_world,
             fov_degrees: fov,
             fov_axis: axis,

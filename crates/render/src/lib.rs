@@ -5,7 +5,8 @@
 //! - [`sampler`]: where a pixel sample's coordinates come from (Mitsuba 3's samplers, Sobol').
 //! - [`texture`], [`bsdf`]: materials with importance sampling (Mitsuba 3's models).
 //! - [`lights`]: emitters with importance sampling, for next-event estimation and MIS.
-//! - [`integrators`]: `direct` and `path` (the unbiased reference).
+//! - [`media`]: participating media: phase functions, grids, delta and ratio tracking (002).
+//! - [`integrators`]: `direct`, `path` and `volpath` (the unbiased references).
 //! - [`irradiance_cache`]: Ward's irradiance cache with gradients (the `ic` integrator's records).
 //! - [`radiance_cache`]: radiance caching of glossy light in hemispherical harmonics (issue 10, begun).
 //! - [`splatting`]: radiance cache splatting and the progressive walkthrough (001 ch. 4).
@@ -19,6 +20,7 @@ pub mod film;
 pub mod integrators;
 pub mod irradiance_cache;
 pub mod lights;
+pub mod media;
 pub mod photon_map;
 pub mod radiance_cache;
 pub mod render;

@@ -61,6 +61,10 @@ pub struct Shape {
     /// A flat-shaded mesh whose material has no image texture and ignores tangents: its
     /// interactions need no vertex data (position from the ray, normal from Embree).
     pub flat: bool,
+    /// A `null` BSDF: the invisible boundary of a medium, passed through by rays.
+    pub null: bool,
+    /// The media on its two sides (indices into [`Scene::media`]).
+    pub media: ircache_scene::MediumInterface,
 }
 
 /// A ray–surface intersection.
@@ -110,6 +114,12 @@ pub struct Scene {
     /// Content hash of what light transport depends on (geometry, materials, emitters; not the
     /// camera, not where the files are): a cache file records it.
     pub content_hash: u64,
+    /// Participating media.
+    pub media: Vec<crate::media::Medium>,
+    /// The medium the camera sits in.
+    pub camera_medium: Option<usize>,
+    /// Where the first medium or `null` surface was declared, for integrators without media.
+    media_location: Option<String>,
 }
 
 /// FNV-1a of what light transport depends on: the geometry (positions, indices, normals, uvs),
@@ -163,6 +173,30 @@ fn content_hash(desc: &SceneDesc) -> u64 {
         });
     }
     let _ = write!(h, "{:?}", desc.emitters);
+    for m in &desc.media {
+        let _ = write!(
+            h,
+            "{:?}{:?}{:?}{}{:?}",
+            m.kind, m.phase, m.scale, m.sample_emitters, m.id
+        );
+        for v in [Some(&m.sigma_t), Some(&m.albedo), m.emission.as_ref()]
+            .into_iter()
+            .flatten()
+        {
+            match v {
+                ircache_scene::VolumeDesc::Grid(g) => {
+                    let _ = write!(h, "{g:?}");
+                    h.words(g.data.iter().map(|x| x.to_bits()));
+                }
+                c => {
+                    let _ = write!(h, "{c:?}");
+                }
+            }
+        }
+    }
+    for s in &desc.shapes {
+        let _ = write!(h, "{:?}", s.media);
+    }
     h.0
 }
 
@@ -217,6 +251,8 @@ impl Scene {
                 material: i,
                 area_light: None,
                 flat,
+                null: matches!(*s.bsdf, ircache_scene::BsdfDesc::Null),
+                media: s.media,
             });
         }
         let accel = builder.build()?;
@@ -234,7 +270,24 @@ impl Scene {
         let scale = lo.abs().max(hi.abs()).max_element().max(f32::MIN_POSITIVE);
         let has_hittable_emitters =
             lights.has_environment() || shapes.iter().any(|s| s.area_light.is_some());
+        let media_location = desc
+            .media
+            .first()
+            .map(|m| m.location.to_string())
+            .or_else(|| {
+                desc.shapes
+                    .iter()
+                    .find(|s| matches!(*s.bsdf, ircache_scene::BsdfDesc::Null))
+                    .map(|s| s.location.to_string())
+            });
         Ok(Scene {
+            media: desc
+                .media
+                .iter()
+                .map(crate::media::Medium::from_desc)
+                .collect(),
+            camera_medium: desc.sensor.medium,
+            media_location,
             content_hash: content_hash(desc),
             has_hittable_emitters,
             accel,
@@ -247,6 +300,24 @@ impl Scene {
             radius,
             triangles,
         })
+    }
+
+    /// True when the scene has participating media or `null` surfaces.
+    #[must_use]
+    pub fn has_media(&self) -> bool {
+        self.media_location.is_some()
+    }
+
+    /// Errors when the scene has media or `null` surfaces, which only `volpath` renders: `what`
+    /// names the method that cannot.
+    pub fn require_no_media(&self, what: &str) -> Result<(), RenderError> {
+        match &self.media_location {
+            None => Ok(()),
+            Some(at) => Err(RenderError::Invalid(format!(
+                "the scene has participating media or null surfaces (the first at {at}), which \
+                 {what} does not handle: render it with --integrator volpath"
+            ))),
+        }
     }
 
     /// The closest surface along `ray`.

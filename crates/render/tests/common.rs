@@ -32,6 +32,7 @@ pub fn sensor(eye: Vec3, target: Vec3, fov: f32, size: u32, spp: u32) -> SensorD
         eye.extend(1.0),
     );
     SensorDesc {
+        medium: None,
         to_world,
         fov_degrees: fov,
         fov_axis: FovAxis::X,
@@ -64,6 +65,7 @@ pub fn scene(
     emitters: Vec<EmitterDesc>,
 ) -> SceneDesc {
     SceneDesc {
+        media: Vec::new(),
         source: PathBuf::from("<test>"),
         sensor,
         integrator,
@@ -131,8 +133,10 @@ pub fn mean_and_error(img: &ircache_image::Image) -> (Rgb, Rgb) {
 /// A scene of just `shapes` and `emitters` behind a fixed camera (for the emitter tests).
 pub fn light_scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>) -> SceneDesc {
     SceneDesc {
+        media: Vec::new(),
         source: PathBuf::from("<test>"),
         sensor: SensorDesc {
+            medium: None,
             to_world: Mat4::IDENTITY,
             fov_degrees: 45.0,
             fov_axis: FovAxis::X,
@@ -158,6 +162,7 @@ pub fn light_scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>) -> SceneD
 /// A diffuse shape with an area emitter of `radiance`.
 pub fn emitting_shape(geometry: Geometry, radiance: Rgb) -> ShapeDesc {
     ShapeDesc {
+        media: Default::default(),
         id: None,
         geometry,
         bsdf: Arc::new(BsdfDesc::Diffuse {
@@ -171,6 +176,7 @@ pub fn emitting_shape(geometry: Geometry, radiance: Rgb) -> ShapeDesc {
 /// A one-sided quad from corners in order (normal by the right-hand rule).
 pub fn quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> ShapeDesc {
     ShapeDesc {
+        media: Default::default(),
         id: None,
         geometry: Geometry::Mesh(TriangleMesh {
             positions: corners.to_vec(),

@@ -8,6 +8,7 @@ use ircache_scene::*;
 
 fn sphere_furnace(rho: f32, le: f32, max_depth: i32, spp: u32) -> SceneDesc {
     let shape = ShapeDesc {
+        media: Default::default(),
         id: None,
         geometry: Geometry::Sphere {
             center: Vec3::new(1.0, 2.0, 3.0),
@@ -76,6 +77,7 @@ fn box_furnace_with_scaled_geometry_is_scale_free() {
         ));
         ircache_scene::shapes::flip_mesh(&mut mesh);
         let shape = ShapeDesc {
+            media: Default::default(),
             id: None,
             geometry: Geometry::Mesh(mesh),
             bsdf: diffuse(Rgb::splat(0.5)),

@@ -664,6 +664,7 @@ fn light_samples_are_not_occluded_by_their_own_light() {
     use ircache_math::ray::Ray;
     use ircache_render::scene::Scene;
     let floor = |s: f32| ShapeDesc {
+        media: Default::default(),
         id: None,
         geometry: Geometry::Mesh(rectangle(
             Vec3::new(-10.0 * s, -10.0 * s, 0.0),

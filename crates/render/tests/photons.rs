@@ -325,6 +325,7 @@ fn caustics_through_a_glass_sphere_match_the_path_tracer() {
         specular_transmittance: Rgb::ONE,
     });
     let sphere = ShapeDesc {
+        media: Default::default(),
         id: None,
         geometry: Geometry::Sphere {
             center: Vec3::new(0.0, 0.9, 0.0),

@@ -28,6 +28,7 @@ fn floor_under_a_sphere(spp: u32, sampler: &str) -> (SceneDesc, f64) {
     };
     let shapes = vec![
         ShapeDesc {
+            media: Default::default(),
             id: None,
             geometry: Geometry::Mesh(floor),
             bsdf: diffuse(Rgb::splat(0.5)),

@@ -24,6 +24,8 @@ pub struct SceneDesc {
     pub shapes: Vec<ShapeDesc>,
     /// Emitters that are not attached to a shape (point, spot, directional, constant, envmap).
     pub emitters: Vec<EmitterDesc>,
+    /// Participating media, indexed by [`MediumInterface`] and [`SensorDesc::medium`].
+    pub media: Vec<MediumDesc>,
     /// What the loaders changed and a user should hear of (degenerate triangles dropped, with
     /// where the first one was).
     pub notes: Vec<String>,
@@ -53,6 +55,8 @@ pub struct SensorDesc {
     pub sampler_seed: u64,
     /// The sampler's `jitter` (stratified kinds).
     pub jitter: bool,
+    /// The medium the camera sits in (index into [`SceneDesc::media`]).
+    pub medium: Option<usize>,
 }
 
 /// Mitsuba's `fov_axis`.
@@ -162,8 +166,135 @@ pub struct ShapeDesc {
     pub bsdf: Arc<BsdfDesc>,
     /// Radiance of an attached `area` emitter (one-sided, along the shading normal).
     pub emitter: Option<Rgb>,
+    /// The media on either side of the surface, if it bounds any.
+    pub media: MediumInterface,
     /// Where the shape was declared.
     pub location: SourceLocation,
+}
+
+/// The media on the two sides of a shape's surface (indices into [`SceneDesc::media`]); a ray
+/// crossing a shape that declares neither keeps its medium (Mitsuba 3's `is_medium_transition`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MediumInterface {
+    /// The medium on the side the geometric normal points away from.
+    pub interior: Option<usize>,
+    /// The medium on the side the geometric normal points to.
+    pub exterior: Option<usize>,
+}
+
+impl MediumInterface {
+    /// True when crossing the surface changes the medium.
+    #[must_use]
+    pub fn is_transition(&self) -> bool {
+        self.interior.is_some() || self.exterior.is_some()
+    }
+}
+
+/// A participating medium (Mitsuba 3's `homogeneous` and `heterogeneous`). Extinction is
+/// `scale · sigma_t` in inverse scene units, scattering `albedo` times that; `emission` is an
+/// ircache extension (radiance L_e, emitted per unit length as σ_a L_e: an optically thick
+/// absorbing slab shows exactly L_e).
+#[derive(Clone, Debug)]
+pub struct MediumDesc {
+    /// The `id` attribute, if any.
+    pub id: Option<String>,
+    /// Homogeneous or heterogeneous.
+    pub kind: MediumKind,
+    /// Extinction before `scale` (constant for a homogeneous medium).
+    pub sigma_t: VolumeDesc,
+    /// Single-scattering albedo σ_s/σ_t (default 0.75).
+    pub albedo: VolumeDesc,
+    /// Emitted radiance (ircache extension; Mitsuba 3 has no emitting media).
+    pub emission: Option<VolumeDesc>,
+    /// Scale applied to `sigma_t`.
+    pub scale: f32,
+    /// Phase function.
+    pub phase: PhaseDesc,
+    /// Next-event estimation at scattering events in the medium (default true).
+    pub sample_emitters: bool,
+    /// Where it was declared.
+    pub location: SourceLocation,
+}
+
+/// Mitsuba 3's two medium plugins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MediumKind {
+    /// Constant extinction everywhere inside the shapes that reference it.
+    Homogeneous,
+    /// Extinction from a volume, present only inside that volume's bounding box.
+    Heterogeneous,
+}
+
+/// A spatially varying quantity (Mitsuba 3's `constvolume` and `gridvolume`). Both occupy the
+/// unit cube mapped by `to_world` (a heterogeneous medium exists only there).
+#[derive(Clone, Debug)]
+pub enum VolumeDesc {
+    /// The same value everywhere (`constvolume`, or a bare `<float>`/`<rgb>`).
+    Constant {
+        /// The value.
+        value: Rgb,
+        /// Unit cube to world.
+        to_world: Mat4,
+    },
+    /// A voxel grid from a `.vol` file.
+    Grid(Arc<GridVolumeDesc>),
+}
+
+impl VolumeDesc {
+    /// A constant over the default unit cube.
+    #[must_use]
+    pub fn constant(value: Rgb) -> VolumeDesc {
+        VolumeDesc::Constant {
+            value,
+            to_world: Mat4::IDENTITY,
+        }
+    }
+}
+
+/// A voxel grid (`gridvolume`): samples at cell centres, texel coordinate `p·res − ½` in the unit
+/// cube, looked up trilinearly or by nearest sample.
+#[derive(Clone)]
+pub struct GridVolumeDesc {
+    /// The `.vol` file.
+    pub path: PathBuf,
+    /// Samples along x, y, z.
+    pub resolution: [usize; 3],
+    /// 1 (scalar) or 3 (RGB).
+    pub channels: usize,
+    /// Samples, `((z·ny + y)·nx + x)·channels + c`.
+    pub data: Vec<f32>,
+    /// Unit cube to world (`to_world`, with the file's bounding box when `use_grid_bbox`).
+    pub to_world: Mat4,
+    /// Trilinear (default) or nearest.
+    pub filter: TextureFilter,
+    /// Outside the unit cube (default clamp).
+    pub wrap: WrapMode,
+}
+
+/// The file and the size, not the samples.
+impl std::fmt::Debug for GridVolumeDesc {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GridVolumeDesc")
+            .field("file", &self.path.file_name().unwrap_or_default())
+            .field("resolution", &self.resolution)
+            .field("channels", &self.channels)
+            .field("to_world", &self.to_world)
+            .field("filter", &self.filter)
+            .field("wrap", &self.wrap)
+            .finish()
+    }
+}
+
+/// A phase function.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PhaseDesc {
+    /// 1/4π.
+    Isotropic,
+    /// Henyey–Greenstein with mean cosine `g` in (−1, 1) (Mitsuba's default 0.8).
+    HenyeyGreenstein {
+        /// Mean cosine of the scattering angle.
+        g: f32,
+    },
 }
 
 /// World-space geometry.
@@ -374,6 +505,8 @@ pub enum BsdfDesc {
         /// Transmission scale.
         specular_transmittance: Rgb,
     },
+    /// No scattering: the invisible boundary of a medium (rays pass straight through).
+    Null,
     /// Wavefront MTL material: Lambertian `Kd` plus normalised modified-Phong lobe `Ks`, `Ns`
     /// (Lafortune and Willems 1994); only produced by the OBJ loader.
     ObjPhong {

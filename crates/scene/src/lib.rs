@@ -13,6 +13,7 @@ pub mod mesh;
 pub mod mitsuba;
 pub mod obj_scene;
 pub mod shapes;
+pub mod volume_file;
 
 pub use desc::*;
 pub use error::{SceneError, SourceLocation};

@@ -133,6 +133,7 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
     }
     let sensor = sensor(&shapes, camera);
     Ok(SceneDesc {
+        media: Vec::new(),
         source: path.to_path_buf(),
         sensor,
         integrator: IntegratorDesc::default(),
@@ -268,6 +269,7 @@ fn material(
 
 fn shape(group: &ObjGroup, bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> ShapeDesc {
     ShapeDesc {
+        media: Default::default(),
         id: group.material.clone(),
         geometry: Geometry::Mesh(group.mesh.clone()),
         bsdf,
@@ -325,6 +327,7 @@ fn sensor(shapes: &[ShapeDesc], camera: &ObjCamera) -> SensorDesc {
     };
     let distance = (eye - centre).length() + radius;
     SensorDesc {
+        medium: None,
         to_world: look_at(eye, target, up),
         fov_degrees: fov,
         fov_axis: FovAxis::Y,

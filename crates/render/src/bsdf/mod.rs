@@ -415,6 +415,11 @@ impl Compiled {
             BsdfDesc::Diffuse { reflectance } => Compiled::Diffuse {
                 reflectance: Texture::from_desc(reflectance),
             },
+            // A null surface is never shaded: `volpath` passes through it (`Shape::null`) and
+            // the other integrators refuse such scenes (`Scene::require_no_media`). Black in case.
+            BsdfDesc::Null => Compiled::Diffuse {
+                reflectance: Texture::from_desc(&ircache_scene::TextureDesc::Constant(Rgb::ZERO)),
+            },
             // Nested twosided: the inner front model (Mitsuba does not nest them either).
             BsdfDesc::TwoSided { front, .. } => Compiled::new(front),
             // Normal and bump maps act on the shading frame (`Material::perturb`).

@@ -8,6 +8,7 @@ pub mod ic;
 pub mod light_sampling;
 pub mod path;
 pub mod path_continuation;
+pub mod volpath;
 
 use crate::sampler::Sampler;
 use crate::scene::Scene;
@@ -52,10 +53,12 @@ pub enum Integrator {
     Path(path::PathIntegrator),
     /// Direct light per sample, diffuse indirect light from the irradiance cache.
     Ic(ic::IcIntegrator),
+    /// Volumetric path tracing through participating media (Mitsuba's `volpath`).
+    VolPath(volpath::VolPathIntegrator),
 }
 
 /// The integrator names this renderer knows.
-pub const INTEGRATOR_NAMES: &[&str] = &["path", "direct", "ic (irrcache)", "splat"];
+pub const INTEGRATOR_NAMES: &[&str] = &["path", "volpath", "direct", "ic (irrcache)", "splat"];
 
 impl Integrator {
     /// Builds the integrator named in `desc`.
@@ -65,6 +68,11 @@ impl Integrator {
         }
         match desc.kind.as_str() {
             "path" => Ok(Integrator::Path(path::PathIntegrator {
+                max_depth: desc.max_depth,
+                rr_depth: desc.rr_depth,
+                hide_emitters: desc.hide_emitters,
+            })),
+            "volpath" => Ok(Integrator::VolPath(volpath::VolPathIntegrator {
                 max_depth: desc.max_depth,
                 rr_depth: desc.rr_depth,
                 hide_emitters: desc.hide_emitters,
@@ -98,6 +106,14 @@ impl Integrator {
         pool: &rayon::ThreadPool,
     ) -> Result<(Integrator, Option<crate::irradiance_cache::CacheStats>), crate::scene::RenderError>
     {
+        match self {
+            Integrator::VolPath(_) => {}
+            Integrator::Direct(_) => scene.require_no_media("the direct integrator")?,
+            Integrator::Path(_) => scene.require_no_media("the path integrator")?,
+            Integrator::Ic(_) => {
+                scene.require_no_media("the irradiance cache (issue 15, not yet)")?
+            }
+        }
         match self {
             Integrator::Ic(ic) if ic.cache.is_none() => {
                 let (cache, stats) =
@@ -155,6 +171,7 @@ impl Integrator {
             Integrator::Direct(d) => d.li(scene, ray, first_hit, sampler, rays),
             Integrator::Path(p) => p.li(scene, ray, first_hit, sampler, rays),
             Integrator::Ic(c) => c.li(scene, ray, first_hit, sampler, rays),
+            Integrator::VolPath(v) => v.li(scene, ray, first_hit, sampler, rays),
         }
     }
 

@@ -127,7 +127,7 @@ impl Arrival {
     /// hidden), 0 for gather rays, 1 after a delta lobe, else the power heuristic against the
     /// light samples taken at the vertex left, `light_pdf(that vertex)` being their density.
     #[inline]
-    fn emission_weight(&self, light_pdf: impl FnOnce(Vec3) -> f32) -> f32 {
+    pub(crate) fn emission_weight(&self, light_pdf: impl FnOnce(Vec3) -> f32) -> f32 {
         match *self {
             Arrival::Camera { hide_emitters } => f32::from(u8::from(!hide_emitters)),
             Arrival::Gather => 0.0,

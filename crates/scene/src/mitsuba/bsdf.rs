@@ -29,6 +29,7 @@ const BSDFS: &[&str] = &[
     "thindielectric",
     "normalmap",
     "bumpmap",
+    "null",
 ];
 const TEXTURES: &[&str] = &["bitmap"];
 
@@ -46,6 +47,7 @@ pub(crate) fn build_bsdf(ctx: &Ctx, p: &Rc<Plugin>) -> Result<Arc<BsdfDesc>, Sce
 fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
     p.expect_type(BSDFS)?;
     let b = match p.ty.as_str() {
+        "null" => BsdfDesc::Null,
         "diffuse" => {
             let reflectance = texture_param(ctx, p, "reflectance", 0.5)?;
             if let (TextureDesc::Constant(c), Some(prop)) = (&reflectance, p.get("reflectance")) {

@@ -11,11 +11,13 @@
 //! samplers `independent`, `stratified`, `multijitter`, `ldsampler`, `orthogonal`; integrators
 //! `path`, `direct`, `irrcache`; shapes `obj`, `ply`, `rectangle`, `cube`, `disk` (tessellated),
 //! `sphere`; BSDFs `diffuse`, `twosided`, `plastic`, `roughplastic`, `conductor`,
-//! `roughconductor`, `dielectric`, `thindielectric`; texture `bitmap`; emitters `area`, `point`,
-//! `spot`, `directional`, `constant`, `envmap`.
+//! `roughconductor`, `dielectric`, `thindielectric`, `null`; texture `bitmap`; emitters `area`,
+//! `point`, `spot`, `directional`, `constant`, `envmap`; media `homogeneous`, `heterogeneous`
+//! with volumes `constvolume`, `gridvolume` and phase functions `isotropic`, `hg`.
 
 mod bsdf;
 mod emitter;
+mod medium;
 mod props;
 mod sensor;
 mod shape;
@@ -87,6 +89,12 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, Scen
             "texture" => {
                 bsdf::build_texture(&ctx, &obj)?;
             }
+            "medium" => {
+                medium::build_medium(&ctx, &obj)?;
+            }
+            "volume" => {
+                medium::build_volume(&ctx, &obj)?;
+            }
             other => {
                 return Err(SceneError::at(
                     obj.loc.clone(),
@@ -112,6 +120,7 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, Scen
         integrator: integrator.unwrap_or_default(),
         shapes,
         emitters,
+        media: ctx.media.take(),
         notes: ctx.notes.take(),
     })
 }
@@ -132,6 +141,10 @@ pub(crate) struct Ctx {
     pub images: RefCell<HashMap<(PathBuf, bool), Arc<Image>>>,
     /// The default BSDF (diffuse 0.5) shared by shapes without one.
     pub default_bsdf: Arc<BsdfDesc>,
+    /// Media built so far ([`SceneDesc::media`]).
+    pub media: RefCell<Vec<crate::desc::MediumDesc>>,
+    /// Built media by plugin, so `<ref>`s share one.
+    pub medium_ids: RefCell<HashMap<*const Plugin, usize>>,
 }
 
 impl Ctx {
@@ -143,6 +156,8 @@ impl Ctx {
             bsdfs: RefCell::default(),
             bitmaps: RefCell::default(),
             images: RefCell::default(),
+            media: RefCell::default(),
+            medium_ids: RefCell::default(),
             default_bsdf: Arc::new(BsdfDesc::Diffuse {
                 reflectance: crate::desc::TextureDesc::Constant(ircache_math::Rgb::splat(0.5)),
             }),

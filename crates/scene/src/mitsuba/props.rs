@@ -25,10 +25,13 @@ pub(crate) const OBJECT_TAGS: &[&str] = &[
     "bsdf",
     "emitter",
     "texture",
+    "medium",
+    "phase",
+    "volume",
 ];
 
 /// Mitsuba object tags that this loader does not support.
-const UNSUPPORTED_OBJECT_TAGS: &[&str] = &["medium", "phase", "volume", "spectrum"];
+const UNSUPPORTED_OBJECT_TAGS: &[&str] = &["spectrum"];
 
 /// Value tags.
 const VALUE_TAGS: &[&str] = &[

@@ -18,7 +18,7 @@ const SAMPLERS: &[&str] = &[
     "orthogonal",
     "sobol",
 ];
-const INTEGRATORS: &[&str] = &["path", "direct", "irrcache"];
+const INTEGRATORS: &[&str] = &["path", "volpath", "direct", "irrcache"];
 
 /// The `perspective` sensor with its film and sampler.
 pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneError> {
@@ -52,10 +52,21 @@ pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneErr
         Some((s, _)) => build_sampler(s)?,
         None => SamplerParams::default(),
     };
-    // Any other nested object is unused and reported by check_unused below.
+    // The medium the camera sits in (Mitsuba: a bare `<ref id>` or nested `<medium>`).
+    let mut medium = None;
     for (obj, prop) in p.objects(&ctx.ids)? {
-        if obj.tag != "film" && obj.tag != "sampler" {
-            expect_tag(&obj, prop, "film or sampler")?;
+        match obj.tag.as_str() {
+            "film" | "sampler" => {}
+            "medium" if medium.is_none() => {
+                medium = Some(super::medium::build_medium(ctx, &obj)?);
+            }
+            "medium" => {
+                return Err(SceneError::at(
+                    prop.loc.clone(),
+                    "a sensor can be inside only one medium",
+                ))
+            }
+            _ => expect_tag(&obj, prop, "film, sampler or medium")?,
         }
     }
 
@@ -137,6 +148,7 @@ pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneErr
         sampler: sampler.kind,
         sampler_seed: sampler.seed,
         jitter: sampler.jitter,
+        medium,
     })
 }
 

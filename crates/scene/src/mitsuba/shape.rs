@@ -100,8 +100,22 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
 
     let mut bsdf = None;
     let mut emitter = None;
+    let mut media = crate::desc::MediumInterface::default();
     for (obj, prop) in p.objects(&ctx.ids)? {
         match obj.tag.as_str() {
+            "medium" => {
+                let side = match prop.name.as_str() {
+                    "interior" => &mut media.interior,
+                    "exterior" => &mut media.exterior,
+                    _ => {
+                        return Err(SceneError::at(
+                            prop.loc.clone(),
+                            "a medium on a shape needs name=\"interior\" or name=\"exterior\"",
+                        ))
+                    }
+                };
+                *side = Some(super::medium::build_medium(ctx, &obj)?);
+            }
             "bsdf" => {
                 if bsdf.is_some() {
                     return Err(SceneError::at(
@@ -120,7 +134,7 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
                 }
                 emitter = Some(build_area(&obj)?);
             }
-            _ => expect_tag(&obj, prop, "bsdf or emitter")?,
+            _ => expect_tag(&obj, prop, "bsdf, emitter or medium")?,
         }
     }
     p.check_unused()?;
@@ -129,6 +143,7 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
         geometry,
         bsdf: bsdf.unwrap_or_else(|| ctx.default_bsdf.clone()),
         emitter,
+        media,
         location: p.loc.clone(),
     })
 }

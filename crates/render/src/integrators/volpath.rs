@@ -1,0 +1,272 @@
+//! Volumetric path tracing, the reference in scenes with participating media, step for step
+//! Mitsuba 3's `volpath`: free-flight sampling in the ray's medium ([`crate::media::tracking`]),
+//! next-event estimation at medium and surface vertices with transmittance through `null`
+//! boundaries, MIS (power heuristic) between light samples and phase or BSDF samples, Russian
+//! roulette from `rr_depth`. `max_depth` counts scattering vertices in the medium and on
+//! surfaces alike (1: emitters seen directly, 2: direct light); crossing a `null` boundary does
+//! not count. Medium emission (an ircache extension) is gathered along every segment.
+
+use super::path_continuation::Arrival;
+use super::{mis_weight, RayCounts};
+use crate::media::tracking::{
+    medium_after, sample_flight, transmittance_along, Flight, MAX_CROSSINGS,
+};
+use crate::media::Phase;
+use crate::sampler::{dims, Sampler};
+use crate::scene::{Interaction, Scene};
+use ircache_embree::Hit;
+use ircache_math::{ray::SHADOW_EPSILON, Ray, Rgb, Rng, Vec3};
+
+/// Parameters of the volumetric path tracer.
+#[derive(Clone, Debug)]
+pub struct VolPathIntegrator {
+    /// Longest path (−1: unbounded).
+    pub max_depth: i32,
+    /// Depth from which Russian roulette runs.
+    pub rr_depth: u32,
+    /// Hide emitters seen directly by the camera.
+    pub hide_emitters: bool,
+}
+
+/// Where a light sample is taken.
+enum Vertex<'a> {
+    /// A surface point with its BSDF, outgoing direction in the local frame.
+    Surface(&'a Interaction, &'a crate::bsdf::Bsdf, Vec3),
+    /// A point in a medium, reached along `d`, with the medium's phase function.
+    Medium(Vec3, Vec3, Phase),
+}
+
+impl VolPathIntegrator {
+    /// Radiance arriving along the camera ray `ray`, whose closest hit `first_hit` the caller
+    /// traced.
+    pub fn li(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        first_hit: Option<&Hit>,
+        sampler: &mut dyn Sampler,
+        rays: &mut RayCounts,
+    ) -> Rgb {
+        let max_depth = u32::try_from(self.max_depth).unwrap_or(u32::MAX);
+        sampler.set_dimension(dims::vertex(0, dims::CACHE));
+        let mut rng = Rng::new(sampler.next_key(), 0x766f_6c70);
+        let mut ray = *ray;
+        let mut medium = scene.camera_medium;
+        let mut beta = Rgb::ONE;
+        let mut l = Rgb::ZERO;
+        let mut depth = 0u32;
+        let mut eta = 1.0f32;
+        let mut arrival = Arrival::Camera {
+            hide_emitters: self.hide_emitters,
+        };
+        let mut first = Some(first_hit.copied());
+        let mut crossings = 0u32;
+        loop {
+            if depth >= max_depth {
+                break;
+            }
+            let hit = match first.take() {
+                Some(h) => h,
+                None => {
+                    rays.bounce += 1;
+                    scene.accel.intersect(&ray)
+                }
+            };
+            let t_hit = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+            if let Some(m) = medium {
+                let med = &scene.media[m];
+                let mut emitted = Rgb::ZERO;
+                let flight =
+                    sample_flight(med, ray.o, ray.d, t_hit, &mut beta, &mut emitted, &mut rng);
+                l += emitted;
+                match flight {
+                    Flight::Absorbed => break,
+                    Flight::Passed => {}
+                    Flight::Scattered { t, .. } => {
+                        let p = ray.at(t);
+                        let sample_emitters = med.sample_emitters && !scene.lights.is_empty();
+                        if depth + 1 < max_depth && sample_emitters {
+                            let vertex = Vertex::Medium(p, ray.d, med.phase);
+                            l += beta
+                                * sample_light(
+                                    scene, &vertex, medium, depth, sampler, &mut rng, rays,
+                                );
+                        }
+                        sampler.set_dimension(dims::vertex(depth, dims::BSDF));
+                        sampler.skip_1d();
+                        let (w, pdf) = med.phase.sample(ray.d, sampler.next_2d());
+                        arrival = Arrival::Bsdf {
+                            p,
+                            pdf,
+                            delta: false,
+                            light_samples: u32::from(sample_emitters),
+                        };
+                        ray = Ray::new(p, w);
+                        if !self.roulette(&mut depth, &mut beta, eta, sampler) {
+                            break;
+                        }
+                        continue;
+                    }
+                }
+            }
+            let Some(hit) = hit else {
+                if scene.lights.has_environment() {
+                    let w = arrival.emission_weight(|p| scene.lights.pdf_environment(p, ray.d));
+                    if w > 0.0 {
+                        l += beta * scene.lights.environment_radiance(ray.d) * w;
+                    }
+                }
+                break;
+            };
+            let it = scene.interaction(&ray, &hit);
+            let shape = &scene.shapes[it.shape as usize];
+            if shape.null {
+                // An index-matched boundary: the ray goes on, in the medium beyond.
+                crossings += 1;
+                if crossings > MAX_CROSSINGS {
+                    break;
+                }
+                medium = medium_after(shape.media, it.ng, ray.d, medium);
+                ray = scene.spawn_ray(&it, ray.d);
+                continue;
+            }
+            let wo = -ray.d;
+            if let Some(light) = shape.area_light {
+                let le = scene.lights.area_radiance(light, it.frame.n, wo);
+                if !le.is_black() {
+                    let w = arrival.emission_weight(|p| {
+                        scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n)
+                    });
+                    l += beta * le * w;
+                }
+            }
+            if depth + 1 >= max_depth {
+                break;
+            }
+            let bsdf = scene.materials[shape.material].at(it.uv);
+            let wo_local = it.frame.to_local(wo);
+            if bsdf.has_smooth() && !scene.lights.is_empty() {
+                let vertex = Vertex::Surface(&it, &bsdf, wo_local);
+                l += beta * sample_light(scene, &vertex, medium, depth, sampler, &mut rng, rays);
+            }
+            sampler.set_dimension(dims::vertex(depth, dims::BSDF));
+            let u_lobe = sampler.next_1d();
+            let Some(bs) = bsdf.sample(wo_local, u_lobe, sampler.next_2d()) else {
+                break;
+            };
+            let wi = it.frame.from_local(bs.wi);
+            // Samples whose geometric and shading hemispheres disagree leak light.
+            if (wi.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
+                break;
+            }
+            beta *= bs.weight;
+            eta *= bs.eta;
+            arrival = Arrival::Bsdf {
+                p: it.p,
+                pdf: bs.pdf,
+                delta: bs.delta,
+                light_samples: 1,
+            };
+            medium = medium_after(shape.media, it.ng, wi, medium);
+            ray = scene.spawn_ray(&it, wi);
+            if !self.roulette(&mut depth, &mut beta, eta, sampler) {
+                break;
+            }
+        }
+        l
+    }
+
+    /// Counts the vertex just left and plays Russian roulette from `rr_depth` on (as
+    /// [`super::path_continuation::trace_path`]); false when the path ends.
+    fn roulette(
+        &self,
+        depth: &mut u32,
+        beta: &mut Rgb,
+        eta: f32,
+        sampler: &mut dyn Sampler,
+    ) -> bool {
+        sampler.set_dimension(dims::vertex(*depth, dims::ROULETTE));
+        *depth += 1;
+        let beta_max = beta.max_channel();
+        if beta_max <= 0.0 || !beta_max.is_finite() {
+            return false;
+        }
+        if *depth >= self.rr_depth {
+            let q = (beta_max * eta * eta).min(0.95);
+            if sampler.next_1d() >= q {
+                return false;
+            }
+            *beta /= q;
+        }
+        true
+    }
+}
+
+/// One light sample at `vertex` (in `medium`, on the side the light lies for a surface), with
+/// transmittance through media and `null` boundaries, weighted against the vertex's phase or
+/// BSDF sample by the power heuristic.
+fn sample_light(
+    scene: &Scene,
+    vertex: &Vertex,
+    medium: Option<usize>,
+    depth: u32,
+    sampler: &mut dyn Sampler,
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> Rgb {
+    sampler.set_dimension(dims::vertex(depth, dims::LIGHT));
+    let u_sel = sampler.next_1d();
+    let u = sampler.next_2d();
+    let p = match vertex {
+        Vertex::Surface(it, ..) => it.p,
+        Vertex::Medium(p, ..) => *p,
+    };
+    let Some(ls) = scene.lights.sample(p, u_sel, u) else {
+        return Rgb::ZERO;
+    };
+    if ls.pdf <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let (f, pdf, ray, medium) = match *vertex {
+        Vertex::Surface(it, bsdf, wo) => {
+            let wi = it.frame.to_local(ls.wi);
+            let f = bsdf.eval(wo, wi);
+            if f.is_black() {
+                return Rgb::ZERO;
+            }
+            let shape = &scene.shapes[it.shape as usize];
+            let medium = medium_after(shape.media, it.ng, ls.wi, medium);
+            (
+                f,
+                bsdf.pdf(wo, wi),
+                scene.shadow_ray(it, ls.wi, ls.distance),
+                medium,
+            )
+        }
+        Vertex::Medium(p, d, phase) => {
+            let value = phase.eval(d, ls.wi);
+            let t_max = if ls.distance.is_finite() {
+                ls.distance * (1.0 - SHADOW_EPSILON)
+            } else {
+                f32::INFINITY
+            };
+            let ray = Ray {
+                o: p,
+                d: ls.wi,
+                t_min: 0.0,
+                t_max,
+            };
+            (Rgb::splat(value), value, ray, medium)
+        }
+    };
+    let tr = transmittance_along(scene, ray, medium, rng, rays);
+    if tr.is_black() {
+        return Rgb::ZERO;
+    }
+    let w = if ls.is_delta {
+        1.0
+    } else {
+        mis_weight(ls.pdf, pdf)
+    };
+    f * tr * ls.radiance * (w / ls.pdf)
+}

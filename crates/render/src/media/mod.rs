@@ -1,0 +1,143 @@
+//! Participating media (002; Mitsuba 3's `homogeneous` and `heterogeneous`): extinction σ_t,
+//! scattering σ_s = α σ_t, absorption σ_a = σ_t − σ_s per RGB channel, a phase function, and
+//! emitted radiance L_e emitted per unit length as σ_a L_e (NOTES-002 §0, an ircache extension).
+//!
+//! - [`phase`]: isotropic and Henyey–Greenstein.
+//! - [`volume`]: constants and voxel grids.
+//! - [`tracking`]: free-flight sampling (delta tracking with spectral weights) and transmittance
+//!   (closed form, ratio tracking) along rays that pass through `null` boundaries.
+
+pub mod phase;
+pub mod tracking;
+pub mod volume;
+
+use ircache_math::{Rgb, Vec3};
+use ircache_scene::{MediumDesc, MediumKind};
+pub use phase::Phase;
+pub use volume::Volume;
+
+/// A medium ready for lookups.
+#[derive(Clone, Debug)]
+pub struct Medium {
+    /// Extinction before `scale`.
+    sigma_t: Volume,
+    /// Single-scattering albedo.
+    albedo: Volume,
+    /// Emitted radiance, if any.
+    emission: Option<Volume>,
+    /// Applied to `sigma_t`.
+    scale: f32,
+    /// The phase function.
+    pub phase: Phase,
+    /// Next-event estimation at scattering events.
+    pub sample_emitters: bool,
+    /// Largest extinction over space and channels (the delta-tracking majorant).
+    pub majorant: f32,
+    /// Where a heterogeneous medium exists (its `sigma_t` volume's box), world space.
+    pub bounds: Option<(Vec3, Vec3)>,
+    /// σ_t is the same everywhere inside (closed-form transmittance).
+    pub homogeneous: bool,
+}
+
+/// The coefficients at a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coefficients {
+    /// Extinction.
+    pub sigma_t: Rgb,
+    /// Scattering.
+    pub sigma_s: Rgb,
+    /// Emitted radiance (black without emission).
+    pub emission: Rgb,
+}
+
+impl Coefficients {
+    /// Absorption σ_t − σ_s.
+    #[inline]
+    #[must_use]
+    pub fn sigma_a(&self) -> Rgb {
+        (self.sigma_t - self.sigma_s).max(Rgb::ZERO)
+    }
+}
+
+impl Medium {
+    /// From the description.
+    #[must_use]
+    pub fn from_desc(desc: &MediumDesc) -> Medium {
+        let sigma_t = Volume::from_desc(&desc.sigma_t);
+        let majorant = desc.scale * sigma_t.max().max_channel();
+        let bounds = match desc.kind {
+            MediumKind::Homogeneous => None,
+            MediumKind::Heterogeneous => {
+                let to_world = match &desc.sigma_t {
+                    ircache_scene::VolumeDesc::Constant { to_world, .. } => *to_world,
+                    ircache_scene::VolumeDesc::Grid(g) => g.to_world,
+                };
+                let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+                for c in 0..8u32 {
+                    let p = Vec3::new((c & 1) as f32, ((c >> 1) & 1) as f32, ((c >> 2) & 1) as f32);
+                    let w = to_world.transform_point3(p);
+                    lo = lo.min(w);
+                    hi = hi.max(w);
+                }
+                Some((lo, hi))
+            }
+        };
+        Medium {
+            homogeneous: sigma_t.is_constant(),
+            sigma_t,
+            albedo: Volume::from_desc(&desc.albedo),
+            emission: desc.emission.as_ref().map(Volume::from_desc),
+            scale: desc.scale,
+            phase: Phase::from_desc(&desc.phase),
+            sample_emitters: desc.sample_emitters,
+            majorant,
+            bounds,
+        }
+    }
+
+    /// The coefficients at world point `p` (inside the medium).
+    #[inline]
+    #[must_use]
+    pub fn at(&self, p: Vec3) -> Coefficients {
+        let sigma_t = self.sigma_t.eval(p) * self.scale;
+        Coefficients {
+            sigma_t,
+            sigma_s: sigma_t * self.albedo.eval(p),
+            emission: self.emission.as_ref().map_or(Rgb::ZERO, |e| e.eval(p)),
+        }
+    }
+
+    /// True when the medium emits.
+    #[must_use]
+    pub fn emits(&self) -> bool {
+        self.emission
+            .as_ref()
+            .is_some_and(|e| e.max().max_channel() > 0.0)
+    }
+
+    /// The part `[t0, t1]` of `[0, t_max]` along `o + t d` inside the medium (its box for a
+    /// heterogeneous medium); `None` when empty.
+    #[inline]
+    #[must_use]
+    pub fn clip(&self, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, f32)> {
+        let Some((lo, hi)) = self.bounds else {
+            return (t_max > 0.0).then_some((0.0, t_max));
+        };
+        let (mut t0, mut t1) = (0.0f32, t_max);
+        for a in 0..3 {
+            let inv = 1.0 / d[a];
+            let (mut near, mut far) = ((lo[a] - o[a]) * inv, (hi[a] - o[a]) * inv);
+            if near > far {
+                std::mem::swap(&mut near, &mut far);
+            }
+            // NaN (d = 0 on the slab's plane) leaves the interval as it is.
+            if near > t0 {
+                t0 = near;
+            }
+            if far < t1 {
+                t1 = far;
+            }
+        }
+        (t0 < t1).then_some((t0, t1))
+    }
+}

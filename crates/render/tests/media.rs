@@ -1,0 +1,482 @@
+//! Participating media against closed forms (NOTES-002 §1.4): transmittance through slabs and
+//! grids, volumetric furnaces, an emitting slab, single scattering from a point light against
+//! 1-D quadrature; `volpath` equal to `path` without media; integrators without media support
+//! refuse such scenes.
+
+mod common;
+use common::*;
+use ircache_math::{Mat4, Ray, Rgb, Rng, Vec3};
+use ircache_render::integrators::{Integrator, RayCounts};
+use ircache_render::media::tracking::transmittance_along;
+use ircache_render::scene::Scene;
+use ircache_scene::*;
+use std::sync::Arc;
+
+/// The unit cube [−1, 1]³ scaled by `half` and moved to `center` (outward normals unless
+/// `flip`).
+fn cube(
+    center: Vec3,
+    half: Vec3,
+    bsdf: Arc<BsdfDesc>,
+    media: MediumInterface,
+    flip: bool,
+) -> ShapeDesc {
+    let mut mesh = shapes::cube();
+    assert!(shapes::transform_mesh(
+        &mut mesh,
+        &(Mat4::from_translation(center) * Mat4::from_scale(half))
+    ));
+    if flip {
+        shapes::flip_mesh(&mut mesh);
+    }
+    ShapeDesc {
+        id: None,
+        geometry: Geometry::Mesh(mesh),
+        bsdf,
+        emitter: None,
+        media,
+        location: here(),
+    }
+}
+
+fn null() -> Arc<BsdfDesc> {
+    Arc::new(BsdfDesc::Null)
+}
+
+fn interior(m: usize) -> MediumInterface {
+    MediumInterface {
+        interior: Some(m),
+        exterior: None,
+    }
+}
+
+fn medium(sigma_t: VolumeDesc, albedo: Rgb, emission: Option<Rgb>, phase: PhaseDesc) -> MediumDesc {
+    MediumDesc {
+        id: None,
+        kind: if matches!(sigma_t, VolumeDesc::Grid(_)) {
+            MediumKind::Heterogeneous
+        } else {
+            MediumKind::Homogeneous
+        },
+        sigma_t,
+        albedo: VolumeDesc::constant(albedo),
+        emission: emission.map(VolumeDesc::constant),
+        scale: 1.0,
+        phase,
+        sample_emitters: true,
+        location: here(),
+    }
+}
+
+/// A scalar grid over the box `[lo, hi]` with samples `f(x, y, z)` at the cell centres.
+fn grid(res: [usize; 3], lo: Vec3, hi: Vec3, f: impl Fn(Vec3) -> f32) -> VolumeDesc {
+    let to_world = Mat4::from_translation(lo) * Mat4::from_scale(hi - lo);
+    let mut data = Vec::new();
+    for z in 0..res[2] {
+        for y in 0..res[1] {
+            for x in 0..res[0] {
+                let u = Vec3::new(
+                    (x as f32 + 0.5) / res[0] as f32,
+                    (y as f32 + 0.5) / res[1] as f32,
+                    (z as f32 + 0.5) / res[2] as f32,
+                );
+                data.push(f(to_world.transform_point3(u)));
+            }
+        }
+    }
+    VolumeDesc::Grid(Arc::new(GridVolumeDesc {
+        path: "<test>".into(),
+        resolution: res,
+        channels: 1,
+        data,
+        to_world,
+        filter: TextureFilter::Bilinear,
+        wrap: WrapMode::Clamp,
+    }))
+}
+
+fn volpath(max_depth: i32) -> IntegratorDesc {
+    IntegratorDesc {
+        kind: "volpath".into(),
+        max_depth,
+        ..IntegratorDesc::default()
+    }
+}
+
+/// Mean transmittance along `ray` over `n` estimates (one stream each), with its standard error.
+fn mean_transmittance(scene: &Scene, ray: Ray, medium: Option<usize>, n: u32) -> (Rgb, Rgb) {
+    let (mut s, mut s2) = (Rgb::ZERO, Rgb::ZERO);
+    let mut rays = RayCounts::default();
+    for i in 0..n {
+        let mut rng = Rng::new(11, u64::from(i));
+        let t = transmittance_along(scene, ray, medium, &mut rng, &mut rays);
+        s += t;
+        s2 += t * t;
+    }
+    let m = s / n as f32;
+    let var = (s2 / n as f32 - m * m).max(Rgb::ZERO);
+    (m, (var / n as f32).sqrt())
+}
+
+/// A homogeneous slab x ∈ [1, 3] behind a null boundary: e^{−σ_t·2} per channel, exactly; a
+/// grid of the same constant by ratio tracking, within 3 standard errors; a linear ramp
+/// σ = a + b·x sampled at cell centres, ratio-tracked between the outermost centres:
+/// τ = s·σ(midpoint).
+#[test]
+fn transmittance_through_slabs_and_grids() {
+    let sigma = Rgb::new(0.5, 1.0, 2.0);
+    let slab = |m: MediumDesc| {
+        let mut desc = scene(
+            sensor(Vec3::new(0.0, 0.0, -5.0), Vec3::ZERO, 30.0, 4, 1),
+            volpath(-1),
+            vec![cube(
+                Vec3::new(2.0, 0.0, 0.0),
+                Vec3::new(1.0, 4.0, 4.0),
+                null(),
+                interior(0),
+                false,
+            )],
+            vec![],
+        );
+        desc.media = vec![m];
+        Scene::build(&desc).expect("scene")
+    };
+    let ray = Ray {
+        o: Vec3::new(0.0, 0.3, 0.2),
+        d: Vec3::X,
+        t_min: 0.0,
+        t_max: 5.0,
+    };
+    let homogeneous = slab(medium(
+        VolumeDesc::constant(sigma),
+        Rgb::splat(0.5),
+        None,
+        PhaseDesc::Isotropic,
+    ));
+    let (t, e) = mean_transmittance(&homogeneous, ray, None, 4);
+    let expect = (sigma * -2.0).exp();
+    for c in 0..3 {
+        // Within the ray-origin offsets at the two crossings (a relative 1e-5 of the scene).
+        assert!(
+            (t[c] - expect[c]).abs() <= 1e-4 * expect[c],
+            "channel {c}: {} vs {}",
+            t[c],
+            expect[c]
+        );
+        assert_eq!(e[c], 0.0, "closed form is deterministic");
+    }
+    // The same medium seen from inside (the ray starts in it) and a blocked ray.
+    let inside = Ray {
+        o: Vec3::new(2.5, 0.0, 0.0),
+        ..ray
+    };
+    let (t, _) = mean_transmittance(&homogeneous, inside, Some(0), 1);
+    assert!((t[1] - (-0.5f32).exp() * 1.0).abs() < 1e-5, "{t:?}");
+
+    // A constant grid over the slab: ratio tracking is unbiased.
+    let lo = Vec3::new(1.0, -4.0, -4.0);
+    let hi = Vec3::new(3.0, 4.0, 4.0);
+    let constant = slab(medium(
+        grid([4, 4, 4], lo, hi, |_| 1.5),
+        Rgb::splat(0.5),
+        None,
+        PhaseDesc::Isotropic,
+    ));
+    let (t, e) = mean_transmittance(&constant, ray, None, 40_000);
+    let expect = (-1.5f32 * 2.0).exp();
+    assert!(
+        (t[0] - expect).abs() < 3.0 * e[0] + 1e-4,
+        "{} vs {expect} ± {}",
+        t[0],
+        e[0]
+    );
+
+    // A linear ramp in x: exact between the first and last sample centres (x ∈ [1.125, 2.875]
+    // for 8 cells over [1, 3]); the ray runs from x = 1.25 to 2.75.
+    let (a, b) = (0.2, 0.6);
+    let ramp = slab(medium(
+        grid([8, 2, 2], lo, hi, |p| a + b * p.x),
+        Rgb::splat(0.5),
+        None,
+        PhaseDesc::Isotropic,
+    ));
+    let inner = Ray {
+        o: Vec3::new(1.25, 0.1, 0.3),
+        t_max: 1.5,
+        ..ray
+    };
+    let (t, e) = mean_transmittance(&ramp, inner, Some(0), 200_000);
+    let expect = (-(1.5 * (a + b * 2.0))).exp();
+    assert!(
+        (t[0] - expect).abs() < 3.0 * e[0] + 1e-4 && e[0] < 0.01 * expect,
+        "ramp: {} vs {expect} ± {}",
+        t[0],
+        e[0]
+    );
+}
+
+/// A closed box of black walls emitting L0 inwards, filled with a non-absorbing medium, camera
+/// inside: radiance L0 everywhere, whatever the phase function and the density. With walls of
+/// albedo ρ emitting (1 − ρ)L0 the same holds.
+#[test]
+fn volumetric_furnaces_are_uniform() {
+    let l0 = 0.7;
+    let cases: Vec<(&str, VolumeDesc, PhaseDesc, f32)> = vec![
+        (
+            "homogeneous isotropic",
+            VolumeDesc::constant(Rgb::splat(2.0)),
+            PhaseDesc::Isotropic,
+            0.0,
+        ),
+        (
+            "homogeneous hg 0.8",
+            VolumeDesc::constant(Rgb::new(1.0, 2.0, 3.0)),
+            PhaseDesc::HenyeyGreenstein { g: 0.8 },
+            0.5,
+        ),
+        (
+            "grid hg -0.8",
+            grid([6, 6, 6], Vec3::splat(-1.0), Vec3::splat(1.0), |p| {
+                1.0 + p.x * p.x + 0.5 * p.y
+            }),
+            PhaseDesc::HenyeyGreenstein { g: -0.8 },
+            0.0,
+        ),
+    ];
+    for (name, sigma_t, phase, rho) in cases {
+        let mut walls = cube(
+            Vec3::ZERO,
+            Vec3::ONE,
+            diffuse(Rgb::splat(rho)),
+            MediumInterface::default(),
+            true,
+        );
+        walls.emitter = Some(Rgb::splat((1.0 - rho) * l0));
+        let mut cam = sensor(
+            Vec3::new(0.1, -0.2, 0.05),
+            Vec3::new(1.0, 0.3, 0.4),
+            90.0,
+            12,
+            32,
+        );
+        cam.medium = Some(0);
+        let mut desc = scene(cam, volpath(-1), vec![walls], vec![]);
+        desc.media = vec![medium(sigma_t, Rgb::ONE, None, phase)];
+        let out = render_desc(&desc, 2, 3);
+        let (m, e) = mean_and_error(&out.image);
+        for c in 0..3 {
+            assert!(
+                (m[c] - l0).abs() < (4.0 * e[c]).max(0.005 * l0),
+                "{name}, channel {c}: {} vs {l0} (σ {})",
+                m[c],
+                e[c]
+            );
+        }
+        assert_eq!(out.invalid_samples, 0, "{name}");
+    }
+}
+
+/// An absorbing, emitting slab of optical depth τ seen at normal incidence against black:
+/// L_e (1 − e^{−τ}) per channel (the emission convention σ_a L_e per unit length).
+#[test]
+fn emitting_slab_shows_le_times_one_minus_transmittance() {
+    let sigma = Rgb::new(0.3, 1.0, 2.5);
+    let le = Rgb::new(1.0, 2.0, 0.5);
+    let slab = cube(
+        Vec3::ZERO,
+        Vec3::new(20.0, 20.0, 0.5),
+        null(),
+        interior(0),
+        false,
+    );
+    let mut desc = scene(
+        sensor(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, 1.0, 4, 256),
+        volpath(1),
+        vec![slab],
+        vec![],
+    );
+    desc.media = vec![medium(
+        VolumeDesc::constant(sigma),
+        Rgb::ZERO,
+        Some(le),
+        PhaseDesc::Isotropic,
+    )];
+    let out = render_desc(&desc, 2, 5);
+    let (m, e) = mean_and_error(&out.image);
+    let expect = le * (Rgb::ONE - (sigma * -1.0).exp());
+    for c in 0..3 {
+        assert!(
+            (m[c] - expect[c]).abs() < (4.0 * e[c]).max(0.005 * expect[c]),
+            "channel {c}: {} vs {} (σ {})",
+            m[c],
+            expect[c],
+            e[c]
+        );
+    }
+}
+
+/// Single scattering from a point light of intensity I in an infinite homogeneous medium
+/// (`max_depth` 2), camera ray passing the light at distance D with its foot a distance C ahead:
+/// L = ∫_{−C}^{∞} σ_s p(θ) I e^{−σ_t (C + t)} e^{−σ_t ℓ}/ℓ² dt, ℓ = √(D² + t²), by quadrature.
+#[test]
+fn single_scattering_matches_quadrature() {
+    let (sigma_t, albedo, intensity, d, c) = (0.5f64, 0.6f64, 3.0f64, 1.0f64, 2.0f64);
+    for phase in [PhaseDesc::Isotropic, PhaseDesc::HenyeyGreenstein { g: 0.5 }] {
+        let g = match phase {
+            PhaseDesc::Isotropic => 0.0,
+            PhaseDesc::HenyeyGreenstein { g } => f64::from(g),
+        };
+        let integrand = |t: f64| {
+            let l = (d * d + t * t).sqrt();
+            // cos θ between the ray (+z) and the direction towards the light.
+            let cos = -t / l;
+            let p = (1.0 - g * g)
+                / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
+            sigma_t * albedo * p * intensity * (-sigma_t * (c + t)).exp() * (-sigma_t * l).exp()
+                / (l * l)
+        };
+        let reference = ircache_render::testing::adaptive_simpson(&integrand, -c, 80.0, 1e-10, 40);
+        // Something to trace against, far off the ray.
+        let speck = ShapeDesc {
+            id: None,
+            geometry: Geometry::Sphere {
+                center: Vec3::new(500.0, 500.0, -500.0),
+                radius: 0.01,
+                flip_normals: false,
+            },
+            bsdf: diffuse(Rgb::ZERO),
+            emitter: None,
+            media: MediumInterface::default(),
+            location: here(),
+        };
+        let mut cam = sensor(
+            Vec3::new(0.0, 0.0, -c as f32),
+            Vec3::new(0.0, 0.0, 1.0),
+            0.01,
+            2,
+            4096,
+        );
+        cam.medium = Some(0);
+        let light = EmitterDesc::Point {
+            position: Vec3::new(0.0, d as f32, 0.0),
+            intensity: Rgb::splat(intensity as f32),
+        };
+        let mut desc = scene(cam, volpath(2), vec![speck], vec![light]);
+        desc.media = vec![medium(
+            VolumeDesc::constant(Rgb::splat(sigma_t as f32)),
+            Rgb::splat(albedo as f32),
+            None,
+            phase,
+        )];
+        let out = render_desc(&desc, 2, 9);
+        let (m, e) = mean_and_error(&out.image);
+        let got = f64::from(m.g);
+        assert!(
+            (got - reference).abs() < (4.0 * f64::from(e.g)).max(0.01 * reference),
+            "{phase:?}: {got} vs quadrature {reference} (σ {})",
+            e.g
+        );
+        assert!(
+            f64::from(e.g) < 0.005 * reference,
+            "too noisy to decide: σ {}",
+            e.g
+        );
+    }
+}
+
+/// Without media, `volpath` is path tracing: the sphere furnace (ρ = 0.5, L_e = 0.5) gives
+/// L_e/(1 − ρ), and a null sphere inside it changes nothing.
+#[test]
+fn volpath_without_media_is_path_tracing() {
+    let furnace = ShapeDesc {
+        id: None,
+        geometry: Geometry::Sphere {
+            center: Vec3::ZERO,
+            radius: 5.0,
+            flip_normals: true,
+        },
+        bsdf: diffuse(Rgb::splat(0.5)),
+        emitter: Some(Rgb::splat(0.5)),
+        media: MediumInterface::default(),
+        location: here(),
+    };
+    let ghost = cube(
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::splat(0.5),
+        null(),
+        MediumInterface::default(),
+        false,
+    );
+    let desc = scene(
+        sensor(
+            Vec3::new(-2.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            60.0,
+            12,
+            32,
+        ),
+        volpath(-1),
+        vec![furnace, ghost],
+        vec![],
+    );
+    let out = render_desc(&desc, 2, 1);
+    let (m, e) = mean_and_error(&out.image);
+    assert!(
+        (m.r - 1.0).abs() < (4.0 * e.r).max(0.005),
+        "{} ± {}",
+        m.r,
+        e.r
+    );
+}
+
+/// `path`, `direct` and the irradiance cache refuse a scene with media (naming `volpath`)
+/// rather than render it as if the medium were not there; the same image comes back at 1 and
+/// 2 threads.
+#[test]
+fn media_scenes_need_volpath_and_render_deterministically() {
+    let fog = cube(Vec3::ZERO, Vec3::splat(1.0), null(), interior(0), false);
+    let light = EmitterDesc::Point {
+        position: Vec3::new(0.0, 2.0, 0.0),
+        intensity: Rgb::splat(5.0),
+    };
+    let floor = quad(
+        [
+            Vec3::new(-3.0, -1.5, -3.0),
+            Vec3::new(-3.0, -1.5, 3.0),
+            Vec3::new(3.0, -1.5, 3.0),
+            Vec3::new(3.0, -1.5, -3.0),
+        ],
+        diffuse(Rgb::splat(0.5)),
+        None,
+    );
+    let mut desc = scene(
+        sensor(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, 45.0, 8, 4),
+        volpath(4),
+        vec![fog, floor],
+        vec![light],
+    );
+    desc.media = vec![medium(
+        VolumeDesc::constant(Rgb::splat(0.8)),
+        Rgb::splat(0.9),
+        None,
+        PhaseDesc::Isotropic,
+    )];
+    let scene_built = Scene::build(&desc).expect("scene");
+    let settings =
+        ircache_render::render::RenderSettings::from_desc(&desc, 1, 1).expect("settings");
+    for kind in ["path", "direct", "irrcache"] {
+        let integrator = Integrator::from_desc(&IntegratorDesc {
+            kind: kind.into(),
+            ..IntegratorDesc::default()
+        })
+        .expect("integrator");
+        let err = ircache_render::render::render(&scene_built, &integrator, &settings, &|_| {})
+            .err()
+            .unwrap_or_else(|| panic!("{kind} rendered a scene with media"));
+        assert!(err.to_string().contains("volpath"), "{kind}: {err}");
+    }
+    let one = render_desc(&desc, 1, 4);
+    let two = render_desc(&desc, 2, 4);
+    assert_eq!(one.image.pixels, two.image.pixels);
+    assert!(one.image.pixels.iter().any(|p| p.g > 0.0));
+}
