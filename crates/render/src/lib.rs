@@ -6,6 +6,7 @@
 //! - [`texture`], [`bsdf`]: materials with importance sampling (Mitsuba 3's models).
 //! - [`lights`]: emitters with importance sampling, for next-event estimation and MIS.
 //! - [`media`]: participating media: phase functions, grids, delta and ratio tracking (002).
+//! - [`media_cache`]: irradiance gradients through media and occlusions (002, begun).
 //! - [`integrators`]: `direct`, `path` and `volpath` (the unbiased references).
 //! - [`irradiance_cache`]: Ward's irradiance cache with gradients (the `ic` integrator's records).
 //! - [`radiance_cache`]: radiance caching of glossy light in hemispherical harmonics (issue 10, begun).
@@ -21,6 +22,7 @@ pub mod integrators;
 pub mod irradiance_cache;
 pub mod lights;
 pub mod media;
+pub mod media_cache;
 pub mod photon_map;
 pub mod radiance_cache;
 pub mod render;

@@ -480,3 +480,77 @@ fn media_scenes_need_volpath_and_render_deterministically() {
     assert_eq!(one.image.pixels, two.image.pixels);
     assert!(one.image.pixels.iter().any(|p| p.g > 0.0));
 }
+
+/// Shadow rays through a null box whose top face lies just under an area light (Cornell box
+/// proportions: face 2 cm below, wall 2 cm behind the box): after a grazing crossing, each
+/// segment still ends short of the light, so no sample of the light is lost.
+#[test]
+fn shadow_rays_through_grazing_crossings_reach_the_light() {
+    let light = quad(
+        [
+            Vec3::new(-0.24, 1.98, -0.22),
+            Vec3::new(0.23, 1.98, -0.22),
+            Vec3::new(0.23, 1.98, 0.16),
+            Vec3::new(-0.24, 1.98, 0.16),
+        ],
+        diffuse(Rgb::ZERO),
+        Some(Rgb::splat(10.0)),
+    );
+    let wall = quad(
+        [
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(1.0, 2.0, -1.0),
+            Vec3::new(-1.0, 2.0, -1.0),
+        ],
+        diffuse(Rgb::splat(0.5)),
+        None,
+    );
+    let fog = cube(
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(0.98, 0.96, 0.98),
+        null(),
+        interior(0),
+        false,
+    );
+    let mut desc = scene(
+        sensor(
+            Vec3::new(0.0, 1.0, 6.8),
+            Vec3::new(0.0, 1.0, 0.0),
+            20.0,
+            4,
+            1,
+        ),
+        volpath(2),
+        vec![light, wall, fog],
+        vec![],
+    );
+    desc.media = vec![medium(
+        VolumeDesc::constant(Rgb::ZERO),
+        Rgb::ZERO,
+        None,
+        PhaseDesc::Isotropic,
+    )];
+    let scene = Scene::build(&desc).expect("scene");
+    let mut rays = RayCounts::default();
+    for y in [1.7f32, 1.8, 1.85, 1.9, 1.95] {
+        let probe = Ray::new(Vec3::new(0.1, y, -0.99), Vec3::new(0.0, 0.0, -1.0));
+        let hit = scene.accel.intersect(&probe).expect("the wall");
+        let it = scene.interaction(&probe, &hit);
+        for i in 0..8 {
+            for j in 0..8 {
+                let u = ircache_math::Vec2::new((i as f32 + 0.5) / 8.0, (j as f32 + 0.5) / 8.0);
+                let Some(ls) = scene.lights.sample(it.p, 0.5, u) else {
+                    continue;
+                };
+                let ray = scene.shadow_ray(&it, ls.wi, ls.distance);
+                let t = transmittance_along(&scene, ray, None, &mut Rng::new(1, 1), &mut rays);
+                assert_eq!(
+                    t,
+                    Rgb::ONE,
+                    "wall point at y = {y}, light sample {u}: blocked"
+                );
+            }
+        }
+    }
+}

@@ -324,51 +324,84 @@ impl HemisphereSamples {
     /// the projected cell boundaries.
     #[must_use]
     pub fn translational_gradient_ward_heckbert(&self) -> LocalGradient {
-        self.translational_gradient_with(|w, j| w.sin[j + 1] - w.sin[j])
+        self.translational_gradient_with(ward_heckbert_azimuthal)
     }
 
-    /// The sum over cell walls that both formulations share. Polar walls (between rings j−1 and
-    /// j, at θ_{j−}: 3.42, ERRATA 3) weigh (2π/N) sin θ cos² θ in both; azimuthal walls (between
-    /// sectors k−1 and k: 3.46, ERRATA 2 and 4) weigh `azimuthal(walls, j)`, which is where
-    /// 3.47 and 3.48 differ in form. Each wall moves with the closer of its two cells.
+    /// The wall sum of both formulations on the cells' radiance differences.
     fn translational_gradient_with(
         &self,
         azimuthal: impl Fn(&PolarWalls, usize) -> f64,
     ) -> LocalGradient {
-        let (m, n) = (self.strata.polar, self.strata.azimuthal);
-        let walls = PolarWalls::new(m);
-        let dphi = 2.0 * PI / n as f64;
-        let mut g = [[0.0f64; 2]; 3];
-        for k in 0..n {
-            let phi_c = (k as f64 + 0.5) * dphi;
-            let u = [phi_c.cos(), phi_c.sin()];
-            let phi_w = k as f64 * dphi;
-            let v = [-phi_w.sin(), phi_w.cos()];
-            let km = (k + n - 1) % n;
-            let (mut su, mut sv) = ([0.0f64; 3], [0.0f64; 3]);
-            for j in 0..m {
-                let l = self.l(j, k);
-                if j > 0 {
-                    let (s, c) = (walls.sin[j], walls.cos[j]);
-                    let w = dphi * s * c * c / self.r(j, k).min(self.r(j - 1, k));
-                    let lp = self.l(j - 1, k);
+        let n = self.strata.azimuthal;
+        wall_sum(
+            self.strata,
+            |c| self.r(c / n, c % n),
+            azimuthal,
+            |hi, lo| {
+                let (a, b) = (self.l(hi / n, hi % n), self.l(lo / n, lo % n));
+                [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+            },
+        )
+    }
+}
+
+/// Ward and Heckbert's azimuthal wall weight (000 eq. 3.48): sin θ_{j+} − sin θ_{j−}.
+pub(crate) fn ward_heckbert_azimuthal(w: &PolarWalls, j: usize) -> f64 {
+    w.sin[j + 1] - w.sin[j]
+}
+
+/// The sum over cell walls that both formulations share. Polar walls (between rings j−1 and j,
+/// at θ_{j−}: 3.42, ERRATA 3) weigh (2π/N) sin θ cos² θ in both; azimuthal walls (between
+/// sectors k−1 and k: 3.46, ERRATA 2 and 4) weigh `azimuthal(walls, j)`, which is where 3.47 and
+/// 3.48 differ in form. Each wall moves with the closer of its two cells (`distance` of cell
+/// `j·N + k`); `difference(hi, lo)` is what changes across the wall from cell `lo` to cell `hi`
+/// (the higher index): the radiance difference for surfaces (002 eq. 11), the medium's
+/// visible-shell integral for the visibility gradient (002 eq. 24).
+pub(crate) fn wall_sum(
+    strata: Stratification,
+    distance: impl Fn(usize) -> f64,
+    azimuthal: impl Fn(&PolarWalls, usize) -> f64,
+    difference: impl Fn(usize, usize) -> [f64; 3],
+) -> LocalGradient {
+    let (m, n) = (strata.polar, strata.azimuthal);
+    let walls = PolarWalls::new(m);
+    let dphi = 2.0 * PI / n as f64;
+    let mut g = [[0.0f64; 2]; 3];
+    for k in 0..n {
+        let phi_c = (k as f64 + 0.5) * dphi;
+        let u = [phi_c.cos(), phi_c.sin()];
+        let phi_w = k as f64 * dphi;
+        let v = [-phi_w.sin(), phi_w.cos()];
+        let km = (k + n - 1) % n;
+        let (mut su, mut sv) = ([0.0f64; 3], [0.0f64; 3]);
+        for j in 0..m {
+            let cell = j * n + k;
+            if j > 0 {
+                let (s, c) = (walls.sin[j], walls.cos[j]);
+                let below = (j - 1) * n + k;
+                let w = dphi * s * c * c / distance(cell).min(distance(below));
+                if w.is_finite() && w != 0.0 {
+                    let d = difference(cell, below);
                     for ch in 0..3 {
-                        su[ch] += w * (l[ch] - lp[ch]);
+                        su[ch] += w * d[ch];
                     }
                 }
-                let w = azimuthal(&walls, j) / self.r(j, k).min(self.r(j, km));
-                let lm = self.l(j, km);
+            }
+            let beside = j * n + km;
+            let w = azimuthal(&walls, j) / distance(cell).min(distance(beside));
+            if w.is_finite() && w != 0.0 {
+                let d = difference(cell, beside);
                 for ch in 0..3 {
-                    sv[ch] += w * (l[ch] - lm[ch]);
+                    sv[ch] += w * d[ch];
                 }
             }
-            for ch in 0..3 {
-                g[ch][0] += u[0] * su[ch] + v[0] * sv[ch];
-                g[ch][1] += u[1] * su[ch] + v[1] * sv[ch];
-            }
         }
-        g.map(|gc| Vec3::new(gc[0] as f32, gc[1] as f32, 0.0))
+        for ch in 0..3 {
+            g[ch][0] += u[0] * su[ch] + v[0] * sv[ch];
+            g[ch][1] += u[1] * su[ch] + v[1] * sv[ch];
+        }
     }
+    g.map(|gc| Vec3::new(gc[0] as f32, gc[1] as f32, 0.0))
 }
 
 impl HemisphereSamples {
@@ -430,7 +463,7 @@ pub fn largest_eigenvalue(h: [f64; 3]) -> f64 {
 }
 
 /// Angles of the polar cell boundaries: sin²θ_j = j/M for j = 0..=M.
-struct PolarWalls {
+pub(crate) struct PolarWalls {
     theta: Vec<f64>,
     sin: Vec<f64>,
     cos: Vec<f64>,

@@ -171,14 +171,24 @@ pub fn transmittance_along(
         medium = medium_after(shape.media, hit.ng, ray.d, medium);
         let p = ray.at(hit.t);
         let o = offset_ray_origin(p, hit.ng.normalize_or(ray.d), ray.d, scene.scale);
-        ray.o = o;
-        ray.t_min = 0.0;
-        if let Some(end) = end {
-            let left = (end - o).dot(ray.d);
-            if left <= 0.0 {
-                return tr;
+        // Aimed from the offset origin at the same end point (as `Scene::shadow_ray`): a ray
+        // kept parallel would pass the end at the offset's distance and, after a grazing
+        // crossing, reach the light's own surface before it.
+        match end {
+            Some(end) => {
+                let to_end = end - o;
+                let left = to_end.length();
+                if left <= 0.0 || to_end.dot(ray.d) <= 0.0 {
+                    return tr;
+                }
+                ray = Ray {
+                    o,
+                    d: to_end / left,
+                    t_min: 0.0,
+                    t_max: left,
+                };
             }
-            ray.t_max = left;
+            None => ray = Ray::new(o, ray.d),
         }
     }
     Rgb::ZERO

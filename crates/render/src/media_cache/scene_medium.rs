@@ -1,0 +1,370 @@
+//! The renderer's scene as a [`GatherMedium`]: gather rays pass through `null` boundaries (they
+//! are not occluders: only opaque hits end a cell, NOTES-002 §1.3), the medium along each ray is
+//! tracked across them, surfaces are lit by direct light with transmittance, and the medium's
+//! source is single scattering from the lights plus emission (stage 1, §2.8).
+//!
+//! Everything is deterministic for a given ray: light samples use a fixed stratified set, and
+//! transmittance a fixed stream, so that central differences with common random numbers (§3.3)
+//! compare like with like.
+
+use super::gradient::{DVec3, GatherMedium};
+use crate::integrators::RayCounts;
+use crate::media::tracking::{medium_after, transmittance_along, MAX_CROSSINGS};
+use crate::scene::Scene;
+use ircache_math::{offset_ray_origin, ray::SHADOW_EPSILON, Ray, Rgb, Rng, Vec2, Vec3};
+use std::cell::RefCell;
+
+/// A ray traced up to its first opaque hit.
+#[derive(Clone, Debug)]
+struct Traced {
+    o: DVec3,
+    w: DVec3,
+    s: f64,
+    radiance: [f64; 3],
+    /// Crossings of null boundaries: distance, geometric normal.
+    crossings: Vec<(f64, DVec3)>,
+    /// The medium after each crossing (`media[0]` before the first).
+    media: Vec<Option<usize>>,
+}
+
+/// A scene seen by a gather from one receiver.
+pub struct SceneMedium<'a> {
+    scene: &'a Scene,
+    /// The medium on the side of the receiver's hemisphere.
+    medium: Option<usize>,
+    /// Emitters seen by gather rays count (validation against closed forms).
+    include_emitters: bool,
+    /// Light samples per surface hit and per medium point.
+    light_samples: u32,
+    last: RefCell<Option<Traced>>,
+    rays: RefCell<RayCounts>,
+}
+
+/// The medium containing `p`: a ray along `dir` to the first surface that bounds a medium tells
+/// by its facing; where none is met, the camera's medium (the one around the scene).
+#[must_use]
+pub fn medium_at(scene: &Scene, p: Vec3, dir: Vec3) -> Option<usize> {
+    let mut ray = Ray::new(p, dir);
+    for _ in 0..MAX_CROSSINGS {
+        let Some(hit) = scene.accel.intersect(&ray) else {
+            return scene.camera_medium;
+        };
+        let shape = &scene.shapes[hit.geom_id as usize];
+        if shape.media.is_transition() {
+            // Leaving through the front (along the normal): inside, the interior.
+            return if dir.dot(hit.ng) > 0.0 {
+                shape.media.interior
+            } else {
+                shape.media.exterior
+            };
+        }
+        let q = ray.at(hit.t);
+        ray = Ray::new(
+            offset_ray_origin(q, hit.ng.normalize_or(dir), dir, scene.scale),
+            dir,
+        );
+    }
+    scene.camera_medium
+}
+
+impl<'a> SceneMedium<'a> {
+    /// A view of `scene` from a receiver in `medium`.
+    #[must_use]
+    pub fn new(
+        scene: &'a Scene,
+        medium: Option<usize>,
+        include_emitters: bool,
+        light_samples: u32,
+    ) -> Self {
+        SceneMedium {
+            scene,
+            medium,
+            include_emitters,
+            light_samples: light_samples.max(1),
+            last: RefCell::new(None),
+            rays: RefCell::new(RayCounts::default()),
+        }
+    }
+
+    /// Rays traced so far.
+    #[must_use]
+    pub fn rays(&self) -> RayCounts {
+        *self.rays.borrow()
+    }
+
+    /// The `i`-th of the fixed light samples (light choice, position).
+    fn light_sample(&self, i: u32) -> (f32, Vec2) {
+        let n = self.light_samples;
+        let side = (n as f32).sqrt().ceil() as u32;
+        let (a, b) = (i % side, i / side);
+        let u = Vec2::new(
+            (a as f32 + 0.5) / side as f32,
+            (b as f32 + 0.5) / side.max(1) as f32,
+        );
+        ((i as f32 + 0.5) / n as f32, u)
+    }
+
+    /// Light arriving at `p` (in `medium`) along each fixed light sample, with transmittance:
+    /// `f(direction towards the light)` weighs each; the mean over the samples.
+    fn direct(
+        &self,
+        p: Vec3,
+        offset_normal: Option<Vec3>,
+        medium: Option<usize>,
+        f: impl Fn(Vec3) -> Rgb,
+    ) -> Rgb {
+        let lights = &self.scene.lights;
+        if lights.is_empty() {
+            return Rgb::ZERO;
+        }
+        let mut sum = Rgb::ZERO;
+        let mut rays = self.rays.borrow_mut();
+        for i in 0..self.light_samples {
+            let (u_sel, u) = self.light_sample(i);
+            let Some(ls) = lights.sample(p, u_sel, u) else {
+                continue;
+            };
+            if ls.pdf <= 0.0 {
+                continue;
+            }
+            let weight = f(ls.wi);
+            if weight.is_black() {
+                continue;
+            }
+            let o = offset_normal.map_or(p, |n| offset_ray_origin(p, n, ls.wi, self.scene.scale));
+            let t_max = if ls.distance.is_finite() {
+                (p + ls.wi * ls.distance - o).length() * (1.0 - SHADOW_EPSILON)
+            } else {
+                f32::INFINITY
+            };
+            let ray = Ray {
+                o,
+                d: ls.wi,
+                t_min: 0.0,
+                t_max,
+            };
+            let mut rng = Rng::new(0x006d_6564_6961, u64::from(i));
+            let tr = transmittance_along(self.scene, ray, medium, &mut rng, &mut rays);
+            sum += weight * tr * ls.radiance / ls.pdf;
+        }
+        sum / self.light_samples as f32
+    }
+
+    /// Traces (or recalls) the ray from `o` along `w`.
+    fn traced(&self, o: DVec3, w: DVec3) -> Traced {
+        if let Some(t) = self.last.borrow().as_ref().filter(|t| t.o == o && t.w == w) {
+            return t.clone();
+        }
+        let scene = self.scene;
+        let d = w.as_vec3();
+        let mut ray = Ray::new(o.as_vec3(), d);
+        let mut medium = self.medium;
+        let mut crossings = Vec::new();
+        let mut media = vec![medium];
+        let mut travelled = 0.0f64;
+        let mut result = (f64::INFINITY, [0.0; 3]);
+        for _ in 0..MAX_CROSSINGS {
+            self.rays.borrow_mut().gather += 1;
+            let Some(hit) = scene.accel.intersect(&ray) else {
+                if scene.lights.has_environment() && self.include_emitters {
+                    let l = scene.lights.environment_radiance(d);
+                    result.1 = [l.r, l.g, l.b].map(f64::from);
+                }
+                break;
+            };
+            let it = scene.interaction(&ray, &hit);
+            let t = travelled + f64::from(hit.t);
+            let shape = &scene.shapes[it.shape as usize];
+            if shape.null {
+                medium = medium_after(shape.media, it.ng, d, medium);
+                crossings.push((t, it.ng.as_dvec3()));
+                media.push(medium);
+                let next = offset_ray_origin(it.p, it.ng, d, scene.scale);
+                travelled = (next.as_dvec3() - o).dot(w);
+                ray = Ray::new(next, d);
+                continue;
+            }
+            // The opaque hit: its emission (when counted) and direct light reflected towards o.
+            let wo = -d;
+            let mut l = Rgb::ZERO;
+            if self.include_emitters {
+                if let Some(light) = shape.area_light {
+                    l += scene.lights.area_radiance(light, it.frame.n, wo);
+                }
+            }
+            let bsdf = scene.materials[shape.material].at(it.uv);
+            if bsdf.has_smooth() {
+                let wo_local = it.frame.to_local(wo);
+                let side = medium_after(shape.media, it.ng, wo, medium);
+                l += self.direct(it.p, Some(it.ng), side, |wi| {
+                    bsdf.eval(wo_local, it.frame.to_local(wi))
+                });
+            }
+            result = (t, [l.r, l.g, l.b].map(f64::from));
+            break;
+        }
+        let traced = Traced {
+            o,
+            w,
+            s: result.0,
+            radiance: result.1,
+            crossings,
+            media,
+        };
+        *self.last.borrow_mut() = Some(traced.clone());
+        traced
+    }
+
+    /// The medium at distance `t` along the ray.
+    fn medium_along(&self, o: DVec3, w: DVec3, t: f64) -> Option<usize> {
+        let traced = self.traced(o, w);
+        let i = traced.crossings.iter().take_while(|c| c.0 <= t).count();
+        traced.media[i]
+    }
+
+    /// σ_t, σ_s, L_e at `p` in `medium`.
+    fn coefficients(&self, medium: Option<usize>, p: DVec3) -> Option<crate::media::Coefficients> {
+        let m = &self.scene.media[medium?];
+        let p = p.as_vec3();
+        if let Some((lo, hi)) = m.bounds {
+            if !(p.cmpge(lo).all() && p.cmple(hi).all()) {
+                return None;
+            }
+        }
+        Some(m.at(p))
+    }
+
+    /// The source q at `p` towards direction `-w` (the receiver) in `medium`.
+    fn q(&self, medium: Option<usize>, p: DVec3, w: DVec3) -> [f64; 3] {
+        let Some(c) = self.coefficients(medium, p) else {
+            return [0.0; 3];
+        };
+        let mut q = c.sigma_a() * c.emission;
+        if !c.sigma_s.is_black() {
+            let m = &self.scene.media[medium.unwrap_or(0)];
+            let towards = (-w).as_vec3();
+            let phase = m.phase;
+            let li = self.direct(p.as_vec3(), None, medium, |wi| {
+                Rgb::splat(phase.eval(-wi, towards))
+            });
+            q += c.sigma_s * li;
+        }
+        [q.r, q.g, q.b].map(f64::from)
+    }
+
+    /// Central differences of `f` at `p` along the world axes, step `h`.
+    fn central(h: f64, p: DVec3, f: impl Fn(DVec3) -> [f64; 3]) -> [DVec3; 3] {
+        let mut g = [DVec3::ZERO; 3];
+        for (axis, e) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().enumerate() {
+            let (a, b) = (f(p + e * h), f(p - e * h));
+            for c in 0..3 {
+                g[c][axis] = (a[c] - b[c]) / (2.0 * h);
+            }
+        }
+        g
+    }
+
+    /// A difference step at `p`: a small fraction of the mean free path, or of the distance.
+    fn step(&self, medium: Option<usize>, p: DVec3, t: f64) -> f64 {
+        let sigma = self
+            .coefficients(medium, p)
+            .map_or(0.0, |c| f64::from(c.sigma_t.max_channel()));
+        let scale = if sigma > 0.0 {
+            1.0 / sigma
+        } else {
+            t.max(1e-3)
+        };
+        1e-3 * scale.min(t.max(f64::MIN_POSITIVE) + scale)
+    }
+}
+
+impl GatherMedium for SceneMedium<'_> {
+    fn surface(&self, o: DVec3, w: DVec3) -> (f64, [f64; 3]) {
+        let t = self.traced(o, w);
+        (t.s, t.radiance)
+    }
+
+    fn boundaries(&self, o: DVec3, w: DVec3, t_max: f64) -> Vec<(f64, DVec3)> {
+        let traced = self.traced(o, w);
+        let mut out: Vec<(f64, DVec3)> = traced
+            .crossings
+            .iter()
+            .copied()
+            .filter(|c| c.0 < t_max)
+            .collect();
+        // A heterogeneous medium also ends at its box.
+        for (i, m) in traced.media.iter().enumerate() {
+            let Some(m) = m.map(|m| &self.scene.media[m]) else {
+                continue;
+            };
+            let Some((lo, hi)) = m.bounds else {
+                continue;
+            };
+            let t0 = if i == 0 {
+                0.0
+            } else {
+                traced.crossings[i - 1].0
+            };
+            let t1 = traced.crossings.get(i).map_or(traced.s, |c| c.0).min(t_max);
+            let Some((a, b)) = m.clip(
+                o.as_vec3() + w.as_vec3() * t0 as f32,
+                w.as_vec3(),
+                (t1 - t0) as f32,
+            ) else {
+                continue;
+            };
+            for (t, inside) in [(f64::from(a), true), (f64::from(b), false)] {
+                let t = t0 + t;
+                let on_face = |p: DVec3| {
+                    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+                    let d = [(p - lo).abs(), (p - hi).abs()];
+                    let axis = (0..3)
+                        .min_by(|&x, &y| d[0][x].min(d[1][x]).total_cmp(&d[0][y].min(d[1][y])))
+                        .unwrap_or(0);
+                    let mut n = DVec3::ZERO;
+                    n[axis] = 1.0;
+                    n
+                };
+                let is_end = (inside && t <= t0) || (!inside && t >= t1);
+                if !is_end {
+                    out.push((t, on_face(o + w * t)));
+                }
+            }
+        }
+        out.sort_by(|a, b| a.0.total_cmp(&b.0));
+        out
+    }
+
+    fn sigma_t(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3] {
+        let medium = self.medium_along(o, w, t);
+        self.coefficients(medium, o + w * t).map_or([0.0; 3], |c| {
+            [c.sigma_t.r, c.sigma_t.g, c.sigma_t.b].map(f64::from)
+        })
+    }
+
+    fn sigma_t_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3] {
+        let medium = self.medium_along(o, w, t);
+        if medium.is_none_or(|m| self.scene.media[m].homogeneous) {
+            return [DVec3::ZERO; 3];
+        }
+        let p = o + w * t;
+        let h = self.step(medium, p, t);
+        Self::central(h, p, |q| {
+            self.coefficients(medium, q).map_or([0.0; 3], |c| {
+                [c.sigma_t.r, c.sigma_t.g, c.sigma_t.b].map(f64::from)
+            })
+        })
+    }
+
+    fn source(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3] {
+        let medium = self.medium_along(o, w, t);
+        self.q(medium, o + w * t, w)
+    }
+
+    fn source_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3] {
+        let medium = self.medium_along(o, w, t);
+        let p = o + w * t;
+        let h = self.step(medium, p, t);
+        Self::central(h, p, |q| self.q(medium, q, w))
+    }
+}
