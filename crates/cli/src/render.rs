@@ -433,6 +433,19 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
         rays as f64 * 1e-6 / out.seconds.max(1e-9),
         output.display()
     );
+    if let Some(st) = &out.media_cache {
+        eprintln!(
+            "media cache: {} records, {:.1} M gather rays, {:.1} M shadow rays, {:.1} M march steps; pre-pass {:.2} s",
+            st.records,
+            st.gather_rays as f64 * 1e-6,
+            st.shadow_rays as f64 * 1e-6,
+            st.march_steps as f64 * 1e-6,
+            st.seconds
+        );
+        if st.metric_replaced {
+            eprintln!("note: in media the records use Ward's split-sphere metric (the chosen error metric does not see media)");
+        }
+    }
     if let Some(c) = &out.cache {
         let st = &c.stats;
         eprintln!(

@@ -181,6 +181,8 @@ pub struct RenderOutput {
     pub seconds: f64,
     /// What the irradiance cache pre-pass did (`ic` integrator only).
     pub cache: Option<CacheReport>,
+    /// What the media cache's pre-pass did (`ic` in a scene with media).
+    pub media_cache: Option<crate::media_cache::cache::MediaCacheStats>,
 }
 
 /// The irradiance cache after a render.
@@ -338,6 +340,11 @@ pub fn render(
         }
         _ => None,
     };
+    let media_cache = integrator.media_cache().map(|c| c.stats);
+    if let Some(st) = &media_cache {
+        rays.gather += st.gather_rays;
+        rays.shadow += st.shadow_rays;
+    }
     Ok(RenderOutput {
         image,
         rays,
@@ -345,6 +352,7 @@ pub fn render(
         samples,
         seconds: start.elapsed().as_secs_f64(),
         cache,
+        media_cache,
     })
 }
 

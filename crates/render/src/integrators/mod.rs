@@ -76,6 +76,7 @@ impl Integrator {
                 max_depth: desc.max_depth,
                 rr_depth: desc.rr_depth,
                 hide_emitters: desc.hide_emitters,
+                cache: None,
             })),
             "direct" => Ok(Integrator::Direct(direct::DirectIntegrator {
                 emitter_samples: desc.emitter_samples.max(1),
@@ -110,9 +111,11 @@ impl Integrator {
             Integrator::VolPath(_) => {}
             Integrator::Direct(_) => scene.require_no_media("the direct integrator")?,
             Integrator::Path(_) => scene.require_no_media("the path integrator")?,
-            Integrator::Ic(_) => {
-                scene.require_no_media("the irradiance cache (issue 15, not yet)")?
+            Integrator::Ic(ic) if scene.has_media() => {
+                let volpath = media_cache_integrator(scene, ic, settings, pool)?;
+                return Ok((Integrator::VolPath(volpath), None));
             }
+            Integrator::Ic(_) => {}
         }
         match self {
             Integrator::Ic(ic) if ic.cache.is_none() => {
@@ -143,6 +146,15 @@ impl Integrator {
                         .load(std::sync::atomic::Ordering::Relaxed),
                 )
             }),
+            _ => None,
+        }
+    }
+
+    /// The media cache serving the first surfaces (the `ic` integrator in a media scene).
+    #[must_use]
+    pub fn media_cache(&self) -> Option<&crate::media_cache::cache::MediaCache> {
+        match self {
+            Integrator::VolPath(v) => v.cache.as_deref(),
             _ => None,
         }
     }
@@ -187,6 +199,42 @@ impl Integrator {
         let hit = scene.accel.intersect(ray);
         self.li(scene, ray, hit.as_ref(), sampler, rays)
     }
+}
+
+/// The `ic` integrator in a scene with media: `volpath` at `max_depth` 3 with the first
+/// surface's diffuse indirect light from records gathered through the media (002; see
+/// [`crate::media_cache::cache`]). What the media cache does not do yet is refused by name.
+fn media_cache_integrator(
+    scene: &Scene,
+    ic: &ic::IcIntegrator,
+    settings: &crate::render::RenderSettings,
+    pool: &rayon::ThreadPool,
+) -> Result<volpath::VolPathIntegrator, crate::scene::RenderError> {
+    let p = &ic.params;
+    let refuse = |what: &str| {
+        Err(crate::scene::RenderError::Invalid(format!(
+            "in scenes with participating media the irradiance cache serves one indirect bounce \
+             with Ward's records (issue 15, stage 1): {what}"
+        )))
+    };
+    if p.bounces != 1 {
+        return refuse("give max_depth 3 (one bounce), or render deeper light with --integrator volpath");
+    }
+    if p.photons > 0 || p.caustic_photons > 0 || p.radiance_cache || ic.cache_file.is_some() {
+        return refuse("photon maps, radiance caching and cache files are not available there yet");
+    }
+    if ic.pixel_pass != ic::PixelPass::Lookup {
+        return refuse("splatting is not available there yet");
+    }
+    let cache = pool.install(|| {
+        crate::media_cache::cache::MediaCache::build(scene, p, settings.width, settings.height, settings.seed)
+    });
+    Ok(volpath::VolPathIntegrator {
+        max_depth: 3,
+        rr_depth: 5,
+        hide_emitters: ic.hide_emitters,
+        cache: Some(std::sync::Arc::new(cache)),
+    })
 }
 
 /// Power heuristic with β = 2 (Veach 1997), as Mitsuba 3's `mis_weight`.

@@ -26,6 +26,9 @@ pub struct VolPathIntegrator {
     pub rr_depth: u32,
     /// Hide emitters seen directly by the camera.
     pub hide_emitters: bool,
+    /// Records serving the first surface's diffuse indirect light (the `ic` integrator in a
+    /// media scene, `max_depth` 3; see [`crate::media_cache::cache`]).
+    pub cache: Option<std::sync::Arc<crate::media_cache::cache::MediaCache>>,
 }
 
 /// Where a light sample is taken.
@@ -88,9 +91,7 @@ impl VolPathIntegrator {
                         if depth + 1 < max_depth && sample_emitters {
                             let vertex = Vertex::Medium(p, ray.d, med.phase);
                             l += beta
-                                * sample_light(
-                                    scene, &vertex, medium, depth, sampler, &mut rng, rays,
-                                );
+                                * sample_light(scene, &vertex, medium, depth, true, sampler, &mut rng, rays);
                         }
                         sampler.set_dimension(dims::vertex(depth, dims::BSDF));
                         sampler.skip_1d();
@@ -145,9 +146,22 @@ impl VolPathIntegrator {
             }
             let bsdf = scene.materials[shape.material].at(it.uv);
             let wo_local = it.frame.to_local(wo);
+            // The first surface's diffuse indirect light from the media cache, where it serves:
+            // the light samples then stand alone and the path ends.
+            if let Some(cache) = self.cache.as_ref().filter(|_| depth == 0 && bsdf.is_diffuse_only()) {
+                let flip = if it.base_n.dot(wo) < 0.0 { -1.0 } else { 1.0 };
+                if let Some(e) = cache.irradiance(it.p, it.base_n * flip, it.frame.n * flip) {
+                    let vertex = Vertex::Surface(&it, &bsdf, wo_local);
+                    l += beta
+                        * sample_light(scene, &vertex, medium, depth, false, sampler, &mut rng, rays);
+                    l += beta * bsdf.lambertian_albedo(wo_local) * e * ircache_math::INV_PI;
+                    break;
+                }
+            }
             if bsdf.has_smooth() && !scene.lights.is_empty() {
                 let vertex = Vertex::Surface(&it, &bsdf, wo_local);
-                l += beta * sample_light(scene, &vertex, medium, depth, sampler, &mut rng, rays);
+                l += beta
+                    * sample_light(scene, &vertex, medium, depth, true, sampler, &mut rng, rays);
             }
             sampler.set_dimension(dims::vertex(depth, dims::BSDF));
             let u_lobe = sampler.next_1d();
@@ -204,12 +218,14 @@ impl VolPathIntegrator {
 
 /// One light sample at `vertex` (in `medium`, on the side the light lies for a surface), with
 /// transmittance through media and `null` boundaries, weighted against the vertex's phase or
-/// BSDF sample by the power heuristic.
+/// BSDF sample by the power heuristic (`mis`), or alone where no such sample follows.
+#[allow(clippy::too_many_arguments)]
 fn sample_light(
     scene: &Scene,
     vertex: &Vertex,
     medium: Option<usize>,
     depth: u32,
+    mis: bool,
     sampler: &mut dyn Sampler,
     rng: &mut Rng,
     rays: &mut RayCounts,
@@ -263,7 +279,7 @@ fn sample_light(
     if tr.is_black() {
         return Rgb::ZERO;
     }
-    let w = if ls.is_delta {
+    let w = if ls.is_delta || !mis {
         1.0
     } else {
         mis_weight(ls.pdf, pdf)

@@ -164,6 +164,8 @@ pub struct IcParams {
     pub photon_radius: f32,
     /// Records made from photons before the pre-pass (`--photon-records`, 001 ch. 6).
     pub photon_records: bool,
+    /// The translational gradient of records in participating media (002, NOTES-002 §2.7).
+    pub media_gradient: crate::media_cache::gradient::MediaGradient,
 }
 
 impl Default for IcParams {
@@ -199,6 +201,7 @@ impl Default for IcParams {
             photon_lookup: 100,
             photon_radius: 0.05,
             photon_records: false,
+            media_gradient: crate::media_cache::gradient::MediaGradient::Corrected,
         }
     }
 }
@@ -656,6 +659,29 @@ pub const PARAMS: &[ParamSpec] = &[
             Ok(())
         },
     },
+    ParamSpec {
+        name: "media_gradient",
+        aliases: &[],
+        value: "corrected|paper|jdzj08|none",
+        help: "in scenes with participating media, the records' translational gradient (002): \
+               corrected (NOTES-002 §2.7's consistent form: absorption, visibility of the \
+               medium's light, the radial and interface terms), paper (002's Algorithm 1 read \
+               literally), jdzj08 (absorption terms only), none (Ward–Heckbert's walls, \
+               media-blind)",
+        shapes_records: false,
+        get: |p| name_of(p.media_gradient, MEDIA_GRADIENTS),
+        set: |p, v| {
+            p.media_gradient = choice(v, MEDIA_GRADIENTS)?;
+            Ok(())
+        },
+    },
+];
+
+const MEDIA_GRADIENTS: &[(&str, crate::media_cache::gradient::MediaGradient)] = &[
+    ("corrected", crate::media_cache::gradient::MediaGradient::Corrected),
+    ("paper", crate::media_cache::gradient::MediaGradient::Paper),
+    ("jdzj08", crate::media_cache::gradient::MediaGradient::Jdzj08),
+    ("none", crate::media_cache::gradient::MediaGradient::None),
 ];
 
 /// The entry named `name` (its name, with dashes or underscores, or an alias).

@@ -10,3 +10,4 @@
 
 pub mod gradient;
 pub mod scene_medium;
+pub mod cache;

@@ -3,9 +3,11 @@
 //! tracked across them, surfaces are lit by direct light with transmittance, and the medium's
 //! source is single scattering from the lights plus emission (stage 1, §2.8).
 //!
-//! Everything is deterministic for a given ray: light samples use a fixed stratified set, and
-//! transmittance a fixed stream, so that central differences with common random numbers (§3.3)
-//! compare like with like.
+//! Everything is deterministic for a given ray: light samples are a stratified set rotated by a
+//! hash of the gather direction (so they differ between cells, and an area light is sampled all
+//! over, but not between two receivers gathering along the same direction), and transmittance
+//! uses a fixed stream, so that central differences with common random numbers (§3.3) compare
+//! like with like.
 
 use super::gradient::{DVec3, GatherMedium};
 use crate::integrators::RayCounts;
@@ -36,6 +38,9 @@ pub struct SceneMedium<'a> {
     include_emitters: bool,
     /// Light samples per surface hit and per medium point.
     light_samples: u32,
+    /// The receiver's tangents, when only the tangential gradients are wanted (the estimator
+    /// projects onto them): differences along two axes instead of three.
+    tangents: Option<[DVec3; 2]>,
     last: RefCell<Option<Traced>>,
     rays: RefCell<RayCounts>,
 }
@@ -81,9 +86,18 @@ impl<'a> SceneMedium<'a> {
             medium,
             include_emitters,
             light_samples: light_samples.max(1),
+            tangents: None,
             last: RefCell::new(None),
             rays: RefCell::new(RayCounts::default()),
         }
+    }
+
+    /// Differentiates along the receiver's tangents `[s, t]` only (the gradients' normal
+    /// components are then zero; the estimator drops them anyway).
+    #[must_use]
+    pub fn with_tangents(mut self, tangents: [DVec3; 2]) -> Self {
+        self.tangents = Some(tangents);
+        self
     }
 
     /// Rays traced so far.
@@ -92,23 +106,29 @@ impl<'a> SceneMedium<'a> {
         *self.rays.borrow()
     }
 
-    /// The `i`-th of the fixed light samples (light choice, position).
-    fn light_sample(&self, i: u32) -> (f32, Vec2) {
+    /// The `i`-th light sample (light choice, position) for gather direction `w`: a stratified
+    /// set shifted by a hash of `w` (Cranley–Patterson rotation).
+    fn light_sample(&self, w: DVec3, i: u32) -> (f32, Vec2) {
         let n = self.light_samples;
         let side = (n as f32).sqrt().ceil() as u32;
         let (a, b) = (i % side, i / side);
+        let mut rng = Rng::keyed(0x6c69_6768_7473, &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits()]);
+        let shift = rng.next_2d();
+        let select = rng.next_f32();
+        let wrap = |x: f32| if x >= 1.0 { x - 1.0 } else { x };
         let u = Vec2::new(
-            (a as f32 + 0.5) / side as f32,
-            (b as f32 + 0.5) / side.max(1) as f32,
+            wrap((a as f32 + shift.x) / side as f32),
+            wrap((b as f32 + shift.y) / side as f32),
         );
-        ((i as f32 + 0.5) / n as f32, u)
+        (wrap((i as f32 + select) / n as f32), u)
     }
 
-    /// Light arriving at `p` (in `medium`) along each fixed light sample, with transmittance:
-    /// `f(direction towards the light)` weighs each; the mean over the samples.
+    /// Light arriving at `p` (in `medium`) along the light samples of gather direction `w`, with
+    /// transmittance: `f(direction towards the light)` weighs each; the mean over the samples.
     fn direct(
         &self,
         p: Vec3,
+        w: DVec3,
         offset_normal: Option<Vec3>,
         medium: Option<usize>,
         f: impl Fn(Vec3) -> Rgb,
@@ -120,7 +140,7 @@ impl<'a> SceneMedium<'a> {
         let mut sum = Rgb::ZERO;
         let mut rays = self.rays.borrow_mut();
         for i in 0..self.light_samples {
-            let (u_sel, u) = self.light_sample(i);
+            let (u_sel, u) = self.light_sample(w, i);
             let Some(ls) = lights.sample(p, u_sel, u) else {
                 continue;
             };
@@ -151,10 +171,17 @@ impl<'a> SceneMedium<'a> {
     }
 
     /// Traces (or recalls) the ray from `o` along `w`.
-    fn traced(&self, o: DVec3, w: DVec3) -> Traced {
-        if let Some(t) = self.last.borrow().as_ref().filter(|t| t.o == o && t.w == w) {
-            return t.clone();
+    fn traced(&self, o: DVec3, w: DVec3) -> std::cell::Ref<'_, Traced> {
+        let known = self.last.borrow().as_ref().is_some_and(|t| t.o == o && t.w == w);
+        if !known {
+            let t = self.trace(o, w);
+            *self.last.borrow_mut() = Some(t);
         }
+        std::cell::Ref::map(self.last.borrow(), |t| t.as_ref().expect("just traced"))
+    }
+
+    /// Traces the ray from `o` along `w` to its first opaque hit.
+    fn trace(&self, o: DVec3, w: DVec3) -> Traced {
         let scene = self.scene;
         let d = w.as_vec3();
         let mut ray = Ray::new(o.as_vec3(), d);
@@ -196,23 +223,21 @@ impl<'a> SceneMedium<'a> {
             if bsdf.has_smooth() {
                 let wo_local = it.frame.to_local(wo);
                 let side = medium_after(shape.media, it.ng, wo, medium);
-                l += self.direct(it.p, Some(it.ng), side, |wi| {
+                l += self.direct(it.p, w, Some(it.ng), side, |wi| {
                     bsdf.eval(wo_local, it.frame.to_local(wi))
                 });
             }
             result = (t, [l.r, l.g, l.b].map(f64::from));
             break;
         }
-        let traced = Traced {
+        Traced {
             o,
             w,
             s: result.0,
             radiance: result.1,
             crossings,
             media,
-        };
-        *self.last.borrow_mut() = Some(traced.clone());
-        traced
+        }
     }
 
     /// The medium at distance `t` along the ray.
@@ -244,7 +269,7 @@ impl<'a> SceneMedium<'a> {
             let m = &self.scene.media[medium.unwrap_or(0)];
             let towards = (-w).as_vec3();
             let phase = m.phase;
-            let li = self.direct(p.as_vec3(), None, medium, |wi| {
+            let li = self.direct(p.as_vec3(), w, None, medium, |wi| {
                 Rgb::splat(phase.eval(-wi, towards))
             });
             q += c.sigma_s * li;
@@ -252,13 +277,19 @@ impl<'a> SceneMedium<'a> {
         [q.r, q.g, q.b].map(f64::from)
     }
 
-    /// Central differences of `f` at `p` along the world axes, step `h`.
-    fn central(h: f64, p: DVec3, f: impl Fn(DVec3) -> [f64; 3]) -> [DVec3; 3] {
+    /// Central differences of `f` at `p` with step `h`, along the world axes or the
+    /// receiver's tangents.
+    fn central(&self, h: f64, p: DVec3, f: impl Fn(DVec3) -> [f64; 3]) -> [DVec3; 3] {
+        let world = [DVec3::X, DVec3::Y, DVec3::Z];
+        let axes: &[DVec3] = match &self.tangents {
+            Some(t) => t,
+            None => &world,
+        };
         let mut g = [DVec3::ZERO; 3];
-        for (axis, e) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().enumerate() {
+        for &e in axes {
             let (a, b) = (f(p + e * h), f(p - e * h));
             for c in 0..3 {
-                g[c][axis] = (a[c] - b[c]) / (2.0 * h);
+                g[c] += e * ((a[c] - b[c]) / (2.0 * h));
             }
         }
         g
@@ -349,7 +380,7 @@ impl GatherMedium for SceneMedium<'_> {
         }
         let p = o + w * t;
         let h = self.step(medium, p, t);
-        Self::central(h, p, |q| {
+        self.central(h, p, |q| {
             self.coefficients(medium, q).map_or([0.0; 3], |c| {
                 [c.sigma_t.r, c.sigma_t.g, c.sigma_t.b].map(f64::from)
             })
@@ -365,6 +396,6 @@ impl GatherMedium for SceneMedium<'_> {
         let medium = self.medium_along(o, w, t);
         let p = o + w * t;
         let h = self.step(medium, p, t);
-        Self::central(h, p, |q| self.q(medium, q, w))
+        self.central(h, p, |q| self.q(medium, q, w))
     }
 }

@@ -1,0 +1,262 @@
+//! The irradiance cache in participating media, stage 1 (NOTES-002 §2.8): records on surfaces,
+//! placed and interpolated as Ward's (002 §7: "the resulting cache point locations are kept
+//! exactly the same"), each gathered through the media with [`super::gradient`] and carrying E =
+//! E_s + E_m, the 002 translational gradient of the chosen form and the rotational gradient of
+//! the total cell radiance. A record's gather sees one bounce: surfaces lit by direct light with
+//! transmittance, the media's single scattering of the lights and their emission. The `ic`
+//! integrator in a media scene is therefore `volpath` at `max_depth` 3 whose first surface
+//! vertex takes its diffuse indirect light from here.
+//!
+//! Records use Ward's split-sphere metric whatever `--error-metric` says (NOTES-002 §2.8: the
+//! Hessian metric reprojects hit points without transmittance, blind to the media; Tabellion's
+//! needs pixel footprints through media); [`MediaCache::note`] says so.
+//!
+//! Records are made in a pre-pass over the image's pixel centres, one row at a time: the row's
+//! uncovered first hits are gathered in parallel and inserted in row order, so the cache is the
+//! same at any thread count.
+
+use super::gradient::{gather, March, MediaGradient};
+use super::scene_medium::SceneMedium;
+use crate::integrators::RayCounts;
+use crate::irradiance_cache::hemisphere::{to_world, Stratification};
+use crate::irradiance_cache::record::{ErrorMetric, GradientMode, Record, NO_RADIANCE};
+use crate::irradiance_cache::store::RecordStore;
+use crate::irradiance_cache::IcParams;
+use crate::media::tracking::{medium_after, MAX_CROSSINGS};
+use crate::scene::Scene;
+use ircache_math::{offset_ray_origin, Frame, Rgb, Rng, Vec3};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// What building the cache did.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MediaCacheStats {
+    /// Records made.
+    pub records: usize,
+    /// Gather rays (to the first opaque hit, through null boundaries).
+    pub gather_rays: u64,
+    /// Shadow rays of the gathers (surface hits' direct light, single scattering).
+    pub shadow_rays: u64,
+    /// March steps in all gathers.
+    pub march_steps: u64,
+    /// Seconds of the pre-pass.
+    pub seconds: f64,
+    /// Ward's metric was used in place of the one asked for ([`MediaCache::note`]).
+    pub metric_replaced: bool,
+}
+
+/// Records in media scenes.
+#[derive(Debug)]
+pub struct MediaCache {
+    store: RecordStore<Record>,
+    /// The translational gradient used.
+    pub gradient: MediaGradient,
+    /// Interpolation mode.
+    mode: GradientMode,
+    /// What building it did.
+    pub stats: MediaCacheStats,
+}
+
+/// Where a record is wanted: a surface point, the normal of the side it serves, the medium on
+/// that side.
+#[derive(Clone, Copy, Debug)]
+pub struct RecordSite {
+    /// Position.
+    pub p: Vec3,
+    /// Geometric normal (for the ray offset).
+    pub ng: Vec3,
+    /// Shading normal on the served side.
+    pub n: Vec3,
+    /// The medium on that side.
+    pub medium: Option<usize>,
+}
+
+/// Light samples per surface hit and per march step of a gather.
+const GATHER_LIGHT_SAMPLES: u32 = 1;
+
+/// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced.
+#[must_use]
+pub fn make_record(scene: &Scene, params: &IcParams, site: &RecordSite, key: u64) -> (Record, MediaCacheStats) {
+    let strata = Stratification::from_divisions(params.divisions);
+    let frame = Frame::from_z(site.n);
+    let origin = offset_ray_origin(site.p, site.ng, site.n, scene.scale);
+    let view = SceneMedium::new(scene, site.medium, false, GATHER_LIGHT_SAMPLES)
+        .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()]);
+    let d = |v: Vec3| v.as_dvec3();
+    let n = strata.azimuthal;
+    let g = gather(
+        &view,
+        d(origin),
+        [d(frame.s), d(frame.t), d(frame.n)],
+        strata,
+        // Ward–Heckbert's walls need no per-cell gradients.
+        &March {
+            gradients: params.media_gradient != MediaGradient::None,
+            ..March::default()
+        },
+        |j, k| Rng::keyed(key, &[(j * n + k) as u64]).next_2d(),
+    );
+    let (es, em) = g.irradiance();
+    let e = Rgb::new((es[0] + em[0]) as f32, (es[1] + em[1]) as f32, (es[2] + em[2]) as f32);
+    let samples = g.hemisphere_samples();
+    let mut grad_t = to_world(&g.gradient_parts().total(params.media_gradient), frame.s, frame.t);
+    let grad_r = to_world(&samples.rotational_gradient(), frame.s, frame.t);
+    let (r_min, r_max) = params.radius_limits(2.0 * scene.radius);
+    let mut r = samples.harmonic_mean_distance().min(r_max);
+    // Gradient limit (003 item 4), as the irradiance cache's records.
+    let mut limit = f32::INFINITY;
+    for c in 0..3 {
+        let len = grad_t[c].length();
+        if len > 0.0 && e[c] > 0.0 {
+            limit = limit.min(e[c] / len);
+        } else if len > 0.0 {
+            grad_t[c] = Vec3::ZERO;
+        }
+    }
+    r = r.min(limit);
+    if r < r_min {
+        r = r_min;
+        if limit < r {
+            let f = limit / r;
+            grad_t = grad_t.map(|v| v * f);
+        }
+    }
+    let rays: RayCounts = view.rays();
+    let stats = MediaCacheStats {
+        records: 1,
+        gather_rays: rays.gather,
+        shadow_rays: rays.shadow,
+        march_steps: g.march_steps as u64,
+        ..MediaCacheStats::default()
+    };
+    let record = Record {
+        p: site.p,
+        n: site.n,
+        e,
+        r,
+        grad_t,
+        grad_r,
+        level: 0,
+        ray_variance: 0.0,
+        radiance: NO_RADIANCE,
+    };
+    (record, stats)
+}
+
+/// The first opaque surface a camera ray finds (through null boundaries), as a record site, if
+/// its BSDF is purely diffuse (the only surfaces the cache serves in media).
+#[must_use]
+pub fn first_site(scene: &Scene, ray: ircache_math::Ray) -> Option<RecordSite> {
+    let mut ray = ray;
+    let mut medium = scene.camera_medium;
+    for _ in 0..MAX_CROSSINGS {
+        let hit = scene.accel.intersect(&ray)?;
+        let it = scene.interaction(&ray, &hit);
+        let shape = &scene.shapes[it.shape as usize];
+        if shape.null {
+            medium = medium_after(shape.media, it.ng, ray.d, medium);
+            ray = scene.spawn_ray(&it, ray.d);
+            continue;
+        }
+        let bsdf = scene.materials[shape.material].at(it.uv);
+        if !bsdf.is_diffuse_only() {
+            return None;
+        }
+        let wo = -ray.d;
+        let n = if it.base_n.dot(wo) < 0.0 { -it.base_n } else { it.base_n };
+        return Some(RecordSite {
+            p: it.p,
+            ng: it.ng,
+            n,
+            medium: medium_after(shape.media, it.ng, n, medium),
+        });
+    }
+    None
+}
+
+impl MediaCache {
+    /// An empty cache.
+    #[must_use]
+    pub fn new(scene: &Scene, params: &IcParams) -> MediaCache {
+        let (r_min, _) = params.radius_limits(2.0 * scene.radius);
+        let min_validity = (params.accuracy * r_min).max(scene.radius * 1e-4);
+        MediaCache {
+            store: RecordStore::new(min_validity, params.accuracy, ErrorMetric::Ward, params.neighbour_clamp),
+            gradient: params.media_gradient,
+            mode: params.gradients,
+            stats: MediaCacheStats::default(),
+        }
+    }
+
+    /// Fills the cache from the first hits of camera rays through the centres of a
+    /// `width` × `height` image (run inside a rayon pool).
+    #[must_use]
+    pub fn build(scene: &Scene, params: &IcParams, width: usize, height: usize, seed: u64) -> MediaCache {
+        let start = Instant::now();
+        let mut cache = MediaCache::new(scene, params);
+        for y in 0..height {
+            // The row's sites that no record covers yet, thinned against each other by the
+            // smallest record spacing.
+            let mut wanted: Vec<(usize, RecordSite)> = Vec::new();
+            for x in 0..width {
+                let film = ircache_math::Vec2::new((x as f32 + 0.5) / width as f32, (y as f32 + 0.5) / height as f32);
+                let Some(site) = first_site(scene, scene.camera.generate_ray(film)) else {
+                    continue;
+                };
+                if cache.store.covers(site.p, site.n) {
+                    continue;
+                }
+                let spacing = params.radius_limits(2.0 * scene.radius).0.max(scene.radius * 1e-3) * params.accuracy;
+                if wanted.iter().any(|(_, w)| (w.p - site.p).length() < spacing && w.n.dot(site.n) > 0.9) {
+                    continue;
+                }
+                wanted.push((y * width + x, site));
+            }
+            let made: Vec<(Record, MediaCacheStats)> = wanted
+                .par_iter()
+                .map(|(pixel, site)| make_record(scene, params, site, ircache_math::rng::mix64(seed ^ (*pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))))
+                .collect();
+            for (record, st) in made {
+                // A record an earlier one of this row already covers is dropped (the row was
+                // chosen before any of its records existed).
+                if cache.store.covers(record.p, record.n) {
+                    continue;
+                }
+                cache.store.insert(record);
+                cache.stats.records += 1;
+                cache.stats.gather_rays += st.gather_rays;
+                cache.stats.shadow_rays += st.shadow_rays;
+                cache.stats.march_steps += st.march_steps;
+            }
+        }
+        cache.stats.seconds = start.elapsed().as_secs_f64();
+        cache.stats.metric_replaced = params.error_metric != ErrorMetric::Ward;
+        cache
+    }
+
+    /// Interpolated irradiance at `p` with normal `n` (bump-mapped `n_rot`), relaxing the
+    /// accuracy up to twice where no record reaches at once; `None` where none does.
+    #[must_use]
+    pub fn irradiance(&self, p: Vec3, n: Vec3, n_rot: Vec3) -> Option<Rgb> {
+        [1.0, 2.0]
+            .into_iter()
+            .find_map(|threshold| self.store.interpolate(p, n, n_rot, threshold, self.mode))
+            .map(|i| i.e)
+    }
+
+    /// What a user should hear of: the metric used when another was asked for.
+    #[must_use]
+    pub fn note(params: &IcParams) -> Option<String> {
+        (params.error_metric != ErrorMetric::Ward).then(|| {
+            "in media the records use Ward's split-sphere metric (the chosen error metric does \
+             not see media)"
+                .to_string()
+        })
+    }
+
+    /// The records.
+    #[must_use]
+    pub fn records(&self) -> &[Record] {
+        self.store.records()
+    }
+}
