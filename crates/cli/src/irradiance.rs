@@ -5,6 +5,11 @@
 //! illuminance 179 · (0.265 R + 0.670 G + 0.065 B) lm/m²); with `--print-gradients`, then the
 //! world-space translational gradient of the indirect part (x y z for R, then G, then B: 9
 //! numbers) and its rotational gradient (9 numbers).
+//!
+//! In scenes with participating media the indirect part is what a media record holds (one
+//! bounce through the media, 002's gradients of `--media-gradient`), or with `--integrator path`
+//! a gather of `--samples` rays with gradients by central differences; the direct part is
+//! attenuated by the media.
 
 use crate::cache_args::CacheArgs;
 use crate::render::{parse_defines, BUILTIN_CORNELL_BOX};
@@ -148,9 +153,26 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
     } else {
         params.direct_samples.max(1)
     };
-    let (results, stats) = pool.install(|| {
-        irradiance_at_points(&scene, &params, &queries, method, direct_samples, args.seed)
-    });
+    let (results, stats) = if scene.has_media() {
+        // Through participating media: each point's own gather with 002's gradients (the
+        // records' computation), or brute force with finite-difference gradients.
+        params.check().map_err(anyhow::Error::msg)?;
+        let results = pool.install(|| {
+            ircache_render::media_cache::points::media_irradiance_at_points(
+                &scene,
+                &params,
+                &queries,
+                method,
+                direct_samples,
+                args.seed,
+            )
+        });
+        (results, None)
+    } else {
+        pool.install(|| {
+            irradiance_at_points(&scene, &params, &queries, method, direct_samples, args.seed)
+        })
+    };
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     for r in &results {
         let e = r.direct + r.indirect;

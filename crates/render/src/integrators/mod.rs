@@ -218,7 +218,9 @@ fn media_cache_integrator(
         )))
     };
     if p.bounces != 1 {
-        return refuse("give max_depth 3 (one bounce), or render deeper light with --integrator volpath");
+        return refuse(
+            "give max_depth 3 (one bounce), or render deeper light with --integrator volpath",
+        );
     }
     if p.photons > 0 || p.caustic_photons > 0 || p.radiance_cache || ic.cache_file.is_some() {
         return refuse("photon maps, radiance caching and cache files are not available there yet");
@@ -227,7 +229,13 @@ fn media_cache_integrator(
         return refuse("splatting is not available there yet");
     }
     let cache = pool.install(|| {
-        crate::media_cache::cache::MediaCache::build(scene, p, settings.width, settings.height, settings.seed)
+        crate::media_cache::cache::MediaCache::build(
+            scene,
+            p,
+            settings.width,
+            settings.height,
+            settings.seed,
+        )
     });
     Ok(volpath::VolPathIntegrator {
         max_depth: 3,

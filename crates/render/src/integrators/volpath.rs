@@ -91,7 +91,9 @@ impl VolPathIntegrator {
                         if depth + 1 < max_depth && sample_emitters {
                             let vertex = Vertex::Medium(p, ray.d, med.phase);
                             l += beta
-                                * sample_light(scene, &vertex, medium, depth, true, sampler, &mut rng, rays);
+                                * sample_light(
+                                    scene, &vertex, medium, depth, true, sampler, &mut rng, rays,
+                                );
                         }
                         sampler.set_dimension(dims::vertex(depth, dims::BSDF));
                         sampler.skip_1d();
@@ -148,12 +150,18 @@ impl VolPathIntegrator {
             let wo_local = it.frame.to_local(wo);
             // The first surface's diffuse indirect light from the media cache, where it serves:
             // the light samples then stand alone and the path ends.
-            if let Some(cache) = self.cache.as_ref().filter(|_| depth == 0 && bsdf.is_diffuse_only()) {
+            if let Some(cache) = self
+                .cache
+                .as_ref()
+                .filter(|_| depth == 0 && bsdf.is_diffuse_only())
+            {
                 let flip = if it.base_n.dot(wo) < 0.0 { -1.0 } else { 1.0 };
                 if let Some(e) = cache.irradiance(it.p, it.base_n * flip, it.frame.n * flip) {
                     let vertex = Vertex::Surface(&it, &bsdf, wo_local);
                     l += beta
-                        * sample_light(scene, &vertex, medium, depth, false, sampler, &mut rng, rays);
+                        * sample_light(
+                            scene, &vertex, medium, depth, false, sampler, &mut rng, rays,
+                        );
                     l += beta * bsdf.lambertian_albedo(wo_local) * e * ircache_math::INV_PI;
                     break;
                 }

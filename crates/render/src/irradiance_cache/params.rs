@@ -678,9 +678,15 @@ pub const PARAMS: &[ParamSpec] = &[
 ];
 
 const MEDIA_GRADIENTS: &[(&str, crate::media_cache::gradient::MediaGradient)] = &[
-    ("corrected", crate::media_cache::gradient::MediaGradient::Corrected),
+    (
+        "corrected",
+        crate::media_cache::gradient::MediaGradient::Corrected,
+    ),
     ("paper", crate::media_cache::gradient::MediaGradient::Paper),
-    ("jdzj08", crate::media_cache::gradient::MediaGradient::Jdzj08),
+    (
+        "jdzj08",
+        crate::media_cache::gradient::MediaGradient::Jdzj08,
+    ),
     ("none", crate::media_cache::gradient::MediaGradient::None),
 ];
 

@@ -76,7 +76,12 @@ const GATHER_LIGHT_SAMPLES: u32 = 1;
 
 /// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced.
 #[must_use]
-pub fn make_record(scene: &Scene, params: &IcParams, site: &RecordSite, key: u64) -> (Record, MediaCacheStats) {
+pub fn make_record(
+    scene: &Scene,
+    params: &IcParams,
+    site: &RecordSite,
+    key: u64,
+) -> (Record, MediaCacheStats) {
     let strata = Stratification::from_divisions(params.divisions);
     let frame = Frame::from_z(site.n);
     let origin = offset_ray_origin(site.p, site.ng, site.n, scene.scale);
@@ -97,9 +102,17 @@ pub fn make_record(scene: &Scene, params: &IcParams, site: &RecordSite, key: u64
         |j, k| Rng::keyed(key, &[(j * n + k) as u64]).next_2d(),
     );
     let (es, em) = g.irradiance();
-    let e = Rgb::new((es[0] + em[0]) as f32, (es[1] + em[1]) as f32, (es[2] + em[2]) as f32);
+    let e = Rgb::new(
+        (es[0] + em[0]) as f32,
+        (es[1] + em[1]) as f32,
+        (es[2] + em[2]) as f32,
+    );
     let samples = g.hemisphere_samples();
-    let mut grad_t = to_world(&g.gradient_parts().total(params.media_gradient), frame.s, frame.t);
+    let mut grad_t = to_world(
+        &g.gradient_parts().total(params.media_gradient),
+        frame.s,
+        frame.t,
+    );
     let grad_r = to_world(&samples.rotational_gradient(), frame.s, frame.t);
     let (r_min, r_max) = params.radius_limits(2.0 * scene.radius);
     let mut r = samples.harmonic_mean_distance().min(r_max);
@@ -163,7 +176,11 @@ pub fn first_site(scene: &Scene, ray: ircache_math::Ray) -> Option<RecordSite> {
             return None;
         }
         let wo = -ray.d;
-        let n = if it.base_n.dot(wo) < 0.0 { -it.base_n } else { it.base_n };
+        let n = if it.base_n.dot(wo) < 0.0 {
+            -it.base_n
+        } else {
+            it.base_n
+        };
         return Some(RecordSite {
             p: it.p,
             ng: it.ng,
@@ -181,7 +198,12 @@ impl MediaCache {
         let (r_min, _) = params.radius_limits(2.0 * scene.radius);
         let min_validity = (params.accuracy * r_min).max(scene.radius * 1e-4);
         MediaCache {
-            store: RecordStore::new(min_validity, params.accuracy, ErrorMetric::Ward, params.neighbour_clamp),
+            store: RecordStore::new(
+                min_validity,
+                params.accuracy,
+                ErrorMetric::Ward,
+                params.neighbour_clamp,
+            ),
             gradient: params.media_gradient,
             mode: params.gradients,
             stats: MediaCacheStats::default(),
@@ -191,7 +213,13 @@ impl MediaCache {
     /// Fills the cache from the first hits of camera rays through the centres of a
     /// `width` × `height` image (run inside a rayon pool).
     #[must_use]
-    pub fn build(scene: &Scene, params: &IcParams, width: usize, height: usize, seed: u64) -> MediaCache {
+    pub fn build(
+        scene: &Scene,
+        params: &IcParams,
+        width: usize,
+        height: usize,
+        seed: u64,
+    ) -> MediaCache {
         let start = Instant::now();
         let mut cache = MediaCache::new(scene, params);
         for y in 0..height {
@@ -199,22 +227,41 @@ impl MediaCache {
             // smallest record spacing.
             let mut wanted: Vec<(usize, RecordSite)> = Vec::new();
             for x in 0..width {
-                let film = ircache_math::Vec2::new((x as f32 + 0.5) / width as f32, (y as f32 + 0.5) / height as f32);
+                let film = ircache_math::Vec2::new(
+                    (x as f32 + 0.5) / width as f32,
+                    (y as f32 + 0.5) / height as f32,
+                );
                 let Some(site) = first_site(scene, scene.camera.generate_ray(film)) else {
                     continue;
                 };
                 if cache.store.covers(site.p, site.n) {
                     continue;
                 }
-                let spacing = params.radius_limits(2.0 * scene.radius).0.max(scene.radius * 1e-3) * params.accuracy;
-                if wanted.iter().any(|(_, w)| (w.p - site.p).length() < spacing && w.n.dot(site.n) > 0.9) {
+                let spacing = params
+                    .radius_limits(2.0 * scene.radius)
+                    .0
+                    .max(scene.radius * 1e-3)
+                    * params.accuracy;
+                if wanted
+                    .iter()
+                    .any(|(_, w)| (w.p - site.p).length() < spacing && w.n.dot(site.n) > 0.9)
+                {
                     continue;
                 }
                 wanted.push((y * width + x, site));
             }
             let made: Vec<(Record, MediaCacheStats)> = wanted
                 .par_iter()
-                .map(|(pixel, site)| make_record(scene, params, site, ircache_math::rng::mix64(seed ^ (*pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))))
+                .map(|(pixel, site)| {
+                    make_record(
+                        scene,
+                        params,
+                        site,
+                        ircache_math::rng::mix64(
+                            seed ^ (*pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                        ),
+                    )
+                })
                 .collect();
             for (record, st) in made {
                 // A record an earlier one of this row already covers is dropped (the row was

@@ -74,7 +74,7 @@ pub struct March {
 impl Default for March {
     fn default() -> Self {
         March {
-            optical_step: 0.25,
+            optical_step: 0.1,
             max_steps: 256,
             cutoff: 1e-6,
             gradients: true,

@@ -8,6 +8,7 @@
 //!   comparison ([`gradient::MediaGradient`]). It sees the scene through a narrow interface
 //!   ([`gradient::GatherMedium`]) so that it is tested against closed forms.
 
-pub mod gradient;
-pub mod scene_medium;
 pub mod cache;
+pub mod gradient;
+pub mod points;
+pub mod scene_medium;

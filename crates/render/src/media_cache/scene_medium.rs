@@ -41,6 +41,8 @@ pub struct SceneMedium<'a> {
     /// The receiver's tangents, when only the tangential gradients are wanted (the estimator
     /// projects onto them): differences along two axes instead of three.
     tangents: Option<[DVec3; 2]>,
+    /// The last source evaluated: point, direction, value (the forward differences' base).
+    last_source: RefCell<Option<(DVec3, DVec3, [f64; 3])>>,
     last: RefCell<Option<Traced>>,
     rays: RefCell<RayCounts>,
 }
@@ -87,13 +89,15 @@ impl<'a> SceneMedium<'a> {
             include_emitters,
             light_samples: light_samples.max(1),
             tangents: None,
+            last_source: RefCell::new(None),
             last: RefCell::new(None),
             rays: RefCell::new(RayCounts::default()),
         }
     }
 
-    /// Differentiates along the receiver's tangents `[s, t]` only (the gradients' normal
-    /// components are then zero; the estimator drops them anyway).
+    /// Differentiates along the receiver's tangents `[s, t]` only, by forward differences from
+    /// the source just evaluated (the gradients' normal components are then zero; the estimator
+    /// drops them anyway): two extra source evaluations per march step instead of six.
     #[must_use]
     pub fn with_tangents(mut self, tangents: [DVec3; 2]) -> Self {
         self.tangents = Some(tangents);
@@ -112,7 +116,10 @@ impl<'a> SceneMedium<'a> {
         let n = self.light_samples;
         let side = (n as f32).sqrt().ceil() as u32;
         let (a, b) = (i % side, i / side);
-        let mut rng = Rng::keyed(0x6c69_6768_7473, &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits()]);
+        let mut rng = Rng::keyed(
+            0x6c69_6768_7473,
+            &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits()],
+        );
         let shift = rng.next_2d();
         let select = rng.next_f32();
         let wrap = |x: f32| if x >= 1.0 { x - 1.0 } else { x };
@@ -172,7 +179,11 @@ impl<'a> SceneMedium<'a> {
 
     /// Traces (or recalls) the ray from `o` along `w`.
     fn traced(&self, o: DVec3, w: DVec3) -> std::cell::Ref<'_, Traced> {
-        let known = self.last.borrow().as_ref().is_some_and(|t| t.o == o && t.w == w);
+        let known = self
+            .last
+            .borrow()
+            .as_ref()
+            .is_some_and(|t| t.o == o && t.w == w);
         if !known {
             let t = self.trace(o, w);
             *self.last.borrow_mut() = Some(t);
@@ -389,13 +400,31 @@ impl GatherMedium for SceneMedium<'_> {
 
     fn source(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3] {
         let medium = self.medium_along(o, w, t);
-        self.q(medium, o + w * t, w)
+        let p = o + w * t;
+        let q = self.q(medium, p, w);
+        *self.last_source.borrow_mut() = Some((p, w, q));
+        q
     }
 
     fn source_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3] {
         let medium = self.medium_along(o, w, t);
         let p = o + w * t;
         let h = self.step(medium, p, t);
-        self.central(h, p, |q| self.q(medium, q, w))
+        let Some(tangents) = self.tangents else {
+            return self.central(h, p, |q| self.q(medium, q, w));
+        };
+        let known = *self.last_source.borrow();
+        let base = match known {
+            Some((lp, lw, q)) if lp == p && lw == w => q,
+            _ => self.q(medium, p, w),
+        };
+        let mut g = [DVec3::ZERO; 3];
+        for e in tangents {
+            let a = self.q(medium, p + e * h, w);
+            for c in 0..3 {
+                g[c] += e * ((a[c] - base[c]) / h);
+            }
+        }
+        g
     }
 }

@@ -1,0 +1,158 @@
+//! Irradiance and its gradients at given points in scenes with media (`ircache irradiance`):
+//! by one record's gather with 002's gradients (the cache's own computation), or by brute force,
+//! a gather of many rays whose translational gradient is taken by central differences with
+//! common random numbers (NOTES-002 §3.3). The direct part is light sampling with transmittance.
+
+use super::cache::{make_record, RecordSite};
+use super::gradient::{gather, March};
+use super::scene_medium::{medium_at, SceneMedium};
+use crate::integrators::RayCounts;
+use crate::irradiance_cache::hemisphere::{to_world, Stratification};
+use crate::irradiance_cache::points::{PointIrradiance, PointMethod};
+use crate::irradiance_cache::IcParams;
+use crate::media::tracking::transmittance_along;
+use crate::scene::Scene;
+use ircache_math::{offset_ray_origin, ray::SHADOW_EPSILON, Frame, Ray, Rgb, Rng, Vec3};
+use rayon::prelude::*;
+
+/// Direct irradiance at `p` (normal `n`, in `medium`) from `samples` light samples with
+/// transmittance.
+#[must_use]
+pub fn direct_irradiance(
+    scene: &Scene,
+    p: Vec3,
+    n: Vec3,
+    medium: Option<usize>,
+    samples: u32,
+    rng: &mut Rng,
+) -> Rgb {
+    let mut sum = Rgb::ZERO;
+    let mut rays = RayCounts::default();
+    for _ in 0..samples {
+        let (u_sel, u) = (rng.next_f32(), rng.next_2d());
+        let Some(ls) = scene.lights.sample(p, u_sel, u) else {
+            continue;
+        };
+        let cos = ls.wi.dot(n);
+        if cos <= 0.0 || ls.pdf <= 0.0 {
+            continue;
+        }
+        let o = offset_ray_origin(p, n, ls.wi, scene.scale);
+        let t_max = if ls.distance.is_finite() {
+            (p + ls.wi * ls.distance - o).length() * (1.0 - SHADOW_EPSILON)
+        } else {
+            f32::INFINITY
+        };
+        let ray = Ray {
+            o,
+            d: ls.wi,
+            t_min: 0.0,
+            t_max,
+        };
+        let tr = transmittance_along(scene, ray, medium, rng, &mut rays);
+        sum += tr * ls.radiance * (cos / ls.pdf);
+    }
+    sum / samples.max(1) as f32
+}
+
+/// Irradiance at each `(point, normal)`.
+#[must_use]
+pub fn media_irradiance_at_points(
+    scene: &Scene,
+    params: &IcParams,
+    queries: &[(Vec3, Vec3)],
+    method: PointMethod,
+    direct_samples: u32,
+    seed: u64,
+) -> Vec<PointIrradiance> {
+    queries
+        .par_iter()
+        .enumerate()
+        .map(|(i, &(p, n))| {
+            let medium = medium_at(scene, offset_ray_origin(p, n, n, scene.scale), n);
+            let mut rng = Rng::keyed(seed, &[0x006d_6564_6961, i as u64]);
+            let direct = if direct_samples > 0 {
+                direct_irradiance(scene, p, n, medium, direct_samples, &mut rng)
+            } else {
+                Rgb::ZERO
+            };
+            let site = RecordSite {
+                p,
+                ng: n,
+                n,
+                medium,
+            };
+            let (indirect, grad_t, grad_r) = match method {
+                PointMethod::Cache => {
+                    let (r, _) = make_record(scene, params, &site, rng.next_u32().into());
+                    (r.e, r.grad_t, r.grad_r)
+                }
+                PointMethod::BruteForce { samples } => {
+                    brute_force(scene, &site, samples, seed ^ i as u64)
+                }
+            };
+            PointIrradiance {
+                direct,
+                indirect,
+                grad_t,
+                grad_r,
+            }
+        })
+        .collect()
+}
+
+/// A gather of `samples` rays and central differences of it along the tangents, with the same
+/// cells' jitter at both points, at a step of 1 % of the nearest opaque hit.
+fn brute_force(
+    scene: &Scene,
+    site: &RecordSite,
+    samples: usize,
+    seed: u64,
+) -> (Rgb, [Vec3; 3], [Vec3; 3]) {
+    let strata = Stratification::from_divisions(samples);
+    let frame = Frame::from_z(site.n);
+    let axes = [frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3()];
+    let origin = offset_ray_origin(site.p, site.ng, site.n, scene.scale).as_dvec3();
+    let n = strata.azimuthal;
+    let at = |x| {
+        let view = SceneMedium::new(scene, site.medium, false, 1);
+        let march = March {
+            gradients: false,
+            ..March::default()
+        };
+        gather(&view, x, axes, strata, &march, |j, k| {
+            Rng::keyed(seed, &[(j * n + k) as u64]).next_2d()
+        })
+    };
+    let here = at(origin);
+    let (es, em) = here.irradiance();
+    let e = |p: ([f64; 3], [f64; 3])| [p.0[0] + p.1[0], p.0[1] + p.1[1], p.0[2] + p.1[2]];
+    let samples_here = here.hemisphere_samples();
+    let nearest = samples_here
+        .distance
+        .iter()
+        .copied()
+        .fold(f32::INFINITY, f32::min);
+    let h = if nearest.is_finite() {
+        0.01 * f64::from(nearest)
+    } else {
+        1e-3 * f64::from(scene.radius)
+    };
+    let mut grad = [Vec3::ZERO; 3];
+    for axis in [axes[0], axes[1]] {
+        let (plus, minus) = (
+            e(at(origin + axis * h).irradiance()),
+            e(at(origin - axis * h).irradiance()),
+        );
+        for c in 0..3 {
+            grad[c] += axis.as_vec3() * ((plus[c] - minus[c]) / (2.0 * h)) as f32;
+        }
+    }
+    let total = e((es, em));
+    let grad_r = to_world(&samples_here.rotational_gradient(), frame.s, frame.t);
+    (
+        Rgb::new(total[0] as f32, total[1] as f32, total[2] as f32),
+        grad,
+        grad_r,
+    )
+}
