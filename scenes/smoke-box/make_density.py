@@ -7,7 +7,7 @@ N = 32
 puffs = []
 for i in range(9):
     t = i / 8.0
-    puffs.append((0.5 + 0.18 * math.sin(5.0 * t), 0.15 + 0.7 * t, 0.5 + 0.18 * math.cos(4.0 * t), 0.09 + 0.08 * t))
+    puffs.append((0.5 + 0.18 * math.sin(5.0 * t), 0.15 + 0.7 * t, 0.5 + 0.18 * math.cos(4.0 * t), 0.05 + 0.05 * t))
 data = []
 for z in range(N):
     for y in range(N):
@@ -17,7 +17,7 @@ for z in range(N):
             for (cx, cy, cz, r) in puffs:
                 d2 = (p[0] - cx) ** 2 + (p[1] - cy) ** 2 + (p[2] - cz) ** 2
                 v += math.exp(-d2 / (2 * r * r))
-            data.append(min(v, 1.0))
+            data.append(min(max(v - 0.05, 0.0) / 0.95, 1.0))
 with open("density.vol", "wb") as f:
     f.write(b"VOL" + bytes([3]))
     f.write(struct.pack("<iiiii", 1, N, N, N, 1))
