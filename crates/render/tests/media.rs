@@ -628,3 +628,75 @@ fn media_cache_agrees_with_volpath_at_one_bounce() {
         "{err}"
     );
 }
+
+/// Interpolation quality of each gradient form (NOTES-002 §3.3): the cache's interpolated
+/// irradiance at the first hits of a `size`² grid of pixel centres against a gather at each of
+/// those points with many rays. Returns relMSE per form (corrected, paper, jdzj08, none).
+fn interpolation_errors(size: u32, reference_divisions: usize) -> Vec<(&'static str, f64, usize)> {
+    use ircache_render::irradiance_cache::IcParams;
+    use ircache_render::media_cache::cache::{first_site, make_record, MediaCache};
+    let desc = cornell_fog("irrcache", 3, size, 1);
+    let scene = Scene::build(&desc).expect("scene");
+    let mut sites = Vec::new();
+    for y in 0..size {
+        for x in 0..size {
+            let film = ircache_math::Vec2::new(
+                (x as f32 + 0.37) / size as f32,
+                (y as f32 + 0.61) / size as f32,
+            );
+            if let Some(site) = first_site(&scene, scene.camera.generate_ray(film)) {
+                sites.push(site);
+            }
+        }
+    }
+    let mut fine = IcParams::default();
+    fine.bounces = 1;
+    fine.divisions = reference_divisions;
+    let reference: Vec<Rgb> = sites
+        .iter()
+        .enumerate()
+        .map(|(i, s)| make_record(&scene, &fine, s, 7 + i as u64).0.e)
+        .collect();
+    let mut out = Vec::new();
+    for (name, form) in [
+        (
+            "corrected",
+            ircache_render::media_cache::gradient::MediaGradient::Corrected,
+        ),
+        (
+            "paper",
+            ircache_render::media_cache::gradient::MediaGradient::Paper,
+        ),
+        (
+            "jdzj08",
+            ircache_render::media_cache::gradient::MediaGradient::Jdzj08,
+        ),
+        (
+            "none",
+            ircache_render::media_cache::gradient::MediaGradient::None,
+        ),
+    ] {
+        let mut params = IcParams::default();
+        params.bounces = 1;
+        params.media_gradient = form;
+        let cache = MediaCache::build(&scene, &params, size as usize / 2, size as usize / 2, 3);
+        let (mut sum, mut n) = (0.0f64, 0usize);
+        for (s, r) in sites.iter().zip(&reference) {
+            if let Some(e) = cache.irradiance(s.p, s.n, s.n) {
+                let (a, b) = (f64::from(e.luminance()), f64::from(r.luminance()));
+                sum += (a - b).powi(2) / (b * b + 1e-4);
+                n += 1;
+            }
+        }
+        out.push((name, sum / n.max(1) as f64, cache.records().len()));
+    }
+    out
+}
+
+#[test]
+#[ignore = "prints the interpolation errors of the gradient forms: cargo test --release -- --ignored"]
+fn gradient_forms_interpolation_quality() {
+    for (name, err, records) in interpolation_errors(64, 4096) {
+        eprintln!("{name:>9}: relMSE {err:.3e} ({records} records)");
+    }
+}
