@@ -649,9 +649,11 @@ fn interpolation_errors(size: u32, reference_divisions: usize) -> Vec<(&'static 
             }
         }
     }
-    let mut fine = IcParams::default();
-    fine.bounces = 1;
-    fine.divisions = reference_divisions;
+    let fine = IcParams {
+        bounces: 1,
+        divisions: reference_divisions,
+        ..IcParams::default()
+    };
     let reference: Vec<Rgb> = sites
         .iter()
         .enumerate()
@@ -676,9 +678,11 @@ fn interpolation_errors(size: u32, reference_divisions: usize) -> Vec<(&'static 
             ircache_render::media_cache::gradient::MediaGradient::None,
         ),
     ] {
-        let mut params = IcParams::default();
-        params.bounces = 1;
-        params.media_gradient = form;
+        let params = IcParams {
+            bounces: 1,
+            media_gradient: form,
+            ..IcParams::default()
+        };
         let cache = MediaCache::build(&scene, &params, size as usize / 2, size as usize / 2, 3);
         let (mut sum, mut n) = (0.0f64, 0usize);
         for (s, r) in sites.iter().zip(&reference) {
