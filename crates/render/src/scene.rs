@@ -497,7 +497,15 @@ impl Scene {
     #[inline]
     #[must_use]
     pub fn shadow_ray(&self, it: &Interaction, wi: Vec3, distance: f32) -> Ray {
-        let o = offset_ray_origin(it.p, it.ng, wi, self.scale);
+        self.shadow_ray_at(it.p, Some(it.ng), wi, distance)
+    }
+
+    /// [`Scene::shadow_ray`] from any point: offset along the geometric normal `ng` of the
+    /// surface it lies on, or not at all for a point in a medium.
+    #[inline]
+    #[must_use]
+    pub fn shadow_ray_at(&self, p: Vec3, ng: Option<Vec3>, wi: Vec3, distance: f32) -> Ray {
+        let o = ng.map_or(p, |ng| offset_ray_origin(p, ng, wi, self.scale));
         if !distance.is_finite() {
             return Ray {
                 o,
@@ -506,7 +514,7 @@ impl Scene {
                 t_max: f32::INFINITY,
             };
         }
-        let to_light = it.p + wi * distance - o;
+        let to_light = p + wi * distance - o;
         let length = to_light.length();
         let d = if length > 0.0 { to_light / length } else { wi };
         Ray {

@@ -4,6 +4,8 @@
 //! distant light (T7), and the same values at a thousand times the scale. Each comparison
 //! variant fails where the notes say it fails.
 
+mod common;
+
 use ircache_math::{DVec3, Vec2};
 use ircache_render::irradiance_cache::hemisphere::Stratification;
 use ircache_render::media_cache::gradient::{gather, GatherMedium, March, MediaGradient};
@@ -425,13 +427,7 @@ mod in_scenes {
     use std::path::PathBuf;
     use std::sync::Arc;
 
-    fn here() -> SourceLocation {
-        SourceLocation {
-            file: Arc::new(PathBuf::from("<test>")),
-            line: 1,
-            column: 1,
-        }
-    }
+    use common::here;
 
     fn shape(geometry: Geometry, bsdf: Arc<BsdfDesc>, media: MediumInterface) -> ShapeDesc {
         ShapeDesc {
@@ -497,24 +493,7 @@ mod in_scenes {
                 },
             ),
         ];
-        let mut sensor = SensorDesc {
-            to_world: Mat4::IDENTITY,
-            fov_degrees: 45.0,
-            fov_axis: FovAxis::X,
-            near_clip: 0.01,
-            far_clip: 1e4,
-            film: FilmDesc {
-                width: 4,
-                height: 4,
-                filter: FilterDesc::Box,
-            },
-            spp: 1,
-            sampler: "independent".into(),
-            sampler_seed: 0,
-            jitter: true,
-            medium: None,
-        };
-        sensor.medium = None;
+        let sensor = common::sensor(Vec3::new(0.0, -5.0, 1.0), Vec3::ZERO, 45.0, 4, 1);
         let desc = SceneDesc {
             source: PathBuf::from("<test>"),
             sensor,

@@ -299,22 +299,10 @@ pub fn trace_path(
         }
 
         // The BSDF sample that continues the path.
-        sampler.set_dimension(dims::vertex(depth, dims::BSDF));
-        let u_lobe = if bsdf.is_diffuse_only() {
-            sampler.skip_1d();
-            0.0
-        } else {
-            sampler.next_1d()
-        };
-        let u = sampler.next_2d();
-        let Some(bs) = strategy.sample(&bsdf, wo_local, u_lobe, u) else {
+        let Some((bs, wi)) = sample_continuation(&it, &bsdf, wo_local, strategy, depth, sampler)
+        else {
             break;
         };
-        let wi = it.frame.from_local(bs.wi);
-        // Reject samples whose geometric and shading hemispheres disagree (light leaks).
-        if (wi.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
-            break;
-        }
         beta *= bs.weight;
         eta *= bs.eta;
         caustic_chain &= bs.delta;
@@ -326,19 +314,62 @@ pub fn trace_path(
         };
         ray = scene.spawn_ray(&it, wi);
         rays.bounce += 1;
-        sampler.set_dimension(dims::vertex(depth, dims::ROULETTE));
-        depth += 1;
-        let beta_max = beta.max_channel();
-        if beta_max <= 0.0 || !beta_max.is_finite() {
+        if !count_and_roulette(&mut depth, &mut beta, eta, settings.rr_depth, sampler) {
             break;
-        }
-        if depth >= settings.rr_depth {
-            let q = (beta_max * eta * eta).min(0.95);
-            if sampler.next_1d() >= q {
-                break;
-            }
-            beta /= q;
         }
     }
     l
+}
+
+/// The sample of `strategy`'s part of the BSDF that continues a path at vertex `depth` (its
+/// dimensions of the sampler), with its world direction; `None` where there is none or where
+/// the geometric and shading hemispheres disagree (light leaks).
+pub(crate) fn sample_continuation(
+    it: &Interaction,
+    bsdf: &crate::bsdf::Bsdf,
+    wo_local: Vec3,
+    strategy: BsdfStrategy,
+    depth: u32,
+    sampler: &mut dyn Sampler,
+) -> Option<(crate::bsdf::BsdfSample, Vec3)> {
+    sampler.set_dimension(dims::vertex(depth, dims::BSDF));
+    let u_lobe = if bsdf.is_diffuse_only() {
+        sampler.skip_1d();
+        0.0
+    } else {
+        sampler.next_1d()
+    };
+    let u = sampler.next_2d();
+    let bs = strategy.sample(bsdf, wo_local, u_lobe, u)?;
+    let wi = it.frame.from_local(bs.wi);
+    if (wi.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
+        return None;
+    }
+    Some((bs, wi))
+}
+
+/// Counts the vertex a path just left (`depth` + 1) and plays Russian roulette from `rr_depth`
+/// on with survival min(max(β)·η², 0.95), as Mitsuba 3; false when the path ends (also when
+/// the weight is zero or not finite).
+pub(crate) fn count_and_roulette(
+    depth: &mut u32,
+    beta: &mut Rgb,
+    eta: f32,
+    rr_depth: u32,
+    sampler: &mut dyn Sampler,
+) -> bool {
+    sampler.set_dimension(dims::vertex(*depth, dims::ROULETTE));
+    *depth += 1;
+    let beta_max = beta.max_channel();
+    if beta_max <= 0.0 || !beta_max.is_finite() {
+        return false;
+    }
+    if *depth >= rr_depth {
+        let q = (beta_max * eta * eta).min(0.95);
+        if sampler.next_1d() >= q {
+            return false;
+        }
+        *beta /= q;
+    }
+    true
 }

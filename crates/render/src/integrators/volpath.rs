@@ -15,7 +15,7 @@ use crate::media::Phase;
 use crate::sampler::{dims, Sampler};
 use crate::scene::{Interaction, Scene};
 use ircache_embree::Hit;
-use ircache_math::{ray::SHADOW_EPSILON, Ray, Rgb, Rng, Vec3};
+use ircache_math::{Ray, Rgb, Rng, Vec3};
 
 /// Parameters of the volumetric path tracer.
 #[derive(Clone, Debug)]
@@ -171,16 +171,12 @@ impl VolPathIntegrator {
                 l += beta
                     * sample_light(scene, &vertex, medium, depth, true, sampler, &mut rng, rays);
             }
-            sampler.set_dimension(dims::vertex(depth, dims::BSDF));
-            let u_lobe = sampler.next_1d();
-            let Some(bs) = bsdf.sample(wo_local, u_lobe, sampler.next_2d()) else {
+            let strategy = super::light_sampling::BsdfStrategy::All;
+            let Some((bs, wi)) = super::path_continuation::sample_continuation(
+                &it, &bsdf, wo_local, strategy, depth, sampler,
+            ) else {
                 break;
             };
-            let wi = it.frame.from_local(bs.wi);
-            // Samples whose geometric and shading hemispheres disagree leak light.
-            if (wi.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
-                break;
-            }
             beta *= bs.weight;
             eta *= bs.eta;
             arrival = Arrival::Bsdf {
@@ -207,20 +203,7 @@ impl VolPathIntegrator {
         eta: f32,
         sampler: &mut dyn Sampler,
     ) -> bool {
-        sampler.set_dimension(dims::vertex(*depth, dims::ROULETTE));
-        *depth += 1;
-        let beta_max = beta.max_channel();
-        if beta_max <= 0.0 || !beta_max.is_finite() {
-            return false;
-        }
-        if *depth >= self.rr_depth {
-            let q = (beta_max * eta * eta).min(0.95);
-            if sampler.next_1d() >= q {
-                return false;
-            }
-            *beta /= q;
-        }
-        true
+        super::path_continuation::count_and_roulette(depth, beta, eta, self.rr_depth, sampler)
     }
 }
 
@@ -269,17 +252,7 @@ fn sample_light(
         }
         Vertex::Medium(p, d, phase) => {
             let value = phase.eval(d, ls.wi);
-            let t_max = if ls.distance.is_finite() {
-                ls.distance * (1.0 - SHADOW_EPSILON)
-            } else {
-                f32::INFINITY
-            };
-            let ray = Ray {
-                o: p,
-                d: ls.wi,
-                t_min: 0.0,
-                t_max,
-            };
+            let ray = scene.shadow_ray_at(p, None, ls.wi, ls.distance);
             (Rgb::splat(value), value, ray, medium)
         }
     };

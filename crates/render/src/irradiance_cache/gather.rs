@@ -735,25 +735,7 @@ impl Gatherer<'_> {
             }
         }
         .min(r_max);
-        // Gradient limit (003 item 4): the gradient may not predict a change larger than E
-        // itself within the radius; at the minimum spacing the gradient is reduced instead.
-        let mut limit = f32::INFINITY;
-        for c in 0..3 {
-            let g = grad_t[c].length();
-            if g > 0.0 && e[c] > 0.0 {
-                limit = limit.min(e[c] / g);
-            } else if g > 0.0 {
-                grad_t[c] = Vec3::ZERO;
-            }
-        }
-        r = r.min(limit);
-        if r < r_min {
-            r = r_min;
-            if limit < r {
-                let f = limit / r;
-                grad_t = grad_t.map(|g| g * f);
-            }
-        }
+        r = super::record::limit_radius_by_gradient(e, &mut grad_t, r, r_min);
         let (ray_variance, radiance) = self.variance_and_radiance(st, sp, &h);
         Record {
             p: sp.it.p,

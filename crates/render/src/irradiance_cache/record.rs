@@ -31,6 +31,32 @@ pub struct Record {
     pub radiance: u32,
 }
 
+/// Ward's gradient limit on a record's radius (003 item 4): the translational gradient may not
+/// predict a change larger than E itself within the radius `r`; a channel with a gradient but no
+/// irradiance loses its gradient; where the limit falls below `r_min`, the radius stays at
+/// `r_min` and the gradient is scaled down instead. Returns the radius.
+#[must_use]
+pub fn limit_radius_by_gradient(e: Rgb, grad_t: &mut [Vec3; 3], r: f32, r_min: f32) -> f32 {
+    let mut limit = f32::INFINITY;
+    for c in 0..3 {
+        let g = grad_t[c].length();
+        if g > 0.0 && e[c] > 0.0 {
+            limit = limit.min(e[c] / g);
+        } else if g > 0.0 {
+            grad_t[c] = Vec3::ZERO;
+        }
+    }
+    let mut r = r.min(limit);
+    if r < r_min {
+        r = r_min;
+        if limit < r {
+            let f = limit / r;
+            *grad_t = grad_t.map(|g| g * f);
+        }
+    }
+    r
+}
+
 /// [`Record::radiance`] of a record without radiance coefficients.
 pub const NO_RADIANCE: u32 = u32::MAX;
 

@@ -19,7 +19,9 @@ use super::gradient::{gather, March, MediaGradient};
 use super::scene_medium::SceneMedium;
 use crate::integrators::RayCounts;
 use crate::irradiance_cache::hemisphere::{to_world, Stratification};
-use crate::irradiance_cache::record::{ErrorMetric, GradientMode, Record, NO_RADIANCE};
+use crate::irradiance_cache::record::{
+    limit_radius_by_gradient, ErrorMetric, GradientMode, Record, NO_RADIANCE,
+};
 use crate::irradiance_cache::store::RecordStore;
 use crate::irradiance_cache::IcParams;
 use crate::media::tracking::{medium_after, MAX_CROSSINGS};
@@ -115,25 +117,12 @@ pub fn make_record(
     );
     let grad_r = to_world(&samples.rotational_gradient(), frame.s, frame.t);
     let (r_min, r_max) = params.radius_limits(2.0 * scene.radius);
-    let mut r = samples.harmonic_mean_distance().min(r_max);
-    // Gradient limit (003 item 4), as the irradiance cache's records.
-    let mut limit = f32::INFINITY;
-    for c in 0..3 {
-        let len = grad_t[c].length();
-        if len > 0.0 && e[c] > 0.0 {
-            limit = limit.min(e[c] / len);
-        } else if len > 0.0 {
-            grad_t[c] = Vec3::ZERO;
-        }
-    }
-    r = r.min(limit);
-    if r < r_min {
-        r = r_min;
-        if limit < r {
-            let f = limit / r;
-            grad_t = grad_t.map(|v| v * f);
-        }
-    }
+    let r = limit_radius_by_gradient(
+        e,
+        &mut grad_t,
+        samples.harmonic_mean_distance().min(r_max),
+        r_min,
+    );
     let rays: RayCounts = view.rays();
     let stats = MediaCacheStats {
         records: 1,

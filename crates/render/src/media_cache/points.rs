@@ -12,7 +12,7 @@ use crate::irradiance_cache::points::{PointIrradiance, PointMethod};
 use crate::irradiance_cache::IcParams;
 use crate::media::tracking::transmittance_along;
 use crate::scene::Scene;
-use ircache_math::{offset_ray_origin, ray::SHADOW_EPSILON, Frame, Ray, Rgb, Rng, Vec3};
+use ircache_math::{offset_ray_origin, Frame, Rgb, Rng, Vec3};
 use rayon::prelude::*;
 
 /// Direct irradiance at `p` (normal `n`, in `medium`) from `samples` light samples with
@@ -37,18 +37,7 @@ pub fn direct_irradiance(
         if cos <= 0.0 || ls.pdf <= 0.0 {
             continue;
         }
-        let o = offset_ray_origin(p, n, ls.wi, scene.scale);
-        let t_max = if ls.distance.is_finite() {
-            (p + ls.wi * ls.distance - o).length() * (1.0 - SHADOW_EPSILON)
-        } else {
-            f32::INFINITY
-        };
-        let ray = Ray {
-            o,
-            d: ls.wi,
-            t_min: 0.0,
-            t_max,
-        };
+        let ray = scene.shadow_ray_at(p, Some(n), ls.wi, ls.distance);
         let tr = transmittance_along(scene, ray, medium, rng, &mut rays);
         sum += tr * ls.radiance * (cos / ls.pdf);
     }

@@ -13,7 +13,7 @@ use super::gradient::{DVec3, GatherMedium};
 use crate::integrators::RayCounts;
 use crate::media::tracking::{medium_after, transmittance_along, MAX_CROSSINGS};
 use crate::scene::Scene;
-use ircache_math::{offset_ray_origin, ray::SHADOW_EPSILON, Ray, Rgb, Rng, Vec2, Vec3};
+use ircache_math::{offset_ray_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use std::cell::RefCell;
 
 /// A ray traced up to its first opaque hit.
@@ -158,18 +158,9 @@ impl<'a> SceneMedium<'a> {
             if weight.is_black() {
                 continue;
             }
-            let o = offset_normal.map_or(p, |n| offset_ray_origin(p, n, ls.wi, self.scene.scale));
-            let t_max = if ls.distance.is_finite() {
-                (p + ls.wi * ls.distance - o).length() * (1.0 - SHADOW_EPSILON)
-            } else {
-                f32::INFINITY
-            };
-            let ray = Ray {
-                o,
-                d: ls.wi,
-                t_min: 0.0,
-                t_max,
-            };
+            let ray = self
+                .scene
+                .shadow_ray_at(p, offset_normal, ls.wi, ls.distance);
             let mut rng = Rng::new(0x006d_6564_6961, u64::from(i));
             let tr = transmittance_along(self.scene, ray, medium, &mut rng, &mut rays);
             sum += weight * tr * ls.radiance / ls.pdf;
