@@ -16,6 +16,7 @@
 //! - `temporal`: animations, the cache kept over time, flicker measured (see [`temporal`]).
 
 mod cache_vs_path;
+mod media;
 mod peers;
 mod photons;
 mod plane;
@@ -57,7 +58,8 @@ pub struct BenchArgs {
     /// plane (records from a rasterised plane against the stratified gather, Table 4.1),
     /// temporal (animations: the cache kept over time against a cache per frame and against
     /// Mitsuba 3 per frame, flicker measured), photons (the final gather, caustic map and
-    /// photon records against the cache without photons and Mitsuba 3, by rendering).
+    /// photon records against the cache without photons and Mitsuba 3, by rendering), media
+    /// (the cache in fog against volpath, volpath against Mitsuba 3's volpath).
     #[arg(long, default_value = "all")]
     pub only: String,
     /// temporal: only the animations whose name contains this (still, cube, light, lamp).
@@ -135,6 +137,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "photons" {
         photons::run_all(!args.no_mitsuba)?;
+    }
+    if args.only == "all" || args.only == "media" {
+        media::run_all(!args.no_mitsuba)?;
     }
     if args.only == "all" || args.only == "temporal" {
         temporal::run_all(!args.no_mitsuba, args.case.as_deref())?;
@@ -383,7 +388,9 @@ fn mitsuba_time(scene: &Path, spp: u32) -> Result<f64> {
 /// Renders the scene with Mitsuba 3 at `spp` (in passes of at most 64 spp with different
 /// seeds, averaged, as the references were made), writing the image to `out` if given; returns
 /// the render time (kernels compiled by a warm-up run first).
-/// `sampler` overrides the scene's `$sampler` default, `defines` others (`resx`, `resy`).
+/// `sampler` overrides the scene's `$sampler` default, `defines` others (`resx`, `resy`); a
+/// define `seed0` is not the scene's: it offsets the passes' seeds (for an image independent of a
+/// reference made with the first seeds).
 pub(super) fn mitsuba_render(
     scene: &Path,
     spp: u32,
@@ -393,8 +400,13 @@ pub(super) fn mitsuba_render(
     defines: &[(&str, &str)],
 ) -> Result<f64> {
     let mut sampler = sampler.map_or(String::new(), |s| format!(", sampler={s:?}"));
+    let mut seed0 = "0";
     for (name, value) in defines {
-        sampler += &format!(", {name}={value:?}");
+        if *name == "seed0" {
+            seed0 = value;
+        } else {
+            sampler += &format!(", {name}={value:?}");
+        }
     }
     let save = match out {
         Some(p) => format!("mi.Bitmap(acc).write({:?})", p.display().to_string()),
@@ -411,7 +423,7 @@ left, passes, acc = {spp}, 0, None
 t = time.time()
 while left > 0:
     n = min(64, left)
-    img = mi.render(s, spp=n, seed=passes) * (n / {spp})
+    img = mi.render(s, spp=n, seed={seed0} + passes) * (n / {spp})
     acc = img if acc is None else acc + img
     dr.eval(acc); dr.sync_thread()
     left -= n; passes += 1

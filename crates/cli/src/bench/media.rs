@@ -1,0 +1,118 @@
+//! `ircache bench --only media`: participating media (issue 15) by rendering, in the same run.
+//!
+//! On `scenes/cornell-fog` at 128 pixels across: (1) the irradiance cache in the fog (one
+//! bounce, `max_depth` 3) with each `--media-gradient` form at 16 spp, against `volpath` at 8,
+//! 16, 32, … spp until it reaches the cache's error (unblurred and blurred, σ = 2 px); the
+//! reference is `volpath` at 1024 spp made here; the records' pre-pass time and rays are printed,
+//! so the gradients' overhead over the media-blind form reads off the table. (2) `volpath` at
+//! `max_depth` 6 (`multijitter`) against Mitsuba 3's `volpath` (`multijitter`) at equal spp,
+//! both against a Mitsuba reference of 4096 spp made here (seeds 0–63; the compared Mitsuba
+//! images from seed 5000). Times to equal error are interpolated between the bracketing renders,
+//! never extrapolated.
+
+use super::cache_vs_path::{fmt_time, measure, measure_image, run, time_to, Point};
+use super::mitsuba_render;
+use super::radiance::own_scenes;
+use anyhow::{Context, Result};
+use ircache_render::scene::Scene;
+use ircache_scene::obj_scene::ObjCamera;
+
+fn show(label: &str, p: &Point) {
+    println!(
+        "  {label:<44} {:>8.2} s  relMSE_trim {:.3e}  blurred {:.3e}  lum {:.4}",
+        p.seconds, p.error, p.blurred, p.lum
+    );
+}
+
+/// Runs the comparison.
+pub fn run_all(with_mitsuba: bool) -> Result<()> {
+    let scene_path = own_scenes().join("cornell-fog").join("scene.xml");
+    let size = "128";
+    let load = |depth: u32| -> Result<(ircache_scene::SceneDesc, Scene)> {
+        let defines = vec![
+            ("max_depth".to_string(), depth.to_string()),
+            ("resx".to_string(), size.to_string()),
+            ("resy".to_string(), size.to_string()),
+        ];
+        let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
+        let scene = Scene::build(&desc)?;
+        Ok((desc, scene))
+    };
+    println!("\nParticipating media (2 threads, same run; cornell-fog at {size} × {size})");
+    let (desc, scene) = load(3)?;
+    let reference = run(&scene, &desc, "volpath", 1024, &[])?.image;
+    println!(
+        "\nThe cache in the fog, one bounce (max_depth 3), 16 spp; reference: volpath at 1024 spp"
+    );
+    let mut forms = Vec::new();
+    for form in ["none", "jdzj08", "paper", "corrected"] {
+        let out = run(&scene, &desc, "ic", 16, &[("media_gradient", form)])?;
+        let p = measure(&out, &reference)?;
+        show(&format!("ic --media-gradient {form}"), &p);
+        if let Some(st) = &out.media_cache {
+            println!(
+                "    {} records, pre-pass {:.2} s, {:.1} M gather rays, {:.1} M shadow rays, {:.1} M march steps",
+                st.records,
+                st.seconds,
+                st.gather_rays as f64 * 1e-6,
+                st.shadow_rays as f64 * 1e-6,
+                st.march_steps as f64 * 1e-6
+            );
+        }
+        forms.push(p);
+    }
+    let best = forms.last().copied().context("no cache render")?;
+    let mut series = Vec::new();
+    let mut spp = 8;
+    while spp <= 1024 {
+        let p = measure(&run(&scene, &desc, "volpath", spp, &[])?, &reference)?;
+        show(&format!("volpath, {spp} spp"), &p);
+        series.push(p);
+        if p.error <= best.error && p.blurred <= best.blurred {
+            break;
+        }
+        spp *= 2;
+    }
+    let last = series.last().map_or(0.0, |p| p.seconds);
+    // How many times volpath's time to the same error the cache takes (> 1: the cache loses).
+    let ratio = |t: Option<f64>| t.map_or("?".into(), |t| format!("{:.1}", best.seconds / t));
+    let (t, tb) = (
+        time_to(&series, best.error, |p| p.error),
+        time_to(&series, best.blurred, |p| p.blurred),
+    );
+    println!(
+        "  volpath to the corrected cache's error: {} (the cache takes {}× that); blurred: {} ({}×)",
+        fmt_time(t, last),
+        ratio(t),
+        fmt_time(tb, last),
+        ratio(tb)
+    );
+    if !with_mitsuba {
+        return Ok(());
+    }
+    println!("\nvolpath against Mitsuba 3 volpath (max_depth 6, multijitter, equal spp; reference: Mitsuba 4096 spp)");
+    let (desc, scene) = load(6)?;
+    let defines = [("resx", size), ("resy", size)];
+    let tmp = std::env::temp_dir().join(format!("ircache-media-{}.exr", std::process::id()));
+    mitsuba_render(
+        &scene_path,
+        4096,
+        Some(&tmp),
+        6,
+        Some("multijitter"),
+        &defines,
+    )
+    .context("Mitsuba 3 reference")?;
+    let reference = ircache_image::read_image(&tmp)?;
+    for spp in [64, 256] {
+        let mut d = defines.to_vec();
+        d.push(("seed0", "5000"));
+        let seconds = mitsuba_render(&scene_path, spp, Some(&tmp), 6, Some("multijitter"), &d)?;
+        let mi = measure_image(&ircache_image::read_image(&tmp)?, seconds, &reference)?;
+        show(&format!("Mitsuba volpath, {spp} spp"), &mi);
+        let ours = measure(&run(&scene, &desc, "volpath", spp, &[])?, &reference)?;
+        show(&format!("ircache volpath, {spp} spp"), &ours);
+    }
+    let _ = std::fs::remove_file(&tmp);
+    Ok(())
+}
