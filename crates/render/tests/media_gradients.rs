@@ -530,6 +530,16 @@ mod in_scenes {
     /// 002's occluder scene (NOTES-002 §3.3): floor, sphere, box and a wall at x = 2, all black,
     /// in an absorbing, emitting medium (σ_a = 1, L_e = 1) inside a null box.
     pub fn f4() -> Scene {
+        f4_with(MediumKind::Homogeneous)
+    }
+
+    /// F4 with a heterogeneous medium: σ_a = σ_t on a 24 × 24 × 12 grid over the null box,
+    /// 0.6 + 0.5 (1 + sin 1.3x cos 1.7y) e^{−z/2}, emission 1.
+    fn f4_grid() -> Scene {
+        f4_with(MediumKind::Heterogeneous)
+    }
+
+    fn f4_with(kind: MediumKind) -> Scene {
         let black = Arc::new(BsdfDesc::TwoSided {
             front: Arc::new(BsdfDesc::Diffuse {
                 reflectance: TextureDesc::Constant(Rgb::ZERO),
@@ -580,8 +590,11 @@ mod in_scenes {
             emitters: vec![],
             media: vec![MediumDesc {
                 id: None,
-                kind: MediumKind::Homogeneous,
-                sigma_t: VolumeDesc::constant(Rgb::ONE),
+                kind,
+                sigma_t: match kind {
+                    MediumKind::Homogeneous => VolumeDesc::constant(Rgb::ONE),
+                    MediumKind::Heterogeneous => density_grid(),
+                },
                 albedo: VolumeDesc::constant(Rgb::ZERO),
                 emission: Some(VolumeDesc::constant(Rgb::ONE)),
                 scale: 1.0,
@@ -592,6 +605,39 @@ mod in_scenes {
             notes: vec![],
         };
         Scene::build(&desc).expect("scene")
+    }
+
+    /// The smooth density of [`f4_grid`] sampled at cell centres over the null box.
+    fn density_grid() -> VolumeDesc {
+        let (lo, hi) = (Vec3::new(-2.1, -2.1, -0.1), Vec3::new(2.1, 2.1, 2.1));
+        let res = [24usize, 24, 12];
+        let mut data = Vec::new();
+        for z in 0..res[2] {
+            for y in 0..res[1] {
+                for x in 0..res[0] {
+                    let u = Vec3::new(
+                        (x as f32 + 0.5) / res[0] as f32,
+                        (y as f32 + 0.5) / res[1] as f32,
+                        (z as f32 + 0.5) / res[2] as f32,
+                    );
+                    let p = lo + (hi - lo) * u;
+                    data.push(
+                        0.6 + 0.5
+                            * (1.0 + (1.3 * p.x).sin() * (1.7 * p.y).cos())
+                            * (-p.z / 2.0).exp(),
+                    );
+                }
+            }
+        }
+        VolumeDesc::Grid(Arc::new(GridVolumeDesc {
+            path: PathBuf::from("<test>"),
+            resolution: res,
+            channels: 1,
+            data,
+            to_world: Mat4::from_translation(lo) * Mat4::from_scale(hi - lo),
+            filter: TextureFilter::Bilinear,
+            wrap: WrapMode::Clamp,
+        }))
     }
 
     fn strata(m: usize) -> Stratification {
@@ -678,6 +724,41 @@ mod in_scenes {
                 "{v:?}: {g} against FD {fd} (consistent {fine})"
             );
         }
+    }
+
+    /// The same in a heterogeneous medium (a grid of smoothly varying absorption and emission,
+    /// boxes, sphere and wall as occluders): the consistent form within 5 % of the differences
+    /// at 64 × 128 cells, the media-blind walls further off (measured: 2.028 against 1.969; none
+    /// 1.706).
+    #[test]
+    fn f4_heterogeneous_gradient_against_finite_differences() {
+        let scene = f4_grid();
+        let x = DVec3::new(1.2, -0.5, 1e-4);
+        let fd = finite_difference(&scene, x, 0.005, 128, 8)[0];
+        let mean_gradient = |variant: MediaGradient| {
+            (0..4)
+                .map(|seed| {
+                    f64::from(
+                        irradiance(&scene, x, 64, seed, true)
+                            .gradient_parts()
+                            .total(variant)[0]
+                            .x,
+                    )
+                })
+                .sum::<f64>()
+                / 4.0
+        };
+        let corrected = mean_gradient(MediaGradient::Corrected);
+        let none = mean_gradient(MediaGradient::None);
+        let error = |g: f64| (g - fd).abs() / fd.abs();
+        assert!(
+            error(corrected) < 0.05,
+            "∂E/∂x: {corrected} against FD {fd} (none {none})"
+        );
+        assert!(
+            error(none) > error(corrected),
+            "none {none}, corrected {corrected}, FD {fd}"
+        );
     }
 
     #[test]
