@@ -7,6 +7,7 @@
 //! - [`tracking`]: free-flight sampling (delta tracking with spectral weights) and transmittance
 //!   (closed form, ratio tracking) along rays that pass through `null` boundaries.
 
+pub mod majorant;
 pub mod phase;
 pub mod tracking;
 pub mod volume;
@@ -37,6 +38,8 @@ pub struct Medium {
     pub bounds: Option<(Vec3, Vec3)>,
     /// σ_t is the same everywhere inside (closed-form transmittance).
     pub homogeneous: bool,
+    /// Local majorants of a grid's extinction.
+    pub majorants: Option<majorant::MajorantGrid>,
 }
 
 /// The coefficients at a point.
@@ -82,7 +85,12 @@ impl Medium {
                 Some((lo, hi))
             }
         };
+        let majorants = match &sigma_t {
+            Volume::Grid(g) => Some(majorant::MajorantGrid::new(g, desc.scale, g.to_unit())),
+            Volume::Constant(_) => None,
+        };
         Medium {
+            majorants,
             homogeneous: sigma_t.is_constant(),
             sigma_t,
             albedo: Volume::from_desc(&desc.albedo),
@@ -104,6 +112,26 @@ impl Medium {
             sigma_t,
             sigma_s: sigma_t * self.albedo.eval(p),
             emission: self.emission.as_ref().map_or(Rgb::ZERO, |e| e.eval(p)),
+        }
+    }
+
+    /// Calls `f(t0, t1, majorant)` for the pieces of `[t0, t1]` along `o + t d` with a bound on
+    /// the extinction in each (local majorants in grids, the medium's majorant elsewhere), in
+    /// order, until `f` returns false.
+    #[inline]
+    pub fn for_each_segment(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t0: f32,
+        t1: f32,
+        mut f: impl FnMut(f32, f32, f32) -> bool,
+    ) {
+        match &self.majorants {
+            Some(grid) => grid.for_each_segment(o, d, t0, t1, f),
+            None => {
+                f(t0, t1, self.majorant);
+            }
         }
     }
 

@@ -2,7 +2,7 @@
 //! (Kutz et al. 2017: scattering or a null collision chosen by channel-mean probabilities, the
 //! path weight corrected per channel, absorption carried as a weight), emission gathered by the collision estimator (β σ_a L_e / σ̄ at every
 //! tentative collision), and transmittance in closed form (homogeneous) or by ratio tracking
-//! (grids). [`transmittance_along`] follows a shadow ray through `null` boundaries, changing
+//! (grids), both against local majorants in grids ([`super::majorant`]). [`transmittance_along`] follows a shadow ray through `null` boundaries, changing
 //! medium where a shape declares one (Mitsuba 3's `target_medium`).
 
 use super::{Coefficients, Medium};
@@ -51,38 +51,44 @@ pub fn sample_flight(
     let Some((t0, t1)) = medium.clip(o, d, t_max) else {
         return Flight::Passed;
     };
-    let majorant = medium.majorant;
-    if majorant <= 0.0 {
-        return Flight::Passed;
-    }
     let emits = medium.emits();
-    let mut t = t0;
-    loop {
-        t += exponential(rng, majorant);
-        if t >= t1 || !t.is_finite() {
-            return Flight::Passed;
+    let mut flight = Flight::Passed;
+    medium.for_each_segment(o, d, t0, t1, |a, b, majorant| {
+        if majorant <= 0.0 {
+            return true;
         }
-        let c = medium.at(o + d * t);
-        let sigma_a = c.sigma_a();
-        if emits {
-            *emitted += *beta * sigma_a * c.emission / majorant;
+        let mut t = a;
+        loop {
+            t += exponential(rng, majorant);
+            if t >= b || !t.is_finite() {
+                return true;
+            }
+            let c = medium.at(o + d * t);
+            if emits {
+                *emitted += *beta * c.sigma_a() * c.emission / majorant;
+            }
+            let sigma_n = (Rgb::splat(majorant) - c.sigma_t).max(Rgb::ZERO);
+            // Absorption is a weight, not an event (Mitsuba's albedo factor): scattering and
+            // null collisions are chosen by their channel means, the weights correct each
+            // channel.
+            let (ps, pn) = (c.sigma_s.mean(), sigma_n.mean());
+            if ps + pn <= 0.0 {
+                flight = Flight::Absorbed;
+                return false;
+            }
+            if rng.next_f32() * (ps + pn) < ps {
+                *beta *= c.sigma_s * ((ps + pn) / (ps * majorant));
+                flight = Flight::Scattered { t, coefficients: c };
+                return false;
+            }
+            *beta *= sigma_n * ((ps + pn) / (pn * majorant));
+            if beta.is_black() {
+                flight = Flight::Absorbed;
+                return false;
+            }
         }
-        let sigma_n = (Rgb::splat(majorant) - c.sigma_t).max(Rgb::ZERO);
-        // Absorption is a weight, not an event (Mitsuba's albedo factor): scattering and null
-        // collisions are chosen by their channel means, the weights correct each channel.
-        let (ps, pn) = (c.sigma_s.mean(), sigma_n.mean());
-        if ps + pn <= 0.0 {
-            return Flight::Absorbed;
-        }
-        if rng.next_f32() * (ps + pn) < ps {
-            *beta *= c.sigma_s * ((ps + pn) / (ps * majorant));
-            return Flight::Scattered { t, coefficients: c };
-        }
-        *beta *= sigma_n * ((ps + pn) / (pn * majorant));
-        if beta.is_black() {
-            return Flight::Absorbed;
-        }
-    }
+    });
+    flight
 }
 
 /// Transmittance along `o + t d` for `t` in `[0, t_max]` inside `medium`: closed form where σ_t
@@ -97,28 +103,31 @@ pub fn transmittance(medium: &Medium, o: Vec3, d: Vec3, t_max: f32, rng: &mut Rn
             .exp()
             .map(|x| if x.is_nan() { 0.0 } else { x });
     }
-    let majorant = medium.majorant;
-    if majorant <= 0.0 {
-        return Rgb::ONE;
-    }
     let mut tr = Rgb::ONE;
-    let mut t = t0;
-    loop {
-        t += exponential(rng, majorant);
-        if t >= t1 || !t.is_finite() {
-            return tr;
+    medium.for_each_segment(o, d, t0, t1, |a, b, majorant| {
+        if majorant <= 0.0 {
+            return true;
         }
-        let sigma_t = medium.at(o + d * t).sigma_t;
-        tr *= (Rgb::ONE - sigma_t / majorant).max(Rgb::ZERO);
-        // Russian roulette once the estimate is small keeps long rays cheap and unbiased.
-        let m = tr.max_channel();
-        if m < 0.1 {
-            if rng.next_f32() >= m {
-                return Rgb::ZERO;
+        let mut t = a;
+        loop {
+            t += exponential(rng, majorant);
+            if t >= b || !t.is_finite() {
+                return true;
             }
-            tr /= m;
+            let sigma_t = medium.at(o + d * t).sigma_t;
+            tr *= (Rgb::ONE - sigma_t / majorant).max(Rgb::ZERO);
+            // Russian roulette once the estimate is small keeps long rays cheap and unbiased.
+            let m = tr.max_channel();
+            if m < 0.1 {
+                if rng.next_f32() >= m {
+                    tr = Rgb::ZERO;
+                    return false;
+                }
+                tr /= m;
+            }
         }
-    }
+    });
+    tr
 }
 
 /// The medium a ray is in after crossing a surface with `interface` and geometric normal `ng`

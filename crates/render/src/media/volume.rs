@@ -95,6 +95,33 @@ fn wrap(i: i64, n: usize, mode: WrapMode) -> usize {
 }
 
 impl Grid {
+    /// Samples along x, y, z.
+    #[must_use]
+    pub fn resolution(&self) -> [usize; 3] {
+        self.desc.resolution
+    }
+
+    /// The largest sample (over channels) with indices in the inclusive ranges `[(lo, hi); 3]`,
+    /// indices outside the grid wrapped as lookups wrap them.
+    #[must_use]
+    pub fn max_over(&self, ranges: [(i64, i64); 3]) -> f32 {
+        let mut m = 0.0f32;
+        for z in ranges[2].0..=ranges[2].1 {
+            for y in ranges[1].0..=ranges[1].1 {
+                for x in ranges[0].0..=ranges[0].1 {
+                    m = m.max(self.sample([x, y, z]).max_channel());
+                }
+            }
+        }
+        m
+    }
+
+    /// World to the unit cube.
+    #[must_use]
+    pub fn to_unit(&self) -> Mat4 {
+        self.to_unit
+    }
+
     /// The sample at integer indices (wrapped).
     #[inline]
     fn sample(&self, [x, y, z]: [i64; 3]) -> Rgb {
