@@ -704,3 +704,66 @@ fn gradient_forms_interpolation_quality() {
         eprintln!("{name:>9}: relMSE {err:.3e} ({records} records)");
     }
 }
+
+/// 002's gradients in the fog Cornell box against central differences (NOTES-002 §3.3): at
+/// points on the floor and on two walls, the consistent form's gradient (20 000 cells) and the
+/// brute force's differences (100 000 cells, common random numbers), each the mean of 8 seeds.
+#[test]
+#[ignore = "prints the fog Cornell box's gradients against finite differences: cargo test --release -- --ignored"]
+fn fog_cornell_gradients_against_finite_differences() {
+    use ircache_render::irradiance_cache::points::PointMethod;
+    use ircache_render::irradiance_cache::IcParams;
+    use ircache_render::media_cache::points::media_irradiance_at_points;
+    let desc = cornell_fog("irrcache", 3, 8, 1);
+    let scene = Scene::build(&desc).expect("scene");
+    let points = [
+        (Vec3::new(-0.5, 0.001, 0.5), Vec3::Y),
+        (Vec3::new(-0.99, 1.0, 0.0), Vec3::X),
+        (Vec3::new(0.0, 1.0, -0.99), Vec3::Z),
+    ];
+    for (form, name) in [
+        (
+            ircache_render::media_cache::gradient::MediaGradient::Corrected,
+            "corrected",
+        ),
+        (
+            ircache_render::media_cache::gradient::MediaGradient::None,
+            "none",
+        ),
+    ] {
+        let params = IcParams {
+            bounces: 1,
+            divisions: 20_000,
+            media_gradient: form,
+            ..IcParams::default()
+        };
+        let mut cache = vec![Vec3::ZERO; points.len()];
+        let mut brute = vec![Vec3::ZERO; points.len()];
+        for seed in 0..8 {
+            let c =
+                media_irradiance_at_points(&scene, &params, &points, PointMethod::Cache, 0, seed);
+            for (acc, r) in cache.iter_mut().zip(&c) {
+                *acc += r.grad_t[1] / 8.0;
+            }
+            if name == "corrected" {
+                let b = media_irradiance_at_points(
+                    &scene,
+                    &params,
+                    &points,
+                    PointMethod::BruteForce { samples: 100_000 },
+                    0,
+                    seed,
+                );
+                for (acc, r) in brute.iter_mut().zip(&b) {
+                    *acc += r.grad_t[1] / 8.0;
+                }
+            }
+        }
+        for (i, (p, _)) in points.iter().enumerate() {
+            if name == "corrected" {
+                eprintln!("{p}: finite differences (green) {}", brute[i]);
+            }
+            eprintln!("{p}: {name:>9} {}", cache[i]);
+        }
+    }
+}
