@@ -166,6 +166,8 @@ pub struct IcParams {
     pub photon_records: bool,
     /// The translational gradient of records in participating media (002, NOTES-002 §2.7).
     pub media_gradient: crate::media_cache::gradient::MediaGradient,
+    /// Light samples per surface hit and per march step of a gather through media.
+    pub media_light_samples: u32,
 }
 
 impl Default for IcParams {
@@ -202,6 +204,7 @@ impl Default for IcParams {
             photon_radius: 0.05,
             photon_records: false,
             media_gradient: crate::media_cache::gradient::MediaGradient::Corrected,
+            media_light_samples: 1,
         }
     }
 }
@@ -672,6 +675,21 @@ pub const PARAMS: &[ParamSpec] = &[
         get: |p| name_of(p.media_gradient, MEDIA_GRADIENTS),
         set: |p, v| {
             p.media_gradient = choice(v, MEDIA_GRADIENTS)?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "media_light_samples",
+        aliases: &[],
+        value: "N",
+        help: "in scenes with participating media, light samples per surface hit and per march \
+               step of a record's gather (its single scattering, and the differences of it that \
+               the gradient's source term takes): more cost more, and steady the gradients near \
+               lights",
+        shapes_records: true,
+        get: |p| p.media_light_samples.to_string(),
+        set: |p, v| {
+            p.media_light_samples = number(v, 1u32, 1024, "a number of light samples")?;
             Ok(())
         },
     },

@@ -73,9 +73,6 @@ pub struct RecordSite {
     pub medium: Option<usize>,
 }
 
-/// Light samples per surface hit and per march step of a gather.
-const GATHER_LIGHT_SAMPLES: u32 = 1;
-
 /// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced.
 #[must_use]
 pub fn make_record(
@@ -87,7 +84,7 @@ pub fn make_record(
     let strata = Stratification::from_divisions(params.divisions);
     let frame = Frame::from_z(site.n);
     let origin = offset_ray_origin(site.p, site.ng, site.n, scene.scale);
-    let view = SceneMedium::new(scene, site.medium, false, GATHER_LIGHT_SAMPLES)
+    let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
         .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()]);
     let d = |v: Vec3| v.as_dvec3();
     let n = strata.azimuthal;
