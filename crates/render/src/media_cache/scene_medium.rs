@@ -41,6 +41,8 @@ pub struct SceneMedium<'a> {
     /// The receiver's tangents, when only the tangential gradients are wanted (the estimator
     /// projects onto them): differences along two axes instead of three.
     tangents: Option<[DVec3; 2]>,
+    /// The light samples' rotation for the last gather direction asked.
+    rotation: std::cell::Cell<Option<(DVec3, Vec2, f32)>>,
     /// The last source evaluated: point, direction, value (the forward differences' base).
     last_source: RefCell<Option<(DVec3, DVec3, [f64; 3])>>,
     last: RefCell<Option<Traced>>,
@@ -89,6 +91,7 @@ impl<'a> SceneMedium<'a> {
             include_emitters,
             light_samples: light_samples.max(1),
             tangents: None,
+            rotation: std::cell::Cell::new(None),
             last_source: RefCell::new(None),
             last: RefCell::new(None),
             rays: RefCell::new(RayCounts::default()),
@@ -116,12 +119,19 @@ impl<'a> SceneMedium<'a> {
         let n = self.light_samples;
         let side = (n as f32).sqrt().ceil() as u32;
         let (a, b) = (i % side, i / side);
-        let mut rng = Rng::keyed(
-            0x6c69_6768_7473,
-            &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits()],
-        );
-        let shift = rng.next_2d();
-        let select = rng.next_f32();
+        // The rotation of direction `w` (a cell's every march step asks for the same one).
+        let (shift, select) = match self.rotation.get() {
+            Some((known, shift, select)) if known == w => (shift, select),
+            _ => {
+                let mut rng = Rng::keyed(
+                    0x6c69_6768_7473,
+                    &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits()],
+                );
+                let (shift, select) = (rng.next_2d(), rng.next_f32());
+                self.rotation.set(Some((w, shift, select)));
+                (shift, select)
+            }
+        };
         let wrap = |x: f32| if x >= 1.0 { x - 1.0 } else { x };
         let u = Vec2::new(
             wrap((a as f32 + shift.x) / side as f32),
