@@ -318,6 +318,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         ic.splatter = Some(gpu.splatter);
     }
     let scene = Scene::build(&desc).context("building the scene")?;
+    scene.require_no_media("the walkthrough viewer")?;
     let (w, h) = (
         desc.sensor.film.width as usize,
         desc.sensor.film.height as usize,

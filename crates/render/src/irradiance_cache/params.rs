@@ -686,7 +686,8 @@ pub const PARAMS: &[ParamSpec] = &[
                step of a record's gather (its single scattering, and the differences of it that \
                the gradient's source term takes): more cost more, and steady the gradients near \
                lights",
-        shapes_records: true,
+        // Media records are never saved in cache files (refused in media scenes).
+        shapes_records: false,
         get: |p| p.media_light_samples.to_string(),
         set: |p, v| {
             p.media_light_samples = number(v, 1u32, 1024, "a number of light samples")?;

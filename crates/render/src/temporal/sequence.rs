@@ -247,6 +247,7 @@ impl SequenceCache {
         motion: &dyn Motion,
         pool: &rayon::ThreadPool,
     ) -> Result<IrradianceCache, RenderError> {
+        scene.require_no_media("the temporal cache (ircache animate with a cache mode)")?;
         Ok(self.seeded(frame, scene, motion, pool)?.0)
     }
 
