@@ -211,3 +211,30 @@ pub fn form_factor(x: Vec3, n: Vec3, poly: &[Vec3]) -> f32 {
     }
     (s.abs() / (2.0 * std::f64::consts::PI)) as f32
 }
+
+/// A scalar grid over the box `[lo, hi]` with samples `f(x, y, z)` at the cell centres.
+pub fn grid(res: [usize; 3], lo: Vec3, hi: Vec3, f: impl Fn(Vec3) -> f32) -> VolumeDesc {
+    let to_world = Mat4::from_translation(lo) * Mat4::from_scale(hi - lo);
+    let mut data = Vec::new();
+    for z in 0..res[2] {
+        for y in 0..res[1] {
+            for x in 0..res[0] {
+                let u = Vec3::new(
+                    (x as f32 + 0.5) / res[0] as f32,
+                    (y as f32 + 0.5) / res[1] as f32,
+                    (z as f32 + 0.5) / res[2] as f32,
+                );
+                data.push(f(to_world.transform_point3(u)));
+            }
+        }
+    }
+    VolumeDesc::Grid(Arc::new(GridVolumeDesc {
+        path: "<test>".into(),
+        resolution: res,
+        channels: 1,
+        data,
+        to_world,
+        filter: TextureFilter::Bilinear,
+        wrap: WrapMode::Clamp,
+    }))
+}

@@ -68,33 +68,6 @@ fn medium(sigma_t: VolumeDesc, albedo: Rgb, emission: Option<Rgb>, phase: PhaseD
     }
 }
 
-/// A scalar grid over the box `[lo, hi]` with samples `f(x, y, z)` at the cell centres.
-fn grid(res: [usize; 3], lo: Vec3, hi: Vec3, f: impl Fn(Vec3) -> f32) -> VolumeDesc {
-    let to_world = Mat4::from_translation(lo) * Mat4::from_scale(hi - lo);
-    let mut data = Vec::new();
-    for z in 0..res[2] {
-        for y in 0..res[1] {
-            for x in 0..res[0] {
-                let u = Vec3::new(
-                    (x as f32 + 0.5) / res[0] as f32,
-                    (y as f32 + 0.5) / res[1] as f32,
-                    (z as f32 + 0.5) / res[2] as f32,
-                );
-                data.push(f(to_world.transform_point3(u)));
-            }
-        }
-    }
-    VolumeDesc::Grid(Arc::new(GridVolumeDesc {
-        path: "<test>".into(),
-        resolution: res,
-        channels: 1,
-        data,
-        to_world,
-        filter: TextureFilter::Bilinear,
-        wrap: WrapMode::Clamp,
-    }))
-}
-
 fn volpath(max_depth: i32) -> IntegratorDesc {
     IntegratorDesc {
         kind: "volpath".into(),

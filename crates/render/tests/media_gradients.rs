@@ -609,35 +609,12 @@ mod in_scenes {
 
     /// The smooth density of [`f4_grid`] sampled at cell centres over the null box.
     fn density_grid() -> VolumeDesc {
-        let (lo, hi) = (Vec3::new(-2.1, -2.1, -0.1), Vec3::new(2.1, 2.1, 2.1));
-        let res = [24usize, 24, 12];
-        let mut data = Vec::new();
-        for z in 0..res[2] {
-            for y in 0..res[1] {
-                for x in 0..res[0] {
-                    let u = Vec3::new(
-                        (x as f32 + 0.5) / res[0] as f32,
-                        (y as f32 + 0.5) / res[1] as f32,
-                        (z as f32 + 0.5) / res[2] as f32,
-                    );
-                    let p = lo + (hi - lo) * u;
-                    data.push(
-                        0.6 + 0.5
-                            * (1.0 + (1.3 * p.x).sin() * (1.7 * p.y).cos())
-                            * (-p.z / 2.0).exp(),
-                    );
-                }
-            }
-        }
-        VolumeDesc::Grid(Arc::new(GridVolumeDesc {
-            path: PathBuf::from("<test>"),
-            resolution: res,
-            channels: 1,
-            data,
-            to_world: Mat4::from_translation(lo) * Mat4::from_scale(hi - lo),
-            filter: TextureFilter::Bilinear,
-            wrap: WrapMode::Clamp,
-        }))
+        common::grid(
+            [24, 24, 12],
+            Vec3::new(-2.1, -2.1, -0.1),
+            Vec3::new(2.1, 2.1, 2.1),
+            |p| 0.6 + 0.5 * (1.0 + (1.3 * p.x).sin() * (1.7 * p.y).cos()) * (-p.z / 2.0).exp(),
+        )
     }
 
     fn strata(m: usize) -> Stratification {

@@ -37,6 +37,33 @@ fn exponential(rng: &mut Rng, majorant: f32) -> f32 {
     -(1.0 - rng.next_f32()).ln() / majorant
 }
 
+/// Tentative collisions along `o + t d` for t in `[t0, t1]`: distances drawn against each
+/// piece's majorant ([`Medium::for_each_segment`]), `f(t, coefficients, majorant)` called at each
+/// in order until it returns false. The one sampling loop of delta and ratio tracking.
+fn for_each_tentative_collision(
+    medium: &Medium,
+    (o, d): (Vec3, Vec3),
+    (t0, t1): (f32, f32),
+    rng: &mut Rng,
+    mut f: impl FnMut(f32, Coefficients, f32, &mut Rng) -> bool,
+) {
+    medium.for_each_segment(o, d, t0, t1, |a, b, majorant| {
+        if majorant <= 0.0 {
+            return true;
+        }
+        let mut t = a;
+        loop {
+            t += exponential(rng, majorant);
+            if t >= b || !t.is_finite() {
+                return true;
+            }
+            if !f(t, medium.at(o + d * t), majorant, rng) {
+                return false;
+            }
+        }
+    });
+}
+
 /// Samples the first real collision along `o + t d`, `t < t_max`, updating the path weight
 /// `beta` and adding the medium's emission met on the way (weighted by `beta`) to `emitted`.
 pub fn sample_flight(
@@ -53,40 +80,29 @@ pub fn sample_flight(
     };
     let emits = medium.emits();
     let mut flight = Flight::Passed;
-    medium.for_each_segment(o, d, t0, t1, |a, b, majorant| {
-        if majorant <= 0.0 {
-            return true;
+    for_each_tentative_collision(medium, (o, d), (t0, t1), rng, |t, c, majorant, rng| {
+        if emits {
+            *emitted += *beta * c.sigma_a() * c.emission / majorant;
         }
-        let mut t = a;
-        loop {
-            t += exponential(rng, majorant);
-            if t >= b || !t.is_finite() {
-                return true;
-            }
-            let c = medium.at(o + d * t);
-            if emits {
-                *emitted += *beta * c.sigma_a() * c.emission / majorant;
-            }
-            let sigma_n = (Rgb::splat(majorant) - c.sigma_t).max(Rgb::ZERO);
-            // Absorption is a weight, not an event (Mitsuba's albedo factor): scattering and
-            // null collisions are chosen by their channel means, the weights correct each
-            // channel.
-            let (ps, pn) = (c.sigma_s.mean(), sigma_n.mean());
-            if ps + pn <= 0.0 {
-                flight = Flight::Absorbed;
-                return false;
-            }
-            if rng.next_f32() * (ps + pn) < ps {
-                *beta *= c.sigma_s * ((ps + pn) / (ps * majorant));
-                flight = Flight::Scattered { t, coefficients: c };
-                return false;
-            }
-            *beta *= sigma_n * ((ps + pn) / (pn * majorant));
-            if beta.is_black() {
-                flight = Flight::Absorbed;
-                return false;
-            }
+        let sigma_n = (Rgb::splat(majorant) - c.sigma_t).max(Rgb::ZERO);
+        // Absorption is a weight, not an event (Mitsuba's albedo factor): scattering and null
+        // collisions are chosen by their channel means, the weights correct each channel.
+        let (ps, pn) = (c.sigma_s.mean(), sigma_n.mean());
+        if ps + pn <= 0.0 {
+            flight = Flight::Absorbed;
+            return false;
         }
+        if rng.next_f32() * (ps + pn) < ps {
+            *beta *= c.sigma_s * ((ps + pn) / (ps * majorant));
+            flight = Flight::Scattered { t, coefficients: c };
+            return false;
+        }
+        *beta *= sigma_n * ((ps + pn) / (pn * majorant));
+        if beta.is_black() {
+            flight = Flight::Absorbed;
+            return false;
+        }
+        true
     });
     flight
 }
@@ -104,28 +120,18 @@ pub fn transmittance(medium: &Medium, o: Vec3, d: Vec3, t_max: f32, rng: &mut Rn
             .map(|x| if x.is_nan() { 0.0 } else { x });
     }
     let mut tr = Rgb::ONE;
-    medium.for_each_segment(o, d, t0, t1, |a, b, majorant| {
-        if majorant <= 0.0 {
-            return true;
-        }
-        let mut t = a;
-        loop {
-            t += exponential(rng, majorant);
-            if t >= b || !t.is_finite() {
-                return true;
+    for_each_tentative_collision(medium, (o, d), (t0, t1), rng, |_, c, majorant, rng| {
+        tr *= (Rgb::ONE - c.sigma_t / majorant).max(Rgb::ZERO);
+        // Russian roulette once the estimate is small keeps long rays cheap and unbiased.
+        let m = tr.max_channel();
+        if m < 0.1 {
+            if rng.next_f32() >= m {
+                tr = Rgb::ZERO;
+                return false;
             }
-            let sigma_t = medium.at(o + d * t).sigma_t;
-            tr *= (Rgb::ONE - sigma_t / majorant).max(Rgb::ZERO);
-            // Russian roulette once the estimate is small keeps long rays cheap and unbiased.
-            let m = tr.max_channel();
-            if m < 0.1 {
-                if rng.next_f32() >= m {
-                    tr = Rgb::ZERO;
-                    return false;
-                }
-                tr /= m;
-            }
+            tr /= m;
         }
+        true
     });
     tr
 }
