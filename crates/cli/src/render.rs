@@ -443,7 +443,7 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
             st.seconds
         );
         if st.metric_replaced {
-            eprintln!("note: in media the records use Ward's split-sphere metric (the chosen error metric does not see media)");
+            eprintln!("note: {}", ircache_render::media_cache::cache::METRIC_NOTE);
         }
     }
     if let Some(c) = &out.cache {

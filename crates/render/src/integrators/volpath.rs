@@ -6,8 +6,9 @@
 //! surfaces alike (1: emitters seen directly, 2: direct light); crossing a `null` boundary does
 //! not count. Medium emission (an ircache extension) is gathered along every segment.
 
-use super::path_continuation::Arrival;
+use super::path_continuation::{count_and_roulette, Arrival};
 use super::{mis_weight, RayCounts};
+use crate::irradiance_cache::gather::ShadingPoint;
 use crate::media::tracking::{
     medium_after, sample_flight, transmittance_along, Flight, MAX_CROSSINGS,
 };
@@ -105,7 +106,7 @@ impl VolPathIntegrator {
                             light_samples: u32::from(sample_emitters),
                         };
                         ray = Ray::new(p, w);
-                        if !self.roulette(&mut depth, &mut beta, eta, sampler) {
+                        if !count_and_roulette(&mut depth, &mut beta, eta, self.rr_depth, sampler) {
                             break;
                         }
                         continue;
@@ -155,8 +156,8 @@ impl VolPathIntegrator {
                 .as_ref()
                 .filter(|_| depth == 0 && bsdf.is_diffuse_only())
             {
-                let flip = if it.base_n.dot(wo) < 0.0 { -1.0 } else { 1.0 };
-                if let Some(e) = cache.irradiance(it.p, it.base_n * flip, it.frame.n * flip) {
+                let sp = ShadingPoint::facing(it, wo);
+                if let Some(e) = cache.irradiance(it.p, sp.n, sp.n_bump) {
                     let vertex = Vertex::Surface(&it, &bsdf, wo_local);
                     l += beta
                         * sample_light(
@@ -187,23 +188,11 @@ impl VolPathIntegrator {
             };
             medium = medium_after(shape.media, it.ng, wi, medium);
             ray = scene.spawn_ray(&it, wi);
-            if !self.roulette(&mut depth, &mut beta, eta, sampler) {
+            if !count_and_roulette(&mut depth, &mut beta, eta, self.rr_depth, sampler) {
                 break;
             }
         }
         l
-    }
-
-    /// Counts the vertex just left and plays Russian roulette from `rr_depth` on (as
-    /// [`super::path_continuation::trace_path`]); false when the path ends.
-    fn roulette(
-        &self,
-        depth: &mut u32,
-        beta: &mut Rgb,
-        eta: f32,
-        sampler: &mut dyn Sampler,
-    ) -> bool {
-        super::path_continuation::count_and_roulette(depth, beta, eta, self.rr_depth, sampler)
     }
 }
 

@@ -7,7 +7,7 @@
 
 use super::{Coefficients, Medium};
 use crate::integrators::RayCounts;
-use crate::scene::Scene;
+use crate::scene::{Interaction, Scene};
 use ircache_math::{offset_ray_origin, Ray, Rgb, Rng, Vec3};
 use ircache_scene::MediumInterface;
 
@@ -153,6 +153,48 @@ pub fn medium_after(
     } else {
         interface.interior
     }
+}
+
+/// The first opaque surface a ray meets, past any null boundaries.
+#[derive(Clone, Copy, Debug)]
+pub struct OpaqueHit {
+    /// The interaction, on the last ray segment.
+    pub it: Interaction,
+    /// Where that segment starts (the ray's origin when no boundary was crossed).
+    pub segment_origin: Vec3,
+    /// The medium in front of the surface.
+    pub medium: Option<usize>,
+}
+
+/// The first opaque surface along `ray` from a point in `medium`, passing through null
+/// boundaries (each segment after a crossing starts at the crossing, offset, in the same
+/// direction); `crossed(segment origin, crossing, medium beyond)` hears of every boundary and
+/// `intersections` counts the rays traced. `None` when the ray escapes (or stays trapped past
+/// [`MAX_CROSSINGS`]).
+pub fn first_opaque(
+    scene: &Scene,
+    mut ray: Ray,
+    mut medium: Option<usize>,
+    intersections: &mut u64,
+    mut crossed: impl FnMut(Vec3, &Interaction, Option<usize>),
+) -> Option<OpaqueHit> {
+    for _ in 0..MAX_CROSSINGS {
+        *intersections += 1;
+        let hit = scene.accel.intersect(&ray)?;
+        let it = scene.interaction(&ray, &hit);
+        let shape = &scene.shapes[it.shape as usize];
+        if !shape.null {
+            return Some(OpaqueHit {
+                it,
+                segment_origin: ray.o,
+                medium,
+            });
+        }
+        medium = medium_after(shape.media, it.ng, ray.d, medium);
+        crossed(ray.o, &it, medium);
+        ray = scene.spawn_ray(&it, ray.d);
+    }
+    None
 }
 
 /// Transmittance along a shadow ray from `ray.o` (in `medium`) to `ray.t_max`, passing through

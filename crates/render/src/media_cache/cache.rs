@@ -9,7 +9,7 @@
 //!
 //! Records use Ward's split-sphere metric whatever `--error-metric` says (NOTES-002 §2.8: the
 //! Hessian metric reprojects hit points without transmittance, blind to the media; Tabellion's
-//! needs pixel footprints through media); [`MediaCache::note`] says so.
+//! needs pixel footprints through media); [`METRIC_NOTE`] says so.
 //!
 //! Records are made in a pre-pass over the image's pixel centres, one row at a time: the row's
 //! uncovered first hits are gathered in parallel and inserted in row order, so the cache is the
@@ -18,13 +18,14 @@
 use super::gradient::{gather, March, MediaGradient};
 use super::scene_medium::SceneMedium;
 use crate::integrators::RayCounts;
+use crate::irradiance_cache::gather::ShadingPoint;
 use crate::irradiance_cache::hemisphere::{to_world, Stratification};
 use crate::irradiance_cache::record::{
     limit_radius_by_gradient, ErrorMetric, GradientMode, Record, NO_RADIANCE,
 };
 use crate::irradiance_cache::store::RecordStore;
 use crate::irradiance_cache::IcParams;
-use crate::media::tracking::{medium_after, MAX_CROSSINGS};
+use crate::media::tracking::{first_opaque, medium_after};
 use crate::scene::Scene;
 use ircache_math::{offset_ray_origin, Frame, Rgb, Rng, Vec3};
 use rayon::prelude::*;
@@ -43,7 +44,7 @@ pub struct MediaCacheStats {
     pub march_steps: u64,
     /// Seconds of the pre-pass.
     pub seconds: f64,
-    /// Ward's metric was used in place of the one asked for ([`MediaCache::note`]).
+    /// Ward's metric was used in place of the one asked for ([`METRIC_NOTE`]).
     pub metric_replaced: bool,
 }
 
@@ -51,13 +52,15 @@ pub struct MediaCacheStats {
 #[derive(Debug)]
 pub struct MediaCache {
     store: RecordStore<Record>,
-    /// The translational gradient used.
-    pub gradient: MediaGradient,
     /// Interpolation mode.
     mode: GradientMode,
     /// What building it did.
     pub stats: MediaCacheStats,
 }
+
+/// What a user should hear of when another error metric was asked for.
+pub const METRIC_NOTE: &str =
+    "in media the records use Ward's split-sphere metric (the chosen error metric does not see media)";
 
 /// Where a record is wanted: a surface point, the normal of the side it serves, the medium on
 /// that side.
@@ -100,12 +103,8 @@ pub fn make_record(
         },
         |j, k| Rng::keyed(key, &[(j * n + k) as u64]).next_2d(),
     );
-    let (es, em) = g.irradiance();
-    let e = Rgb::new(
-        (es[0] + em[0]) as f32,
-        (es[1] + em[1]) as f32,
-        (es[2] + em[2]) as f32,
-    );
+    let total = g.total_irradiance();
+    let e = Rgb::new(total[0] as f32, total[1] as f32, total[2] as f32);
     let samples = g.hemisphere_samples();
     let mut grad_t = to_world(
         &g.gradient_parts().total(params.media_gradient),
@@ -146,35 +145,19 @@ pub fn make_record(
 /// its BSDF is purely diffuse (the only surfaces the cache serves in media).
 #[must_use]
 pub fn first_site(scene: &Scene, ray: ircache_math::Ray) -> Option<RecordSite> {
-    let mut ray = ray;
-    let mut medium = scene.camera_medium;
-    for _ in 0..MAX_CROSSINGS {
-        let hit = scene.accel.intersect(&ray)?;
-        let it = scene.interaction(&ray, &hit);
-        let shape = &scene.shapes[it.shape as usize];
-        if shape.null {
-            medium = medium_after(shape.media, it.ng, ray.d, medium);
-            ray = scene.spawn_ray(&it, ray.d);
-            continue;
-        }
-        let bsdf = scene.materials[shape.material].at(it.uv);
-        if !bsdf.is_diffuse_only() {
-            return None;
-        }
-        let wo = -ray.d;
-        let n = if it.base_n.dot(wo) < 0.0 {
-            -it.base_n
-        } else {
-            it.base_n
-        };
-        return Some(RecordSite {
-            p: it.p,
-            ng: it.ng,
-            n,
-            medium: medium_after(shape.media, it.ng, n, medium),
-        });
+    let hit = first_opaque(scene, ray, scene.camera_medium, &mut 0, |_, _, _| {})?;
+    let it = hit.it;
+    let shape = &scene.shapes[it.shape as usize];
+    if !scene.materials[shape.material].at(it.uv).is_diffuse_only() {
+        return None;
     }
-    None
+    let n = ShadingPoint::facing(it, -ray.d).n;
+    Some(RecordSite {
+        p: it.p,
+        ng: it.ng,
+        n,
+        medium: medium_after(shape.media, it.ng, n, hit.medium),
+    })
 }
 
 impl MediaCache {
@@ -190,7 +173,6 @@ impl MediaCache {
                 ErrorMetric::Ward,
                 params.neighbour_clamp,
             ),
-            gradient: params.media_gradient,
             mode: params.gradients,
             stats: MediaCacheStats::default(),
         }
@@ -208,6 +190,12 @@ impl MediaCache {
     ) -> MediaCache {
         let start = Instant::now();
         let mut cache = MediaCache::new(scene, params);
+        // Sites of one row closer than this (and facing alike) share a record.
+        let spacing = params
+            .radius_limits(2.0 * scene.radius)
+            .0
+            .max(scene.radius * 1e-3)
+            * params.accuracy;
         for y in 0..height {
             // The row's sites that no record covers yet, thinned against each other by the
             // smallest record spacing.
@@ -223,11 +211,6 @@ impl MediaCache {
                 if cache.store.covers(site.p, site.n) {
                     continue;
                 }
-                let spacing = params
-                    .radius_limits(2.0 * scene.radius)
-                    .0
-                    .max(scene.radius * 1e-3)
-                    * params.accuracy;
                 if wanted
                     .iter()
                     .any(|(_, w)| (w.p - site.p).length() < spacing && w.n.dot(site.n) > 0.9)
@@ -275,16 +258,6 @@ impl MediaCache {
             .into_iter()
             .find_map(|threshold| self.store.interpolate(p, n, n_rot, threshold, self.mode))
             .map(|i| i.e)
-    }
-
-    /// What a user should hear of: the metric used when another was asked for.
-    #[must_use]
-    pub fn note(params: &IcParams) -> Option<String> {
-        (params.error_metric != ErrorMetric::Ward).then(|| {
-            "in media the records use Ward's split-sphere metric (the chosen error metric does \
-             not see media)"
-                .to_string()
-        })
     }
 
     /// The records.

@@ -379,6 +379,13 @@ impl MediaGather {
         (es, em)
     }
 
+    /// The whole irradiance E = E_s + E_m.
+    #[must_use]
+    pub fn total_irradiance(&self) -> [f64; 3] {
+        let (es, em) = self.irradiance();
+        std::array::from_fn(|c| es[c] + em[c])
+    }
+
     /// The samples as the irradiance cache keeps them: the total cell radiance L_s + L_m and
     /// the opaque hit distance (for E, R and the rotational gradient, unchanged by media: 002 §3).
     #[must_use]

@@ -114,8 +114,6 @@ fn brute_force(
         })
     };
     let here = at(origin);
-    let (es, em) = here.irradiance();
-    let e = |p: ([f64; 3], [f64; 3])| [p.0[0] + p.1[0], p.0[1] + p.1[1], p.0[2] + p.1[2]];
     let samples_here = here.hemisphere_samples();
     let nearest = samples_here
         .distance
@@ -130,14 +128,14 @@ fn brute_force(
     let mut grad = [Vec3::ZERO; 3];
     for axis in [axes[0], axes[1]] {
         let (plus, minus) = (
-            e(at(origin + axis * h).irradiance()),
-            e(at(origin - axis * h).irradiance()),
+            at(origin + axis * h).total_irradiance(),
+            at(origin - axis * h).total_irradiance(),
         );
         for c in 0..3 {
             grad[c] += axis.as_vec3() * ((plus[c] - minus[c]) / (2.0 * h)) as f32;
         }
     }
-    let total = e((es, em));
+    let total = here.total_irradiance();
     let grad_r = to_world(&samples_here.rotational_gradient(), frame.s, frame.t);
     (
         Rgb::new(total[0] as f32, total[1] as f32, total[2] as f32),

@@ -11,7 +11,9 @@
 
 use super::gradient::{DVec3, GatherMedium};
 use crate::integrators::RayCounts;
-use crate::media::tracking::{medium_after, transmittance_along, MAX_CROSSINGS};
+use crate::media::tracking::{
+    first_opaque, medium_after, transmittance_along, OpaqueHit, MAX_CROSSINGS,
+};
 use crate::scene::Scene;
 use ircache_math::{offset_ray_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use std::cell::RefCell;
@@ -196,57 +198,60 @@ impl<'a> SceneMedium<'a> {
     fn trace(&self, o: DVec3, w: DVec3) -> Traced {
         let scene = self.scene;
         let d = w.as_vec3();
-        let mut ray = Ray::new(o.as_vec3(), d);
-        let mut medium = self.medium;
         let mut crossings = Vec::new();
-        let mut media = vec![medium];
-        let mut travelled = 0.0f64;
-        let mut result = (f64::INFINITY, [0.0; 3]);
-        for _ in 0..MAX_CROSSINGS {
-            self.rays.borrow_mut().gather += 1;
-            let Some(hit) = scene.accel.intersect(&ray) else {
+        let mut media = vec![self.medium];
+        // Distances from `o`, in double precision, of each segment's start plus its hit.
+        let along =
+            |segment_origin: Vec3, t: f32| (segment_origin.as_dvec3() - o).dot(w) + f64::from(t);
+        let opaque = first_opaque(
+            scene,
+            Ray::new(o.as_vec3(), d),
+            self.medium,
+            &mut self.rays.borrow_mut().gather,
+            |segment_origin, it, beyond| {
+                crossings.push((along(segment_origin, it.t), it.ng.as_dvec3()));
+                media.push(beyond);
+            },
+        );
+        let (s, radiance) = match opaque {
+            None => {
+                let mut l = [0.0; 3];
                 if scene.lights.has_environment() && self.include_emitters {
-                    let l = scene.lights.environment_radiance(d);
-                    result.1 = [l.r, l.g, l.b].map(f64::from);
+                    let e = scene.lights.environment_radiance(d);
+                    l = [e.r, e.g, e.b].map(f64::from);
                 }
-                break;
-            };
-            let it = scene.interaction(&ray, &hit);
-            let t = travelled + f64::from(hit.t);
-            let shape = &scene.shapes[it.shape as usize];
-            if shape.null {
-                medium = medium_after(shape.media, it.ng, d, medium);
-                crossings.push((t, it.ng.as_dvec3()));
-                media.push(medium);
-                let next = offset_ray_origin(it.p, it.ng, d, scene.scale);
-                travelled = (next.as_dvec3() - o).dot(w);
-                ray = Ray::new(next, d);
-                continue;
+                (f64::INFINITY, l)
             }
-            // The opaque hit: its emission (when counted) and direct light reflected towards o.
-            let wo = -d;
-            let mut l = Rgb::ZERO;
-            if self.include_emitters {
-                if let Some(light) = shape.area_light {
-                    l += scene.lights.area_radiance(light, it.frame.n, wo);
+            Some(OpaqueHit {
+                it,
+                segment_origin,
+                medium,
+            }) => {
+                // Its emission (when counted) and direct light reflected towards o.
+                let shape = &scene.shapes[it.shape as usize];
+                let wo = -d;
+                let mut l = Rgb::ZERO;
+                if self.include_emitters {
+                    if let Some(light) = shape.area_light {
+                        l += scene.lights.area_radiance(light, it.frame.n, wo);
+                    }
                 }
+                let bsdf = scene.materials[shape.material].at(it.uv);
+                if bsdf.has_smooth() {
+                    let wo_local = it.frame.to_local(wo);
+                    let side = medium_after(shape.media, it.ng, wo, medium);
+                    l += self.direct(it.p, w, Some(it.ng), side, |wi| {
+                        bsdf.eval(wo_local, it.frame.to_local(wi))
+                    });
+                }
+                (along(segment_origin, it.t), [l.r, l.g, l.b].map(f64::from))
             }
-            let bsdf = scene.materials[shape.material].at(it.uv);
-            if bsdf.has_smooth() {
-                let wo_local = it.frame.to_local(wo);
-                let side = medium_after(shape.media, it.ng, wo, medium);
-                l += self.direct(it.p, w, Some(it.ng), side, |wi| {
-                    bsdf.eval(wo_local, it.frame.to_local(wi))
-                });
-            }
-            result = (t, [l.r, l.g, l.b].map(f64::from));
-            break;
-        }
+        };
         Traced {
             o,
             w,
-            s: result.0,
-            radiance: result.1,
+            s,
+            radiance,
             crossings,
             media,
         }
