@@ -446,6 +446,14 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
             eprintln!("note: {}", ircache_render::media_cache::cache::METRIC_NOTE);
         }
     }
+    if let Some(st) = &out.volume_records {
+        eprintln!(
+            "volumetric records: {} records, {:.1} M rays; pre-pass {:.2} s",
+            st.records,
+            st.rays as f64 * 1e-6,
+            st.seconds
+        );
+    }
     if let Some(c) = &out.cache {
         let st = &c.stats;
         eprintln!(

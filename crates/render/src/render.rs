@@ -183,6 +183,8 @@ pub struct RenderOutput {
     pub cache: Option<CacheReport>,
     /// What the media cache's pre-pass did (`ic` in a scene with media).
     pub media_cache: Option<crate::media_cache::cache::MediaCacheStats>,
+    /// What building the volumetric records did (`ic` in a scene with media).
+    pub volume_records: Option<crate::media_cache::volume_records::VolumeCacheStats>,
 }
 
 /// The irradiance cache after a render.
@@ -345,6 +347,10 @@ pub fn render(
         rays.gather += st.gather_rays;
         rays.shadow += st.shadow_rays;
     }
+    let volume_records = integrator.volume_records().map(|c| c.stats);
+    if let Some(st) = &volume_records {
+        rays.gather += st.rays;
+    }
     Ok(RenderOutput {
         image,
         rays,
@@ -353,6 +359,7 @@ pub fn render(
         seconds: start.elapsed().as_secs_f64(),
         cache,
         media_cache,
+        volume_records,
     })
 }
 

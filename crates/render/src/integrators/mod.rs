@@ -6,6 +6,7 @@
 pub mod direct;
 pub mod ic;
 pub mod light_sampling;
+pub mod media_march;
 pub mod path;
 pub mod path_continuation;
 pub mod volpath;
@@ -77,6 +78,9 @@ impl Integrator {
                 rr_depth: desc.rr_depth,
                 hide_emitters: desc.hide_emitters,
                 cache: None,
+                camera_march: None,
+                first_light_samples: 1,
+                volume_records: None,
             })),
             "direct" => Ok(Integrator::Direct(direct::DirectIntegrator {
                 emitter_samples: desc.emitter_samples.max(1),
@@ -159,6 +163,16 @@ impl Integrator {
         }
     }
 
+    /// The volumetric records serving the media's in-scattered light (the `ic` integrator in a
+    /// media scene).
+    #[must_use]
+    pub fn volume_records(&self) -> Option<&crate::media_cache::volume_records::VolumeCache> {
+        match self {
+            Integrator::VolPath(v) => v.volume_records.as_deref(),
+            _ => None,
+        }
+    }
+
     /// The integrator whose pixel pass splats records (see [`crate::splatting`]), if it is one.
     #[must_use]
     pub fn splatting(&self) -> Option<&ic::IcIntegrator> {
@@ -237,12 +251,38 @@ fn media_cache_integrator(
             settings.seed,
         )
     });
-    Ok(volpath::VolPathIntegrator {
+    let mut integrator = volpath::VolPathIntegrator {
         max_depth: 3,
         rr_depth: 5,
         hide_emitters: ic.hide_emitters,
         cache: Some(std::sync::Arc::new(cache)),
-    })
+        camera_march: (p.media_march > 0).then_some(media_march::CameraMarch {
+            points: p.media_march,
+        }),
+        first_light_samples: p.direct_samples,
+        volume_records: None,
+    };
+    if p.media_volume_records && p.media_march > 0 {
+        let gatherer = volpath::VolPathIntegrator {
+            cache: None,
+            camera_march: None,
+            ..integrator.clone()
+        };
+        let records = pool.install(|| {
+            crate::media_cache::volume_records::VolumeCache::build(
+                &gatherer,
+                scene,
+                p.accuracy,
+                u32::try_from(p.divisions).unwrap_or(u32::MAX),
+                p.media_march,
+                settings.width,
+                settings.height,
+                settings.seed,
+            )
+        });
+        integrator.volume_records = Some(std::sync::Arc::new(records));
+    }
+    Ok(integrator)
 }
 
 /// Power heuristic with β = 2 (Veach 1997), as Mitsuba 3's `mis_weight`.

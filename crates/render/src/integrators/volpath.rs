@@ -16,7 +16,7 @@ use crate::media::Phase;
 use crate::sampler::{dims, Sampler};
 use crate::scene::{Interaction, Scene};
 use ircache_embree::Hit;
-use ircache_math::{Ray, Rgb, Rng, Vec3};
+use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 
 /// Parameters of the volumetric path tracer.
 #[derive(Clone, Debug)]
@@ -30,14 +30,36 @@ pub struct VolPathIntegrator {
     /// Records serving the first surface's diffuse indirect light (the `ic` integrator in a
     /// media scene, `max_depth` 3; see [`crate::media_cache::cache`]).
     pub cache: Option<std::sync::Arc<crate::media_cache::cache::MediaCache>>,
+    /// Camera rays marched through media instead of tracked (the cache's pixel pass; see
+    /// [`super::media_march`]); `None`: Mitsuba's `volpath`.
+    pub camera_march: Option<super::media_march::CameraMarch>,
+    /// Light samples at a first surface the media cache serves (`--direct-samples`).
+    pub first_light_samples: u32,
+    /// Volumetric records serving the in-scattered indirect light at the march's points.
+    pub volume_records: Option<std::sync::Arc<crate::media_cache::volume_records::VolumeCache>>,
 }
 
 /// Where a light sample is taken.
-enum Vertex<'a> {
+pub(crate) enum Vertex<'a> {
     /// A surface point with its BSDF, outgoing direction in the local frame.
     Surface(&'a Interaction, &'a crate::bsdf::Bsdf, Vec3),
     /// A point in a medium, reached along `d`, with the medium's phase function.
     Medium(Vec3, Vec3, Phase),
+}
+
+/// A path about to find its next vertex.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PathState {
+    /// The ray.
+    pub ray: Ray,
+    /// The medium the ray starts in.
+    pub medium: Option<usize>,
+    /// Throughput so far.
+    pub beta: Rgb,
+    /// Depth of the vertex it will find.
+    pub depth: u32,
+    /// How it arrives there (the weight of emission found).
+    pub arrival: Arrival,
 }
 
 impl VolPathIntegrator {
@@ -51,19 +73,65 @@ impl VolPathIntegrator {
         sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Rgb {
-        let max_depth = u32::try_from(self.max_depth).unwrap_or(u32::MAX);
         sampler.set_dimension(dims::vertex(0, dims::CACHE));
         let mut rng = Rng::new(sampler.next_key(), 0x766f_6c70);
-        let mut ray = *ray;
-        let mut medium = scene.camera_medium;
-        let mut beta = Rgb::ONE;
-        let mut l = Rgb::ZERO;
-        let mut depth = 0u32;
-        let mut eta = 1.0f32;
-        let mut arrival = Arrival::Camera {
+        let arrival = Arrival::Camera {
             hide_emitters: self.hide_emitters,
         };
-        let mut first = Some(first_hit.copied());
+        if let Some(march) = self.camera_march {
+            return super::media_march::li(
+                self, march, scene, ray, first_hit, arrival, sampler, &mut rng, rays,
+            );
+        }
+        let start = PathState {
+            ray: *ray,
+            medium: scene.camera_medium,
+            beta: Rgb::ONE,
+            depth: 0,
+            arrival,
+        };
+        self.trace(
+            scene,
+            start,
+            Some(first_hit.copied()),
+            false,
+            sampler,
+            &mut rng,
+            rays,
+        )
+    }
+
+    /// The largest depth as a count (−1: unbounded).
+    pub(crate) fn depth_limit(&self) -> u32 {
+        u32::try_from(self.max_depth).unwrap_or(u32::MAX)
+    }
+
+    /// Radiance arriving along `start.ray`, whose closest hit the caller may have traced
+    /// (`first`); with `skip_first_medium` the medium before that hit is left out (the caller
+    /// accounted for it: [`super::media_march`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn trace(
+        &self,
+        scene: &Scene,
+        start: PathState,
+        first: Option<Option<Hit>>,
+        skip_first_medium: bool,
+        sampler: &mut dyn Sampler,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Rgb {
+        let max_depth = self.depth_limit();
+        let PathState {
+            mut ray,
+            mut medium,
+            mut beta,
+            mut depth,
+            mut arrival,
+        } = start;
+        let mut l = Rgb::ZERO;
+        let mut eta = 1.0f32;
+        let mut first = first;
+        let mut skip_medium = skip_first_medium;
         let mut crossings = 0u32;
         loop {
             if depth >= max_depth {
@@ -77,11 +145,10 @@ impl VolPathIntegrator {
                 }
             };
             let t_hit = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-            if let Some(m) = medium {
+            if let Some(m) = medium.filter(|_| !std::mem::take(&mut skip_medium)) {
                 let med = &scene.media[m];
                 let mut emitted = Rgb::ZERO;
-                let flight =
-                    sample_flight(med, ray.o, ray.d, t_hit, &mut beta, &mut emitted, &mut rng);
+                let flight = sample_flight(med, ray.o, ray.d, t_hit, &mut beta, &mut emitted, rng);
                 l += emitted;
                 match flight {
                     Flight::Absorbed => break,
@@ -93,7 +160,7 @@ impl VolPathIntegrator {
                             let vertex = Vertex::Medium(p, ray.d, med.phase);
                             l += beta
                                 * sample_light(
-                                    scene, &vertex, medium, depth, true, sampler, &mut rng, rays,
+                                    scene, &vertex, medium, depth, true, sampler, rng, rays,
                                 );
                         }
                         sampler.set_dimension(dims::vertex(depth, dims::BSDF));
@@ -159,18 +226,25 @@ impl VolPathIntegrator {
                 let sp = ShadingPoint::facing(it, wo);
                 if let Some(e) = cache.irradiance(it.p, sp.n, sp.n_bump) {
                     let vertex = Vertex::Surface(&it, &bsdf, wo_local);
-                    l += beta
-                        * sample_light(
-                            scene, &vertex, medium, depth, false, sampler, &mut rng, rays,
-                        );
+                    // Several light samples here (`--direct-samples`): the lattice shifted by
+                    // the sampler's numbers, so the first stays stratified across the pixel.
+                    sampler.set_dimension(dims::vertex(depth, dims::LIGHT));
+                    let (u_sel, u) = (sampler.next_1d(), sampler.next_2d());
+                    let shift = [u_sel, u.x, u.y];
+                    let n = self.first_light_samples.max(1);
+                    let mut direct = Rgb::ZERO;
+                    for i in 0..n {
+                        let u = super::media_march::lattice_point(shift, i);
+                        direct += light_sample_with(scene, &vertex, medium, false, u, rng, rays);
+                    }
+                    l += beta * direct / n as f32;
                     l += beta * bsdf.lambertian_albedo(wo_local) * e * ircache_math::INV_PI;
                     break;
                 }
             }
             if bsdf.has_smooth() && !scene.lights.is_empty() {
                 let vertex = Vertex::Surface(&it, &bsdf, wo_local);
-                l += beta
-                    * sample_light(scene, &vertex, medium, depth, true, sampler, &mut rng, rays);
+                l += beta * sample_light(scene, &vertex, medium, depth, true, sampler, rng, rays);
             }
             let strategy = super::light_sampling::BsdfStrategy::All;
             let Some((bs, wi)) = super::path_continuation::sample_continuation(
@@ -196,9 +270,8 @@ impl VolPathIntegrator {
     }
 }
 
-/// One light sample at `vertex` (in `medium`, on the side the light lies for a surface), with
-/// transmittance through media and `null` boundaries, weighted against the vertex's phase or
-/// BSDF sample by the power heuristic (`mis`), or alone where no such sample follows.
+/// One light sample at `vertex` from the sampler's dimensions of vertex `depth`; see
+/// [`light_sample_with`].
 #[allow(clippy::too_many_arguments)]
 fn sample_light(
     scene: &Scene,
@@ -213,6 +286,22 @@ fn sample_light(
     sampler.set_dimension(dims::vertex(depth, dims::LIGHT));
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
+    light_sample_with(scene, vertex, medium, mis, (u_sel, u), rng, rays)
+}
+
+/// One light sample at `vertex` (in `medium`, on the side the light lies for a surface) drawn
+/// with `u` (light choice, position), with transmittance through media and `null` boundaries,
+/// weighted against the vertex's phase or BSDF sample by the power heuristic (`mis`), or alone
+/// where no such sample follows.
+pub(crate) fn light_sample_with(
+    scene: &Scene,
+    vertex: &Vertex,
+    medium: Option<usize>,
+    mis: bool,
+    (u_sel, u): (f32, Vec2),
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> Rgb {
     let p = match vertex {
         Vertex::Surface(it, ..) => it.p,
         Vertex::Medium(p, ..) => *p,

@@ -168,6 +168,10 @@ pub struct IcParams {
     pub media_gradient: crate::media_cache::gradient::MediaGradient,
     /// Light samples per surface hit and per march step of a gather through media.
     pub media_light_samples: u32,
+    /// In media: quadrature points per camera-ray segment of the pixel pass (0: delta tracking).
+    pub media_march: u32,
+    /// In media: volumetric records serve the in-scattered indirect light at the march's points.
+    pub media_volume_records: bool,
 }
 
 impl Default for IcParams {
@@ -205,6 +209,8 @@ impl Default for IcParams {
             photon_records: false,
             media_gradient: crate::media_cache::gradient::MediaGradient::Corrected,
             media_light_samples: 1,
+            media_march: 8,
+            media_volume_records: true,
         }
     }
 }
@@ -691,6 +697,37 @@ pub const PARAMS: &[ParamSpec] = &[
         get: |p| p.media_light_samples.to_string(),
         set: |p, v| {
             p.media_light_samples = number(v, 1u32, 1024, "a number of light samples")?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "media_march",
+        aliases: &[],
+        value: "N",
+        help: "in scenes with participating media, the pixel pass marches camera rays: the \
+               medium's single scattering and emission by N stratified points per segment (fewer \
+               where it scatters little), each with a light sample, and the surface behind \
+               weighted by its transmittance; 0 tracks them as volpath does (one collision or \
+               none)",
+        shapes_records: false,
+        get: |p| p.media_march.to_string(),
+        set: |p, v| {
+            p.media_march = number(v, 0u32, 1024, "a number of points")?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "media_volume_records",
+        aliases: &[],
+        value: "on|off",
+        help: "in scenes with participating media, with --media-march: records inside the \
+               medium hold its in-scattered indirect light (spherical harmonics of bands 0–2, \
+               gathered with --divisions paths) and serve the march's points; off: a \
+               phase-sampled path from one collision per camera sample",
+        shapes_records: false,
+        get: |p| if p.media_volume_records { "on" } else { "off" }.to_string(),
+        set: |p, v| {
+            p.media_volume_records = on_off(v)?;
             Ok(())
         },
     },

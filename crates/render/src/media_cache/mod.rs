@@ -7,8 +7,11 @@
 //!   in the notes' consistent form, with the paper's literal reading and the older ones for
 //!   comparison ([`gradient::MediaGradient`]). It sees the scene through a narrow interface
 //!   ([`gradient::GatherMedium`]) so that it is tested against closed forms.
+//! - [`cache`]: surface records gathered through media (stage 1).
+//! - [`volume_records`]: records of the in-scattered indirect light inside media (stage 2).
 
 pub mod cache;
 pub mod gradient;
 pub mod points;
 pub mod scene_medium;
+pub mod volume_records;

@@ -1,0 +1,482 @@
+//! Camera rays marched through media: the pixel pass of the cache in media (NOTES-002 §2.8,
+//! "Rendering"). Delta tracking (`volpath`) lets each camera sample find one collision or none,
+//! so the fog's single scattering gets one light sample per pixel sample and a surface behind
+//! fog is seen or not (a binary weight). Here the light the medium scatters towards the camera
+//! is split as 002 eqs. 2–4 split a gather ray's:
+//!
+//! - **single scattering and emission**, ∫ T(0,t) [σ_s ∫ f_p L_direct dω + σ_a L_e] dt, by
+//!   stratified quadrature: `points` distances per segment, one in each stratum of equal
+//!   scattering probability (the inverse of 1 − T̄ in homogeneous media; equal lengths with
+//!   ratio-tracked transmittance in grids), each with a light sample from a randomly shifted
+//!   rank-1 lattice (unbiased for a random shift: Cranley–Patterson);
+//! - **the surface behind**, weighted by the transmittance T(0,s) (closed form, or ratio
+//!   tracking) instead of a survival test, shaded as `volpath` shades it (direct light and the
+//!   media cache's records);
+//! - **the in-scattered indirect light**, ∫ T σ_s ∫ f_p L_indirect dω dt, by one delta-tracking
+//!   collision per camera sample whose phase-sampled path leaves out the emitters it reaches
+//!   directly (the quadrature's light samples hold them).
+//!
+//! The three are unbiased and their sum converges to `volpath` (tested against it).
+
+use super::path_continuation::{count_and_roulette, Arrival};
+use super::volpath::{light_sample_with, PathState, Vertex, VolPathIntegrator};
+use super::RayCounts;
+use crate::media::tracking::{medium_after, sample_flight, transmittance, Flight, MAX_CROSSINGS};
+use crate::media::{Medium, Phase};
+use crate::sampler::Sampler;
+use crate::scene::Scene;
+use ircache_embree::Hit;
+use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
+
+/// How camera rays are marched.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CameraMarch {
+    /// Quadrature points per medium segment of a camera ray where it is opaque (fewer where
+    /// the segment scatters little: a point per 1/`points` of scattering probability).
+    pub points: u32,
+}
+
+/// The generator of the light samples' lattice: 1/φ₃, 1/φ₃², 1/φ₃³ with φ₃ the plastic number
+/// (Roberts' R₃ sequence, well spread in every projection).
+const LATTICE: [f32; 3] = [0.819_172_5, 0.671_043_5, 0.549_700_5];
+
+/// Point `i` of the lattice shifted by `shift` (light choice, position on the light).
+#[must_use]
+pub fn lattice_point(shift: [f32; 3], i: u32) -> (f32, Vec2) {
+    let at = |k: usize| (shift[k] + i as f32 * LATTICE[k]).fract();
+    (at(0), Vec2::new(at(1), at(2)))
+}
+
+/// Radiance along the camera ray `ray` (closest hit `first_hit`), marched (see the module).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn li(
+    integrator: &VolPathIntegrator,
+    march: CameraMarch,
+    scene: &Scene,
+    ray: &Ray,
+    first_hit: Option<&Hit>,
+    arrival: Arrival,
+    sampler: &mut dyn Sampler,
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> Rgb {
+    let max_depth = integrator.depth_limit();
+    let mut l = Rgb::ZERO;
+    let mut ray = *ray;
+    let mut hit = first_hit.copied();
+    let mut medium = scene.camera_medium;
+    // Transmittance from the camera to the current segment's start.
+    let mut tr = Rgb::ONE;
+    // The delta-tracking walk that finds the in-scattered indirect light's collision.
+    let mut collision_beta = Rgb::ONE;
+    let mut collision: Option<(Vec3, Vec3, Option<usize>, Phase, bool)> = None;
+    // (The volumetric records serve it at the quadrature's points instead, where they exist.)
+    let mut tracking = max_depth > 2 && integrator.volume_records.is_none();
+    for _ in 0..MAX_CROSSINGS {
+        let t_hit = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+        if let Some(m) = medium {
+            let med = &scene.media[m];
+            let (light, segment) = march_segment(
+                integrator,
+                scene,
+                med,
+                medium,
+                &ray,
+                t_hit,
+                march.points,
+                max_depth,
+                rng,
+                rays,
+            );
+            l += tr * light;
+            if tracking {
+                let mut ignored = Rgb::ZERO;
+                match sample_flight(
+                    med,
+                    ray.o,
+                    ray.d,
+                    t_hit,
+                    &mut collision_beta,
+                    &mut ignored,
+                    rng,
+                ) {
+                    Flight::Absorbed => tracking = false,
+                    Flight::Passed => {}
+                    Flight::Scattered { t, .. } => {
+                        let sample_emitters = med.sample_emitters && !scene.lights.is_empty();
+                        collision = Some((ray.at(t), ray.d, medium, med.phase, sample_emitters));
+                        tracking = false;
+                    }
+                }
+            }
+            tr *= segment;
+            if tr.is_black() && !tracking {
+                break;
+            }
+        }
+        let Some(h) = hit else {
+            break;
+        };
+        let shape = &scene.shapes[h.geom_id as usize];
+        if !shape.null {
+            break;
+        }
+        let it = scene.interaction(&ray, &h);
+        medium = medium_after(shape.media, it.ng, ray.d, medium);
+        ray = scene.spawn_ray(&it, ray.d);
+        rays.bounce += 1;
+        hit = scene.accel.intersect(&ray);
+    }
+
+    // The surface behind the fog (or the environment), seen through it.
+    if !tr.is_black() {
+        let start = PathState {
+            ray,
+            medium,
+            beta: tr,
+            depth: 0,
+            arrival,
+        };
+        l += integrator.trace(scene, start, Some(hit), true, sampler, rng, rays);
+    }
+
+    // The in-scattered indirect light from the collision, on a stream of its own (its
+    // dimensions would repeat the surface path's).
+    if let Some((p, d, medium, phase, sample_emitters)) = collision {
+        let at = MarchPoint { p, d, medium };
+        let key = u64::from(rng.next_u32());
+        l += collision_beta
+            * in_scattered_by_path(
+                integrator,
+                scene,
+                &at,
+                phase,
+                sample_emitters,
+                key,
+                rng,
+                rays,
+            );
+    }
+    l
+}
+
+/// The light `medium` sends towards the camera along `ray` up to `t_hit` (from the segment's
+/// start, without the transmittance before it) and the segment's transmittance: the quadrature
+/// of [`quadrature_points`], each point's source from [`source`].
+#[allow(clippy::too_many_arguments)]
+fn march_segment(
+    integrator: &VolPathIntegrator,
+    scene: &Scene,
+    med: &Medium,
+    medium: Option<usize>,
+    ray: &Ray,
+    t_hit: f32,
+    points: u32,
+    max_depth: u32,
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> (Rgb, Rgb) {
+    let mut jitter = Rng::new(u64::from(rng.next_u32()), 0x6a69_7474);
+    let (quadrature, segment) =
+        quadrature_points(med, ray, t_hit, points, || jitter.next_f32(), rng);
+    let shift = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+    let mut sum = Rgb::ZERO;
+    for (i, &(t, weight)) in quadrature.iter().enumerate() {
+        let u = lattice_point(shift, i as u32);
+        let at = MarchPoint {
+            p: ray.at(t),
+            d: ray.d,
+            medium,
+        };
+        sum += weight * source(integrator, scene, med, &at, max_depth, u, rng, rays);
+    }
+    (sum, segment)
+}
+
+/// A quadrature point of a camera ray.
+struct MarchPoint {
+    p: Vec3,
+    /// The camera ray's direction.
+    d: Vec3,
+    medium: Option<usize>,
+}
+
+/// The light a point of `med` sends back along the camera ray per unit length: emission σ_a L_e,
+/// single scattering σ_s ∫ f_p L_direct by a light sample drawn with `u`, and where paths go on
+/// (`max_depth` > 2) the in-scattered indirect light from the volumetric records, or where
+/// none serves, by a phase-sampled path that leaves out the emitters it meets directly.
+#[allow(clippy::too_many_arguments)]
+fn source(
+    integrator: &VolPathIntegrator,
+    scene: &Scene,
+    med: &Medium,
+    at: &MarchPoint,
+    max_depth: u32,
+    u: (f32, Vec2),
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> Rgb {
+    let c = med.at(at.p);
+    let mut q = if med.emits() {
+        c.sigma_a() * c.emission
+    } else {
+        Rgb::ZERO
+    };
+    if c.sigma_s.is_black() || max_depth < 2 {
+        return q;
+    }
+    let sample_emitters = med.sample_emitters && !scene.lights.is_empty();
+    if sample_emitters {
+        let vertex = Vertex::Medium(at.p, at.d, med.phase);
+        q += c.sigma_s * light_sample_with(scene, &vertex, at.medium, false, u, rng, rays);
+    }
+    if max_depth > 2 {
+        if let Some(records) = &integrator.volume_records {
+            let cached = at
+                .medium
+                .and_then(|m| records.in_scattered(at.p, m, at.d, med.phase));
+            let indirect = cached.unwrap_or_else(|| {
+                let key = u64::from(rng.next_u32());
+                in_scattered_by_path(
+                    integrator,
+                    scene,
+                    at,
+                    med.phase,
+                    sample_emitters,
+                    key,
+                    rng,
+                    rays,
+                )
+            });
+            q += c.sigma_s * indirect;
+        }
+    }
+    q
+}
+
+/// The in-scattered indirect light at `at` towards the camera by one phase-sampled path on a
+/// stream of its own (keyed by `key`), leaving out the emitters it meets directly where the
+/// light samples hold them (`sample_emitters`).
+#[allow(clippy::too_many_arguments)]
+fn in_scattered_by_path(
+    integrator: &VolPathIntegrator,
+    scene: &Scene,
+    at: &MarchPoint,
+    phase: Phase,
+    sample_emitters: bool,
+    key: u64,
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> Rgb {
+    let mut stream = Rng::new(key, 0x006d_6172_6368);
+    let (w, pdf) = phase.sample(at.d, stream.next_2d());
+    let mut beta = Rgb::ONE;
+    let mut depth = 0;
+    if !count_and_roulette(&mut depth, &mut beta, 1.0, integrator.rr_depth, &mut stream) {
+        return Rgb::ZERO;
+    }
+    let start = PathState {
+        ray: Ray::new(at.p, w),
+        medium: at.medium,
+        beta,
+        depth,
+        arrival: indirect_arrival(at.p, pdf, sample_emitters),
+    };
+    integrator.trace(scene, start, None, false, &mut stream, rng, rays)
+}
+
+/// How a path that carries only indirect light arrives at its next vertex: emitters found there
+/// count nothing where light samples took them (`sample_emitters`), fully where none did.
+pub(crate) fn indirect_arrival(p: Vec3, pdf: f32, sample_emitters: bool) -> Arrival {
+    if sample_emitters {
+        Arrival::Gather
+    } else {
+        Arrival::Bsdf {
+            p,
+            pdf,
+            delta: false,
+            light_samples: 0,
+        }
+    }
+}
+
+/// The quadrature of a medium segment of `ray` up to `t_hit`: distances with weights
+/// T(t₀, t)/(n pdf(t)) (`jitter` places each in its stratum), and the segment's transmittance.
+/// Homogeneous media: one distance per stratum of equal scattering probability under the
+/// channels' mean extinction σ̄, pdf = σ̄ e^{−σ̄ s}/(1 − e^{−σ̄ L}); grids: equal lengths, T
+/// ratio-tracked from point to point with `rng`. `points` strata where the segment is opaque,
+/// fewer where it scatters little ([`strata`]).
+pub(crate) fn quadrature_points(
+    med: &Medium,
+    ray: &Ray,
+    t_hit: f32,
+    points: u32,
+    mut jitter: impl FnMut() -> f32,
+    rng: &mut Rng,
+) -> (Vec<(f32, Rgb)>, Rgb) {
+    let Some((t0, t1)) = med.clip(ray.o, ray.d, t_hit) else {
+        return (Vec::new(), Rgb::ONE);
+    };
+    let length = t1 - t0;
+    if med.homogeneous {
+        let sigma_t = med.at(ray.at(t0)).sigma_t;
+        let segment = (sigma_t * -length)
+            .exp()
+            .map(|x| if x.is_nan() { 0.0 } else { x });
+        let mean = sigma_t.mean();
+        if mean <= 0.0 || !length.is_finite() {
+            return (Vec::new(), segment);
+        }
+        let mass = -(-mean * length).exp_m1();
+        let n = strata(points, mass);
+        let out = (0..n)
+            .map(|i| {
+                let xi = (i as f32 + jitter()) / n as f32;
+                let s = (-(-xi * mass).ln_1p() / mean).min(length);
+                let weight = (sigma_t * -s).exp() * (mass / (n as f32 * mean * (-mean * s).exp()));
+                (t0 + s, weight)
+            })
+            .collect();
+        return (out, segment);
+    }
+    if !length.is_finite() {
+        return (Vec::new(), Rgb::ONE);
+    }
+    let n = strata(points, -(-med.majorant * length).exp_m1());
+    let step = length / n as f32;
+    let mut out = Vec::with_capacity(n as usize);
+    let mut tr = Rgb::ONE;
+    let mut at = t0;
+    for i in 0..n {
+        let t = t0 + (i as f32 + jitter()) * step;
+        tr *= transmittance(med, ray.at(at), ray.d, t - at, rng);
+        at = t;
+        if tr.is_black() {
+            return (out, Rgb::ZERO);
+        }
+        out.push((t, tr * step));
+    }
+    tr *= transmittance(med, ray.at(at), ray.d, t1 - at, rng);
+    (out, tr)
+}
+
+/// Points for a segment whose scattering probability is `mass`: one per 1/`points` of it, at
+/// least one.
+fn strata(points: u32, mass: f32) -> u32 {
+    ((points as f32 * mass).ceil() as u32).clamp(1, points.max(1))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ircache_math::Mat4;
+    use ircache_scene::{
+        GridVolumeDesc, MediumDesc, MediumKind, PhaseDesc, SourceLocation, TextureFilter,
+        VolumeDesc, WrapMode,
+    };
+    use std::sync::Arc;
+
+    fn medium(sigma_t: VolumeDesc) -> Medium {
+        Medium::from_desc(&MediumDesc {
+            id: None,
+            kind: if matches!(sigma_t, VolumeDesc::Grid(_)) {
+                MediumKind::Heterogeneous
+            } else {
+                MediumKind::Homogeneous
+            },
+            sigma_t,
+            albedo: VolumeDesc::constant(Rgb::splat(0.5)),
+            emission: None,
+            scale: 1.0,
+            phase: PhaseDesc::Isotropic,
+            sample_emitters: true,
+            location: SourceLocation {
+                file: Arc::new("<test>".into()),
+                line: 1,
+                column: 1,
+            },
+        })
+    }
+
+    /// The mean over jitters of the quadrature's weights is ∫ T dt per channel (the weights
+    /// are unbiased), and the segment's transmittance is T(L): a homogeneous medium with
+    /// different extinctions per channel (closed form (1 − e^{−σL})/σ), a thin one, and a
+    /// grid whose extinction rises along the ray (∫ e^{−τ(t)} dt by fine midpoint sums).
+    #[test]
+    fn quadrature_weights_integrate_the_transmittance() {
+        let ray = Ray::new(Vec3::ZERO, Vec3::X);
+        let mut rng = Rng::new(3, 4);
+        let runs = 20_000;
+        for (sigma, length) in [(Rgb::new(0.5, 1.0, 3.0), 2.0f32), (Rgb::splat(0.01), 1.0)] {
+            let med = medium(VolumeDesc::constant(sigma));
+            let mut sum = Rgb::ZERO;
+            for _ in 0..runs {
+                let mut jitter = Rng::new(u64::from(rng.next_u32()), 1);
+                let (points, segment) =
+                    quadrature_points(&med, &ray, length, 8, || jitter.next_f32(), &mut rng);
+                let expected = (sigma * -length).exp();
+                assert!((0..3).all(|c| (segment[c] - expected[c]).abs() < 1e-6));
+                for (_, w) in points {
+                    sum += w;
+                }
+            }
+            let mean = sum / runs as f32;
+            let exact = (Rgb::ONE - (sigma * -length).exp()) / sigma;
+            for c in 0..3 {
+                let rel = (mean[c] - exact[c]).abs() / exact[c];
+                assert!(
+                    rel < 0.01,
+                    "σ {sigma:?}: channel {c} mean {} exact {}",
+                    mean[c],
+                    exact[c]
+                );
+            }
+        }
+        // σ_t(x) = 0.2 + 1.8 x on [0, 1]³ (linear in x, so trilinear filtering is exact).
+        let res = [16, 2, 2];
+        let mut data = Vec::new();
+        for _z in 0..2 {
+            for _y in 0..2 {
+                for x in 0..16 {
+                    data.push(0.2 + 1.8 * (x as f32 + 0.5) / 16.0);
+                }
+            }
+        }
+        let med = medium(VolumeDesc::Grid(Arc::new(GridVolumeDesc {
+            path: "<test>".into(),
+            resolution: res,
+            channels: 1,
+            data,
+            to_world: Mat4::IDENTITY,
+            filter: TextureFilter::Bilinear,
+            wrap: WrapMode::Clamp,
+        })));
+        let ray = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
+        let sigma = |x: f32| 0.2 + 1.8 * x.clamp(1.0 / 32.0, 31.0 / 32.0);
+        let (mut exact, mut tau, steps) = (0.0f64, 0.0f64, 100_000);
+        for i in 0..steps {
+            let x = (i as f32 + 0.5) / steps as f32;
+            let dt = 1.0 / f64::from(steps);
+            exact += (-(tau + 0.5 * f64::from(sigma(x)) * dt)).exp() * dt;
+            tau += f64::from(sigma(x)) * dt;
+        }
+        let (mut sum, mut segment_sum) = (0.0f64, 0.0f64);
+        for _ in 0..runs {
+            let mut jitter = Rng::new(u64::from(rng.next_u32()), 2);
+            let (points, segment) =
+                quadrature_points(&med, &ray, 5.0, 8, || jitter.next_f32(), &mut rng);
+            segment_sum += f64::from(segment.g);
+            sum += points.iter().map(|&(_, w)| f64::from(w.g)).sum::<f64>();
+        }
+        let (mean, mean_segment) = (sum / f64::from(runs), segment_sum / f64::from(runs));
+        assert!(
+            (mean - exact).abs() / exact < 0.01,
+            "grid: {mean} against {exact}"
+        );
+        assert!(
+            (mean_segment - (-tau).exp()).abs() < 0.01,
+            "grid transmittance {mean_segment} against {}",
+            (-tau).exp()
+        );
+    }
+}

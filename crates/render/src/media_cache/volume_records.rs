@@ -1,0 +1,410 @@
+//! Volumetric records: the in-scattered indirect light of a medium cached at points inside it
+//! (NOTES-002 §2.8, stage 2; 002 itself caches nothing in the medium and cites JDZJ08 for it).
+//!
+//! A record at x holds the indirect radiance arriving there, L_ind(x, ω) (everything but the
+//! emitters seen directly, which the pixel pass samples), projected onto real spherical
+//! harmonics of bands 0–2 (nine coefficients a colour) by a stratified gather over the sphere
+//! whose paths are `volpath`'s own. The phase function's in-scattering then follows by
+//! Funk–Hecke: with Henyey–Greenstein's Legendre coefficients gˡ, the light scattered towards a
+//! camera ray travelling along d is Σ_lm gˡ L_lm Y_lm(d) (isotropic: the l = 0 term alone).
+//! Bands above 2 are dropped: their share is at most g³ of the directional detail.
+//!
+//! Records are placed by a pre-pass along camera rays at the pixel pass's own quadrature points
+//! (one row at a time, gathered in parallel, inserted in row order: the same cache at any
+//! thread count), with Ward's radius R = the harmonic mean distance of the gather's first hits
+//! bounded to [scene size/64, scene size/4], serving within a·R with weights 1 − ε (ε the
+//! distance over a·R) and no gradients; a record serves only its own medium.
+
+use crate::integrators::media_march::{indirect_arrival, quadrature_points};
+use crate::integrators::volpath::{PathState, VolPathIntegrator};
+use crate::integrators::RayCounts;
+use crate::irradiance_cache::record::{CachedRecord, ErrorMetric};
+use crate::irradiance_cache::store::RecordStore;
+use crate::media::tracking::{medium_after, MAX_CROSSINGS};
+use crate::media::Phase;
+use crate::scene::Scene;
+use ircache_math::harmonics::sh::ShBasis;
+use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3, PI};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Coefficients a colour: bands 0, 1 and 2.
+pub const COEFFICIENTS: usize = 9;
+const ORDER: usize = 3;
+
+/// A record of the in-scattered indirect light at a point of a medium.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeRecord {
+    /// Position.
+    pub p: Vec3,
+    /// Ward's radius (the harmonic mean distance of the gather's hits, bounded).
+    pub r: f32,
+    /// The medium it lies in.
+    pub medium: usize,
+    /// L_ind's spherical-harmonic coefficients, index l² + l + m.
+    pub radiance: [Rgb; COEFFICIENTS],
+}
+
+impl CachedRecord for VolumeRecord {
+    fn position(&self) -> Vec3 {
+        self.p
+    }
+    fn normal(&self) -> Vec3 {
+        Vec3::Z
+    }
+    fn radius(&self) -> f32 {
+        self.r
+    }
+    fn set_radius(&mut self, r: f32) {
+        self.r = r;
+    }
+}
+
+impl VolumeRecord {
+    /// The light the record's medium scatters towards −`d` (a camera ray travelling along `d`)
+    /// per unit scattering coefficient: Σ_lm gˡ L_lm Y_lm(d).
+    #[must_use]
+    pub fn in_scattered(&self, d: Vec3, phase: Phase) -> Rgb {
+        let mut y = [0.0f64; COEFFICIENTS];
+        ShBasis::new(ORDER).eval(d.as_dvec3(), &mut y);
+        let g = phase.mean_cosine();
+        // Band l of index i = l² + l + m is weighted gˡ.
+        let band_weight = |i: usize| match i {
+            0 => 1.0,
+            1..=3 => g,
+            _ => g * g,
+        };
+        let mut sum = Rgb::ZERO;
+        for (i, (&c, &b)) in self.radiance.iter().zip(&y).enumerate() {
+            sum += c * (band_weight(i) * b as f32);
+        }
+        sum
+    }
+}
+
+/// What building the records did.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VolumeCacheStats {
+    /// Records made.
+    pub records: usize,
+    /// Rays traced by their gathers (every kind).
+    pub rays: u64,
+    /// Seconds of the pre-pass.
+    pub seconds: f64,
+}
+
+/// Volumetric records and their index.
+#[derive(Debug)]
+pub struct VolumeCache {
+    store: RecordStore<VolumeRecord>,
+    accuracy: f32,
+    /// What building it did.
+    pub stats: VolumeCacheStats,
+}
+
+/// Gathers a record at `p` in `medium` with `divisions` paths (deterministic for `key`):
+/// directions stratified over the sphere (θ by equal cos θ, φ twice as finely), each path
+/// `volpath`'s from depth 1, its directly seen emitters left out.
+#[must_use]
+pub fn gather(
+    integrator: &VolPathIntegrator,
+    scene: &Scene,
+    p: Vec3,
+    medium: usize,
+    divisions: u32,
+    key: u64,
+) -> (VolumeRecord, u64) {
+    let polar = ((divisions as f32 / 2.0).sqrt().round() as u32).max(2);
+    let azimuthal = 2 * polar;
+    let count = polar * azimuthal;
+    let sample_emitters = scene.media[medium].sample_emitters && !scene.lights.is_empty();
+    let mut basis = ShBasis::new(ORDER);
+    let mut y = [0.0f64; COEFFICIENTS];
+    let mut sum = [Rgb::ZERO; COEFFICIENTS];
+    let mut inverse_distances = 0.0f64;
+    let mut rays = RayCounts::default();
+    for j in 0..polar {
+        for k in 0..azimuthal {
+            let mut stream = Rng::keyed(key, &[u64::from(j * azimuthal + k)]);
+            let u = stream.next_2d();
+            let cos = 1.0 - 2.0 * (j as f32 + u.x) / polar as f32;
+            let sin = (1.0 - cos * cos).max(0.0).sqrt();
+            let phi = 2.0 * PI * (k as f32 + u.y) / azimuthal as f32;
+            let w = Vec3::new(sin * phi.cos(), sin * phi.sin(), cos);
+            let ray = Ray::new(p, w);
+            rays.bounce += 1;
+            let hit = scene.accel.intersect(&ray);
+            if let Some(h) = &hit {
+                inverse_distances += 1.0 / f64::from(h.t.max(f32::MIN_POSITIVE));
+            }
+            let start = PathState {
+                ray,
+                medium: Some(medium),
+                beta: Rgb::ONE,
+                depth: 1,
+                arrival: indirect_arrival(p, 0.25 / PI, sample_emitters),
+            };
+            let mut rng = Rng::new(u64::from(stream.next_u32()), 0x766f_6c75);
+            let l = integrator.trace(
+                scene,
+                start,
+                Some(hit),
+                false,
+                &mut stream,
+                &mut rng,
+                &mut rays,
+            );
+            basis.eval(w.as_dvec3(), &mut y);
+            for (s, &b) in sum.iter_mut().zip(&y) {
+                *s += l * b as f32;
+            }
+        }
+    }
+    let solid_angle = 4.0 * PI / count as f32;
+    let size = 2.0 * scene.radius;
+    let harmonic = if inverse_distances > 0.0 {
+        (f64::from(count) / inverse_distances) as f32
+    } else {
+        f32::INFINITY
+    };
+    let record = VolumeRecord {
+        p,
+        r: harmonic.clamp(size / 64.0, size / 4.0),
+        medium,
+        radiance: sum.map(|s| s * solid_angle),
+    };
+    (record, rays.bounce + rays.shadow + rays.gather)
+}
+
+impl VolumeCache {
+    /// An empty cache serving within `accuracy` · R.
+    #[must_use]
+    pub fn new(scene: &Scene, accuracy: f32) -> VolumeCache {
+        let min_validity = accuracy * 2.0 * scene.radius / 64.0;
+        VolumeCache {
+            store: RecordStore::new(min_validity, accuracy, ErrorMetric::Ward, false),
+            accuracy,
+            stats: VolumeCacheStats::default(),
+        }
+    }
+
+    /// Calls `f(record, ε)` for the records of `medium` whose ε = ‖p − xᵢ‖/(a Rᵢ) ≤ `threshold`.
+    fn for_each_serving(
+        &self,
+        p: Vec3,
+        medium: usize,
+        threshold: f32,
+        mut f: impl FnMut(&VolumeRecord, f32),
+    ) {
+        self.store.for_each_near_within(p, threshold, |id| {
+            let rec = &self.store.records()[id as usize];
+            if rec.medium != medium {
+                return;
+            }
+            let e = (p - rec.p).length() / (self.accuracy * rec.r);
+            if e <= threshold {
+                f(rec, e);
+            }
+        });
+    }
+
+    /// True when a record of `medium` serves `p`.
+    #[must_use]
+    pub fn covers(&self, p: Vec3, medium: usize) -> bool {
+        let mut found = false;
+        self.for_each_serving(p, medium, 1.0, |_, _| found = true);
+        found
+    }
+
+    /// The in-scattered indirect light at `p` towards a camera ray along `d` per unit
+    /// scattering coefficient, interpolated with weights 1 − ε/threshold, relaxing the
+    /// accuracy up to twice where no record serves at once; `None` where none does.
+    #[must_use]
+    pub fn in_scattered(&self, p: Vec3, medium: usize, d: Vec3, phase: Phase) -> Option<Rgb> {
+        for threshold in [1.0f32, 2.0] {
+            let mut sum = Rgb::ZERO;
+            let mut weights = 0.0f32;
+            self.for_each_serving(p, medium, threshold, |rec, e| {
+                let w = (1.0 - e / threshold).max(1e-6);
+                sum += rec.in_scattered(d, phase) * w;
+                weights += w;
+            });
+            if weights > 0.0 {
+                return Some((sum / weights).max(Rgb::ZERO));
+            }
+        }
+        None
+    }
+
+    /// The records.
+    #[must_use]
+    pub fn records(&self) -> &[VolumeRecord] {
+        self.store.records()
+    }
+
+    /// Fills the cache at the quadrature points (`points` a segment, each at its stratum's
+    /// middle) of camera rays through the centres of a `width` × `height` image, gathering
+    /// with `divisions` paths of `integrator` (run inside a rayon pool).
+    #[allow(clippy::too_many_arguments)]
+    #[must_use]
+    pub fn build(
+        integrator: &VolPathIntegrator,
+        scene: &Scene,
+        accuracy: f32,
+        divisions: u32,
+        points: u32,
+        width: usize,
+        height: usize,
+        seed: u64,
+    ) -> VolumeCache {
+        let start = Instant::now();
+        let mut cache = VolumeCache::new(scene, accuracy);
+        for y in 0..height {
+            let mut wanted: Vec<(u64, Vec3, usize)> = Vec::new();
+            for x in 0..width {
+                let film = Vec2::new(
+                    (x as f32 + 0.5) / width as f32,
+                    (y as f32 + 0.5) / height as f32,
+                );
+                let ray = scene.camera.generate_ray(film);
+                for_each_quadrature_point(scene, ray, points, |p, m| {
+                    if cache.covers(p, m) {
+                        return;
+                    }
+                    // A point close to one already wanted in this row waits for its record.
+                    let spacing = accuracy * 2.0 * scene.radius / 64.0;
+                    if wanted
+                        .iter()
+                        .any(|&(_, q, n)| n == m && (q - p).length() < spacing)
+                    {
+                        return;
+                    }
+                    let key = (y * width + x) as u64 * 64 + wanted.len() as u64;
+                    wanted.push((key, p, m));
+                });
+            }
+            let made: Vec<(VolumeRecord, u64)> = wanted
+                .par_iter()
+                .map(|&(key, p, m)| {
+                    let key =
+                        ircache_math::rng::mix64(seed ^ key.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+                    gather(integrator, scene, p, m, divisions, key)
+                })
+                .collect();
+            for (record, rays) in made {
+                if cache.covers(record.p, record.medium) {
+                    continue;
+                }
+                cache.store.insert(record);
+                cache.stats.records += 1;
+                cache.stats.rays += rays;
+            }
+        }
+        cache.stats.seconds = start.elapsed().as_secs_f64();
+        cache
+    }
+}
+
+/// Calls `f(point, medium)` at the middle of each quadrature stratum of `ray`'s medium segments
+/// (through null boundaries, up to the first opaque surface), as the pixel pass places them.
+fn for_each_quadrature_point(
+    scene: &Scene,
+    mut ray: Ray,
+    points: u32,
+    mut f: impl FnMut(Vec3, usize),
+) {
+    let mut medium = scene.camera_medium;
+    let mut rng = Rng::new(0, 0x7072_6570);
+    for _ in 0..MAX_CROSSINGS {
+        let hit = scene.accel.intersect(&ray);
+        if let Some(m) = medium {
+            let t_hit = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+            let med = &scene.media[m];
+            if !med.at(ray.o).sigma_s.is_black() || !med.homogeneous {
+                let (quadrature, _) = quadrature_points(med, &ray, t_hit, points, || 0.5, &mut rng);
+                for (t, _) in quadrature {
+                    f(ray.at(t), m);
+                }
+            }
+        }
+        let Some(h) = hit else {
+            return;
+        };
+        let shape = &scene.shapes[h.geom_id as usize];
+        if !shape.null {
+            return;
+        }
+        let it = scene.interaction(&ray, &h);
+        medium = medium_after(shape.media, it.ng, ray.d, medium);
+        ray = scene.spawn_ray(&it, ray.d);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::media::phase::henyey_greenstein;
+    use ircache_math::harmonics::quadrature;
+
+    /// A record's in-scattered light equals the integral ∫ f_p(d·ω) L(ω) dω by a fine product
+    /// rule, for incident light of bands 0–2 (exact there whatever g) and Henyey–Greenstein
+    /// phases forward, backward and isotropic.
+    #[test]
+    fn in_scattering_is_the_phase_integral() {
+        let light = |w: ircache_math::DVec3| {
+            [
+                1.0 + 0.6 * w.z + 0.3 * w.x * w.y,
+                0.5 + 0.4 * w.x * w.x - 0.2 * w.y,
+                0.8 - 0.3 * w.z * w.z + 0.1 * w.x,
+            ]
+        };
+        let rule = quadrature::sphere(24);
+        let bands: Vec<Vec<f64>> = (0..3)
+            .map(|c| ShBasis::new(ORDER).project(&rule, |w| light(w)[c]))
+            .collect();
+        let radiance: [Rgb; COEFFICIENTS] = std::array::from_fn(|i| {
+            Rgb::new(bands[0][i] as f32, bands[1][i] as f32, bands[2][i] as f32)
+        });
+        let record = VolumeRecord {
+            p: Vec3::ZERO,
+            r: 1.0,
+            medium: 0,
+            radiance,
+        };
+        let fine = quadrature::sphere(200);
+        for phase in [
+            Phase::Isotropic,
+            Phase::HenyeyGreenstein { g: 0.3 },
+            Phase::HenyeyGreenstein { g: -0.5 },
+        ] {
+            for d in [
+                Vec3::Z,
+                Vec3::new(0.6, 0.0, -0.8),
+                Vec3::new(-0.48, 0.6, 0.64),
+            ] {
+                let got = record.in_scattered(d, phase);
+                let mut exact = [0.0f64; 3];
+                for (w, &weight) in fine.directions.iter().zip(&fine.weights) {
+                    let f = match phase {
+                        Phase::Isotropic => 0.25 / std::f64::consts::PI,
+                        Phase::HenyeyGreenstein { g } => {
+                            f64::from(henyey_greenstein(g, d.as_dvec3().dot(*w) as f32))
+                        }
+                    };
+                    let l = light(*w);
+                    for c in 0..3 {
+                        exact[c] += weight * f * l[c];
+                    }
+                }
+                for c in 0..3 {
+                    assert!(
+                        (f64::from(got[c]) - exact[c]).abs() < 2e-3 * exact[c].abs().max(0.1),
+                        "{phase:?} {d:?} channel {c}: {} against {}",
+                        got[c],
+                        exact[c]
+                    );
+                }
+            }
+        }
+    }
+}
