@@ -1,10 +1,11 @@
 //! `ircache bench --only media`: participating media (issue 15) by rendering, in the same run.
 //!
 //! On `scenes/cornell-fog` at 128 pixels across: (1) the irradiance cache in the fog (one
-//! bounce, `max_depth` 3) with each `--media-gradient` form at 16 spp, against `volpath` at 8,
-//! 16, 32, … spp until it reaches the cache's error (unblurred and blurred, σ = 2 px); the
-//! reference is `volpath` at 1024 spp made here; the records' pre-pass time and rays are printed,
-//! so the gradients' overhead over the media-blind form reads off the table. (2) `volpath` at
+//! bounce, `max_depth` 3) at 16 spp — camera rays tracked (stage 1), marched without and with
+//! volumetric records, the media-blind gradient, fewer gather rays — against `volpath` at 8,
+//! 16, 32, … spp until it reaches the last variant's error (unblurred and blurred, σ = 2 px); the
+//! reference is `volpath` at 4096 spp made here; the records' pre-pass times and rays are
+//! printed, so the gradients' overhead over the media-blind form reads off the table. (2) `volpath` at
 //! `max_depth` 6 (`multijitter`) against Mitsuba 3's `volpath` (`multijitter`) at equal spp,
 //! both against a Mitsuba reference of 4096 spp made here (seeds 0–63; the compared Mitsuba
 //! images from seed 5000). Times to equal error are interpolated between the bracketing renders,
@@ -40,18 +41,36 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
     };
     println!("\nParticipating media (2 threads, same run; cornell-fog at {size} × {size})");
     let (desc, scene) = load(3)?;
-    let reference = run(&scene, &desc, "volpath", 1024, &[])?.image;
+    let reference = run(&scene, &desc, "volpath", 4096, &[])?.image;
     println!(
-        "\nThe cache in the fog, one bounce (max_depth 3), 16 spp; reference: volpath at 1024 spp"
+        "\nThe cache in the fog, one bounce (max_depth 3), 16 spp; reference: volpath at 4096 spp"
     );
+    let cheap = [("divisions", "128"), ("supersamples", "0")];
+    let variants: [(&str, Vec<(&str, &str)>); 6] = [
+        ("stage 1: camera rays tracked", vec![("media_march", "0")]),
+        (
+            "marched, no volumetric records",
+            vec![("media_volume_records", "off")],
+        ),
+        ("defaults (marched, volumetric records)", vec![]),
+        (
+            "defaults, --media-gradient none",
+            vec![("media_gradient", "none")],
+        ),
+        (
+            "--divisions 128 --supersamples 0, gradient none",
+            [cheap.as_slice(), &[("media_gradient", "none")]].concat(),
+        ),
+        ("--divisions 128 --supersamples 0", cheap.to_vec()),
+    ];
     let mut forms = Vec::new();
-    for form in ["none", "jdzj08", "paper", "corrected"] {
-        let out = run(&scene, &desc, "ic", 16, &[("media_gradient", form)])?;
+    for (label, params) in &variants {
+        let out = run(&scene, &desc, "ic", 16, params)?;
         let p = measure(&out, &reference)?;
-        show(&format!("ic --media-gradient {form}"), &p);
+        show(label, &p);
         if let Some(st) = &out.media_cache {
             println!(
-                "    {} records, pre-pass {:.2} s, {:.1} M gather rays, {:.1} M shadow rays, {:.1} M march steps",
+                "    {} surface records, pre-pass {:.2} s, {:.1} M gather rays, {:.1} M shadow rays, {:.1} M march steps",
                 st.records,
                 st.seconds,
                 st.gather_rays as f64 * 1e-6,
@@ -59,12 +78,20 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
                 st.march_steps as f64 * 1e-6
             );
         }
+        if let Some(st) = &out.volume_records {
+            println!(
+                "    {} volumetric records, pre-pass {:.2} s, {:.1} M rays",
+                st.records,
+                st.seconds,
+                st.rays as f64 * 1e-6
+            );
+        }
         forms.push(p);
     }
     let best = forms.last().copied().context("no cache render")?;
     let mut series = Vec::new();
     let mut spp = 8;
-    while spp <= 1024 {
+    while spp <= 2048 {
         let p = measure(&run(&scene, &desc, "volpath", spp, &[])?, &reference)?;
         show(&format!("volpath, {spp} spp"), &p);
         series.push(p);
@@ -81,7 +108,7 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
         time_to(&series, best.blurred, |p| p.blurred),
     );
     println!(
-        "  volpath to the corrected cache's error: {} (the cache takes {}× that); blurred: {} ({}×)",
+        "  volpath to the last cache row's error: {} (the cache takes {}× that); blurred: {} ({}×)",
         fmt_time(t, last),
         ratio(t),
         fmt_time(tb, last),

@@ -20,7 +20,7 @@ use crate::integrators::volpath::{PathState, VolPathIntegrator};
 use crate::integrators::RayCounts;
 use crate::irradiance_cache::record::{CachedRecord, ErrorMetric};
 use crate::irradiance_cache::store::RecordStore;
-use crate::media::tracking::{medium_after, MAX_CROSSINGS};
+use crate::media::tracking::first_opaque;
 use crate::media::Phase;
 use crate::scene::Scene;
 use ircache_math::harmonics::sh::ShBasis;
@@ -307,36 +307,29 @@ impl VolumeCache {
 
 /// Calls `f(point, medium)` at the middle of each quadrature stratum of `ray`'s medium segments
 /// (through null boundaries, up to the first opaque surface), as the pixel pass places them.
-fn for_each_quadrature_point(
-    scene: &Scene,
-    mut ray: Ray,
-    points: u32,
-    mut f: impl FnMut(Vec3, usize),
-) {
-    let mut medium = scene.camera_medium;
+fn for_each_quadrature_point(scene: &Scene, ray: Ray, points: u32, mut f: impl FnMut(Vec3, usize)) {
     let mut rng = Rng::new(0, 0x7072_6570);
-    for _ in 0..MAX_CROSSINGS {
-        let hit = scene.accel.intersect(&ray);
-        if let Some(m) = medium {
-            let t_hit = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
-            let med = &scene.media[m];
-            if !med.at(ray.o).sigma_s.is_black() || !med.homogeneous {
-                let (quadrature, _) = quadrature_points(med, &ray, t_hit, points, || 0.5, &mut rng);
-                for (t, _) in quadrature {
-                    f(ray.at(t), m);
-                }
-            }
-        }
-        let Some(h) = hit else {
+    let mut visit = |o: Vec3, t_end: f32, medium: Option<usize>| {
+        let Some(m) = medium else {
             return;
         };
-        let shape = &scene.shapes[h.geom_id as usize];
-        if !shape.null {
-            return;
+        let segment = Ray::new(o, ray.d);
+        let (quadrature, _) =
+            quadrature_points(&scene.media[m], &segment, t_end, points, || 0.5, &mut rng);
+        for (t, _) in quadrature {
+            f(segment.at(t), m);
         }
-        let it = scene.interaction(&ray, &h);
-        medium = medium_after(shape.media, it.ng, ray.d, medium);
-        ray = scene.spawn_ray(&it, ray.d);
+    };
+    let mut medium = scene.camera_medium;
+    let mut last_origin = ray.o;
+    let opaque = first_opaque(scene, ray, medium, &mut 0, |origin, it, beyond| {
+        visit(origin, it.t, medium);
+        medium = beyond;
+        last_origin = it.p;
+    });
+    match opaque {
+        Some(hit) => visit(hit.segment_origin, hit.it.t, hit.medium),
+        None => visit(last_origin, f32::INFINITY, medium),
     }
 }
 
