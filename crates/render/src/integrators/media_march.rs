@@ -194,11 +194,13 @@ fn march_segment(
 }
 
 /// A quadrature point of a camera ray.
-struct MarchPoint {
-    p: Vec3,
+pub(crate) struct MarchPoint {
+    /// Where.
+    pub p: Vec3,
     /// The camera ray's direction.
-    d: Vec3,
-    medium: Option<usize>,
+    pub d: Vec3,
+    /// The medium there.
+    pub medium: Option<usize>,
 }
 
 /// The light a point of `med` sends back along the camera ray per unit length: emission σ_a L_e,
@@ -258,7 +260,7 @@ fn source(
 /// stream of its own (keyed by `key`), leaving out the emitters it meets directly where the
 /// light samples hold them (`sample_emitters`).
 #[allow(clippy::too_many_arguments)]
-fn in_scattered_by_path(
+pub(crate) fn in_scattered_by_path(
     integrator: &VolPathIntegrator,
     scene: &Scene,
     at: &MarchPoint,

@@ -273,7 +273,7 @@ fn media_cache_integrator(
                 &gatherer,
                 scene,
                 p.accuracy,
-                u32::try_from(p.divisions).unwrap_or(u32::MAX),
+                p.media_volume_divisions,
                 p.media_march,
                 settings.width,
                 settings.height,
