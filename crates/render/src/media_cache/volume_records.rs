@@ -323,14 +323,14 @@ fn local_linear(serving: &[(Vec3, f32, Rgb)]) -> Option<Rgb> {
         .map(|s| s.0.length())
         .fold(0.0f32, f32::max)
         .max(f32::MIN_POSITIVE);
+    // The design row (1, offset/scale) of a record.
+    let design = |o: Vec3| {
+        let o = o / scale;
+        ircache_math::DVec4::new(1.0, f64::from(o.x), f64::from(o.y), f64::from(o.z))
+    };
     let mut m = ircache_math::DMat4::ZERO;
     for &(o, w, _) in serving {
-        let v = ircache_math::DVec4::new(
-            1.0,
-            f64::from(o.x / scale),
-            f64::from(o.y / scale),
-            f64::from(o.z / scale),
-        );
+        let v = design(o);
         let w = f64::from(w);
         m += ircache_math::DMat4::from_cols(
             v * (w * v.x),
@@ -346,14 +346,8 @@ fn local_linear(serving: &[(Vec3, f32, Rgb)]) -> Option<Rgb> {
     let inverse = m.inverse();
     let mut sum = Rgb::ZERO;
     for &(o, w, value) in serving {
-        let v = ircache_math::DVec4::new(
-            1.0,
-            f64::from(o.x / scale),
-            f64::from(o.y / scale),
-            f64::from(o.z / scale),
-        );
         // The equivalent kernel: e₁ᵀ M⁻¹ v w.
-        let l = inverse.row(0).dot(v) * f64::from(w);
+        let l = inverse.row(0).dot(design(o)) * f64::from(w);
         sum += value * l as f32;
     }
     Some(sum)
