@@ -562,6 +562,13 @@ fn media_cache_agrees_with_volpath_at_one_bounce() {
             ParamValue::String(gradient.into()),
             here(),
         ));
+        // Ward's records, as 002 places them (Tabellion's, the default, span ten pixel
+        // footprints: coarse at 32², +1.8 % here, +0.2 % at 128²).
+        desc.integrator.extra.push((
+            "error_metric".into(),
+            ParamValue::String("ward".into()),
+            here(),
+        ));
         let out = render_desc(&desc, 2, 2);
         assert!(
             out.media_cache.is_some_and(|s| s.records > 20),

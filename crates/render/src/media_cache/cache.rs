@@ -7,9 +7,10 @@
 //! integrator in a media scene is therefore `volpath` at `max_depth` 3 whose first surface
 //! vertex takes its diffuse indirect light from here.
 //!
-//! Records use Ward's split-sphere metric whatever `--error-metric` says (NOTES-002 §2.8: the
-//! Hessian metric reprojects hit points without transmittance, blind to the media; Tabellion's
-//! needs pixel footprints through media); [`METRIC_NOTE`] says so.
+//! Records use the error metric asked for, Tabellion's (the default: half the nearest opaque hit
+//! within 1.5–10 pixel footprints, which a camera ray keeps through null boundaries and media)
+//! or Ward's; the Hessian metric's reprojection has no transmittance (NOTES-002 §2.8), so Ward's
+//! stands in for it and [`METRIC_NOTE`] says so.
 //!
 //! Records are made in a pre-pass over the image's pixel centres, one row at a time: the row's
 //! uncovered first hits are gathered in parallel and inserted in row order, so the cache is the
@@ -58,9 +59,19 @@ pub struct MediaCache {
     pub stats: MediaCacheStats,
 }
 
-/// What a user should hear of when another error metric was asked for.
+/// What a user should hear of when the Hessian metric was asked for.
 pub const METRIC_NOTE: &str =
-    "in media the records use Ward's split-sphere metric (the chosen error metric does not see media)";
+    "in media the records use Ward's split-sphere metric in place of the Hessian one (its reprojection does not see media)";
+
+/// The error metric records in media use: Tabellion's or Ward's as asked, Ward's for the
+/// Hessian's (NOTES-002 §2.8: its reprojection has no transmittance).
+#[must_use]
+pub fn media_metric(asked: ErrorMetric) -> ErrorMetric {
+    match asked {
+        ErrorMetric::Tabellion => ErrorMetric::Tabellion,
+        ErrorMetric::Ward | ErrorMetric::Hessian => ErrorMetric::Ward,
+    }
+}
 
 /// Where a record is wanted: a surface point, the normal of the side it serves, the medium on
 /// that side.
@@ -74,6 +85,8 @@ pub struct RecordSite {
     pub n: Vec3,
     /// The medium on that side.
     pub medium: Option<usize>,
+    /// The pixel's footprint there for a site the camera sees (bounds Tabellion's radii), else 0.
+    pub footprint: f32,
 }
 
 /// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced.
@@ -112,13 +125,25 @@ pub fn make_record(
         frame.t,
     );
     let grad_r = to_world(&samples.rotational_gradient(), frame.s, frame.t);
-    let (r_min, r_max) = params.radius_limits(2.0 * scene.radius);
-    let r = limit_radius_by_gradient(
-        e,
-        &mut grad_t,
-        samples.harmonic_mean_distance().min(r_max),
-        r_min,
-    );
+    // Radii as the irradiance cache's (000 eq. 3.60 for Tabellion's: half the nearest opaque
+    // hit within 1.5 and 10 pixel footprints); Ward's harmonic mean otherwise.
+    let (mut r_min, mut r_max) = params.radius_limits(2.0 * scene.radius);
+    let r = if params.error_metric == ErrorMetric::Tabellion {
+        r_min *= 0.5;
+        r_max *= 0.5;
+        if site.footprint > 0.0 {
+            r_min = r_min.max(1.5 * site.footprint);
+            r_max = r_max.min(10.0 * site.footprint).max(r_min);
+        }
+        0.5 * samples
+            .distance
+            .iter()
+            .copied()
+            .fold(f32::INFINITY, f32::min)
+    } else {
+        samples.harmonic_mean_distance()
+    };
+    let r = limit_radius_by_gradient(e, &mut grad_t, r.min(r_max), r_min);
     let rays: RayCounts = view.rays();
     let stats = MediaCacheStats {
         records: 1,
@@ -157,6 +182,7 @@ pub fn first_site(scene: &Scene, ray: ircache_math::Ray) -> Option<RecordSite> {
         ng: it.ng,
         n,
         medium: medium_after(shape.media, it.ng, n, hit.medium),
+        footprint: 0.0,
     })
 }
 
@@ -170,7 +196,7 @@ impl MediaCache {
             store: RecordStore::new(
                 min_validity,
                 params.accuracy,
-                ErrorMetric::Ward,
+                media_metric(params.error_metric),
                 params.neighbour_clamp,
             ),
             mode: params.gradients,
@@ -190,6 +216,7 @@ impl MediaCache {
     ) -> MediaCache {
         let start = Instant::now();
         let mut cache = MediaCache::new(scene, params);
+        let pixel_angle = 2.0 * scene.camera.tan_half_x / width.max(1) as f32;
         // Sites of one row closer than this (and facing alike) share a record.
         let spacing = params
             .radius_limits(2.0 * scene.radius)
@@ -205,9 +232,14 @@ impl MediaCache {
                     (x as f32 + 0.5) / width as f32,
                     (y as f32 + 0.5) / height as f32,
                 );
-                let Some(site) = first_site(scene, scene.camera.generate_ray(film)) else {
+                let ray = scene.camera.generate_ray(film);
+                let Some(mut site) = first_site(scene, ray) else {
                     continue;
                 };
+                // The pixel's footprint at the site (000 eq. 3.60): the camera ray is straight
+                // through null boundaries and media.
+                let cos = site.n.dot(ray.d).abs().max(0.05);
+                site.footprint = pixel_angle * (site.p - ray.o).length() / cos.sqrt();
                 if cache.store.covers(site.p, site.n) {
                     continue;
                 }
@@ -246,7 +278,7 @@ impl MediaCache {
             }
         }
         cache.stats.seconds = start.elapsed().as_secs_f64();
-        cache.stats.metric_replaced = params.error_metric != ErrorMetric::Ward;
+        cache.stats.metric_replaced = params.error_metric == ErrorMetric::Hessian;
         cache
     }
 

@@ -70,6 +70,7 @@ pub fn media_irradiance_at_points(
                 ng: n,
                 n,
                 medium,
+                footprint: 0.0,
             };
             let (indirect, grad_t, grad_r) = match method {
                 PointMethod::Cache => {
