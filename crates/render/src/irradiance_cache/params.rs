@@ -211,9 +211,9 @@ impl Default for IcParams {
             photon_records: false,
             media_gradient: crate::media_cache::gradient::MediaGradient::Corrected,
             media_light_samples: 1,
-            media_march: 8,
+            media_march: 16,
             media_volume_records: true,
-            media_volume_divisions: 512,
+            media_volume_divisions: 256,
         }
     }
 }
