@@ -302,6 +302,13 @@ impl Scene {
         })
     }
 
+    /// True when scattering in `medium` takes light samples (Mitsuba's `sample_emitters`, and
+    /// lights to sample).
+    #[must_use]
+    pub fn samples_lights_in(&self, medium: usize) -> bool {
+        self.media[medium].sample_emitters && !self.lights.is_empty()
+    }
+
     /// True when the scene has participating media or `null` surfaces.
     #[must_use]
     pub fn has_media(&self) -> bool {

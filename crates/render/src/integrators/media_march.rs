@@ -22,7 +22,7 @@ use super::path_continuation::{count_and_roulette, Arrival};
 use super::volpath::{light_sample_with, PathState, Vertex, VolPathIntegrator};
 use super::RayCounts;
 use crate::media::tracking::{medium_after, sample_flight, transmittance, Flight, MAX_CROSSINGS};
-use crate::media::{Medium, Phase};
+use crate::media::Medium;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
 use ircache_embree::Hit;
@@ -69,7 +69,7 @@ pub(crate) fn li(
     let mut tr = Rgb::ONE;
     // The delta-tracking walk that finds the in-scattered indirect light's collision.
     let mut collision_beta = Rgb::ONE;
-    let mut collision: Option<(Vec3, Vec3, Option<usize>, Phase, bool)> = None;
+    let mut collision: Option<MarchPoint> = None;
     // (The volumetric records serve it at the quadrature's points instead, where they exist.)
     let mut tracking = max_depth > 2 && integrator.volume_records.is_none();
     for _ in 0..MAX_CROSSINGS {
@@ -79,8 +79,7 @@ pub(crate) fn li(
             let (light, segment) = march_segment(
                 integrator,
                 scene,
-                med,
-                medium,
+                m,
                 &ray,
                 t_hit,
                 march.points,
@@ -103,8 +102,11 @@ pub(crate) fn li(
                     Flight::Absorbed => tracking = false,
                     Flight::Passed => {}
                     Flight::Scattered { t, .. } => {
-                        let sample_emitters = med.sample_emitters && !scene.lights.is_empty();
-                        collision = Some((ray.at(t), ray.d, medium, med.phase, sample_emitters));
+                        collision = Some(MarchPoint {
+                            p: ray.at(t),
+                            d: ray.d,
+                            medium: m,
+                        });
                         tracking = false;
                     }
                 }
@@ -142,20 +144,9 @@ pub(crate) fn li(
 
     // The in-scattered indirect light from the collision, on a stream of its own (its
     // dimensions would repeat the surface path's).
-    if let Some((p, d, medium, phase, sample_emitters)) = collision {
-        let at = MarchPoint { p, d, medium };
+    if let Some(at) = collision {
         let key = u64::from(rng.next_u32());
-        l += collision_beta
-            * in_scattered_by_path(
-                integrator,
-                scene,
-                &at,
-                phase,
-                sample_emitters,
-                key,
-                rng,
-                rays,
-            );
+        l += collision_beta * in_scattered_by_path(integrator, scene, &at, key, rng, rays);
     }
     l
 }
@@ -167,8 +158,7 @@ pub(crate) fn li(
 fn march_segment(
     integrator: &VolPathIntegrator,
     scene: &Scene,
-    med: &Medium,
-    medium: Option<usize>,
+    medium: usize,
     ray: &Ray,
     t_hit: f32,
     points: u32,
@@ -176,6 +166,7 @@ fn march_segment(
     rng: &mut Rng,
     rays: &mut RayCounts,
 ) -> (Rgb, Rgb) {
+    let med = &scene.media[medium];
     let mut jitter = Rng::new(u64::from(rng.next_u32()), 0x6a69_7474);
     let (quadrature, segment) =
         quadrature_points(med, ray, t_hit, points, || jitter.next_f32(), rng);
@@ -188,7 +179,7 @@ fn march_segment(
             d: ray.d,
             medium,
         };
-        sum += weight * source(integrator, scene, med, &at, max_depth, u, rng, rays);
+        sum += weight * source(integrator, scene, &at, max_depth, u, rng, rays);
     }
     (sum, segment)
 }
@@ -200,10 +191,10 @@ pub(crate) struct MarchPoint {
     /// The camera ray's direction.
     pub d: Vec3,
     /// The medium there.
-    pub medium: Option<usize>,
+    pub medium: usize,
 }
 
-/// The light a point of `med` sends back along the camera ray per unit length: emission σ_a L_e,
+/// The light a point of its medium sends back along the camera ray per unit length: emission σ_a L_e,
 /// single scattering σ_s ∫ f_p L_direct by a light sample drawn with `u`, and where paths go on
 /// (`max_depth` > 2) the in-scattered indirect light from the volumetric records, or where
 /// none serves, by a phase-sampled path that leaves out the emitters it meets directly.
@@ -211,13 +202,13 @@ pub(crate) struct MarchPoint {
 fn source(
     integrator: &VolPathIntegrator,
     scene: &Scene,
-    med: &Medium,
     at: &MarchPoint,
     max_depth: u32,
     u: (f32, Vec2),
     rng: &mut Rng,
     rays: &mut RayCounts,
 ) -> Rgb {
+    let med = &scene.media[at.medium];
     let c = med.at(at.p);
     let mut q = if med.emits() {
         c.sigma_a() * c.emission
@@ -227,29 +218,18 @@ fn source(
     if c.sigma_s.is_black() || max_depth < 2 {
         return q;
     }
-    let sample_emitters = med.sample_emitters && !scene.lights.is_empty();
-    if sample_emitters {
+    if scene.samples_lights_in(at.medium) {
         let vertex = Vertex::Medium(at.p, at.d, med.phase);
-        q += c.sigma_s * light_sample_with(scene, &vertex, at.medium, false, u, rng, rays);
+        q += c.sigma_s * light_sample_with(scene, &vertex, Some(at.medium), false, u, rng, rays);
     }
     if max_depth > 2 {
         if let Some(records) = &integrator.volume_records {
-            let cached = at
-                .medium
-                .and_then(|m| records.in_scattered(at.p, m, at.d, med.phase));
-            let indirect = cached.unwrap_or_else(|| {
-                let key = u64::from(rng.next_u32());
-                in_scattered_by_path(
-                    integrator,
-                    scene,
-                    at,
-                    med.phase,
-                    sample_emitters,
-                    key,
-                    rng,
-                    rays,
-                )
-            });
+            let indirect = records
+                .in_scattered(at.p, at.medium, at.d, med.phase)
+                .unwrap_or_else(|| {
+                    let key = u64::from(rng.next_u32());
+                    in_scattered_by_path(integrator, scene, at, key, rng, rays)
+                });
             q += c.sigma_s * indirect;
         }
     }
@@ -257,20 +237,18 @@ fn source(
 }
 
 /// The in-scattered indirect light at `at` towards the camera by one phase-sampled path on a
-/// stream of its own (keyed by `key`), leaving out the emitters it meets directly where the
-/// light samples hold them (`sample_emitters`).
-#[allow(clippy::too_many_arguments)]
+/// stream of its own (keyed by `key`), leaving out the emitters it meets directly where light
+/// samples in the medium hold them.
 pub(crate) fn in_scattered_by_path(
     integrator: &VolPathIntegrator,
     scene: &Scene,
     at: &MarchPoint,
-    phase: Phase,
-    sample_emitters: bool,
     key: u64,
     rng: &mut Rng,
     rays: &mut RayCounts,
 ) -> Rgb {
     let mut stream = Rng::new(key, 0x006d_6172_6368);
+    let phase = scene.media[at.medium].phase;
     let (w, pdf) = phase.sample(at.d, stream.next_2d());
     let mut beta = Rgb::ONE;
     let mut depth = 0;
@@ -279,10 +257,10 @@ pub(crate) fn in_scattered_by_path(
     }
     let start = PathState {
         ray: Ray::new(at.p, w),
-        medium: at.medium,
+        medium: Some(at.medium),
         beta,
         depth,
-        arrival: indirect_arrival(at.p, pdf, sample_emitters),
+        arrival: indirect_arrival(at.p, pdf, scene.samples_lights_in(at.medium)),
     };
     integrator.trace(scene, start, None, false, &mut stream, rng, rays)
 }

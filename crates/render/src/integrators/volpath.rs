@@ -155,7 +155,7 @@ impl VolPathIntegrator {
                     Flight::Passed => {}
                     Flight::Scattered { t, .. } => {
                         let p = ray.at(t);
-                        let sample_emitters = med.sample_emitters && !scene.lights.is_empty();
+                        let sample_emitters = scene.samples_lights_in(m);
                         if depth + 1 < max_depth && sample_emitters {
                             let vertex = Vertex::Medium(p, ray.d, med.phase);
                             l += beta

@@ -62,19 +62,28 @@ impl CachedRecord for VolumeRecord {
     }
 }
 
+/// The weights gˡ Y_lm(d) that turn a record's coefficients into the light scattered towards −`d`
+/// (a camera ray travelling along `d`): one evaluation of the basis serves every record of a
+/// lookup.
+#[must_use]
+pub fn scattering_weights(d: Vec3, phase: Phase) -> [f32; COEFFICIENTS] {
+    let mut y = [0.0f64; COEFFICIENTS];
+    ShBasis::new(ORDER).eval(d.as_dvec3(), &mut y);
+    let g = phase.mean_cosine();
+    // Band l of index i = l² + l + m is weighted gˡ.
+    std::array::from_fn(|i| {
+        g.powi(ircache_math::harmonics::band_and_degree(i).0 as i32) * y[i] as f32
+    })
+}
+
 impl VolumeRecord {
-    /// The light the record's medium scatters towards −`d` (a camera ray travelling along `d`)
-    /// per unit scattering coefficient: Σ_lm gˡ L_lm Y_lm(d).
+    /// The light the record's medium scatters per unit scattering coefficient, with the
+    /// [`scattering_weights`] of a direction: Σ_lm gˡ L_lm Y_lm(d).
     #[must_use]
-    pub fn in_scattered(&self, d: Vec3, phase: Phase) -> Rgb {
-        let mut y = [0.0f64; COEFFICIENTS];
-        ShBasis::new(ORDER).eval(d.as_dvec3(), &mut y);
-        let g = phase.mean_cosine();
-        // Band l of index i = l² + l + m is weighted gˡ.
-        let band_weight = |i: usize| g.powi(ircache_math::harmonics::band_and_degree(i).0 as i32);
+    pub fn in_scattered(&self, weights: &[f32; COEFFICIENTS]) -> Rgb {
         let mut sum = Rgb::ZERO;
-        for (i, (&c, &b)) in self.radiance.iter().zip(&y).enumerate() {
-            sum += c * (band_weight(i) * b as f32);
+        for (&c, &w) in self.radiance.iter().zip(weights) {
+            sum += c * w;
         }
         sum
     }
@@ -115,7 +124,7 @@ pub fn gather(
     let polar = ((divisions as f32 / 2.0).sqrt().round() as u32).max(2);
     let azimuthal = 2 * polar;
     let count = polar * azimuthal;
-    let sample_emitters = scene.media[medium].sample_emitters && !scene.lights.is_empty();
+    let sample_emitters = scene.samples_lights_in(medium);
     let mut basis = ShBasis::new(ORDER);
     let mut y = [0.0f64; COEFFICIENTS];
     let mut sum = [Rgb::ZERO; COEFFICIENTS];
@@ -223,9 +232,10 @@ impl VolumeCache {
     /// the fit), and the caller then traces a path.
     #[must_use]
     pub fn in_scattered(&self, p: Vec3, medium: usize, d: Vec3, phase: Phase) -> Option<Rgb> {
+        let weights = scattering_weights(d, phase);
         let mut serving: Vec<(Vec3, f32, Rgb)> = Vec::new();
         self.for_each_serving(p, medium, 1.0, |rec, e| {
-            serving.push((rec.p - p, (1.0 - e).max(1e-6), rec.in_scattered(d, phase)));
+            serving.push((rec.p - p, (1.0 - e).max(1e-6), rec.in_scattered(&weights)));
         });
         if serving.is_empty() {
             return None;
@@ -419,29 +429,15 @@ mod tests {
         ] {
             let (record, _) = gather(&integrator, &scene, p, medium, 8192, 7);
             for d in [Vec3::X, Vec3::NEG_Y, Vec3::Z] {
-                let predicted = record.in_scattered(d, phase).g;
-                let at = MarchPoint {
-                    p,
-                    d,
-                    medium: Some(medium),
-                };
+                let predicted = record.in_scattered(&scattering_weights(d, phase)).g;
+                let at = MarchPoint { p, d, medium };
                 let n = 40_000;
                 let (mut sum, mut sum2) = (0.0f64, 0.0f64);
                 let mut rng = Rng::new(11, 12);
                 let mut rays = RayCounts::default();
                 for k in 0..n {
                     let v = f64::from(
-                        in_scattered_by_path(
-                            &integrator,
-                            &scene,
-                            &at,
-                            phase,
-                            true,
-                            k,
-                            &mut rng,
-                            &mut rays,
-                        )
-                        .g,
+                        in_scattered_by_path(&integrator, &scene, &at, k, &mut rng, &mut rays).g,
                     );
                     sum += v;
                     sum2 += v * v;
@@ -541,7 +537,7 @@ mod tests {
                 Vec3::new(0.6, 0.0, -0.8),
                 Vec3::new(-0.48, 0.6, 0.64),
             ] {
-                let got = record.in_scattered(d, phase);
+                let got = record.in_scattered(&scattering_weights(d, phase));
                 let mut exact = [0.0f64; 3];
                 for (w, &weight) in fine.directions.iter().zip(&fine.weights) {
                     let f = match phase {
