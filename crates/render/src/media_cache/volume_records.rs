@@ -274,6 +274,8 @@ impl VolumeCache {
     ) -> VolumeCache {
         let start = Instant::now();
         let mut cache = VolumeCache::new(scene, accuracy);
+        // A point closer than this to one already wanted in its row waits for that record.
+        let spacing = accuracy * 2.0 * scene.radius / 64.0;
         for y in 0..height {
             let mut wanted: Vec<(u64, Vec3, usize)> = Vec::new();
             for x in 0..width {
@@ -282,20 +284,21 @@ impl VolumeCache {
                     (y as f32 + 0.5) / height as f32,
                 );
                 let ray = scene.camera.generate_ray(film);
+                // Each record's stream: its pixel and its place among the pixel's points.
+                let pixel = ((y * width + x) as u64) << 16;
+                let mut index = 0u64;
                 for_each_quadrature_point(scene, ray, points, |p, m| {
+                    index += 1;
                     if cache.covers(p, m) {
                         return;
                     }
-                    // A point close to one already wanted in this row waits for its record.
-                    let spacing = accuracy * 2.0 * scene.radius / 64.0;
                     if wanted
                         .iter()
                         .any(|&(_, q, n)| n == m && (q - p).length() < spacing)
                     {
                         return;
                     }
-                    let key = (y * width + x) as u64 * 64 + wanted.len() as u64;
-                    wanted.push((key, p, m));
+                    wanted.push((pixel | index, p, m));
                 });
             }
             let made: Vec<(VolumeRecord, u64)> = wanted
