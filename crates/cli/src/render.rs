@@ -305,7 +305,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         if aov == "photons"
             && !matches!(&integrator, Integrator::Ic(ic)
-                if ic.params.photons > 0 || ic.params.caustic_photons > 0)
+                if ic.params.global_photons() > 0 || ic.params.caustic_photons > 0)
         {
             bail!("--aov photons needs photon maps: give --photons N or --caustic-photons N");
         }

@@ -140,6 +140,16 @@ pub fn run_all(shared: &Path) -> Result<()> {
         let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
         let scene = Scene::build(&desc)?;
         let ic = measure(&run(&scene, &desc, "ic", 16, &[])?, &reference)?;
+        // Beyond one bounce the defaults read the gather hits' indirect light from photons
+        // (`--photons auto`); the same without them, for the record.
+        let without = (depth > 3)
+            .then(|| {
+                measure(
+                    &run(&scene, &desc, "ic", 16, &[("photons", "0")])?,
+                    &reference,
+                )
+            })
+            .transpose()?;
         let cap = 30.0 * ic.seconds;
         let mut series = Vec::new();
         let mut spp = 4;
@@ -166,6 +176,22 @@ pub fn run_all(shared: &Path) -> Result<()> {
             fmt_time(time_to(&series, ic.error, |p| p.error), cap),
             fmt_time(time_to(&series, ic.blurred, |p| p.blurred), cap),
         );
+        if let Some(w) = without {
+            println!(
+                "  {:<24} {:>7.2} {:>10.3e} {:>10.3e} {:>7.4} | {:>10} {:>10} | {:>11} {:>11}",
+                "  … --photons 0",
+                w.seconds,
+                w.error,
+                w.blurred,
+                w.lum,
+                error_at(&series, w.seconds, |p| p.error)
+                    .map_or("-".into(), |e| format!("{e:.3e}")),
+                error_at(&series, w.seconds, |p| p.blurred)
+                    .map_or("-".into(), |e| format!("{e:.3e}")),
+                "",
+                ""
+            );
+        }
     }
     println!("  * the path tracer's error at the cache's time (interpolated between its renders)");
 
@@ -174,7 +200,9 @@ pub fn run_all(shared: &Path) -> Result<()> {
         let scene_path = shared.join(format!("scenes/{name}/scene.xml"));
         let desc = ircache_scene::load_scene(&scene_path, &[], &ObjCamera::default())?;
         let scene = Scene::build(&desc)?;
-        for (deeper, bounces) in [("traced", &["1", "8"][..]), ("cache", &["1", "2", "3"][..])] {
+        // Ward's per-level caches stop at -ab 2: -ab 3 took 157× -ab 1 on cornell-glossy
+        // (BENCHMARKS.md, issue 8).
+        for (deeper, bounces) in [("traced", &["1", "8"][..]), ("cache", &["1", "2"][..])] {
             let mut line = format!("  {name:<16} deeper bounces {deeper:<7}");
             let mut first = 0.0;
             for b in bounces {

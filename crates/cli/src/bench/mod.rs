@@ -182,7 +182,8 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     // Cosine-hemisphere gather rays from the first hits (the same rays for every measurement).
     let k = args.hemisphere_rays;
     let mut hemisphere = Vec::with_capacity(hits.len() * k);
-    for (i, it) in hits.iter().enumerate() {
+    // Every (k / 64)th hit when k is large, so the set stays near 20 M rays.
+    for (i, it) in hits.iter().enumerate().step_by((k / 64).max(1)) {
         gather_rays(&scene, it, i, k, |r| hemisphere.push(r));
     }
     // Shadow rays towards a fixed direction (the sun's reverse) from the first hits.
@@ -239,6 +240,11 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     row(
         "hemisphere rays, Embree rtcIntersect1 (raw)",
         &raw_intersect,
+        &hemisphere,
+    )?;
+    row(
+        "hemisphere rays, Embree rtcIntersect16 packets",
+        &packets,
         &hemisphere,
     )?;
     row("shadow rays, Embree rtcOccluded1", &raw_occluded, &shadow)?;
@@ -300,9 +306,24 @@ fn gather_rays(scene: &Scene, it: &Interaction, index: usize, k: usize, mut f: i
         it.ng
     };
     let frame = Frame::from_z(n);
-    for _ in 0..k {
-        let d = frame.from_local(sampling::square_to_cosine_hemisphere(rng.next_2d()));
-        f(scene.spawn_ray(it, d));
+    // Stratified as a record's gather (polar × azimuthal cells), visited in 4 × 4 blocks of
+    // cells so that sixteen consecutive rays point in neighbouring directions.
+    let polar = ((k as f32 / std::f32::consts::PI).sqrt().round() as usize).max(4) / 4 * 4;
+    let azimuthal = (k / polar).max(4) / 4 * 4;
+    for block in 0..(polar / 4) * (azimuthal / 4) {
+        let (bj, bi) = (block / (azimuthal / 4), block % (azimuthal / 4));
+        for c in 0..16 {
+            let (j, i) = (bj * 4 + c / 4, bi * 4 + c % 4);
+            let u = rng.next_2d();
+            let cell = ircache_math::Vec2::new(
+                (j as f32 + u.x) / polar as f32,
+                (i as f32 + u.y) / azimuthal as f32,
+            );
+            f(scene.spawn_ray(
+                it,
+                frame.from_local(sampling::square_to_cosine_hemisphere(cell)),
+            ));
+        }
     }
 }
 

@@ -120,7 +120,8 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
         let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
         let scene = Scene::build(&desc)?;
         println!("\n{name} ({resx} × {resy}, max_depth {depth})");
-        let out = run(&scene, &desc, "ic", 16, &[])?;
+        let no_photons = [("photons", "0")];
+        let out = run(&scene, &desc, "ic", 16, &no_photons)?;
         let plain = measure(&out, &reference)?;
         show("ic, no photons", &plain);
         println!("{}", cache_line(&out));
@@ -153,7 +154,7 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
             && series.last().is_some_and(|p| p.seconds < cap)
             && spp <= 1024
         {
-            let p = measure(&run(&scene, &desc, "ic", spp, &[])?, &reference)?;
+            let p = measure(&run(&scene, &desc, "ic", spp, &no_photons)?, &reference)?;
             show(&format!("ic, no photons, {spp} spp"), &p);
             series.push(p);
             spp *= 2;

@@ -236,7 +236,11 @@ fn media_cache_integrator(
             "give max_depth 3 (one bounce), or render deeper light with --integrator volpath",
         );
     }
-    if p.photons > 0 || p.caustic_photons > 0 || p.radiance_cache || ic.cache_file.is_some() {
+    if p.global_photons() > 0
+        || p.caustic_photons > 0
+        || p.radiance_cache
+        || ic.cache_file.is_some()
+    {
         return refuse("photon maps, radiance caching and cache files are not available there yet");
     }
     if ic.pixel_pass != ic::PixelPass::Lookup {

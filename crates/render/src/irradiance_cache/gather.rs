@@ -198,7 +198,10 @@ impl IrradianceCache {
     /// measured 2 cm below a Cornell box's ceiling), so the path goes on there.
     #[must_use]
     pub fn photon_irradiance(&self, sp: &ShadingPoint, depth: u32) -> Option<Rgb> {
-        let maps = self.photons.as_ref().filter(|_| self.params.photons > 0)?;
+        let maps = self
+            .photons
+            .as_ref()
+            .filter(|_| self.params.global_photons() > 0)?;
         let bounces = self.photon_bounces(depth);
         let (e, radius) =
             maps.global

@@ -152,12 +152,13 @@ pub fn photon_records(cache: &mut IrradianceCache) -> crate::photon_map::records
 /// empty).
 #[must_use]
 pub fn photon_note(params: &super::IcParams) -> Option<String> {
-    (params.photons > 0 && params.bounces < 2 && !params.photon_records).then(|| {
+    let photons = params.photons.unwrap_or(0);
+    (photons > 0 && params.bounces < 2 && !params.photon_records).then(|| {
         format!(
             "--photons {} does nothing at {} bounce(s): the surfaces records' gather rays hit \
              have no indirect light to read from photons (give -ab 2 or more, or \
              --photon-records on)",
-            params.photons, params.bounces
+            photons, params.bounces
         )
     })
 }
@@ -166,7 +167,7 @@ pub fn photon_note(params: &super::IcParams) -> Option<String> {
 /// one bounce beyond a record, so they need at most `bounces − 1` bounces of their own.
 #[must_use]
 pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option<PhotonMaps> {
-    if params.photons == 0 && params.caustic_photons == 0 {
+    if params.global_photons() == 0 && params.caustic_photons == 0 {
         return None;
     }
     let size = super::gather::scene_size(scene);
@@ -189,7 +190,11 @@ pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option
     } else {
         gather_bounces
     };
-    let photons = if bounces >= 1 { params.photons } else { 0 };
+    let photons = if bounces >= 1 {
+        params.global_photons()
+    } else {
+        0
+    };
     let seed = crate::irradiance_cache::gather::mix(seed, 0x7068_6f74_6f6e);
     Some(PhotonMaps::build(
         scene,
