@@ -29,7 +29,7 @@ use crate::integrators::ic::IcIntegrator;
 use crate::irradiance_cache::build::{fill_for_image, record_sites, Site};
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, WorkState};
 use crate::irradiance_cache::hemisphere::Stratification;
-use crate::irradiance_cache::prepare::empty_cache;
+use crate::irradiance_cache::prepare::{empty_cache, photon_maps};
 use crate::irradiance_cache::record::NO_RADIANCE;
 use crate::irradiance_cache::{IrradianceCache, Record};
 use crate::radiance_cache::record::RadianceRecord;
@@ -543,6 +543,17 @@ impl SequenceCache {
                     scene: next,
                     deeper: cache.params.deeper,
                 };
+                // With photons, the next frame's gathers read the next frame's maps (this
+                // frame's would light the moved scene with where its photons landed before);
+                // traced on the seed the next frame's own cache takes, so they are its maps.
+                let moved = cache.photons.is_some().then(|| {
+                    let mut c = cache.clone();
+                    c.photons = pool
+                        .install(|| photon_maps(next, &c.params, self.seed))
+                        .map(std::sync::Arc::new);
+                    c
+                });
+                let cache = moved.as_ref().unwrap_or(cache);
                 let estimates: Vec<(Record, Option<RadianceRecord>, bool, u64)> =
                     pool.install(|| {
                         self.records[first..]
