@@ -743,3 +743,91 @@ fn movers(scene: &Scene, motion: &dyn Motion) -> Vec<Mover> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrators::Integrator;
+
+    /// With photons (two bounces), a record's estimate of the next frame is exactly what the
+    /// next frame's cache gathers at the moved site with the same key: the next frame's photon
+    /// maps, not this frame's (which lit the moved cube's scene with where photons landed
+    /// before).
+    #[test]
+    fn next_frame_estimates_read_the_next_frames_photons() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenes/cube-in-box/animation.xml"
+        );
+        let (mut desc, anim) =
+            ircache_scene::animation::load_animation(std::path::Path::new(path), &[])
+                .expect("loads");
+        desc.sensor.film.width = 24;
+        desc.sensor.film.height = 24;
+        desc.integrator.max_depth = 4;
+        let Integrator::Ic(mut ic) = Integrator::from_desc(&desc.integrator).expect("ic") else {
+            panic!("the scene's integrator is the cache");
+        };
+        ic.params.set("divisions", "64").unwrap();
+        ic.params.set("supersamples", "0").unwrap();
+        assert!(
+            ic.params.global_photons() > 0,
+            "photons by default at two bounces"
+        );
+        let params = TemporalParams {
+            mode: CacheMode::Temporal,
+            gradients: SlopeKind::Extrapolated,
+            ..TemporalParams::default()
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let scene_at = |f: u32| Scene::build(&anim.scene_at(&desc, f as f32)).expect("scene");
+        let (now, next) = (scene_at(5), scene_at(6));
+        let mut seq = SequenceCache::new(&ic, params, (24, 24), 1).expect("cache");
+        seq.fill_frame(5, &now, Some(&next), &anim, &pool)
+            .expect("fills");
+        let later = empty_cache(&next, &ic, 24, None, seq.seed, &pool).expect("cache");
+        let light = SceneRadiance {
+            scene: &next,
+            deeper: later.params.deeper,
+        };
+        let mut checked = 0;
+        let mut differ = 0;
+        for tr in seq
+            .records
+            .iter()
+            .filter(|tr| tr.kind == SlopeKind::Extrapolated)
+        {
+            let shape = tr.site.point.it.shape;
+            let ahead = anim.motion(shape, 5, 6);
+            let point = ahead.map_or(tr.site.point, |m| move_point(&tr.site.point, &m));
+            let g = Gatherer {
+                light: &light,
+                cache: &later,
+                seed: tr.seed,
+            };
+            let mut st = WorkState::new(later.levels.len());
+            let site = Site { point, ..tr.site };
+            let fresh = gather(&g, &mut st, &site, tr.record.level);
+            let estimate = tr.at(6, ahead.as_ref());
+            let tol = 1e-5 * fresh.e.max_channel().max(1e-6);
+            assert!(
+                (estimate.e - fresh.e).max_channel() <= tol
+                    && (fresh.e - estimate.e).max_channel() <= tol,
+                "estimate {:?} against the next frame's gather {:?}",
+                estimate.e,
+                fresh.e
+            );
+            differ += usize::from(tr.record.e != fresh.e);
+            checked += 1;
+        }
+        assert!(checked > 20, "{checked} estimates");
+        // The photons matter: the light changed between the frames.
+        assert!(
+            differ > checked / 2,
+            "{differ} of {checked} records changed"
+        );
+    }
+}
