@@ -21,7 +21,7 @@ pub fn prepare_cache(
     pool: &rayon::ThreadPool,
 ) -> Result<(IrradianceCache, CacheStats), RenderError> {
     let tables_start = std::time::Instant::now();
-    let mut cache = empty_cache(scene, ic, settings.width, None, settings.seed, pool)?;
+    let mut cache = empty_cache(scene, ic, settings.width, None, None, settings.seed, pool)?;
     let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
     let header = header(scene, ic, settings.width);
     let mut loaded = 0u64;
@@ -95,12 +95,14 @@ pub fn prepare_cache(
 
 /// An empty cache for a `width`-pixel-wide view of `scene` with `ic`'s settings: radiance
 /// caching's tables made (or `tables`, made for the same materials, reused), exclusions
-/// resolved, the pixel footprint set, the photon maps traced (on streams of `seed`).
+/// resolved, the pixel footprint set, the photon maps traced (on streams of `seed`; or `maps`,
+/// traced so for this scene and these settings, reused).
 pub fn empty_cache(
     scene: &Scene,
     ic: &IcIntegrator,
     width: usize,
     tables: Option<&Arc<RadianceCache>>,
+    maps: Option<Arc<PhotonMaps>>,
     seed: u64,
     pool: &rayon::ThreadPool,
 ) -> Result<IrradianceCache, RenderError> {
@@ -113,9 +115,10 @@ pub fn empty_cache(
     }
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     cache.pixel_angle = 2.0 * scene.camera.tan_half_x / width.max(1) as f32;
-    cache.photons = pool
-        .install(|| photon_maps(scene, &ic.params, seed))
-        .map(Arc::new);
+    cache.photons = maps.or_else(|| {
+        pool.install(|| photon_maps(scene, &ic.params, seed))
+            .map(Arc::new)
+    });
     Ok(cache)
 }
 

@@ -32,6 +32,7 @@ use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::prepare::{empty_cache, photon_maps};
 use crate::irradiance_cache::record::NO_RADIANCE;
 use crate::irradiance_cache::{IrradianceCache, Record};
+use crate::photon_map::PhotonMaps;
 use crate::radiance_cache::record::RadianceRecord;
 use crate::scene::{RenderError, Scene, ShapeGeometry};
 use ircache_math::{Mat4, Rgb, Vec2, Vec3};
@@ -195,6 +196,9 @@ pub struct SequenceCache {
     used: Vec<bool>,
     /// Radiance caching's tables, made with the first frame's cache.
     tables: std::sync::OnceLock<std::sync::Arc<crate::radiance_cache::RadianceCache>>,
+    /// The photon maps of the frame after the last filled, traced for its estimates and
+    /// reused by its own cache.
+    next_photons: Option<(u32, std::sync::Arc<PhotonMaps>)>,
 }
 
 impl SequenceCache {
@@ -228,6 +232,7 @@ impl SequenceCache {
             radiance: Vec::new(),
             used: Vec::new(),
             tables: std::sync::OnceLock::new(),
+            next_photons: None,
         })
     }
 
@@ -261,7 +266,12 @@ impl SequenceCache {
     ) -> Result<(IrradianceCache, Vec<Vec<u32>>), RenderError> {
         // Radiance caching's tables depend on the materials only, which do not move.
         let tables = self.tables.get();
-        let cache = empty_cache(scene, &self.ic, self.size.0, tables, self.seed, pool)?;
+        let maps = self
+            .next_photons
+            .as_ref()
+            .filter(|(f, _)| *f == frame)
+            .map(|(_, m)| m.clone());
+        let cache = empty_cache(scene, &self.ic, self.size.0, tables, maps, self.seed, pool)?;
         if let (None, Some(t)) = (tables, &cache.radiance) {
             let _ = self.tables.set(t.clone());
         }
@@ -544,13 +554,15 @@ impl SequenceCache {
                     deeper: cache.params.deeper,
                 };
                 // With photons, the next frame's gathers read the next frame's maps (this
-                // frame's would light the moved scene with where its photons landed before);
-                // traced on the seed the next frame's own cache takes, so they are its maps.
+                // frame's would light the moved scene with where its photons landed before),
+                // traced on the seed the next frame's own cache takes and kept for it.
+                self.next_photons = None;
                 let moved = cache.photons.is_some().then(|| {
                     let mut c = cache.clone();
                     c.photons = pool
                         .install(|| photon_maps(next, &c.params, self.seed))
                         .map(std::sync::Arc::new);
+                    self.next_photons = c.photons.clone().map(|m| (frame + 1, m));
                     c
                 });
                 let cache = moved.as_ref().unwrap_or(cache);
@@ -788,7 +800,7 @@ mod tests {
         let mut seq = SequenceCache::new(&ic, params, (24, 24), 1).expect("cache");
         seq.fill_frame(5, &now, Some(&next), &anim, &pool)
             .expect("fills");
-        let later = empty_cache(&next, &ic, 24, None, seq.seed, &pool).expect("cache");
+        let later = empty_cache(&next, &ic, 24, None, None, seq.seed, &pool).expect("cache");
         let light = SceneRadiance {
             scene: &next,
             deeper: later.params.deeper,
