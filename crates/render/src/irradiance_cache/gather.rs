@@ -699,22 +699,18 @@ impl Gatherer<'_> {
         let grad_r = to_world(&h.rotational_gradient(), frame.s, frame.t);
         // Radius limits: the resolution's (003 items 3–4), or for Tabellion's metric 1.5 and 10
         // pixel footprints at a record the camera sees (000 eq. 3.60).
-        let (mut r_min, mut r_max) = (self.cache.r_min, self.cache.r_max);
-        let mut r = match params.error_metric {
-            ErrorMetric::Ward => h.harmonic_mean_distance(),
+        let limits = (self.cache.r_min, self.cache.r_max);
+        let (r, (r_min, r_max)) = match params.error_metric {
+            ErrorMetric::Ward => (h.harmonic_mean_distance(), limits),
             ErrorMetric::Tabellion => {
-                // R₋ and R₊ are 1.5 and 10 times the square root of the pixel's area projected
-                // onto the surface at the end of the camera path (000 eq. 3.60). The
-                // resolution bounds the distance R as in Radiance, so R/2 ≥ size/(2·ar).
-                r_min *= 0.5;
-                r_max *= 0.5;
-                if self.cache.pixel_angle > 0.0 && sp.travelled > 0.0 {
-                    let cos = sp.cos_view.max(0.05);
-                    let footprint = self.cache.pixel_angle * sp.travelled / cos.sqrt();
-                    r_min = r_min.max(1.5 * footprint);
-                    r_max = r_max.min(10.0 * footprint).max(r_min);
-                }
-                0.5 * h.distance.iter().copied().fold(f32::INFINITY, f32::min)
+                let footprint = (self.cache.pixel_angle > 0.0 && sp.travelled > 0.0).then(|| {
+                    super::record::pixel_footprint(
+                        self.cache.pixel_angle,
+                        sp.travelled,
+                        sp.cos_view,
+                    )
+                });
+                super::record::tabellion_radius(&h.distance, limits, footprint)
             }
             ErrorMetric::Hessian => {
                 // ½ λ R² = a E: the second-order error reaches a E at R.
@@ -734,11 +730,10 @@ impl Gatherer<'_> {
                 // The reprojection cannot see visibility change behind nearby occluders: the
                 // harmonic mean distance bounds the radius there (Radiance's corral plays
                 // this part).
-                r_h.min(h.harmonic_mean_distance())
+                (r_h.min(h.harmonic_mean_distance()), limits)
             }
-        }
-        .min(r_max);
-        r = super::record::limit_radius_by_gradient(e, &mut grad_t, r, r_min);
+        };
+        let r = super::record::limit_radius_by_gradient(e, &mut grad_t, r.min(r_max), r_min);
         let (ray_variance, radiance) = self.variance_and_radiance(st, sp, &h);
         Record {
             p: sp.it.p,

@@ -31,6 +31,33 @@ pub struct Record {
     pub radiance: u32,
 }
 
+/// The pixel's footprint at the end of a camera path (000 eq. 3.60): the square root of the
+/// pixel's area (`pixel_angle` across) projected onto the surface `travelled` along the path, seen
+/// at `cos_view` (floored at 0.05 for grazing views).
+#[must_use]
+pub fn pixel_footprint(pixel_angle: f32, travelled: f32, cos_view: f32) -> f32 {
+    pixel_angle * travelled / cos_view.max(0.05).sqrt()
+}
+
+/// Tabellion–Lamorlette's radius (000 eqs. 3.59–3.60): half the nearest of the gather's hit
+/// `distances`, and its limits: half the resolution's `(r_min, r_max)` (so that R/2 ≥ size/(2·ar)
+/// as in Radiance), and at a record the camera sees 1.5 and 10 times its pixel `footprint`.
+/// Returns the radius (not yet limited) and the limits.
+#[must_use]
+pub fn tabellion_radius(
+    distances: &[f32],
+    (r_min, r_max): (f32, f32),
+    footprint: Option<f32>,
+) -> (f32, (f32, f32)) {
+    let (mut r_min, mut r_max) = (0.5 * r_min, 0.5 * r_max);
+    if let Some(footprint) = footprint {
+        r_min = r_min.max(1.5 * footprint);
+        r_max = r_max.min(10.0 * footprint).max(r_min);
+    }
+    let nearest = distances.iter().copied().fold(f32::INFINITY, f32::min);
+    (0.5 * nearest, (r_min, r_max))
+}
+
 /// Ward's gradient limit on a record's radius (003 item 4): the translational gradient may not
 /// predict a change larger than E itself within the radius `r`; a channel with a gradient but no
 /// irradiance loses its gradient; where the limit falls below `r_min`, the radius stays at

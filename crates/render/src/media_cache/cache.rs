@@ -22,7 +22,8 @@ use crate::integrators::RayCounts;
 use crate::irradiance_cache::gather::ShadingPoint;
 use crate::irradiance_cache::hemisphere::{to_world, Stratification};
 use crate::irradiance_cache::record::{
-    limit_radius_by_gradient, ErrorMetric, GradientMode, Record, NO_RADIANCE,
+    limit_radius_by_gradient, pixel_footprint, tabellion_radius, ErrorMetric, GradientMode, Record,
+    NO_RADIANCE,
 };
 use crate::irradiance_cache::store::RecordStore;
 use crate::irradiance_cache::IcParams;
@@ -127,21 +128,12 @@ pub fn make_record(
     let grad_r = to_world(&samples.rotational_gradient(), frame.s, frame.t);
     // Radii as the irradiance cache's (000 eq. 3.60 for Tabellion's: half the nearest opaque
     // hit within 1.5 and 10 pixel footprints); Ward's harmonic mean otherwise.
-    let (mut r_min, mut r_max) = params.radius_limits(2.0 * scene.radius);
-    let r = if params.error_metric == ErrorMetric::Tabellion {
-        r_min *= 0.5;
-        r_max *= 0.5;
-        if site.footprint > 0.0 {
-            r_min = r_min.max(1.5 * site.footprint);
-            r_max = r_max.min(10.0 * site.footprint).max(r_min);
-        }
-        0.5 * samples
-            .distance
-            .iter()
-            .copied()
-            .fold(f32::INFINITY, f32::min)
+    let limits = params.radius_limits(2.0 * scene.radius);
+    let (r, (r_min, r_max)) = if params.error_metric == ErrorMetric::Tabellion {
+        let footprint = (site.footprint > 0.0).then_some(site.footprint);
+        tabellion_radius(&samples.distance, limits, footprint)
     } else {
-        samples.harmonic_mean_distance()
+        (samples.harmonic_mean_distance(), limits)
     };
     let r = limit_radius_by_gradient(e, &mut grad_t, r.min(r_max), r_min);
     let rays: RayCounts = view.rays();
@@ -238,8 +230,11 @@ impl MediaCache {
                 };
                 // The pixel's footprint at the site (000 eq. 3.60): the camera ray is straight
                 // through null boundaries and media.
-                let cos = site.n.dot(ray.d).abs().max(0.05);
-                site.footprint = pixel_angle * (site.p - ray.o).length() / cos.sqrt();
+                site.footprint = pixel_footprint(
+                    pixel_angle,
+                    (site.p - ray.o).length(),
+                    site.n.dot(ray.d).abs(),
+                );
                 if cache.store.covers(site.p, site.n) {
                     continue;
                 }
