@@ -161,36 +161,35 @@ pub fn run_all(shared: &Path) -> Result<()> {
             }
             spp *= 2;
         }
-        let at = |key: fn(&Point) -> f64| {
-            error_at(&series, ic.seconds, key).map_or("-".to_string(), |e| format!("{e:.3e}"))
-        };
-        println!(
-            "  {:<24} {:>7.2} {:>10.3e} {:>10.3e} {:>7.4} | {:>10} {:>10} | {:>11} {:>11}",
-            format!("{name} d{depth}"),
-            ic.seconds,
-            ic.error,
-            ic.blurred,
-            ic.lum,
-            at(|p| p.error),
-            at(|p| p.blurred),
-            fmt_time(time_to(&series, ic.error, |p| p.error), cap),
-            fmt_time(time_to(&series, ic.blurred, |p| p.blurred), cap),
-        );
-        if let Some(w) = without {
+        // A cache render's row: its figures, the path tracer's errors at its time, and (for the
+        // defaults) the path tracer's times to its errors.
+        let row = |label: String, c: &Point, times: bool| {
+            let at = |key: fn(&Point) -> f64| {
+                error_at(&series, c.seconds, key).map_or("-".to_string(), |e| format!("{e:.3e}"))
+            };
+            let to = |target: f64, key: fn(&Point) -> f64| {
+                if times {
+                    fmt_time(time_to(&series, target, key), cap)
+                } else {
+                    String::new()
+                }
+            };
             println!(
                 "  {:<24} {:>7.2} {:>10.3e} {:>10.3e} {:>7.4} | {:>10} {:>10} | {:>11} {:>11}",
-                "  … --photons 0",
-                w.seconds,
-                w.error,
-                w.blurred,
-                w.lum,
-                error_at(&series, w.seconds, |p| p.error)
-                    .map_or("-".into(), |e| format!("{e:.3e}")),
-                error_at(&series, w.seconds, |p| p.blurred)
-                    .map_or("-".into(), |e| format!("{e:.3e}")),
-                "",
-                ""
+                label,
+                c.seconds,
+                c.error,
+                c.blurred,
+                c.lum,
+                at(|p| p.error),
+                at(|p| p.blurred),
+                to(c.error, |p| p.error),
+                to(c.blurred, |p| p.blurred),
             );
+        };
+        row(format!("{name} d{depth}"), &ic, true);
+        if let Some(w) = without {
+            row("  … --photons 0".into(), &w, false);
         }
     }
     println!("  * the path tracer's error at the cache's time (interpolated between its renders)");
