@@ -11,7 +11,7 @@ use ircache_render::integrators::Integrator;
 use ircache_render::render::render;
 use ircache_render::scene::Scene;
 use ircache_render::temporal::record::SlopeKind;
-use ircache_render::temporal::{CacheMode, FrameStats, SequenceCache, TemporalParams};
+use ircache_render::temporal::{CacheMode, FrameStats, NextFrame, SequenceCache, TemporalParams};
 use ircache_scene::animation::{is_animation, load_animation, Animation};
 use ircache_scene::SceneDesc;
 use std::path::{Path, PathBuf};
@@ -41,6 +41,11 @@ pub struct AnimateArgs {
     /// frame's estimate, 5.12–5.14) or `off`.
     #[arg(long, default_value = "interpolated", value_parser = parse_gradients)]
     pub temporal_gradients: SlopeKind,
+    /// How `temporal` estimates a new record's next frame for its lifespan: `reproject` (001
+    /// §5.2.4: the record's gather rays carried to the next frame and their hits shaded again,
+    /// no gather rays) or `regather` (the hemisphere gathered again in the next frame).
+    #[arg(long, default_value = "reproject", value_parser = NextFrame::parse)]
+    pub next_frame: NextFrame,
     /// Everything `ircache render` takes; SCENE is an `<animation>` file or a still scene
     /// (which then needs --frames; none: the built-in Cornell box), and -o a file name whose
     /// run of `#` is the frame number (default: the scene's name, `-####.exr`).
@@ -165,6 +170,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         accuracy: args.temporal_accuracy,
         max_lifespan: args.max_lifespan,
         gradients: args.temporal_gradients,
+        next_frame: args.next_frame,
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
@@ -245,6 +251,7 @@ fn write_stats(
             serde_json::json!({
                 "frame": f.frame, "live": f.live, "carried": f.carried, "renewed": f.renewed,
                 "new": f.new, "dropped": f.dropped, "estimates": f.estimates,
+                "estimate_rays": f.estimate_rays,
                 "gather_rays": f.gather_rays, "cache_seconds": f.seconds, "pixel_seconds": px,
             })
         })
@@ -255,6 +262,8 @@ fn write_stats(
         "max_lifespan": args.max_lifespan,
         "records_gathered": fills.iter().map(|f| f.renewed + f.new).sum::<usize>(),
         "estimates": fills.iter().map(|f| f.estimates).sum::<usize>(),
+        "next_frame": args.next_frame.name(),
+        "estimate_rays": fills.iter().map(|f| f.estimate_rays).sum::<u64>(),
         "gather_rays": fills.iter().map(|f| f.gather_rays).sum::<u64>(),
         "cache_seconds": fills.iter().map(|f| f.seconds).sum::<f64>(),
         "pixel_seconds": render_seconds.iter().sum::<f64>(),

@@ -708,6 +708,7 @@ fn plane_estimators_keep_the_thesis_order_on_the_cornell_box() {
         light: &light,
         cache: &cache,
         seed: 9,
+        next: None,
     };
     let plane = HemispherePlane::new(64, 2.0);
     let estimators = [

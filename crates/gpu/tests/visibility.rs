@@ -52,6 +52,7 @@ fn rasterised_planes_see_what_the_rays_see() {
         light: &light,
         cache: &cache,
         seed: 3,
+        next: None,
     };
     let plane = HemispherePlane::new(64, 2.0);
     let (mut pixels, mut agree, mut points) = (0usize, 0usize, 0usize);

@@ -498,6 +498,7 @@ fn hessian_by_reprojection_matches_second_differences() {
                 light: &light,
                 cache: &cache,
                 seed,
+                next: None,
             };
             let mut st = WorkState::new(1);
             let (h, f) = g.gather(&mut st, &sp, Stratification::from_divisions(16384), 0, 1);

@@ -1,6 +1,6 @@
 //! `ircache bench --only cache`: the cache against the path tracer on each scene, by rendering.
 //!
-//! For each scene and depth: `ic` at its defaults (16 spp), then `path` at 4, 8, 16, … spp until
+//! For each scene and depth: `ic` at its defaults (16 spp), then `path` at 4, 16, 64, … spp ([`super::next_sample_count`]) until
 //! it reaches the cache's error both unblurred and blurred (σ = 2 px, the low-frequency error:
 //! blotches, leaks, bias), or runs 30 times as long. Times to equal error are interpolated
 //! between the two renders that bracket it (log error against log time); nothing is extrapolated
@@ -159,7 +159,7 @@ pub fn run_all(shared: &Path) -> Result<()> {
             if (p.error <= ic.error && p.blurred <= ic.blurred) || p.seconds > cap || spp >= 4096 {
                 break;
             }
-            spp *= 2;
+            spp = super::next_sample_count(spp);
         }
         // A cache render's row: its figures, the path tracer's errors at its time, and (for the
         // defaults) the path tracer's times to its errors.

@@ -2,8 +2,8 @@
 //!
 //! On `scenes/cornell-fog` at 128 pixels across: (1) the irradiance cache in the fog (one
 //! bounce, `max_depth` 3) at 16 spp — camera rays tracked (stage 1), marched without and with
-//! volumetric records, the media-blind gradient, fewer gather rays — against `volpath` at 8,
-//! 16, 32, … spp until it reaches the last variant's error (unblurred and blurred, σ = 2 px); the
+//! volumetric records, the media-blind gradient, fewer gather rays — against `volpath` at
+//! 16, 64, 256, … spp until it reaches the last variant's error (unblurred and blurred, σ = 2 px); the
 //! reference is `volpath` at 4096 spp made here; the records' pre-pass times and rays are
 //! printed, so the gradients' overhead over the media-blind form reads off the table. (2) `volpath` at
 //! `max_depth` 6 (`multijitter`) against Mitsuba 3's `volpath` (`multijitter`) at equal spp,
@@ -90,15 +90,15 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
     }
     let best = forms.last().copied().context("no cache render")?;
     let mut series = Vec::new();
-    let mut spp = 8;
-    while spp <= 2048 {
+    let mut spp = 16;
+    while spp <= 4096 {
         let p = measure(&run(&scene, &desc, "volpath", spp, &[])?, &reference)?;
         show(&format!("volpath, {spp} spp"), &p);
         series.push(p);
         if p.error <= best.error && p.blurred <= best.blurred {
             break;
         }
-        spp *= 2;
+        spp = super::next_sample_count(spp);
     }
     let last = series.last().map_or(0.0, |p| p.seconds);
     // How many times volpath's time to the same error the cache takes (> 1: the cache loses).

@@ -2,8 +2,8 @@
 //! same run.
 //!
 //! For each scene: Mitsuba 3 (`llvm_ad_rgb`, 2 threads) with its `independent` and
-//! `multijitter` samplers at 64 spp; ircache's path tracer (its default sampler) at 16, 32, 64
-//! spp; `ic` at its defaults. Then Mitsuba `multijitter` at 16, 32, 64, … spp until it reaches
+//! `multijitter` samplers at 64 spp; ircache's path tracer (its default sampler) at 16 and 64
+//! spp; `ic` at its defaults. Then Mitsuba `multijitter` at 16, 64, 256, … spp ([`super::next_sample_count`]) until it reaches
 //! `ic`'s error (or 20 times `ic`'s time), each in a process of its own; the time to equal
 //! error is interpolated between the two renders that bracket it (log error against log time),
 //! never taken from an error law.
@@ -36,7 +36,7 @@ fn mitsuba(
     measure_image(&img, seconds, reference)
 }
 
-/// Mitsuba 3 `multijitter` at 16, 32, 64, … spp until a render reaches `error` (and `blurred`,
+/// Mitsuba 3 `multijitter` at 16, 64, 256, … spp until a render reaches `error` (and `blurred`,
 /// when given) or takes longer than `cap` seconds, each printed by `show`; `defines` set the
 /// scene's defaults (`resx`, `resy`).
 #[allow(clippy::too_many_arguments)]
@@ -62,7 +62,7 @@ pub(super) fn multijitter_series(
         {
             return Ok(series);
         }
-        spp *= 2;
+        spp = super::next_sample_count(spp);
     }
 }
 
@@ -90,7 +90,7 @@ pub fn run_all(shared: &Path) -> Result<()> {
             );
         };
         let mut path = Vec::new();
-        for spp in [16, 32, 64] {
+        for spp in [16, 64] {
             let p = measure(&run(&scene, &desc, "path", spp, &[])?, &reference)?;
             show(&format!("ircache path, {spp} spp"), &p);
             path.push(p);

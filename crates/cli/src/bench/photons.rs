@@ -5,7 +5,7 @@
 //! arrives off a rough-metal bowl and a gold cone; `max_depth` 7), at 256 pixels across: `ic`
 //! without photons, with the cached final gather (`--photons`), with the caustic map too, and
 //! with photon-mapped records (`--photon-records on`), all at 16 spp; then `ic` without photons
-//! at 32, 64, … spp and Mitsuba 3 `multijitter` at 16, 32, … spp until each reaches the best
+//! at 64, 256, … spp and Mitsuba 3 `multijitter` at 16, 64, … spp until each reaches the best
 //! photon variant's error (unblurred and blurred, σ = 2 px), or 20 times its time. Times to
 //! equal error are interpolated between the bracketing renders, never extrapolated. Last, the
 //! time per record: photon records against gathered ones (001 §6.3: 3.71 ms against 2.6 ms).
@@ -147,7 +147,7 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
         let cap = 20.0 * best.seconds;
         println!("  the best photon variant: {label}");
         let mut series = vec![plain];
-        let mut spp = 32;
+        let mut spp = 64;
         while !(series
             .last()
             .is_some_and(|p| p.error <= best.error && p.blurred <= best.blurred))
@@ -157,7 +157,7 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
             let p = measure(&run(&scene, &desc, "ic", spp, &no_photons)?, &reference)?;
             show(&format!("ic, no photons, {spp} spp"), &p);
             series.push(p);
-            spp *= 2;
+            spp = super::next_sample_count(spp);
         }
         let ratio = |t: Option<f64>| t.map_or("?".into(), |t| format!("{:.1}", t / best.seconds));
         let last = series.last().map_or(0.0, |p| p.seconds);

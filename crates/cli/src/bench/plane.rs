@@ -64,6 +64,7 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
         light: &light,
         cache: &cache,
         seed: 7,
+        next: None,
     };
     // The points: first record sites of random camera rays.
     let points = visible_sites(&scene, POINTS, 11);

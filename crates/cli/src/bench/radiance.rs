@@ -2,8 +2,8 @@
 //!
 //! For cornell-glossy and ircache's own moderately glossy `scenes/cornell-rough` (`-ab 3`, against
 //! `max_depth` 5 references): `ic --radiance-cache on` at its defaults (16 spp); `ic` with the
-//! same lobes traced at 16, 32, 64, … spp until it reaches that error; ircache's path tracer at 16
-//! and 64 spp; Mitsuba 3 `multijitter` at 16, 32, … spp until it reaches the error. Times to
+//! same lobes traced at 16, 64, 256, … spp until it reaches that error; ircache's path tracer at 16
+//! and 64 spp; Mitsuba 3 `multijitter` at 16, 64, … spp until it reaches the error. Times to
 //! equal error are interpolated between the bracketing renders (log–log), never extrapolated.
 //! Then environment light in the records (`--cached-environment`, `irradiance_cache::environment`)
 //! on `scenes/sky-glossy`, under its smooth sky and under the same sky with a sun; and the
@@ -75,7 +75,7 @@ pub fn run_all(shared: &Path, with_mitsuba: bool) -> Result<()> {
             if p.error <= cached.error || p.seconds > cap || spp >= 1024 {
                 break;
             }
-            spp *= 2;
+            spp = super::next_sample_count(spp);
         }
         for spp in [16, 64] {
             show(

@@ -5,8 +5,9 @@
 //! halves of `REFERENCE_SPP` each, the frames' motions applied to the shapes through
 //! `mi.traverse`, the matrices computed by ircache's own animation code); `ircache animate` (a
 //! process each, wall time) with the temporal cache (interpolated and extrapolated temporal
-//! gradients), the age-based cache and a cache per frame; the measures of
-//! `ircache_image::flicker`; then Mitsuba `multijitter` per frame at 4, 8, 16, … spp until its
+//! gradients; next frames estimated by reprojection, the default, and by gathering again), the
+//! age-based cache and a cache per frame; the measures of
+//! `ircache_image::flicker`; then Mitsuba `multijitter` per frame at 4, 16, 64, … spp ([`super::next_sample_count`]) until its
 //! mean relMSE reaches the temporal cache's, the equal-error time interpolated between the two
 //! sequences that bracket it (log error against log time).
 
@@ -177,14 +178,30 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
         )?;
         let frames_arg = format!("{}..{}", case.frames.0, case.frames.1);
         let mut temporal = None;
-        for (label, mode, gradients) in [
-            ("temporal, interpolated", "temporal", "interpolated"),
-            ("temporal, extrapolated", "temporal", "extrapolated"),
-            ("age-based", "age", "off"),
-            ("cache per frame", "per-frame", "off"),
+        for (label, mode, gradients, next_frame) in [
+            (
+                "temporal, interpolated",
+                "temporal",
+                "interpolated",
+                "reproject",
+            ),
+            (
+                "  … next frames regathered",
+                "temporal",
+                "interpolated",
+                "regather",
+            ),
+            (
+                "temporal, extrapolated",
+                "temporal",
+                "extrapolated",
+                "reproject",
+            ),
+            ("age-based", "age", "off", "reproject"),
+            ("cache per frame", "per-frame", "off", "reproject"),
         ] {
-            let pattern = dir.join(format!("{mode}-{gradients}-###.exr"));
-            let stats = dir.join(format!("{mode}-{gradients}.json"));
+            let pattern = dir.join(format!("{mode}-{gradients}-{next_frame}-###.exr"));
+            let stats = dir.join(format!("{mode}-{gradients}-{next_frame}.json"));
             let t = Instant::now();
             let out = std::process::Command::new(&exe)
                 .args([
@@ -196,6 +213,7 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
                 .args(["--width", &w.to_string(), "--height", &h.to_string()])
                 .args(["--spp", &SPP.to_string(), "--integrator", "ic", "-q"])
                 .args(["--cache-mode", mode, "--temporal-gradients", gradients])
+                .args(["--next-frame", next_frame])
                 .arg("-o")
                 .arg(&pattern)
                 .arg("--stats")
@@ -211,9 +229,10 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
                 label,
                 &m,
                 &format!(
-                    "records {} (+{} estimates), cache {:.1} s",
+                    "records {} (+{} estimates, {:.1} M rays), cache {:.1} s",
                     s["records_gathered"],
                     s["estimates"],
+                    s["estimate_rays"].as_f64().unwrap_or(0.0) / 1e6,
                     s["cache_seconds"].as_f64().unwrap_or(0.0)
                 ),
             );
@@ -241,7 +260,7 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             {
                 break;
             }
-            spp *= 2;
+            spp = super::next_sample_count(spp);
         }
         let equal = equal_error_seconds(&series, temporal.report.rel_mse_trim);
         match equal {

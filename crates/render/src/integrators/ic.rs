@@ -327,6 +327,7 @@ impl PixelLookup<'_> {
             light: &light,
             cache,
             seed: self.ic.seed,
+            next: None,
         };
         let mut st = WorkState::new(cache.levels.len());
         let key = mix(0x0070_6978_656c, sampler.next_key());

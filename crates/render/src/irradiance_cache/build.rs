@@ -12,7 +12,8 @@
 
 use super::file::Stored;
 use super::gather::{
-    mix, GatherCounts, Gatherer, IrradianceCache, SceneRadiance, ShadingPoint, WorkState,
+    mix, GatherCounts, Gatherer, IrradianceCache, NextEstimate, NextFrameEstimator, SceneRadiance,
+    ShadingPoint, WorkState,
 };
 use super::record::{Record, NO_RADIANCE};
 use crate::radiance_cache::RadianceCache;
@@ -75,22 +76,37 @@ pub struct Site {
     pub rays: usize,
 }
 
-/// The records the pre-pass made, per level. Records read from a file or made by other
-/// processes have none.
+/// The records the pre-pass made, per level, and with a [`NextFrameEstimator`] their next-frame
+/// estimates. Records read from a file or made by other processes have none.
 #[derive(Clone, Debug, Default)]
-pub struct Sites(pub Vec<Vec<Site>>);
+pub struct Sites {
+    /// Per level, the sites in the order the records were made.
+    pub levels: Vec<Vec<Site>>,
+    /// Per level, each site's next-frame estimate (`None` for records the gatherer's paths
+    /// made at deeper levels, or without an estimator).
+    pub estimates: Vec<Vec<Option<NextEstimate>>>,
+}
 
 impl Sites {
-    fn add(&mut self, level: usize, index: usize, point: ShadingPoint, key: u64) {
-        if self.0.len() <= level {
-            self.0.resize(level + 1, Vec::new());
+    fn add(
+        &mut self,
+        level: usize,
+        index: usize,
+        point: ShadingPoint,
+        key: u64,
+        estimate: Option<NextEstimate>,
+    ) {
+        if self.levels.len() <= level {
+            self.levels.resize(level + 1, Vec::new());
+            self.estimates.resize(level + 1, Vec::new());
         }
-        self.0[level].push(Site {
+        self.levels[level].push(Site {
             index,
             point,
             key,
             rays: 0,
         });
+        self.estimates[level].push(estimate);
     }
 }
 
@@ -202,7 +218,9 @@ fn take_in(cache: &mut IrradianceCache, records: Vec<Stored>, stats: &mut CacheS
 }
 
 /// Runs one batch: `points[i] = (key, level, point)`; hands the new records to `hook` and
-/// notes where each was gathered in `sites`.
+/// notes where each was gathered in `sites`, with its next-frame estimate where `next` makes
+/// them.
+#[allow(clippy::too_many_arguments)]
 pub fn run_batch(
     scene: &Scene,
     cache: &mut IrradianceCache,
@@ -211,6 +229,7 @@ pub fn run_batch(
     stats: &mut CacheStats,
     sites: &mut Sites,
     hook: &mut (dyn BatchHook + Send),
+    next: Option<&dyn NextFrameEstimator>,
 ) {
     take_in(cache, hook.before(), stats);
     // Per point: the record gathered there (with its point and key) and its work state.
@@ -224,6 +243,7 @@ pub fn run_batch(
             light: &light,
             cache,
             seed,
+            next,
         };
         // Small pieces: the points that need records cluster (edges, corners), and rayon
         // cannot steal from inside a piece a thread has started.
@@ -246,14 +266,22 @@ pub fn run_batch(
     for (rec, mut st) in results.into_iter().flatten() {
         counts.add(&st.counts);
         let mut radiance = std::mem::take(&mut st.radiance);
+        let deeper = st.new_records.len();
+        let mut estimate = st.estimates.pop();
         // Deeper records first: they were made for the level-0 record's gather.
-        for (mut r, sp, key) in st.new_records.into_iter().chain(std::iter::once(rec)) {
+        for (i, (mut r, sp, key)) in st
+            .new_records
+            .into_iter()
+            .chain(std::iter::once(rec))
+            .enumerate()
+        {
             cache.adopt_radiance(&mut r, &mut radiance, NO_RADIANCE);
             let store = &mut cache.levels[r.level as usize];
             if store.covers(r.p, r.n) {
                 stats.records_overlapping += 1;
             }
-            sites.add(r.level as usize, store.len(), sp, key);
+            let estimate = if i == deeper { estimate.take() } else { None };
+            sites.add(r.level as usize, store.len(), sp, key, estimate);
             store.insert(r);
             added.push(cache.stored(&r));
         }
@@ -298,7 +326,9 @@ pub fn phase_pixels(
 }
 
 /// Fills `cache` for a `width`×`height` view of `scene` (run inside the caller's thread pool);
-/// says where and how each new record was gathered.
+/// says where and how each new record was gathered, and with `next` estimates each one's
+/// next frame.
+#[allow(clippy::too_many_arguments)]
 pub fn fill_for_image(
     scene: &Scene,
     cache: &mut IrradianceCache,
@@ -307,6 +337,7 @@ pub fn fill_for_image(
     rows: std::ops::Range<usize>,
     seed: u64,
     hook: &mut (dyn BatchHook + Send),
+    next: Option<&dyn NextFrameEstimator>,
 ) -> (CacheStats, Sites) {
     let start = Instant::now();
     let mut stats = CacheStats::default();
@@ -334,11 +365,13 @@ pub fn fill_for_image(
                         .map(move |(i, (level, sp))| (mix(key, i as u64), level, sp))
                 })
                 .collect();
-            run_batch(scene, cache, seed, &points, &mut stats, &mut sites, hook);
+            run_batch(
+                scene, cache, seed, &points, &mut stats, &mut sites, hook, next,
+            );
         }
         stride /= 2;
     }
-    regather_noisy(scene, cache, seed, &mut sites, &mut stats);
+    regather_noisy(scene, cache, seed, &mut sites, &mut stats, next);
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     stats.gather_seconds = start.elapsed().as_secs_f64();
     (stats, sites)
@@ -363,10 +396,19 @@ pub fn fill_for_points(
             .filter(|(i, _)| i % stride == 0 && (stride == 64 || i % (2 * stride) != 0))
             .map(|(i, sp)| (mix(0x706f_696e_7473, i as u64), 0, *sp))
             .collect();
-        run_batch(scene, cache, seed, &batch, &mut stats, &mut sites, &mut ());
+        run_batch(
+            scene,
+            cache,
+            seed,
+            &batch,
+            &mut stats,
+            &mut sites,
+            &mut (),
+            None,
+        );
         stride /= 2;
     }
-    regather_noisy(scene, cache, seed, &mut sites, &mut stats);
+    regather_noisy(scene, cache, seed, &mut sites, &mut stats, None);
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     stats.gather_seconds = start.elapsed().as_secs_f64();
     stats
@@ -389,12 +431,14 @@ pub const REGATHER_AT: f64 = 16.0;
 /// done when that is at least [`REGATHER_AT`] times the divisions (a neighbour's error at
 /// least four times the target: where small bright patches make the gathers heavy-tailed). Records made by other processes or read
 /// from a file are left as they are; records a new gather makes at deeper levels are not kept.
+/// With `next`, a record gathered again gets the new gather's next-frame estimate.
 pub fn regather_noisy(
     scene: &Scene,
     cache: &mut IrradianceCache,
     seed: u64,
     sites: &mut Sites,
     stats: &mut CacheStats,
+    next: Option<&dyn NextFrameEstimator>,
 ) {
     let params = cache.params.clone();
     let target = params.record_error * params.accuracy;
@@ -402,7 +446,12 @@ pub fn regather_noisy(
         return;
     }
     let cap = params.divisions + params.supersamples;
-    for (level, level_sites) in sites.0.iter_mut().enumerate() {
+    for (level, (level_sites, level_estimates)) in sites
+        .levels
+        .iter_mut()
+        .zip(sites.estimates.iter_mut())
+        .enumerate()
+    {
         let jobs: Vec<(usize, usize, ShadingPoint, usize)> = {
             let store = &cache.levels[level];
             let recs = store.records();
@@ -443,6 +492,7 @@ pub fn regather_noisy(
             light: &light,
             cache,
             seed,
+            next,
         };
         let fresh: Vec<(usize, usize, Record, WorkState, u64, usize)> = jobs
             .par_iter()
@@ -458,6 +508,7 @@ pub fn regather_noisy(
         let mut records = cache.levels[level].records().to_vec();
         for (site, i, mut rec, mut st, key, rays) in fresh {
             (level_sites[site].key, level_sites[site].rays) = (key, rays);
+            level_estimates[site] = st.estimates.pop();
             // The new coefficients take the old record's place in the list.
             cache.adopt_radiance(&mut rec, &mut st.radiance, records[i].radiance);
             let counts = st.counts;

@@ -376,6 +376,9 @@ pub struct WorkState {
     pub radiance: Vec<RadianceRecord>,
     /// Counters.
     pub counts: GatherCounts,
+    /// With a [`NextFrameEstimator`], the estimates of the records the work item's gatherer made
+    /// itself, in order (records its paths made at deeper levels have none).
+    pub estimates: Vec<NextEstimate>,
 }
 
 impl WorkState {
@@ -387,13 +390,78 @@ impl WorkState {
             new_records: Vec::new(),
             radiance: Vec::new(),
             counts: GatherCounts::default(),
+            estimates: Vec::new(),
         }
     }
 }
 
+/// One gather ray as the gather traced it: enough to carry it to another frame (temporal
+/// caching's reprojection, 001 §5.2.4).
+#[derive(Clone, Copy, Debug)]
+pub struct TracedSample {
+    /// Its cell, `j * N + k`.
+    pub cell: u32,
+    /// The key of its own random stream ([`sample_rng`]).
+    pub key: u64,
+    /// Its direction in the record's frame, as the cell's stratum drew it.
+    pub local: Vec3,
+    /// The ray (world space, unit direction).
+    pub ray: Ray,
+    /// What it found.
+    pub found: TracedHit,
+}
+
+/// What a traced gather ray found.
+#[derive(Clone, Copy, Debug)]
+pub enum TracedHit {
+    /// A surface, where the light source reported it, with the radiance it sent.
+    Surface(Interaction, Rgb),
+    /// A surface a light source without a scene found (a closed form): it cannot be carried.
+    Opaque(Rgb, f32),
+    /// Nothing: the environment's radiance, into the cell's radiance and kept apart.
+    Escaped(Rgb, Rgb),
+    /// A direction below the geometric surface.
+    Below,
+}
+
+/// A record's value in the next frame, estimated while the record is made.
+#[derive(Clone, Debug)]
+pub struct NextEstimate {
+    /// The record as it would be gathered in the next frame (at its moved place).
+    pub record: Record,
+    /// Its incoming radiance in HSH where the record holds it.
+    pub radiance: Option<RadianceRecord>,
+    /// Rays the estimate traced.
+    pub counts: GatherCounts,
+}
+
+/// Estimates each record's next-frame value from its gather's traced samples as the record is
+/// made (temporal caching; [`crate::temporal::reprojection`]).
+pub trait NextFrameEstimator: Sync {
+    /// The next frame's record at the place of the record gathered at `sp` for `level` with
+    /// `strata` and key `key`, on `seed`, whose samples were `samples`.
+    #[allow(clippy::too_many_arguments)]
+    fn estimate(
+        &self,
+        seed: u64,
+        sp: &ShadingPoint,
+        level: u32,
+        key: u64,
+        strata: Stratification,
+        samples: &[TracedSample],
+    ) -> NextEstimate;
+}
+
+/// The random stream of the gather sample keyed `key` for `level` on `seed`: what it draws
+/// never shifts another sample's numbers.
+#[must_use]
+pub fn sample_rng(seed: u64, key: u64, level: u32) -> Rng {
+    Rng::keyed(seed, &[SAMPLE_SALT, key, u64::from(level)])
+}
+
 /// What a gather ray finds: the radiance arriving along it, the distance to the surface it
 /// comes from and that surface's geometric normal (world space).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 pub struct Incident {
     /// Radiance arriving (emission of the surface found left out: direct terms sample lights).
     pub radiance: Rgb,
@@ -401,6 +469,8 @@ pub struct Incident {
     pub distance: f32,
     /// Its geometric normal.
     pub normal: Vec3,
+    /// The ray and the surface it met, where a scene was traced (a closed form has none).
+    pub hit: Option<(Ray, Interaction)>,
 }
 
 /// The narrow interface through which a cache's gather asks for light: the radiance arriving at
@@ -440,6 +510,8 @@ pub struct Gatherer<'a> {
     pub cache: &'a IrradianceCache,
     /// Seed of all random streams.
     pub seed: u64,
+    /// Who estimates each record's next frame as it is made (temporal caching), if anyone.
+    pub next: Option<&'a dyn NextFrameEstimator>,
 }
 
 /// Incident radiance by tracing the scene: a gather ray's path is continued by [`trace_path`]
@@ -503,8 +575,9 @@ enum Escapes {
 
 /// What one gather ray finds.
 enum Found {
-    /// A surface: the radiance arriving from it, its distance and its normal (local frame).
-    Surface(Rgb, f32, Vec3),
+    /// A surface: the radiance arriving from it, its distance, its normal (local frame) and
+    /// the surface where a scene was traced.
+    Surface(Rgb, f32, Vec3, Option<(Ray, Interaction)>),
     /// Nothing: it escaped along the world direction.
     Escaped(Vec3),
     /// The direction is below the geometric surface: nothing arrives.
@@ -520,6 +593,19 @@ impl Gatherer<'_> {
         strata: Stratification,
         level: u32,
         key: u64,
+    ) -> (HemisphereSamples, Frame) {
+        self.gather_traced(st, sp, strata, level, key, None)
+    }
+
+    /// [`Self::gather`], keeping every ray it traces in `traced` when asked.
+    fn gather_traced(
+        &self,
+        st: &mut WorkState,
+        sp: &ShadingPoint,
+        strata: Stratification,
+        level: u32,
+        key: u64,
+        mut traced: Option<&mut Vec<TracedSample>>,
     ) -> (HemisphereSamples, Frame) {
         let mut rng = Rng::keyed(self.seed, &[GATHER_SALT, key, u64::from(level)]);
         let frame = Frame::from_z(sp.n);
@@ -547,8 +633,13 @@ impl Gatherer<'_> {
         );
         for (j, k, local) in dirs {
             let idx = j * strata.azimuthal + k;
-            match self.sample(st, sp, &frame, ng, local, level, mix(key, idx as u64)) {
-                Found::Surface(l, t, n_hit) => {
+            let sample_key = mix(key, idx as u64);
+            let found = self.sample(st, sp, &frame, ng, local, level, sample_key);
+            if let Some(traced) = traced.as_deref_mut() {
+                traced.push(self.traced(sp, &frame, idx, sample_key, local, &found, environment));
+            }
+            match found {
+                Found::Surface(l, t, n_hit, _) => {
                     h.radiance[idx] = l;
                     h.distance[idx] = t;
                     h.hits[idx] = (local, n_hit);
@@ -574,9 +665,47 @@ impl Gatherer<'_> {
                 level,
                 key,
                 environment,
+                traced,
             );
         }
         (h, frame)
+    }
+
+    /// What the sample of cell `cell` along the local direction `local` found, kept for
+    /// [`TracedSample`]s.
+    #[allow(clippy::too_many_arguments)]
+    fn traced(
+        &self,
+        sp: &ShadingPoint,
+        frame: &Frame,
+        cell: usize,
+        key: u64,
+        local: Vec3,
+        found: &Found,
+        environment: Escapes,
+    ) -> TracedSample {
+        let d = frame.from_local(local);
+        let (ray, found) = match *found {
+            Found::Surface(l, _, _, Some((ray, hit))) => (ray, TracedHit::Surface(hit, l)),
+            Found::Surface(l, t, _, None) => (Ray::new(sp.it.p, d), TracedHit::Opaque(l, t)),
+            Found::Escaped(d) => {
+                let e = self.light.escaped(d);
+                let (into, apart) = match environment {
+                    Escapes::Irradiance => (e, Rgb::ZERO),
+                    Escapes::Apart => (Rgb::ZERO, e),
+                    Escapes::Dropped => (Rgb::ZERO, Rgb::ZERO),
+                };
+                (Ray::new(sp.it.p, d), TracedHit::Escaped(into, apart))
+            }
+            Found::Below => (Ray::new(sp.it.p, d), TracedHit::Below),
+        };
+        TracedSample {
+            cell: cell as u32,
+            key,
+            local,
+            ray,
+            found,
+        }
     }
 
     /// One gather ray along the local direction `local`: what it finds. The sample's shading
@@ -600,12 +729,17 @@ impl Gatherer<'_> {
             return Found::Below;
         }
         st.counts.gather_rays += 1;
-        let mut rng = Rng::keyed(self.seed, &[SAMPLE_SALT, key, u64::from(level)]);
+        let mut rng = sample_rng(self.seed, key, level);
         match self
             .light
             .incident(self.cache, self.seed, st, sp, d, level, key, &mut rng)
         {
-            Some(inc) => Found::Surface(inc.radiance, inc.distance, frame.to_local(inc.normal)),
+            Some(inc) => Found::Surface(
+                inc.radiance,
+                inc.distance,
+                frame.to_local(inc.normal),
+                inc.hit,
+            ),
             None => Found::Escaped(d),
         }
     }
@@ -631,6 +765,7 @@ impl Gatherer<'_> {
         level: u32,
         key: u64,
         environment: Escapes,
+        mut traced: Option<&mut Vec<TracedSample>>,
     ) {
         let strata = h.strata;
         let target = self.cache.params.record_error * self.cache.params.accuracy;
@@ -645,8 +780,20 @@ impl Gatherer<'_> {
                 let u = Vec2::new((v.x + dx).fract(), (v.y + dy).fract());
                 let local = strata.direction(j, k, u);
                 let sample_key = mix(key, (strata.cells() + 3 * idx + q) as u64);
-                match self.sample(st, sp, frame, ng, local, level, sample_key) {
-                    Found::Surface(l, t, n_hit) => {
+                let found = self.sample(st, sp, frame, ng, local, level, sample_key);
+                if let Some(traced) = traced.as_deref_mut() {
+                    traced.push(self.traced(
+                        sp,
+                        frame,
+                        idx,
+                        sample_key,
+                        local,
+                        &found,
+                        environment,
+                    ));
+                }
+                match found {
+                    Found::Surface(l, t, n_hit, _) => {
                         sum += l;
                         // The nearest surface in the cell moves its walls (3.42, 3.46).
                         if t < h.distance[idx] {
@@ -687,9 +834,29 @@ impl Gatherer<'_> {
         key: u64,
         strata: Stratification,
     ) -> Record {
-        let params = &self.cache.params;
-        let (h, frame) = self.gather(st, sp, strata, level, key);
+        let mut traced = self.next.map(|_| Vec::new());
+        let (h, frame) = self.gather_traced(st, sp, strata, level, key, traced.as_mut());
         st.counts.records += 1;
+        let record = self.record_from(st, sp, level, &h, &frame);
+        if let (Some(next), Some(traced)) = (self.next, traced) {
+            let estimate = next.estimate(self.seed, sp, level, key, strata, &traced);
+            st.estimates.push(estimate);
+        }
+        record
+    }
+
+    /// The record at `sp` for bounce `level` that the samples `h` (gathered in `frame`, its
+    /// z axis the normal) give: irradiance, gradients, radius within its limits; its HSH
+    /// coefficients, where it holds them, go to `st`.
+    pub fn record_from(
+        &self,
+        st: &mut WorkState,
+        sp: &ShadingPoint,
+        level: u32,
+        h: &HemisphereSamples,
+        frame: &Frame,
+    ) -> Record {
+        let params = &self.cache.params;
         let e = h.irradiance();
         let grad_t_local = match params.formula {
             TranslationalFormula::WardHeckbert => h.translational_gradient_ward_heckbert(),
@@ -734,7 +901,7 @@ impl Gatherer<'_> {
             }
         };
         let r = super::record::limit_radius_by_gradient(e, &mut grad_t, r.min(r_max), r_min);
-        let (ray_variance, radiance) = self.variance_and_radiance(st, sp, &h);
+        let (ray_variance, radiance) = self.variance_and_radiance(st, sp, h);
         Record {
             p: sp.it.p,
             n: sp.n,
@@ -867,6 +1034,7 @@ impl SceneRadiance<'_> {
             light: self,
             cache,
             seed,
+            next: None,
         };
         let radiance = {
             let mut source = GatherSource {
@@ -891,6 +1059,7 @@ impl SceneRadiance<'_> {
             radiance,
             distance,
             normal,
+            hit: Some((ray, hit)),
         }
     }
 }
@@ -979,6 +1148,7 @@ mod tests {
                 radiance: Rgb::splat(self.c0 + self.a.dot(d)),
                 distance: 1e6,
                 normal: -d,
+                hit: None,
             })
         }
     }
@@ -1000,6 +1170,7 @@ mod tests {
             light: &dome,
             cache: &cache,
             seed: 4,
+            next: None,
         };
         for n in [
             Vec3::Z,

@@ -78,6 +78,25 @@ impl Stratification {
         let (sp, cp) = phi.sin_cos();
         Vec3::new(cp * sin_t, sp * sin_t, cos_t)
     }
+
+    /// The cell `j * N + k` holding the local direction `local` (the inverse of
+    /// [`Self::direction`]); `None` below the horizon.
+    #[must_use]
+    pub fn cell_of(&self, local: Vec3) -> Option<usize> {
+        let len2 = local.length_squared();
+        if !(local.z > 0.0 && len2 > 0.0) {
+            return None;
+        }
+        let s2 = (1.0 - local.z * local.z / len2).max(0.0);
+        let j = ((s2 * self.polar as f32) as usize).min(self.polar - 1);
+        let phi = local
+            .y
+            .atan2(local.x)
+            .rem_euclid(2.0 * std::f32::consts::PI);
+        let k = ((phi * self.azimuthal as f32 / (2.0 * std::f32::consts::PI)) as usize)
+            .min(self.azimuthal - 1);
+        Some(j * self.azimuthal + k)
+    }
 }
 
 /// The radiance and hit distance found in each cell, `[j * N + k]`. A ray that escaped has
@@ -508,6 +527,28 @@ mod tests {
     /// iid cell noise: the variance per ray of an estimate weighing a quarter of the cells
     /// (weights 4 there, 0 elsewhere: mean 1) is four times the plain one's, and uniform weights
     /// give the plain figure.
+    #[test]
+    fn every_cell_holds_the_directions_drawn_in_it() {
+        for strata in [
+            Stratification::from_divisions(512),
+            Stratification::from_divisions(37),
+        ] {
+            for j in 0..strata.polar {
+                for k in 0..strata.azimuthal {
+                    for u in [
+                        Vec2::new(0.01, 0.02),
+                        Vec2::new(0.5, 0.5),
+                        Vec2::new(0.98, 0.97),
+                    ] {
+                        let d = strata.direction(j, k, u);
+                        assert_eq!(strata.cell_of(d * 3.0), Some(j * strata.azimuthal + k));
+                    }
+                }
+            }
+            assert_eq!(strata.cell_of(Vec3::new(0.3, 0.2, -0.1)), None);
+        }
+    }
+
     #[test]
     fn weighted_variance_grows_as_the_weights_narrow() {
         let strata = Stratification::from_divisions(4096);

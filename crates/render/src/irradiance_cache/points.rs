@@ -223,6 +223,7 @@ fn brute_force(
         light: &light,
         cache,
         seed: key,
+        next: None,
     };
     let mut st = WorkState::new(cache.levels.len());
     let (h, frame) = g.gather(&mut st, sp, Stratification::from_divisions(samples), 0, key);

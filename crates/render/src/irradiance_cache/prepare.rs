@@ -67,6 +67,7 @@ pub fn prepare_cache(
                 settings.rows(),
                 settings.seed,
                 hook,
+                None,
             )
             .0
         });

@@ -106,6 +106,7 @@ pub fn fill_misses(
                 stats,
                 &mut Sites::default(),
                 &mut (),
+                None,
             );
             let end = cache.levels[0].len();
             splatter.splat(

@@ -2,6 +2,7 @@
 //!
 //! - [`lifespan`]: how long a record serves, from its change over one frame (5.1–5.8).
 //! - [`record`]: a record over time: temporal gradients (5.9–5.17), motion with its shape.
+//! - [`reprojection`]: a record's next frame by reprojecting its gather (§5.2.4).
 //! - [`sequence`]: the frame loop: temporal caching, age-based invalidation, or a new cache each
 //!   frame (`--cache-mode`).
 //!
@@ -10,6 +11,7 @@
 
 pub mod lifespan;
 pub mod record;
+pub mod reprojection;
 pub mod sequence;
 
-pub use sequence::{CacheMode, FrameStats, Motion, SequenceCache, TemporalParams};
+pub use sequence::{CacheMode, FrameStats, Motion, NextFrame, SequenceCache, TemporalParams};

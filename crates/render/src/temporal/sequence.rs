@@ -7,10 +7,11 @@
 //! ([`fill_for_image`]) then gathers records only where none serves, so an unchanged
 //! scene costs nothing after its first frame but the records' renewal. What renews them is the
 //! [`CacheMode`]:
-//! - `Temporal`: each new record is gathered once more in the next frame's scene, with the same
-//!   random numbers (the CPU stand-in for §5.2.4's reprojection, which costs a gather here but
-//!   leaves no holes and no stale shadows), which gives its lifespan (5.3–5.8) and its
-//!   extrapolated temporal gradients (5.12–5.14). When it expires having served its last frame,
+//! - `Temporal`: each new record's value in the next frame is estimated as it is made, by
+//!   reprojecting its gather into the next frame's scene (§5.2.4, [`super::reprojection`]: no
+//!   gather rays, its hits shaded again) or with `--next-frame regather` by gathering it once
+//!   more there with the same random numbers (a whole gather, but no holes); that gives its
+//!   lifespan (5.3–5.8) and its extrapolated temporal gradients (5.12–5.14). When it expires having served its last frame,
 //!   a successor is gathered at the same place (§5.2.3: the pattern of records, and so of
 //!   errors, stays still); one that served no pixel is dropped (§5.3's deletion). With
 //!   interpolated gradients (5.15–5.17) a record's slope runs to its successor's value, which
@@ -25,9 +26,12 @@
 
 use super::lifespan::{coefficient_change, lifespan, relative_change};
 use super::record::{move_point, move_record, RadianceTrack, Slope, SlopeKind, TemporalRecord};
+use super::reprojection::Reprojection;
 use crate::integrators::ic::IcIntegrator;
 use crate::irradiance_cache::build::{fill_for_image, record_sites, Site};
-use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, WorkState};
+use crate::irradiance_cache::gather::{
+    mix, Gatherer, NextEstimate, NextFrameEstimator, SceneRadiance, WorkState,
+};
 use crate::irradiance_cache::hemisphere::Stratification;
 use crate::irradiance_cache::prepare::{empty_cache, photon_maps};
 use crate::irradiance_cache::record::NO_RADIANCE;
@@ -75,6 +79,38 @@ impl CacheMode {
     }
 }
 
+/// How the temporal cache estimates a new record's next frame (`--next-frame`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum NextFrame {
+    /// Reprojecting the record's gather (001 §5.2.4).
+    #[default]
+    Reproject,
+    /// Gathering it again in the next frame with the same random numbers.
+    Regather,
+}
+
+impl NextFrame {
+    /// Parses `reproject` or `regather`.
+    pub fn parse(s: &str) -> Result<NextFrame, String> {
+        match s {
+            "reproject" => Ok(NextFrame::Reproject),
+            "regather" => Ok(NextFrame::Regather),
+            _ => Err(format!(
+                "unknown next-frame estimate \"{s}\" (expected reproject or regather)"
+            )),
+        }
+    }
+
+    /// The name `parse` accepts.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            NextFrame::Reproject => "reproject",
+            NextFrame::Regather => "regather",
+        }
+    }
+}
+
 /// Settings of an animation's cache.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TemporalParams {
@@ -88,6 +124,8 @@ pub struct TemporalParams {
     /// Temporal gradients: [`SlopeKind::Interpolated`] (two passes) or
     /// [`SlopeKind::Extrapolated`] (one); [`SlopeKind::Constant`] turns them off.
     pub gradients: SlopeKind,
+    /// How a new record's next frame is estimated.
+    pub next_frame: NextFrame,
 }
 
 impl Default for TemporalParams {
@@ -99,6 +137,7 @@ impl Default for TemporalParams {
             accuracy: 0.05,
             max_lifespan: 10,
             gradients: SlopeKind::Interpolated,
+            next_frame: NextFrame::Reproject,
         }
     }
 }
@@ -162,8 +201,10 @@ pub struct FrameStats {
     /// Records that expired (or were picked for renewal) without having served a pixel in
     /// their last frame, and were dropped.
     pub dropped: usize,
-    /// Gathers of the next frame for lifespans (temporal mode).
+    /// Next-frame estimates for lifespans (temporal mode).
     pub estimates: usize,
+    /// Rays those estimates traced (gather and shadow rays, and their paths' bounces).
+    pub estimate_rays: u64,
     /// Hemisphere rays traced (all gathers).
     pub gather_rays: u64,
     /// Seconds.
@@ -321,15 +362,40 @@ impl SequenceCache {
         stats.carried = slots.iter().map(Vec::len).sum();
         let seed = self.frame_seed(frame);
         let first_new = self.records.len();
+        let deeper = cache.params.deeper;
+        // Temporal mode: the cache the next frame's estimates shade with, and by default the
+        // reprojection that makes them as each record is gathered.
+        let next_cache = match (self.params.mode, next) {
+            (CacheMode::Temporal, Some(next)) => Some(self.next_cache(&cache, next, frame, pool)),
+            _ => None,
+        };
+        let reprojection = match (next, &next_cache) {
+            (Some(next), Some(next_cache)) if self.params.next_frame == NextFrame::Reproject => {
+                Some(Reprojection {
+                    scene: next,
+                    light: SceneRadiance {
+                        scene: next,
+                        deeper,
+                    },
+                    cache: next_cache,
+                    motion,
+                    frame,
+                })
+            }
+            _ => None,
+        };
+        let estimator = reprojection.as_ref().map(|r| r as &dyn NextFrameEstimator);
+        // The estimates of the records made this frame, in the order of `self.records`.
+        let mut pending: Vec<Option<NextEstimate>> = Vec::new();
 
         // Successors at the places of the renewed records (§5.2.3).
-        let deeper = cache.params.deeper;
         let gathered: Vec<(usize, Record, WorkState, Site)> = {
             let light = SceneRadiance { scene, deeper };
             let g = Gatherer {
                 light: &light,
                 cache: &cache,
                 seed,
+                next: estimator,
             };
             pool.install(|| {
                 renew
@@ -347,8 +413,9 @@ impl SequenceCache {
                     .collect()
             })
         };
-        for (k, rec, st, site) in gathered {
+        for (k, rec, mut st, site) in gathered {
             stats.gather_rays += st.counts.gather_rays;
+            let estimate = st.estimates.pop();
             // Deeper records the gather made first, as the pre-pass inserts them.
             let made = |r: &Record| st.radiance.get(r.radiance as usize).cloned();
             for (r, point, key) in &st.new_records {
@@ -360,6 +427,7 @@ impl SequenceCache {
                     rays: 0,
                 };
                 self.add(&mut cache, &mut slots, *r, made(r), site, seed, frame);
+                pending.push(None);
             }
             let level = rec.level as usize;
             let site = Site {
@@ -367,6 +435,7 @@ impl SequenceCache {
                 ..site
             };
             let l = self.add(&mut cache, &mut slots, rec, made(&rec), site, seed, frame);
+            pending.push(estimate);
             self.records[k].successor = Some(l as u32);
             stats.renewed += 1;
             if self.params.two_passes() {
@@ -389,11 +458,17 @@ impl SequenceCache {
         // Records where none serves: the ordinary pre-pass over the frame's pixels.
         let first_filled = self.records.len();
         let (w, h) = self.size;
-        let (fill, sites) =
-            pool.install(|| fill_for_image(scene, &mut cache, w, h, 0..h, seed, &mut ()));
+        let (fill, mut sites) = pool
+            .install(|| fill_for_image(scene, &mut cache, w, h, 0..h, seed, &mut (), estimator));
         stats.gather_rays += fill.gather_rays;
-        for (level, level_sites) in sites.0.iter().enumerate() {
-            for site in level_sites {
+        for (level, (level_sites, estimates)) in sites
+            .levels
+            .iter()
+            .zip(sites.estimates.iter_mut())
+            .enumerate()
+        {
+            for (site, estimate) in level_sites.iter().zip(estimates.iter_mut()) {
+                pending.push(estimate.take());
                 let r = cache.levels[level].records()[site.index];
                 slots[level].push(self.records.len() as u32);
                 self.records.push(self.born(r, *site, seed, frame));
@@ -417,7 +492,16 @@ impl SequenceCache {
             }
         }
 
-        self.set_lives(frame, first_new, &cache, next, motion, pool, &mut stats);
+        self.set_lives(
+            frame,
+            first_new,
+            next_cache.as_ref(),
+            next,
+            motion,
+            pool,
+            &mut stats,
+            pending,
+        );
         self.mark_used(scene, &cache, &slots, pool);
         stats.live = slots.iter().map(Vec::len).sum();
         stats.seconds = start.elapsed().as_secs_f64();
@@ -526,71 +610,95 @@ impl SequenceCache {
         }
     }
 
-    /// Lives and slopes of the records made at `frame` (from index `first`).
+    /// The cache the next frame's estimates shade with: this frame's settings and records, and
+    /// with photons the next frame's maps (this frame's would light the moved scene with where
+    /// its photons landed before), traced on the seed the next frame's own cache takes and kept
+    /// for it.
+    fn next_cache(
+        &mut self,
+        cache: &IrradianceCache,
+        next: &Scene,
+        frame: u32,
+        pool: &rayon::ThreadPool,
+    ) -> IrradianceCache {
+        let mut c = cache.clone();
+        self.next_photons = None;
+        if cache.photons.is_some() {
+            c.photons = pool
+                .install(|| photon_maps(next, &c.params, self.seed))
+                .map(std::sync::Arc::new);
+            self.next_photons = c.photons.clone().map(|m| (frame + 1, m));
+        }
+        c
+    }
+
+    /// Lives and slopes of the records made at `frame` (from index `first`), from their
+    /// next-frame estimates (`estimates`, one per record; those without are gathered again in
+    /// the `next` scene with `next_cache`).
     #[allow(clippy::too_many_arguments)]
     fn set_lives(
         &mut self,
         frame: u32,
         first: usize,
-        cache: &IrradianceCache,
+        next_cache: Option<&IrradianceCache>,
         next: Option<&Scene>,
         motion: &dyn Motion,
         pool: &rayon::ThreadPool,
         stats: &mut FrameStats,
+        estimates: Vec<Option<NextEstimate>>,
     ) {
-        match (self.params.mode, next) {
-            (CacheMode::PerFrame, _) | (CacheMode::Temporal, None) => {}
-            (CacheMode::Age, _) => {
+        match (self.params.mode, next, next_cache) {
+            (CacheMode::PerFrame, _, _)
+            | (CacheMode::Temporal, _, None)
+            | (CacheMode::Temporal, None, _) => {}
+            (CacheMode::Age, _, _) => {
                 // Until picked for renewal.
                 for tr in &mut self.records[first..] {
                     tr.last = u32::MAX;
                 }
             }
-            (CacheMode::Temporal, Some(next)) => {
-                // The next frame, gathered with the same random numbers (CPU stand-in for
-                // §5.2.4's reprojection).
+            (CacheMode::Temporal, Some(next), Some(cache)) => {
+                // Records without an estimate: the next frame gathered with the same random
+                // numbers.
                 let light = SceneRadiance {
                     scene: next,
                     deeper: cache.params.deeper,
                 };
-                // With photons, the next frame's gathers read the next frame's maps (this
-                // frame's would light the moved scene with where its photons landed before),
-                // traced on the seed the next frame's own cache takes and kept for it.
-                self.next_photons = None;
-                let moved = cache.photons.is_some().then(|| {
-                    let mut c = cache.clone();
-                    c.photons = pool
-                        .install(|| photon_maps(next, &c.params, self.seed))
-                        .map(std::sync::Arc::new);
-                    self.next_photons = c.photons.clone().map(|m| (frame + 1, m));
-                    c
-                });
-                let cache = moved.as_ref().unwrap_or(cache);
                 let estimates: Vec<(Record, Option<RadianceRecord>, bool, u64)> =
                     pool.install(|| {
                         self.records[first..]
                             .par_iter()
+                            .zip(estimates.into_par_iter())
                             .with_max_len(1)
-                            .map(|tr| {
-                                let g = Gatherer {
-                                    light: &light,
-                                    cache,
-                                    seed: tr.seed,
-                                };
+                            .map(|(tr, estimate)| {
                                 let shape = tr.site.point.it.shape;
                                 let ahead = motion.motion(shape, frame, frame + 1);
-                                let point =
-                                    ahead.map_or(tr.site.point, |m| move_point(&tr.site.point, &m));
-                                let site = Site { point, ..tr.site };
-                                let mut st = WorkState::new(cache.levels.len());
-                                let rec = gather(&g, &mut st, &site, tr.record.level);
+                                let (rec, radiance, counts) = match estimate {
+                                    Some(e) => (e.record, e.radiance, e.counts),
+                                    None => {
+                                        let g = Gatherer {
+                                            light: &light,
+                                            cache,
+                                            seed: tr.seed,
+                                            next: None,
+                                        };
+                                        let point = ahead.map_or(tr.site.point, |m| {
+                                            move_point(&tr.site.point, &m)
+                                        });
+                                        let site = Site { point, ..tr.site };
+                                        let mut st = WorkState::new(cache.levels.len());
+                                        let rec = gather(&g, &mut st, &site, tr.record.level);
+                                        let radiance =
+                                            st.radiance.get(rec.radiance as usize).cloned();
+                                        (rec, radiance, st.counts)
+                                    }
+                                };
                                 let back = motion.motion(shape, frame + 1, frame);
-                                let radiance = st.radiance.get(rec.radiance as usize).cloned();
                                 (
                                     back.map_or(rec, |m| move_record(&rec, &m)),
                                     radiance,
                                     ahead.is_some(),
-                                    st.counts.gather_rays,
+                                    counts.gather_rays + counts.shadow_rays,
                                 )
                             })
                             .collect()
@@ -599,7 +707,7 @@ impl SequenceCache {
                 let params = self.params;
                 for (i, (next_rec, next_radiance, moving, rays)) in (first..).zip(estimates) {
                     stats.estimates += 1;
-                    stats.gather_rays += rays;
+                    stats.estimate_rays += rays;
                     let tr = &mut self.records[i];
                     let mut change = relative_change(tr.record.e, next_rec.e, floor);
                     if let Some(track) = &mut self.radiance[i] {
@@ -761,8 +869,8 @@ mod tests {
     use super::*;
     use crate::integrators::Integrator;
 
-    /// With photons (two bounces), a record's estimate of the next frame is exactly what the
-    /// next frame's cache gathers at the moved site with the same key: the next frame's photon
+    /// With photons (two bounces), a record's estimate of the next frame gathered again is
+    /// exactly what the next frame's cache gathers at the moved site with the same key: the next frame's photon
     /// maps, not this frame's (which lit the moved cube's scene with where photons landed
     /// before).
     #[test]
@@ -789,6 +897,7 @@ mod tests {
         let params = TemporalParams {
             mode: CacheMode::Temporal,
             gradients: SlopeKind::Extrapolated,
+            next_frame: NextFrame::Regather,
             ..TemporalParams::default()
         };
         let pool = rayon::ThreadPoolBuilder::new()
@@ -819,6 +928,7 @@ mod tests {
                 light: &light,
                 cache: &later,
                 seed: tr.seed,
+                next: None,
             };
             let mut st = WorkState::new(later.levels.len());
             let site = Site { point, ..tr.site };
