@@ -501,7 +501,14 @@ fn hessian_by_reprojection_matches_second_differences() {
                 next: None,
             };
             let mut st = WorkState::new(1);
-            let (h, f) = g.gather(&mut st, &sp, Stratification::from_divisions(16384), 0, 1);
+            let (h, f) = g.gather(
+                &mut st,
+                &sp,
+                Stratification::from_divisions(16384),
+                0,
+                1,
+                None,
+            );
             let hh = h.translational_hessian(1e-3);
             for c in 0..3 {
                 hsum[c] += hh[c] / seeds as f64;

@@ -14,7 +14,7 @@ use ircache_render::integrators::Integrator;
 use ircache_render::render::{render, RenderSettings};
 use ircache_render::scene::Scene;
 use ircache_render::temporal::record::SlopeKind;
-use ircache_render::temporal::{CacheMode, FrameStats, SequenceCache, TemporalParams};
+use ircache_render::temporal::{CacheMode, FrameStats, NextFrame, SequenceCache, TemporalParams};
 use ircache_scene::animation::{load_animation, Animation};
 use ircache_scene::SceneDesc;
 
@@ -106,17 +106,33 @@ fn still_box_temporal_cache_flickers_a_tenth_of_a_cache_per_frame() {
 #[test]
 fn still_box_records_live_the_longest_life() {
     let (desc, anim) = load("still.xml", 32, 1);
-    let p = params(CacheMode::Temporal);
-    let (cache, _, _) = run(&desc, &anim, p, 12, false);
-    // Frames 0..10 made records whose next frame is known; the same random numbers in the
-    // same scene give the same value, so no change and the longest life (δt_max − 1 after
-    // their own frame), and a successor at frame 10 for those that served a pixel.
-    let made: Vec<_> = cache.records.iter().filter(|r| r.born < 11).collect();
-    assert!(made.len() > 50);
-    for r in &made {
-        assert_eq!(r.last - r.born, p.max_lifespan - 1, "born {}", r.born);
+    for next_frame in [NextFrame::Regather, NextFrame::Reproject] {
+        let p = TemporalParams {
+            next_frame,
+            ..params(CacheMode::Temporal)
+        };
+        let (cache, _, stats) = run(&desc, &anim, p, 12, false);
+        // Frames 0..10 made records whose next frame is known; the same random numbers in the
+        // same scene give the same value (gathered again, or reprojected: nothing moved), so
+        // no change and the longest life (δt_max − 1 after their own frame), and a successor
+        // at frame 10 for those that served a pixel.
+        let made: Vec<_> = cache.records.iter().filter(|r| r.born < 11).collect();
+        assert!(made.len() > 50);
+        for r in &made {
+            assert_eq!(
+                r.last - r.born,
+                p.max_lifespan - 1,
+                "born {} ({next_frame:?})",
+                r.born
+            );
+        }
+        assert!(cache.records.iter().any(|r| r.born == p.max_lifespan));
+        let estimated: usize = stats.iter().map(|s| s.estimates).sum();
+        assert_eq!(
+            estimated,
+            cache.records.iter().filter(|r| r.born < 11).count()
+        );
     }
-    assert!(cache.records.iter().any(|r| r.born == p.max_lifespan));
 }
 
 #[test]

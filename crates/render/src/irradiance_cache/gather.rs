@@ -585,20 +585,9 @@ enum Found {
 }
 
 impl Gatherer<'_> {
-    /// Gathers the hemisphere above `sp` with `strata`, shading the hits for `level`.
+    /// Gathers the hemisphere above `sp` with `strata`, shading the hits for `level`; keeps
+    /// every ray it traces in `traced` when asked.
     pub fn gather(
-        &self,
-        st: &mut WorkState,
-        sp: &ShadingPoint,
-        strata: Stratification,
-        level: u32,
-        key: u64,
-    ) -> (HemisphereSamples, Frame) {
-        self.gather_traced(st, sp, strata, level, key, None)
-    }
-
-    /// [`Self::gather`], keeping every ray it traces in `traced` when asked.
-    fn gather_traced(
         &self,
         st: &mut WorkState,
         sp: &ShadingPoint,
@@ -835,7 +824,7 @@ impl Gatherer<'_> {
         strata: Stratification,
     ) -> Record {
         let mut traced = self.next.map(|_| Vec::new());
-        let (h, frame) = self.gather_traced(st, sp, strata, level, key, traced.as_mut());
+        let (h, frame) = self.gather(st, sp, strata, level, key, traced.as_mut());
         st.counts.records += 1;
         let record = self.record_from(st, sp, level, &h, &frame);
         if let (Some(next), Some(traced)) = (self.next, traced) {

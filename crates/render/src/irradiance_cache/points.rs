@@ -226,7 +226,14 @@ fn brute_force(
         next: None,
     };
     let mut st = WorkState::new(cache.levels.len());
-    let (h, frame) = g.gather(&mut st, sp, Stratification::from_divisions(samples), 0, key);
+    let (h, frame) = g.gather(
+        &mut st,
+        sp,
+        Stratification::from_divisions(samples),
+        0,
+        key,
+        None,
+    );
     let gt = match cache.params.formula {
         TranslationalFormula::WardHeckbert => h.translational_gradient_ward_heckbert(),
         TranslationalFormula::Krivanek => h.translational_gradient_krivanek(),

@@ -2,9 +2,13 @@
 //! its CPU form), instead of gathering the hemisphere again.
 //!
 //! Each ray the record's gather traced is carried to the next frame: the surface it found moves
-//! with its shape, the record with its own; the hit is found again on the same triangle of the
-//! next frame's scene (no traversal) and shaded there, with the sample's own random stream, so
-//! moved lights, moved occluders of the light and the next frame's photon maps all count.
+//! with its shape, the record with its own; where either moved, the hit is found again on the
+//! same triangle of the next frame's scene (no traversal); every hit is shaded there with the
+//! sample's own random stream, so moved lights, moved occluders of the light and the next
+//! frame's photon maps all count. (Keeping the first frame's light at hits on still shapes, as
+//! `NOTES-001.md` D.3 proposes for the CPU, costs a twentieth of the rays but misses the moving
+//! cube's shadow: its estimates were worse than assuming no change, 2.5 % against 2.2 % median
+//! error where records changed.)
 //! Samples whose hit and record move together keep their cell; the others are binned by their
 //! new direction, and where one lands in a cell, the nearest sample there wins (the z-test
 //! of the thesis's splatted hemisphere). Cells no sample reaches any more (disocclusion) take
@@ -423,6 +427,7 @@ mod tests {
                 .sum::<f64>()
             / records.len() as f64;
         let (mut err_reprojected, mut err_constant) = (Vec::new(), Vec::new());
+        let mut err_unchanged = Vec::new();
         let (mut rays_reprojected, mut rays_gathered) = (0u64, 0u64);
         for (site, estimate) in sites.levels[0].iter().zip(&sites.estimates[0]) {
             let estimate = estimate.as_ref().expect("estimate");
@@ -444,12 +449,7 @@ mod tests {
                 err_reprojected.push(rel(estimate.record.e));
                 err_constant.push(rel(record.e));
             } else {
-                // Unchanged by the motion: the estimate stays close too.
-                assert!(
-                    rel(estimate.record.e) < 0.05,
-                    "{} against {y}",
-                    estimate.record.e.luminance()
-                );
+                err_unchanged.push(rel(estimate.record.e));
             }
         }
         let changed = err_constant.len();
@@ -461,9 +461,16 @@ mod tests {
             v[v.len() / 2]
         };
         let (r, c) = (median(err_reprojected), median(err_constant));
+        let u = median(err_unchanged);
         eprintln!(
             "{changed} records changed: median error reprojected {r:.4}, constant {c:.4}; \
-             rays {rays_reprojected} against {rays_gathered}"
+             unchanged: {u:.4}; rays {rays_reprojected} against {rays_gathered}"
+        );
+        // Records the motion leaves within 1 % are estimated within that too (holes and the
+        // z-test's misses elsewhere shorten their lives).
+        assert!(
+            u < 0.01,
+            "median error of the unchanged records' estimates {u:.4}"
         );
         assert!(
             r < 0.7 * c,
