@@ -115,7 +115,7 @@ pub fn run_all(shared: &Path) -> Result<()> {
             20.0 * ic.seconds,
             &show,
         )?);
-        let path64 = path[2];
+        let path64 = *path.last().context("the 64-spp path render")?;
         match error_at(&mi_series, path64.seconds, |p| p.error) {
             Some(e) => println!(
                 "  path at equal time: ircache 64 spp {:.3e} against Mitsuba multijitter {e:.3e} at {:.2} s ({})",
