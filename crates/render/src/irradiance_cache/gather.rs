@@ -414,8 +414,8 @@ pub struct TracedSample {
 /// What a traced gather ray found.
 #[derive(Clone, Copy, Debug)]
 pub enum TracedHit {
-    /// A surface, where the light source reported it, with the radiance it sent.
-    Surface(Interaction, Rgb),
+    /// A surface, where the light source reported it.
+    Surface(Interaction),
     /// A surface a light source without a scene found (a closed form): it cannot be carried.
     Opaque(Rgb, f32),
     /// Nothing: the environment's radiance, into the cell's radiance and kept apart.
@@ -439,14 +439,12 @@ pub struct NextEstimate {
 /// made (temporal caching; [`crate::temporal::reprojection`]).
 pub trait NextFrameEstimator: Sync {
     /// The next frame's record at the place of the record gathered at `sp` for `level` with
-    /// `strata` and key `key`, on `seed`, whose samples were `samples`.
-    #[allow(clippy::too_many_arguments)]
+    /// `strata` on `seed`, whose samples were `samples`.
     fn estimate(
         &self,
         seed: u64,
         sp: &ShadingPoint,
         level: u32,
-        key: u64,
         strata: Stratification,
         samples: &[TracedSample],
     ) -> NextEstimate;
@@ -578,10 +576,39 @@ enum Found {
     /// A surface: the radiance arriving from it, its distance, its normal (local frame) and
     /// the surface where a scene was traced.
     Surface(Rgb, f32, Vec3, Option<(Ray, Interaction)>),
-    /// Nothing: it escaped along the world direction.
-    Escaped(Vec3),
+    /// Nothing: it escaped; the environment's radiance along it, into the cell's radiance and
+    /// kept apart ([`Escapes`]).
+    Escaped(Rgb, Rgb),
     /// The direction is below the geometric surface: nothing arrives.
     Below,
+}
+
+/// What the sample of cell `cell` along the local direction `local` (in `frame`) found, kept as
+/// a [`TracedSample`].
+fn traced_sample(
+    sp: &ShadingPoint,
+    frame: &Frame,
+    cell: usize,
+    key: u64,
+    local: Vec3,
+    found: &Found,
+) -> TracedSample {
+    let ray = |hit: Option<(Ray, Interaction)>| {
+        hit.map_or(Ray::new(sp.it.p, frame.from_local(local)), |(ray, _)| ray)
+    };
+    let (ray, found) = match *found {
+        Found::Surface(_, _, _, Some(hit)) => (ray(Some(hit)), TracedHit::Surface(hit.1)),
+        Found::Surface(l, t, _, None) => (ray(None), TracedHit::Opaque(l, t)),
+        Found::Escaped(into, apart) => (ray(None), TracedHit::Escaped(into, apart)),
+        Found::Below => (ray(None), TracedHit::Below),
+    };
+    TracedSample {
+        cell: cell as u32,
+        key,
+        local,
+        ray,
+        found,
+    }
 }
 
 impl Gatherer<'_> {
@@ -623,9 +650,9 @@ impl Gatherer<'_> {
         for (j, k, local) in dirs {
             let idx = j * strata.azimuthal + k;
             let sample_key = mix(key, idx as u64);
-            let found = self.sample(st, sp, &frame, ng, local, level, sample_key);
+            let found = self.sample(st, sp, &frame, ng, local, level, sample_key, environment);
             if let Some(traced) = traced.as_deref_mut() {
-                traced.push(self.traced(sp, &frame, idx, sample_key, local, &found, environment));
+                traced.push(traced_sample(sp, &frame, idx, sample_key, local, &found));
             }
             match found {
                 Found::Surface(l, t, n_hit, _) => {
@@ -633,11 +660,10 @@ impl Gatherer<'_> {
                     h.distance[idx] = t;
                     h.hits[idx] = (local, n_hit);
                 }
-                Found::Escaped(d) => match environment {
-                    Escapes::Irradiance => h.radiance[idx] = self.light.escaped(d),
-                    Escapes::Apart => h.escaped[idx] = self.light.escaped(d),
-                    Escapes::Dropped => {}
-                },
+                Found::Escaped(into, apart) => {
+                    h.radiance[idx] = into;
+                    h.escaped[idx] = apart;
+                }
                 Found::Below => {}
             }
         }
@@ -660,43 +686,6 @@ impl Gatherer<'_> {
         (h, frame)
     }
 
-    /// What the sample of cell `cell` along the local direction `local` found, kept for
-    /// [`TracedSample`]s.
-    #[allow(clippy::too_many_arguments)]
-    fn traced(
-        &self,
-        sp: &ShadingPoint,
-        frame: &Frame,
-        cell: usize,
-        key: u64,
-        local: Vec3,
-        found: &Found,
-        environment: Escapes,
-    ) -> TracedSample {
-        let d = frame.from_local(local);
-        let (ray, found) = match *found {
-            Found::Surface(l, _, _, Some((ray, hit))) => (ray, TracedHit::Surface(hit, l)),
-            Found::Surface(l, t, _, None) => (Ray::new(sp.it.p, d), TracedHit::Opaque(l, t)),
-            Found::Escaped(d) => {
-                let e = self.light.escaped(d);
-                let (into, apart) = match environment {
-                    Escapes::Irradiance => (e, Rgb::ZERO),
-                    Escapes::Apart => (Rgb::ZERO, e),
-                    Escapes::Dropped => (Rgb::ZERO, Rgb::ZERO),
-                };
-                (Ray::new(sp.it.p, d), TracedHit::Escaped(into, apart))
-            }
-            Found::Below => (Ray::new(sp.it.p, d), TracedHit::Below),
-        };
-        TracedSample {
-            cell: cell as u32,
-            key,
-            local,
-            ray,
-            found,
-        }
-    }
-
     /// One gather ray along the local direction `local`: what it finds. The sample's shading
     /// draws on a stream of its own, keyed by `key`: what one sample draws never shifts
     /// another's numbers, so two gathers with the same key differ only in the samples whose
@@ -712,6 +701,7 @@ impl Gatherer<'_> {
         local: Vec3,
         level: u32,
         key: u64,
+        environment: Escapes,
     ) -> Found {
         let d = frame.from_local(local);
         if d.dot(ng) <= 0.0 {
@@ -729,7 +719,11 @@ impl Gatherer<'_> {
                 frame.to_local(inc.normal),
                 inc.hit,
             ),
-            None => Found::Escaped(d),
+            None => match environment {
+                Escapes::Irradiance => Found::Escaped(self.light.escaped(d), Rgb::ZERO),
+                Escapes::Apart => Found::Escaped(Rgb::ZERO, self.light.escaped(d)),
+                Escapes::Dropped => Found::Escaped(Rgb::ZERO, Rgb::ZERO),
+            },
         }
     }
 
@@ -769,17 +763,9 @@ impl Gatherer<'_> {
                 let u = Vec2::new((v.x + dx).fract(), (v.y + dy).fract());
                 let local = strata.direction(j, k, u);
                 let sample_key = mix(key, (strata.cells() + 3 * idx + q) as u64);
-                let found = self.sample(st, sp, frame, ng, local, level, sample_key);
+                let found = self.sample(st, sp, frame, ng, local, level, sample_key, environment);
                 if let Some(traced) = traced.as_deref_mut() {
-                    traced.push(self.traced(
-                        sp,
-                        frame,
-                        idx,
-                        sample_key,
-                        local,
-                        &found,
-                        environment,
-                    ));
+                    traced.push(traced_sample(sp, frame, idx, sample_key, local, &found));
                 }
                 match found {
                     Found::Surface(l, t, n_hit, _) => {
@@ -790,11 +776,10 @@ impl Gatherer<'_> {
                             h.hits[idx] = (local, n_hit);
                         }
                     }
-                    Found::Escaped(d) => match environment {
-                        Escapes::Irradiance => sum += self.light.escaped(d),
-                        Escapes::Apart => escaped += self.light.escaped(d),
-                        Escapes::Dropped => {}
-                    },
+                    Found::Escaped(into, apart) => {
+                        sum += into;
+                        escaped += apart;
+                    }
                     Found::Below => {}
                 }
             }
@@ -828,7 +813,7 @@ impl Gatherer<'_> {
         st.counts.records += 1;
         let record = self.record_from(st, sp, level, &h, &frame);
         if let (Some(next), Some(traced)) = (self.next, traced) {
-            let estimate = next.estimate(self.seed, sp, level, key, strata, &traced);
+            let estimate = next.estimate(self.seed, sp, level, strata, &traced);
             st.estimates.push(estimate);
         }
         record

@@ -27,14 +27,11 @@ use crate::irradiance_cache::gather::{
     ShadingPoint, TracedHit, TracedSample, WorkState,
 };
 use crate::irradiance_cache::hemisphere::{HemisphereSamples, Stratification};
-use crate::scene::Scene;
 use ircache_math::{Frame, Ray, Rgb, Vec3};
 
 /// Estimates records' next frame by reprojection.
 pub struct Reprojection<'a> {
-    /// The next frame's scene.
-    pub scene: &'a Scene,
-    /// Its light (how deeper bounces are served as the cache's).
+    /// The next frame's scene and how deeper bounces are served there.
     pub light: SceneRadiance<'a>,
     /// The cache whose settings, photon maps and records serve the next frame's shading.
     pub cache: &'a IrradianceCache,
@@ -64,7 +61,6 @@ impl NextFrameEstimator for Reprojection<'_> {
         seed: u64,
         sp: &ShadingPoint,
         level: u32,
-        _key: u64,
         strata: Stratification,
         samples: &[TracedSample],
     ) -> NextEstimate {
@@ -113,7 +109,7 @@ impl NextFrameEstimator for Reprojection<'_> {
                         });
                     }
                 }
-                TracedHit::Surface(hit, _) => {
+                TracedHit::Surface(hit) => {
                     let theirs = moves(hit.shape);
                     let shifted = own != theirs;
                     let (ray, found) = if own.is_none() && theirs.is_none() {
@@ -124,16 +120,14 @@ impl NextFrameEstimator for Reprojection<'_> {
                         if towards.dot(ng1) <= 0.0 {
                             continue;
                         }
-                        let o = self.scene.spawn_ray(&sp1.it, towards).o;
+                        let scene = self.light.scene;
+                        let o = scene.spawn_ray(&sp1.it, towards).o;
                         let ray = Ray::new(o, (y - o).normalize_or_zero());
-                        let found =
-                            self.scene
-                                .hit_triangle(&ray, hit.shape, hit.prim)
-                                .or_else(|| {
-                                    // Not a mesh, or the aim slipped past the triangle's edge.
-                                    st.counts.gather_rays += 1;
-                                    self.scene.intersect(&ray)
-                                });
+                        let found = scene.hit_triangle(&ray, hit.shape, hit.prim).or_else(|| {
+                            // Not a mesh, or the aim slipped past the triangle's edge.
+                            st.counts.gather_rays += 1;
+                            scene.intersect(&ray)
+                        });
                         (ray, found)
                     };
                     let Some(found) = found else { continue };
@@ -141,15 +135,11 @@ impl NextFrameEstimator for Reprojection<'_> {
                     let inc = self.light.incident_at(
                         self.cache, seed, &mut st, &ray, found, level, s.key, &mut rng,
                     );
-                    let local = if shifted {
-                        frame1.to_local(ray.d)
+                    let (local, cell) = if shifted {
+                        let local = frame1.to_local(ray.d);
+                        (local, strata.cell_of(local))
                     } else {
-                        s.local
-                    };
-                    let cell = if shifted {
-                        strata.cell_of(local)
-                    } else {
-                        Some(cell)
+                        (s.local, Some(cell))
                     };
                     if let Some(cell) = cell {
                         carried.push(Carried {
@@ -248,21 +238,20 @@ fn resolve(strata: Stratification, carried: &[Carried]) -> HemisphereSamples {
             if filled[cell] {
                 continue;
             }
-            let mut neighbours = vec![j * n + (k + 1) % n, j * n + (k + n - 1) % n];
-            if j > 0 {
-                neighbours.push((j - 1) * n + k);
-            }
-            if j + 1 < m {
-                neighbours.push((j + 1) * n + k);
-            }
-            let farthest =
-                neighbours
-                    .into_iter()
-                    .filter(|&c| filled[c])
-                    .fold(None::<usize>, |best, c| match best {
-                        Some(b) if h.distance[b] >= h.distance[c] => Some(b),
-                        _ => Some(c),
-                    });
+            let neighbours = [
+                Some(j * n + (k + 1) % n),
+                Some(j * n + (k + n - 1) % n),
+                j.checked_sub(1).map(|below| below * n + k),
+                (j + 1 < m).then(|| (j + 1) * n + k),
+            ];
+            let farthest = neighbours
+                .into_iter()
+                .flatten()
+                .filter(|&c| filled[c])
+                .fold(None::<usize>, |best, c| match best {
+                    Some(b) if h.distance[b] >= h.distance[c] => Some(b),
+                    _ => Some(c),
+                });
             if let Some(f) = farthest {
                 h.radiance[cell] = h.radiance[f];
                 h.escaped[cell] = h.escaped[f];
@@ -280,6 +269,7 @@ mod tests {
     use crate::integrators::Integrator;
     use crate::irradiance_cache::build::fill_for_image;
     use crate::irradiance_cache::prepare::empty_cache;
+    use crate::scene::Scene;
     use crate::temporal::sequence::Motion;
     use ircache_scene::animation::{load_animation, Animation};
     use ircache_scene::SceneDesc;
@@ -324,7 +314,6 @@ mod tests {
             assert_eq!(cache.photons.is_some(), max_depth == 4);
             let next_cache = cache.clone();
             let still = Reprojection {
-                scene: &scene,
                 light: SceneRadiance {
                     scene: &scene,
                     deeper: cache.params.deeper,
@@ -389,7 +378,6 @@ mod tests {
             deeper: cache.params.deeper,
         };
         let reprojection = Reprojection {
-            scene: &next,
             light: SceneRadiance {
                 scene: &next,
                 deeper: cache.params.deeper,

@@ -41,6 +41,7 @@ use crate::radiance_cache::record::RadianceRecord;
 use crate::scene::{RenderError, Scene, ShapeGeometry};
 use ircache_math::{Mat4, Rgb, Vec2, Vec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How an animation's cache is kept over time (`--cache-mode`).
@@ -239,10 +240,10 @@ pub struct SequenceCache {
     /// Whether each record served a pixel in the last frame filled.
     used: Vec<bool>,
     /// Radiance caching's tables, made with the first frame's cache.
-    tables: std::sync::OnceLock<std::sync::Arc<crate::radiance_cache::RadianceCache>>,
+    tables: std::sync::OnceLock<Arc<crate::radiance_cache::RadianceCache>>,
     /// The photon maps of the frame after the last filled, traced for its estimates and
     /// reused by its own cache.
-    next_photons: Option<(u32, std::sync::Arc<PhotonMaps>)>,
+    next_photons: Option<(u32, Arc<PhotonMaps>)>,
 }
 
 impl SequenceCache {
@@ -366,25 +367,29 @@ impl SequenceCache {
         let seed = self.frame_seed(frame);
         let first_new = self.records.len();
         let deeper = cache.params.deeper;
-        // Temporal mode: the cache the next frame's estimates shade with, and by default the
-        // reprojection that makes them as each record is gathered.
-        let next_cache = match (self.params.mode, next) {
-            (CacheMode::Temporal, Some(next)) => Some(self.next_cache(&cache, next, frame, pool)),
+        // Temporal mode: the next frame's scene and photon maps, for the estimates; with
+        // `--next-frame reproject` they are made during the pre-pass from a copy of this frame's
+        // cache lit by those maps.
+        let ahead = match (self.params.mode, next) {
+            (CacheMode::Temporal, Some(next)) => {
+                Some((next, self.next_photon_maps(&cache, next, frame, pool)))
+            }
             _ => None,
         };
-        let reprojection = match (next, &next_cache) {
-            (Some(next), Some(next_cache)) if self.params.next_frame == NextFrame::Reproject => {
-                Some(Reprojection {
+        let reprojection_cache = ahead
+            .as_ref()
+            .filter(|_| self.params.next_frame == NextFrame::Reproject)
+            .map(|(_, maps)| lit_by(&cache, maps.as_ref()));
+        let reprojection = match (&ahead, &reprojection_cache) {
+            (Some((next, _)), Some(next_cache)) => Some(Reprojection {
+                light: SceneRadiance {
                     scene: next,
-                    light: SceneRadiance {
-                        scene: next,
-                        deeper,
-                    },
-                    cache: next_cache,
-                    motion,
-                    frame,
-                })
-            }
+                    deeper,
+                },
+                cache: next_cache,
+                motion,
+                frame,
+            }),
             _ => None,
         };
         let estimator = reprojection.as_ref().map(|r| r as &dyn NextFrameEstimator);
@@ -496,14 +501,7 @@ impl SequenceCache {
         }
 
         self.set_lives(
-            frame,
-            first_new,
-            next_cache.as_ref(),
-            next,
-            motion,
-            pool,
-            &mut stats,
-            pending,
+            frame, first_new, &cache, ahead, motion, pool, &mut stats, pending,
         );
         self.mark_used(scene, &cache, &slots, pool);
         stats.live = slots.iter().map(Vec::len).sum();
@@ -613,56 +611,53 @@ impl SequenceCache {
         }
     }
 
-    /// The cache the next frame's estimates shade with: this frame's settings and records, and
-    /// with photons the next frame's maps (this frame's would light the moved scene with where
+    /// With photons, the next frame's maps (this frame's would light the moved scene with where
     /// its photons landed before), traced on the seed the next frame's own cache takes and kept
     /// for it.
-    fn next_cache(
+    fn next_photon_maps(
         &mut self,
         cache: &IrradianceCache,
         next: &Scene,
         frame: u32,
         pool: &rayon::ThreadPool,
-    ) -> IrradianceCache {
-        let mut c = cache.clone();
+    ) -> Option<Arc<PhotonMaps>> {
         self.next_photons = None;
-        if cache.photons.is_some() {
-            c.photons = pool
-                .install(|| photon_maps(next, &c.params, self.seed))
-                .map(std::sync::Arc::new);
-            self.next_photons = c.photons.clone().map(|m| (frame + 1, m));
-        }
-        c
+        cache.photons.as_ref()?;
+        let maps = pool
+            .install(|| photon_maps(next, &cache.params, self.seed))
+            .map(Arc::new);
+        self.next_photons = maps.clone().map(|m| (frame + 1, m));
+        maps
     }
 
-    /// Lives and slopes of the records made at `frame` (from index `first`), from their
-    /// next-frame estimates (`estimates`, one per record; those without are gathered again in
-    /// the `next` scene with `next_cache`).
+    /// Lives and slopes of the records made at `frame` (from index `first`) in `cache`, from
+    /// their next-frame estimates (`estimates`, one per record); those without are gathered
+    /// again in the next frame's scene, lit by its photon maps (`ahead`).
     #[allow(clippy::too_many_arguments)]
     fn set_lives(
         &mut self,
         frame: u32,
         first: usize,
-        next_cache: Option<&IrradianceCache>,
-        next: Option<&Scene>,
+        cache: &IrradianceCache,
+        ahead: Option<(&Scene, Option<Arc<PhotonMaps>>)>,
         motion: &dyn Motion,
         pool: &rayon::ThreadPool,
         stats: &mut FrameStats,
         estimates: Vec<Option<NextEstimate>>,
     ) {
-        match (self.params.mode, next, next_cache) {
-            (CacheMode::PerFrame, _, _)
-            | (CacheMode::Temporal, _, None)
-            | (CacheMode::Temporal, None, _) => {}
-            (CacheMode::Age, _, _) => {
+        match (self.params.mode, ahead) {
+            (CacheMode::PerFrame, _) | (CacheMode::Temporal, None) => {}
+            (CacheMode::Age, _) => {
                 // Until picked for renewal.
                 for tr in &mut self.records[first..] {
                     tr.last = u32::MAX;
                 }
             }
-            (CacheMode::Temporal, Some(next), Some(cache)) => {
+            (CacheMode::Temporal, Some((next, maps))) => {
                 // Records without an estimate: the next frame gathered with the same random
                 // numbers.
+                let lit = maps.map(|m| lit_by(cache, Some(&m)));
+                let cache = lit.as_ref().unwrap_or(cache);
                 let light = SceneRadiance {
                     scene: next,
                     deeper: cache.params.deeper,
@@ -782,6 +777,15 @@ impl SequenceCache {
             }
         }
     }
+}
+
+/// A copy of `cache` lit by the photon maps `maps` where there are some.
+fn lit_by(cache: &IrradianceCache, maps: Option<&Arc<PhotonMaps>>) -> IrradianceCache {
+    let mut c = cache.clone();
+    if let Some(m) = maps {
+        c.photons = Some(m.clone());
+    }
+    c
 }
 
 /// Gathers a record at `site` for `level` as the site's gather did: its key, its rays.
