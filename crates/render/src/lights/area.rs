@@ -52,6 +52,8 @@ pub struct MeshLight {
     positions: Vec<Vec3>,
     normals: Option<Vec<Vec3>>,
     indices: Vec<[u32; 3]>,
+    /// Unit geometric normal of each triangle (`(p1 − p0) × (p2 − p0)`; zero where degenerate).
+    triangle_normals: Vec<Vec3>,
     /// Triangle selection proportional to area.
     tri_dist: Distribution1D,
     /// Total surface area.
@@ -117,8 +119,21 @@ impl MeshLight {
                     .is_none_or(|ns| ns.iter().all(|&v| flat(v))))
             .then_some((r, n))
         });
+        let triangle_normals = mesh
+            .indices
+            .iter()
+            .map(|&[a, b, c]| {
+                let (p0, p1, p2) = (
+                    mesh.positions[a as usize],
+                    mesh.positions[b as usize],
+                    mesh.positions[c as usize],
+                );
+                (p1 - p0).cross(p2 - p0).normalize_or_zero()
+            })
+            .collect();
         Some(MeshLight {
             positions: mesh.positions.clone(),
+            triangle_normals,
             normals,
             indices: mesh.indices.clone(),
             tri_dist: Distribution1D::new(&areas),
@@ -151,21 +166,25 @@ impl MeshLight {
     /// Unit geometric normal of triangle `prim`, if it exists.
     #[inline]
     fn geometric_normal(&self, prim: u32) -> Option<Vec3> {
-        let [a, b, c] = *self.indices.get(prim as usize)?;
-        let (p0, p1, p2) = (
-            self.positions[a as usize],
-            self.positions[b as usize],
-            self.positions[c as usize],
-        );
-        let n = (p1 - p0).cross(p2 - p0);
-        let len = n.length();
-        (len > 0.0).then(|| n / len)
+        self.triangle_normals
+            .get(prim as usize)
+            .copied()
+            .filter(|n| *n != Vec3::ZERO)
     }
 
-    /// A point uniformly distributed by area over the mesh (density `1 / area()`).
+    /// A point uniformly distributed by area over the mesh (density `1 / area()`): on a
+    /// rectangle directly, else a triangle chosen by area and a point in it.
     #[inline]
     #[must_use]
     pub fn sample_position(&self, u: Vec2) -> SurfacePoint {
+        if let Some((rect, n)) = &self.rectangle {
+            // Its triangles are wound alike and its vertex normals (if any) lie along n.
+            return SurfacePoint {
+                p: rect.point(u),
+                ng: *n,
+                ns: *n,
+            };
+        }
         let (tri, _, ux) = self.tri_dist.sample(u.x);
         let b = square_to_uniform_triangle(Vec2::new(ux, u.y));
         let [i0, i1, i2] = self.indices[tri].map(|i| i as usize);
@@ -173,7 +192,7 @@ impl MeshLight {
         let b0 = 1.0 - b.x - b.y;
         // Same barycentric convention as Embree's hit (u, v) = (b1, b2).
         let p = b0 * p0 + b.x * p1 + b.y * p2;
-        let ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
+        let ng = self.geometric_normal(tri as u32).unwrap_or(Vec3::Z);
         let ns = match &self.normals {
             Some(n) => (b0 * n[i0] + b.x * n[i1] + b.y * n[i2]).normalize_or(ng),
             None => ng,

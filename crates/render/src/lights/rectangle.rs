@@ -126,6 +126,15 @@ impl Rectangle {
         self.ex.cross(self.ey)
     }
 
+    /// The point `u` maps to, uniformly by area: `corner + u.x·width·ex + u.y·height·ey` (the
+    /// square's strata stay strata on the rectangle, where a choice between its two triangles
+    /// would fold them).
+    #[inline]
+    #[must_use]
+    pub fn point(&self, u: Vec2) -> Vec3 {
+        self.corner + self.ex * (u.x * self.width) + self.ey * (u.y * self.height)
+    }
+
     /// The rectangle seen from `p` when its solid angle there is within the bounds this module
     /// samples by solid angle (`None` otherwise, and for a point in its plane).
     #[must_use]
