@@ -226,8 +226,6 @@ impl SamplerSettings {
             dim: 0,
             high_digits: [u64::MAX; CACHED_DIMS],
             dim_hashes: [0; CACHED_DIMS],
-            substrata: [[0; 2 * MAX_MEMO_SIDE]; MEMO_DIMS],
-            substrata_known: [0; MEMO_DIMS],
         }
     }
 }
@@ -287,21 +285,11 @@ pub struct PixelSampler<'a> {
     high_digits: [u64; CACHED_DIMS],
     /// Per dimension, the pixel's hash of it (0 until computed).
     dim_hashes: [u64; CACHED_DIMS],
-    /// `multijitter`: per dimension, the sub-stratum of each column (first half) and of each row
-    /// (second half); they depend on the column or row alone, not on the sample.
-    substrata: [[u8; 2 * MAX_MEMO_SIDE]; MEMO_DIMS],
-    /// Which entries of `substrata` are known (bit i for entry i).
-    substrata_known: [u32; MEMO_DIMS],
 }
 
 /// Dimensions whose per-pixel values (Sobol' pixel digits, dimension hashes) a pixel sampler
 /// keeps.
 const CACHED_DIMS: usize = 48;
-
-/// Dimensions whose multi-jittered sub-strata a pixel sampler keeps (the first four vertices).
-const MEMO_DIMS: usize = 34;
-/// Largest grid side whose sub-strata are kept (256 samples per pixel).
-const MAX_MEMO_SIDE: usize = 16;
 
 impl PixelSampler<'_> {
     /// Moves to sample `index` (< the sample count), dimension `dim`.
@@ -350,26 +338,6 @@ impl PixelSampler<'_> {
             (to_unit(h as u32), to_unit((h >> 32) as u32))
         } else {
             (0.5, 0.5)
-        }
-    }
-
-    /// Kensler's sub-stratum `permute(i, side, seed)` of column (`row` false) or row `i` in
-    /// dimension `dim`, kept per pixel where the grid is small enough: every sample of the
-    /// pixel in that column or row has the same one.
-    #[inline]
-    fn substratum(&mut self, dim: u32, row: bool, i: u32, side: u32, seed: u32) -> u32 {
-        let slot = i as usize + usize::from(row) * MAX_MEMO_SIDE;
-        if (dim as usize) < MEMO_DIMS && side as usize <= MAX_MEMO_SIDE {
-            let d = dim as usize;
-            if self.substrata_known[d] >> slot & 1 == 1 {
-                return u32::from(self.substrata[d][slot]);
-            }
-            let v = permute(i, side, seed);
-            self.substrata[d][slot] = v as u8;
-            self.substrata_known[d] |= 1 << slot;
-            v
-        } else {
-            permute(i, side, seed)
         }
     }
 
@@ -473,8 +441,8 @@ impl PixelSampler<'_> {
                 let seed = self.dim_seed(dim, 0);
                 let p = permute(self.index, n, seed);
                 let (p_div_m, p_mod_m) = div_rem(p, m);
-                let sx = self.substratum(dim, false, p_mod_m, m, seed.wrapping_mul(0xa511_e9b3));
-                let sy = self.substratum(dim, true, p_div_m, k, seed.wrapping_mul(0x63d8_3595));
+                let sx = permute(p_mod_m, m, seed.wrapping_mul(0xa511_e9b3));
+                let sy = permute(p_div_m, k, seed.wrapping_mul(0x63d8_3595));
                 let (jx, jy) = self.jitter2(dim);
                 Vec2::new(
                     (p_mod_m as f32 + (sy as f32 + jx) / k as f32) / m as f32,
