@@ -1,8 +1,12 @@
-//! A balanced kd-tree over photons, stored implicitly in the photon array itself (Jensen,
-//! *Realistic Image Synthesis Using Photon Mapping*, §6.3): the median of a range along its
-//! widest axis sits in the middle of the range, the halves on either side. Queries take a
-//! predicate, so that photons of the wrong side or bounce count are skipped during the search
-//! rather than after it (a k-nearest query that filters afterwards would come back short).
+//! A balanced kd-tree over photons (Jensen, *Realistic Image Synthesis Using Photon Mapping*,
+//! §6.3). The photon array itself is in tree order (the median of a range along its widest axis
+//! in the middle of the range, the halves on either side), so that photons near each other in
+//! space lie near each other in memory; queries walk a compact copy of the same splits in heap
+//! order (node i's children at 2i + 1 and 2i + 2, Jensen's left-balanced tree): the top levels
+//! share cache lines, and a node is 16 bytes, where a descent through the photon array met a
+//! new cache line at every level. Queries take a predicate, so that photons of the wrong side
+//! or bounce count are skipped during the search rather than after it (a k-nearest query that
+//! filters afterwards would come back short).
 
 use super::photon::Photon;
 use std::cmp::Ordering;
@@ -21,23 +25,48 @@ impl Located for Photon {
     }
 }
 
-/// Items (photons by default) in kd-tree order with each node's split axis.
+/// Items (photons by default) in kd-tree order, and the splits in heap order for queries.
 #[derive(Clone, Debug)]
 pub struct KdTree<T = Photon> {
     /// The items, each range's median in its middle.
     pub photons: Vec<T>,
-    /// Split axis of the node at each index.
-    axes: Vec<u8>,
+    /// The search tree: a left-balanced kd-tree over the items' positions, in heap order.
+    nodes: Vec<Node>,
 }
 
 impl<T> Default for KdTree<T> {
     fn default() -> Self {
         KdTree {
             photons: Vec::new(),
-            axes: Vec::new(),
+            nodes: Vec::new(),
         }
     }
 }
+
+/// A search node: an item's position, and its index in [`KdTree::photons`] with the split
+/// axis in the top two bits.
+#[derive(Clone, Copy, Debug, Default)]
+struct Node {
+    position: [f32; 3],
+    index_axis: u32,
+}
+
+impl Node {
+    #[inline]
+    fn index(self) -> usize {
+        (self.index_axis & INDEX_MASK) as usize
+    }
+
+    #[inline]
+    fn axis(self) -> usize {
+        (self.index_axis >> 30) as usize
+    }
+}
+
+const INDEX_MASK: u32 = (1 << 30) - 1;
+
+/// Most items a tree holds (the index shares a word with the split axis).
+pub const MAX_ITEMS: usize = INDEX_MASK as usize + 1;
 
 /// A found photon: its index in [`KdTree::photons`] and squared distance.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,9 +99,19 @@ impl<T: Located> KdTree<T> {
     /// only, not on the threads).
     #[must_use]
     pub fn build(mut photons: Vec<T>) -> KdTree<T> {
-        let mut axes = vec![0u8; photons.len()];
-        build_range(&mut photons, &mut axes);
-        KdTree { photons, axes }
+        photons.truncate(MAX_ITEMS);
+        build_range(&mut photons);
+        let mut items: Vec<Node> = photons
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Node {
+                position: p.key(),
+                index_axis: i as u32,
+            })
+            .collect();
+        let mut nodes = vec![Node::default(); items.len()];
+        build_heap(&mut items, &mut nodes, 0);
+        KdTree { photons, nodes }
     }
 
     /// Number of photons.
@@ -89,12 +128,12 @@ impl<T: Located> KdTree<T> {
 
     /// The (at most) `k` photons nearest to `q` within `sqrt(max_distance2)` that `accept`,
     /// nearest first, into `out` (cleared first).
-    pub fn nearest(
+    pub fn nearest<A: Fn(&T) -> bool + ?Sized>(
         &self,
         q: [f32; 3],
         k: usize,
         max_distance2: f32,
-        accept: &dyn Fn(&T) -> bool,
+        accept: &A,
         out: &mut Vec<Neighbour>,
     ) {
         out.clear();
@@ -105,7 +144,6 @@ impl<T: Located> KdTree<T> {
         let mut bound = max_distance2;
         self.descend(
             0,
-            self.photons.len(),
             q,
             &mut bound,
             &mut |index, distance2| {
@@ -128,17 +166,16 @@ impl<T: Located> KdTree<T> {
     /// The index of the item nearest to `q` within `sqrt(max_distance2)` that `accept`s (the
     /// one-neighbour query, without a heap).
     #[must_use]
-    pub fn nearest_one(
+    pub fn nearest_one<A: Fn(&T) -> bool + ?Sized>(
         &self,
         q: [f32; 3],
         max_distance2: f32,
-        accept: &dyn Fn(&T) -> bool,
+        accept: &A,
     ) -> Option<usize> {
         let mut best = None;
         let mut bound = max_distance2;
         self.descend(
             0,
-            self.photons.len(),
             q,
             &mut bound,
             &mut |index, distance2| {
@@ -151,43 +188,87 @@ impl<T: Located> KdTree<T> {
         best
     }
 
-    /// Visits the items of `lo..hi` within `sqrt(bound)` of `q`, nearer halves first; `visit`
-    /// sees each one's index and squared distance and may return a new, smaller bound.
-    fn descend(
+    /// Visits the items of the subtree at heap node `i` within `sqrt(bound)` of `q`, nearer
+    /// halves first; `visit` sees each one's index and squared distance and may return a new,
+    /// smaller bound (generic, so that each query's visitor is inlined into its own descent).
+    fn descend<V: FnMut(usize, f32) -> Option<f32>>(
         &self,
-        lo: usize,
-        hi: usize,
+        i: usize,
         q: [f32; 3],
         bound: &mut f32,
-        visit: &mut dyn FnMut(usize, f32) -> Option<f32>,
+        visit: &mut V,
     ) {
-        if lo >= hi {
+        let Some(&node) = self.nodes.get(i) else {
             return;
-        }
-        let mid = lo + (hi - lo) / 2;
-        let p = self.photons[mid].key();
-        let axis = self.axes[mid] as usize;
+        };
+        let p = node.position;
+        let axis = node.axis();
         let delta = q[axis] - p[axis];
         let (near, far) = if delta < 0.0 {
-            ((lo, mid), (mid + 1, hi))
+            (2 * i + 1, 2 * i + 2)
         } else {
-            ((mid + 1, hi), (lo, mid))
+            (2 * i + 2, 2 * i + 1)
         };
-        self.descend(near.0, near.1, q, bound, visit);
+        self.descend(near, q, bound, visit);
         let distance2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
         if distance2 < *bound {
-            if let Some(b) = visit(mid, distance2) {
+            if let Some(b) = visit(node.index(), distance2) {
                 *bound = b;
             }
         }
         if delta * delta < *bound {
-            self.descend(far.0, far.1, q, bound, visit);
+            self.descend(far, q, bound, visit);
         }
     }
 }
 
-/// Puts the median along the widest axis of `photons` in the middle and recurses on the halves.
-fn build_range<T: Located>(photons: &mut [T], axes: &mut [u8]) {
+/// The size of the left subtree of a left-balanced (complete) binary tree of `n` nodes.
+fn left_size(n: usize) -> usize {
+    if n <= 1 {
+        return 0;
+    }
+    // Levels above the last are full: 2^h − 1 nodes; the last holds the rest, left first.
+    let h = usize::BITS - 1 - n.leading_zeros();
+    let full = (1usize << h) - 1;
+    let last = n - full;
+    let half_last = 1usize << (h - 1);
+    (full - 1) / 2 + last.min(half_last)
+}
+
+/// Fills heap node `i` and its subtrees from `items`: the item splitting them along the widest
+/// axis at the rank that keeps the tree left-balanced.
+fn build_heap(items: &mut [Node], nodes: &mut [Node], i: usize) {
+    if items.is_empty() {
+        return;
+    }
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for n in items.iter() {
+        for (c, v) in n.position.into_iter().enumerate() {
+            lo[c] = lo[c].min(v);
+            hi[c] = hi[c].max(v);
+        }
+    }
+    let extent = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+    let axis = (0..3)
+        .max_by(|&a, &b| extent[a].total_cmp(&extent[b]).then(b.cmp(&a)))
+        .unwrap_or(0);
+    let rank = left_size(items.len());
+    items.select_nth_unstable_by(rank, |a, b| {
+        a.position[axis]
+            .total_cmp(&b.position[axis])
+            .then(a.index_axis.cmp(&b.index_axis))
+    });
+    let mut node = items[rank];
+    node.index_axis = (node.index_axis & INDEX_MASK) | (axis as u32) << 30;
+    nodes[i] = node;
+    let (left, rest) = items.split_at_mut(rank);
+    build_heap(left, nodes, 2 * i + 1);
+    build_heap(&mut rest[1..], nodes, 2 * i + 2);
+}
+
+/// Puts the median along the widest axis of `photons` in the middle and recurses on the halves
+/// (the photons' own order: neighbours in space near in memory).
+fn build_range<T: Located>(photons: &mut [T]) {
     if photons.len() <= 1 {
         return;
     }
@@ -204,18 +285,13 @@ fn build_range<T: Located>(photons: &mut [T], axes: &mut [u8]) {
         .unwrap_or(0);
     let mid = photons.len() / 2;
     photons.select_nth_unstable_by(mid, |a, b| a.key()[axis].total_cmp(&b.key()[axis]));
-    axes[mid] = axis as u8;
     let (left, rest) = photons.split_at_mut(mid);
-    let (left_axes, rest_axes) = axes.split_at_mut(mid);
-    let (right, right_axes) = (&mut rest[1..], &mut rest_axes[1..]);
+    let right = &mut rest[1..];
     if left.len() > PARALLEL_BUILD {
-        rayon::join(
-            || build_range(left, left_axes),
-            || build_range(right, right_axes),
-        );
+        rayon::join(|| build_range(left), || build_range(right));
     } else {
-        build_range(left, left_axes);
-        build_range(right, right_axes);
+        build_range(left);
+        build_range(right);
     }
 }
 
