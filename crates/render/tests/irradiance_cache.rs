@@ -509,7 +509,7 @@ fn hessian_by_reprojection_matches_second_differences() {
                 1,
                 None,
             );
-            let hh = h.translational_hessian(1e-3);
+            let hh = h.translational_hessian();
             for c in 0..3 {
                 hsum[c] += hh[c] / seeds as f64;
             }
@@ -533,4 +533,104 @@ fn hessian_by_reprojection_matches_second_differences() {
             "Hessian at {x}: {hsum:?} vs {exact:?}"
         );
     }
+}
+
+/// Exact one-bounce irradiance at floor point `x` (normal +z) from the underside of a square
+/// reflector `[-s, s]² × {h}` of albedo `rho`, lit by a point light of intensity `i` at `l`
+/// just below it: a 256² midpoint rule over the reflector (nothing blocks floor and underside).
+fn hot_spot_exact(x: Vec3, s: f32, h: f32, rho: f32, i: f32, l: Vec3) -> f32 {
+    let n = 256;
+    let cell = 2.0 * s / n as f32;
+    let mut e = 0.0f64;
+    for a in 0..n {
+        for b in 0..n {
+            let y = v(
+                -s + (a as f32 + 0.5) * cell,
+                -s + (b as f32 + 0.5) * cell,
+                h,
+            );
+            // Irradiance on the underside (normal −z) from the light below it.
+            let to_l = l - y;
+            let e_y = i * (-to_l.z).max(0.0).abs() / to_l.length().powi(3);
+            let e_y = if to_l.z < 0.0 { e_y } else { 0.0 };
+            let radiance = rho / PI * e_y;
+            let d = y - x;
+            let d2 = d.length_squared();
+            let cos_x = d.z / d2.sqrt();
+            let cos_y = d.z / d2.sqrt();
+            e += f64::from(radiance * cos_x * cos_y / d2 * cell * cell);
+        }
+    }
+    e as f32
+}
+
+#[test]
+fn an_indirect_hot_spot_is_interpolated_within_the_accuracy() {
+    // A lamp's shade reflecting its bulb onto a desk, reduced to its bones: a small bright
+    // reflector above a floor makes a peak of indirect irradiance about as wide as its height.
+    // Records are spaced by the nearest hit distance (Tabellion's metric, the default), which
+    // the reflector sets, too far apart for the peak: the record at its top, with no gradient
+    // to speak of, served its flanks. The curvature bound (the second-order error at the
+    // serving distance) and the gradient limit on the serving distance (003 item 4) bring
+    // records closer there; in the lamp room the peak under the desk lamp was 30 % low.
+    use ircache_render::irradiance_cache::build::fill_for_points;
+    use ircache_render::irradiance_cache::points::{interpolate_with_gradients, query_point};
+    use ircache_render::irradiance_cache::IrradianceCache;
+    let (s, h, rho, intensity) = (0.15f32, 0.3f32, 0.8f32, 1.0f32);
+    let light = v(0.0, 0.0, h - 0.02);
+    let floor = quad(rect_z([-2.0, 2.0], [-2.0, 2.0], 0.0), 0.5);
+    let reflector = quad(rect_z([-s, s], [-s, s], h), rho);
+    let desc = scene(
+        sensor(v(0.0, -1.5, 1.0), v(0.0, 0.0, 0.0), 60.0, 8, 1),
+        ic_desc(&[]),
+        vec![floor, reflector],
+        vec![EmitterDesc::Point {
+            position: light,
+            intensity: Rgb::splat(intensity),
+        }],
+    );
+    let built = Scene::build(&desc).unwrap();
+    let p = params(&[
+        ("bounces", "1"),
+        ("divisions", "2048"),
+        ("supersamples", "0"),
+        ("resolution", "0"),
+    ]);
+    let n = 48;
+    let at = |i: usize, j: usize, offset: f32| {
+        v(
+            -0.6 + 1.2 * (i as f32 + offset) / n as f32,
+            -0.6 + 1.2 * (j as f32 + offset) / n as f32,
+            0.0,
+        )
+    };
+    let fill: Vec<_> = (0..n * n)
+        .map(|k| query_point(at(k % n, k / n, 0.0), Vec3::Z))
+        .collect();
+    let mut cache = IrradianceCache::new(&built, &p);
+    fill_for_points(&built, &mut cache, &fill, 5);
+    // Queries between the fill points, along the line through the peak and over the square.
+    let (mut sum, mut exact_sum, mut worst) = (0.0f64, 0.0f64, 0.0f32);
+    for j in (0..n - 1).step_by(3) {
+        for i in 0..n - 1 {
+            let x = at(i, j, 0.5);
+            let (e, _, _) = interpolate_with_gradients(&cache, &query_point(x, Vec3::Z));
+            let exact = hot_spot_exact(x, s, h, rho, intensity, light);
+            sum += f64::from(e.g);
+            exact_sum += f64::from(exact);
+            if exact > 0.5 * hot_spot_exact(Vec3::ZERO, s, h, rho, intensity, light) {
+                worst = worst.max((e.g - exact).abs() / exact);
+            }
+        }
+    }
+    let ratio = sum / exact_sum;
+    eprintln!(
+        "{} records; interpolated over exact {ratio:.4}; worst near the peak {worst:.3}",
+        cache.levels[0].len()
+    );
+    // Measured 1.002 and 0.11 (the peak's record is a few per cent off by its own noise); the
+    // gradient limit on R alone gave 1.24 and 0.90 (the peak's record served its flanks), and
+    // with the curvature bound at a·E instead of a tenth of it 1.027 and 0.24.
+    assert!((ratio - 1.0).abs() < 0.02, "mean {ratio}");
+    assert!(worst < 0.15, "near the peak {worst}");
 }

@@ -512,6 +512,28 @@ pub struct Gatherer<'a> {
     pub next: Option<&'a dyn NextFrameEstimator>,
 }
 
+/// The share of the accuracy the second-order error may reach at a record's serving distance
+/// (½ λ ρ² = CURVATURE_SHARE · a · E). Measured, three seeds each at the defaults, as blurred
+/// relMSE_trim × time^1.25 (a path tracer's equal-time trade): 0.25 and 1 bound too few records
+/// (Sponza d3 −20 % and −26 % against none, the lamp room −14 %), 0.04 too many (Sponza and
+/// cornell-glossy worse than 0.1); 0.1: Sponza −29 %, the lamp room −23 %, the Cornell box
+/// −5 %, cornell-glossy d5 −3 %, with the gradient limit on the serving distance.
+const CURVATURE_SHARE: f32 = 0.1;
+
+/// The distance at which a record gathered as `h` with irradiance `e` reaches the second-order
+/// error `error·E` (½ λ ρ² = error · E, λ the largest eigenvalue of the translational Hessian of
+/// E's luminance by reprojection of the hits, as the Hessian metric's radius; Radiance's
+/// ambHessian): infinite where E does not curve.
+fn hessian_reach(h: &HemisphereSamples, e: Rgb, error: f32) -> f32 {
+    let lambda = largest_eigenvalue(h.translational_hessian());
+    let y = f64::from(e.luminance());
+    if lambda > 0.0 && y > 0.0 {
+        (2.0 * f64::from(error) * y / lambda).sqrt() as f32
+    } else {
+        f32::INFINITY
+    }
+}
+
 /// Incident radiance by tracing the scene: a gather ray's path is continued by [`trace_path`]
 /// to the cache's depth, the Lambertian parts of deeper vertices served by the next levels'
 /// caches or traced ([`Deeper`]).
@@ -853,28 +875,32 @@ impl Gatherer<'_> {
                 });
                 super::record::tabellion_radius(&h.distance, limits, footprint)
             }
-            ErrorMetric::Hessian => {
-                // ½ λ R² = a E: the second-order error reaches a E at R.
-                let near = h.distance.iter().copied().fold(f32::INFINITY, f32::min);
-                let step = if near.is_finite() {
-                    0.01 * f64::from(near)
-                } else {
-                    1e-3
-                };
-                let lambda = largest_eigenvalue(h.translational_hessian(step));
-                let y = f64::from(e.luminance());
-                let r_h = if lambda > 0.0 && y > 0.0 {
-                    (2.0 * f64::from(params.accuracy) * y / lambda).sqrt() as f32
-                } else {
-                    f32::INFINITY
-                };
-                // The reprojection cannot see visibility change behind nearby occluders: the
-                // harmonic mean distance bounds the radius there (Radiance's corral plays
-                // this part).
-                (r_h.min(h.harmonic_mean_distance()), limits)
-            }
+            // ½ λ R² = a E: the second-order error reaches a E at R. The reprojection cannot
+            // see visibility change behind nearby occluders: the harmonic mean distance bounds
+            // the radius there (Radiance's corral plays this part).
+            ErrorMetric::Hessian => (
+                hessian_reach(h, e, params.accuracy).min(h.harmonic_mean_distance()),
+                limits,
+            ),
         };
-        let r = super::record::limit_radius_by_gradient(e, &mut grad_t, r.min(r_max), r_min);
+        // Where the irradiance curves faster than the nearest surface suggests (a peak of
+        // indirect light under a lamp's shade, which the gradient does not see at its top), no
+        // record serves beyond the distance at which the second-order error, which gradients
+        // do not correct, reaches CURVATURE_SHARE · a · E.
+        let r = match params.error_metric {
+            ErrorMetric::Hessian => r,
+            metric => r.min(
+                hessian_reach(h, e, CURVATURE_SHARE * params.accuracy)
+                    / metric.reach_per_radius(params.accuracy),
+            ),
+        };
+        let r = super::record::limit_radius_by_gradient(
+            e,
+            &mut grad_t,
+            r.min(r_max),
+            r_min,
+            params.error_metric.gradient_limit_scale(params.accuracy),
+        );
         let (ray_variance, radiance) = self.variance_and_radiance(st, sp, h);
         Record {
             p: sp.it.p,

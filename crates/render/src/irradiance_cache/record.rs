@@ -58,17 +58,29 @@ pub fn tabellion_radius(
     (0.5 * nearest, (r_min, r_max))
 }
 
-/// Ward's gradient limit on a record's radius (003 item 4): the translational gradient may not
-/// predict a change larger than E itself within the radius `r`; a channel with a gradient but no
-/// irradiance loses its gradient; where the limit falls below `r_min`, the radius stays at
-/// `r_min` and the gradient is scaled down instead. Returns the radius.
+/// Ward's gradient limit on a record's radius (003 item 4): within the distance at which the
+/// record serves, its translational gradient may not predict a change larger than `a·E` (a the
+/// accuracy). Under Ward's metric a record serves within `a·R`, so this is Radiance's own rule
+/// R ≤ E/‖∇E‖; the other metrics serve farther per unit of R (Tabellion's `R·a/0.2`), and the
+/// same rule in R would let the gradient predict 1.75 E within reach at a = 0.35: indirect hot
+/// spots (a lamp's shade reflecting its bulb onto a desk) were then interpolated from records
+/// outside them, 30 % low. `scale` is `a` over the serving distance per unit R
+/// ([`ErrorMetric::gradient_limit_scale`]). A channel with a gradient but no irradiance loses
+/// its gradient; where the limit falls below `r_min`, the radius stays at `r_min` and the
+/// gradient is scaled down instead. Returns the radius.
 #[must_use]
-pub fn limit_radius_by_gradient(e: Rgb, grad_t: &mut [Vec3; 3], r: f32, r_min: f32) -> f32 {
+pub fn limit_radius_by_gradient(
+    e: Rgb,
+    grad_t: &mut [Vec3; 3],
+    r: f32,
+    r_min: f32,
+    scale: f32,
+) -> f32 {
     let mut limit = f32::INFINITY;
     for c in 0..3 {
         let g = grad_t[c].length();
         if g > 0.0 && e[c] > 0.0 {
-            limit = limit.min(e[c] / g);
+            limit = limit.min(scale * e[c] / g);
         } else if g > 0.0 {
             grad_t[c] = Vec3::ZERO;
         }
@@ -239,12 +251,26 @@ impl ErrorMetric {
     #[inline]
     #[must_use]
     pub fn validity_radius<R: CachedRecord>(self, rec: &R, accuracy: f32) -> f32 {
-        let r = rec.radius();
+        self.reach_per_radius(accuracy) * rec.radius()
+    }
+
+    /// The serving distance per unit of a record's radius R.
+    #[inline]
+    #[must_use]
+    pub fn reach_per_radius(self, accuracy: f32) -> f32 {
         match self {
-            ErrorMetric::Ward => accuracy * r,
-            ErrorMetric::Tabellion => r * accuracy / 0.2,
-            ErrorMetric::Hessian => r,
+            ErrorMetric::Ward => accuracy,
+            ErrorMetric::Tabellion => accuracy / 0.2,
+            ErrorMetric::Hessian => 1.0,
         }
+    }
+
+    /// The factor of [`limit_radius_by_gradient`]: the accuracy over the serving distance per
+    /// unit R (1 for Ward's metric, 0.2 for Tabellion's, `a` for the Hessian radius).
+    #[inline]
+    #[must_use]
+    pub fn gradient_limit_scale(self, accuracy: f32) -> f32 {
+        accuracy / self.reach_per_radius(accuracy)
     }
 }
 
@@ -270,4 +296,46 @@ pub fn extrapolate(rec: &Record, p: Vec3, n: Vec3, mode: GradientMode) -> Rgb {
         );
     }
     e
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_gradient_limit_bounds_the_change_predicted_within_reach_for_every_metric() {
+        let a = 0.35;
+        for metric in [
+            ErrorMetric::Ward,
+            ErrorMetric::Tabellion,
+            ErrorMetric::Hessian,
+        ] {
+            let e = Rgb::new(2.0, 1.0, 4.0);
+            // The green channel's gradient binds: |g| = 5 against E = 1.
+            let mut g = [
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(3.0, 4.0, 0.0),
+                Vec3::ZERO,
+            ];
+            let scale = metric.gradient_limit_scale(a);
+            let r = limit_radius_by_gradient(e, &mut g, 10.0, 0.0, scale);
+            let reach = metric.reach_per_radius(a) * r;
+            assert!(
+                (reach * g[1].length() - a * e.g).abs() < 1e-5,
+                "{metric:?}: {reach}"
+            );
+            assert!(reach * g[0].length() <= a * e.r + 1e-6);
+            // Below the smallest radius the gradient is scaled down to the same bound.
+            let mut g2 = [Vec3::ZERO, Vec3::new(300.0, 400.0, 0.0), Vec3::ZERO];
+            let r2 = limit_radius_by_gradient(e, &mut g2, 10.0, r, scale);
+            assert_eq!(r2, r);
+            let predicted = metric.reach_per_radius(a) * r2 * g2[1].length();
+            assert!(
+                (predicted - a * e.g).abs() < 1e-4,
+                "{metric:?}: {predicted}"
+            );
+        }
+        // Ward's metric keeps Radiance's own rule, R ≤ E/|∇E|.
+        assert_eq!(ErrorMetric::Ward.gradient_limit_scale(0.2), 1.0);
+    }
 }

@@ -135,7 +135,13 @@ pub fn make_record(
     } else {
         (samples.harmonic_mean_distance(), limits)
     };
-    let r = limit_radius_by_gradient(e, &mut grad_t, r.min(r_max), r_min);
+    let r = limit_radius_by_gradient(
+        e,
+        &mut grad_t,
+        r.min(r_max),
+        r_min,
+        media_metric(params.error_metric).gradient_limit_scale(params.accuracy),
+    );
     let rays: RayCounts = view.rays();
     let stats = MediaCacheStats {
         records: 1,

@@ -142,24 +142,19 @@ impl<T: Located> KdTree<T> {
         }
         let mut heap = BinaryHeap::with_capacity(k + 1);
         let mut bound = max_distance2;
-        self.descend(
-            0,
-            q,
-            &mut bound,
-            &mut |index, distance2| {
-                if !accept(&self.photons[index]) {
-                    return None;
-                }
-                heap.push(Neighbour {
-                    index: index as u32,
-                    distance2,
-                });
-                if heap.len() > k {
-                    heap.pop();
-                }
-                (heap.len() == k).then(|| heap.peek().map_or(distance2, |n| n.distance2))
-            },
-        );
+        self.descend(0, q, &mut bound, &mut |index, distance2| {
+            if !accept(&self.photons[index]) {
+                return None;
+            }
+            heap.push(Neighbour {
+                index: index as u32,
+                distance2,
+            });
+            if heap.len() > k {
+                heap.pop();
+            }
+            (heap.len() == k).then(|| heap.peek().map_or(distance2, |n| n.distance2))
+        });
         out.extend(heap.into_sorted_vec());
     }
 
@@ -174,17 +169,12 @@ impl<T: Located> KdTree<T> {
     ) -> Option<usize> {
         let mut best = None;
         let mut bound = max_distance2;
-        self.descend(
-            0,
-            q,
-            &mut bound,
-            &mut |index, distance2| {
-                accept(&self.photons[index]).then(|| {
-                    best = Some(index);
-                    distance2
-                })
-            },
-        );
+        self.descend(0, q, &mut bound, &mut |index, distance2| {
+            accept(&self.photons[index]).then(|| {
+                best = Some(index);
+                distance2
+            })
+        });
         best
     }
 
