@@ -79,7 +79,8 @@ impl MeshLight {
     /// An area light on `mesh` emitting `radiance`; `None` if the mesh has no area.
     #[must_use]
     pub fn new(mesh: &TriangleMesh, radiance: Rgb) -> Option<MeshLight> {
-        let areas: Vec<f32> = mesh
+        // (p1 − p0) × (p2 − p0) of each triangle: twice its area along its normal.
+        let cross: Vec<Vec3> = mesh
             .indices
             .iter()
             .map(|&[a, b, c]| {
@@ -88,9 +89,10 @@ impl MeshLight {
                     mesh.positions[b as usize],
                     mesh.positions[c as usize],
                 );
-                0.5 * (p1 - p0).cross(p2 - p0).length()
+                (p1 - p0).cross(p2 - p0)
             })
             .collect();
+        let areas: Vec<f32> = cross.iter().map(|c| 0.5 * c.length()).collect();
         let area = areas.iter().map(|&a| f64::from(a)).sum::<f64>() as f32;
         if !is_positive_finite(area) {
             return None;
@@ -102,35 +104,16 @@ impl MeshLight {
             .cloned();
         // Solid-angle sampling needs one emitting side: both triangles wound alike and no
         // vertex normal leaning off the plane.
+        let triangle_normals: Vec<Vec3> = cross.iter().map(|c| c.normalize_or_zero()).collect();
         let rectangle = Rectangle::from_triangles(&mesh.positions, &mesh.indices).and_then(|r| {
-            let winding = |&[a, b, c]: &[u32; 3]| {
-                let (a, b, c) = (
-                    mesh.positions[a as usize],
-                    mesh.positions[b as usize],
-                    mesh.positions[c as usize],
-                );
-                (b - a).cross(c - a).normalize_or_zero()
-            };
-            let n = winding(&mesh.indices[0]);
+            let n = triangle_normals[0];
             let flat = |v: Vec3| v.dot(n) > 1.0 - 1e-5;
-            (flat(winding(&mesh.indices[1]))
+            (flat(triangle_normals[1])
                 && normals
                     .as_ref()
                     .is_none_or(|ns| ns.iter().all(|&v| flat(v))))
             .then_some((r, n))
         });
-        let triangle_normals = mesh
-            .indices
-            .iter()
-            .map(|&[a, b, c]| {
-                let (p0, p1, p2) = (
-                    mesh.positions[a as usize],
-                    mesh.positions[b as usize],
-                    mesh.positions[c as usize],
-                );
-                (p1 - p0).cross(p2 - p0).normalize_or_zero()
-            })
-            .collect();
         Some(MeshLight {
             positions: mesh.positions.clone(),
             triangle_normals,

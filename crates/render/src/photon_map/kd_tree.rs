@@ -212,6 +212,21 @@ impl<T: Located> KdTree<T> {
     }
 }
 
+/// The axis along which `points` spread widest (the lowest of equals).
+fn widest_axis(points: impl Iterator<Item = [f32; 3]>) -> usize {
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in points {
+        for (c, v) in p.into_iter().enumerate() {
+            lo[c] = lo[c].min(v);
+            hi[c] = hi[c].max(v);
+        }
+    }
+    let extent = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
+    (0..3)
+        .max_by(|&a, &b| extent[a].total_cmp(&extent[b]).then(b.cmp(&a)))
+        .unwrap_or(0)
+}
+
 /// The size of the left subtree of a left-balanced (complete) binary tree of `n` nodes.
 fn left_size(n: usize) -> usize {
     if n <= 1 {
@@ -231,17 +246,7 @@ fn build_heap(items: &mut [Node], nodes: &mut [Node], i: usize) {
     if items.is_empty() {
         return;
     }
-    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for n in items.iter() {
-        for (c, v) in n.position.into_iter().enumerate() {
-            lo[c] = lo[c].min(v);
-            hi[c] = hi[c].max(v);
-        }
-    }
-    let extent = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
-    let axis = (0..3)
-        .max_by(|&a, &b| extent[a].total_cmp(&extent[b]).then(b.cmp(&a)))
-        .unwrap_or(0);
+    let axis = widest_axis(items.iter().map(|n| n.position));
     let rank = left_size(items.len());
     items.select_nth_unstable_by(rank, |a, b| {
         a.position[axis]
@@ -262,17 +267,7 @@ fn build_range<T: Located>(photons: &mut [T]) {
     if photons.len() <= 1 {
         return;
     }
-    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for p in photons.iter() {
-        for (c, v) in p.key().into_iter().enumerate() {
-            lo[c] = lo[c].min(v);
-            hi[c] = hi[c].max(v);
-        }
-    }
-    let extent = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];
-    let axis = (0..3)
-        .max_by(|&a, &b| extent[a].total_cmp(&extent[b]).then(b.cmp(&a)))
-        .unwrap_or(0);
+    let axis = widest_axis(photons.iter().map(Located::key));
     let mid = photons.len() / 2;
     photons.select_nth_unstable_by(mid, |a, b| a.key()[axis].total_cmp(&b.key()[axis]));
     let (left, rest) = photons.split_at_mut(mid);
