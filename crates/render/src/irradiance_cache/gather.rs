@@ -514,10 +514,10 @@ pub struct Gatherer<'a> {
 
 /// The share of the accuracy the second-order error may reach at a record's serving distance
 /// (½ λ ρ² = CURVATURE_SHARE · a · E). Measured, three seeds each at the defaults, as blurred
-/// relMSE_trim × time^1.25 (a path tracer's equal-time trade): 0.25 and 1 bound too few records
-/// (Sponza d3 −20 % and −26 % against none, the lamp room −14 %), 0.04 too many (Sponza and
-/// cornell-glossy worse than 0.1); 0.1: Sponza −29 %, the lamp room −23 %, the Cornell box
-/// −5 %, cornell-glossy d5 −3 %, with the gradient limit on the serving distance.
+/// relMSE_trim × time^1.25 (the path tracer's trade), against the rule before it: 0.25: Sponza
+/// d3 −28 %, the lamp room −13 %; 0.1: −32 %, −26 %, the Cornell box −5 %, cornell-glossy d5
+/// +1 %; 0.04 ties with 0.1 (−30 %, −27 %, −9 %, −4 %, for 5 % more time); 0.02 loses on three
+/// of the four (BENCHMARKS.md).
 const CURVATURE_SHARE: f32 = 0.1;
 
 /// The distance at which a record gathered as `h` with irradiance `e` reaches the second-order
