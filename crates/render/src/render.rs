@@ -4,6 +4,7 @@
 //! in which tiles finish.
 
 use crate::film::Filter;
+use crate::integrators::light_sampling::DeferredShadows;
 use crate::integrators::{Integrator, RayCounts};
 use crate::irradiance_cache::{CacheStats, IrradianceCache};
 use crate::sampler::{dims, PixelSampler, Sampler, SamplerKind, SamplerSettings};
@@ -238,6 +239,7 @@ pub fn render(
                 .map(|tile| {
                     let (x0, y0, x1, y1) = tile_bounds(tile, tiles_x, w, h);
                     let mut rays = RayCounts::default();
+                    let mut deferred = DeferredShadows::default();
                     let mut out = Vec::with_capacity((x1 - x0) * (y1 - y0));
                     for y in y0..y1 {
                         for x in x0..x1 {
@@ -245,7 +247,13 @@ pub fn render(
                             let to = targets[y * w + x];
                             if to > state.samples {
                                 extend_pixel(
-                                    scene, integrator, settings, &sampler, x, y, &mut state, to,
+                                    scene,
+                                    integrator,
+                                    settings,
+                                    &sampler,
+                                    (x, y),
+                                    (&mut state, to),
+                                    &mut deferred,
                                     &mut rays,
                                 );
                             }
@@ -503,16 +511,17 @@ fn extend_pixel(
     integrator: &Integrator,
     settings: &RenderSettings,
     samplers: &SamplerSettings,
-    x: usize,
-    y: usize,
-    state: &mut PixelState,
-    to: u32,
+    (x, y): (usize, usize),
+    (state, to): (&mut PixelState, u32),
+    deferred: &mut DeferredShadows,
     rays: &mut RayCounts,
 ) {
     let mut sampler = samplers.pixel(x as u32, y as u32);
-    // Camera rays of one pixel are nearly parallel: trace them in 16-wide packets.
+    // Camera rays of one pixel are nearly parallel, and the shadow rays of their first
+    // vertices head for the same lights: both are traced in 16-wide packets.
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
     let mut hits = [None; 16];
+    let mut l = [Rgb::ZERO; 16];
     let mut done = state.samples;
     while done < to {
         let n = (to - done).min(16);
@@ -522,10 +531,21 @@ fn extend_pixel(
         let n = n as usize;
         scene.accel.intersect16(&camera[..n], &mut hits[..n]);
         rays.camera += n as u64;
-        for ((k, ray), hit) in (done..).zip(&camera[..n]).zip(&hits[..n]) {
+        for (i, ((k, ray), hit)) in (done..).zip(&camera[..n]).zip(&hits[..n]).enumerate() {
             sampler.set_sample(k, dims::vertex(0, 0));
-            let l = integrator.li(scene, ray, hit.as_ref(), &mut sampler, rays);
-            state.add(l);
+            deferred.owner = i as u32;
+            l[i] = integrator.li_deferring(
+                scene,
+                ray,
+                hit.as_ref(),
+                &mut sampler,
+                rays,
+                Some(deferred),
+            );
+        }
+        deferred.resolve(scene, &mut l[..n]);
+        for &li in &l[..n] {
+            state.add(li);
         }
         done += n as u32;
     }

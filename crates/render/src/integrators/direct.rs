@@ -2,7 +2,7 @@
 //! samples and `bsdf_samples` BSDF samples combined with the power heuristic, weighted by their
 //! sample counts; emitters seen directly are added as they are.
 
-use super::light_sampling::{sample_lights, BsdfStrategy, EnvironmentServed};
+use super::light_sampling::{sample_lights, BsdfStrategy, EnvironmentServed, Shadows};
 use super::{mis_weight, RayCounts};
 use crate::bsdf::Bsdf;
 use crate::sampler::{dims, Sampler};
@@ -85,6 +85,7 @@ pub fn estimate_direct(
         0,
         sampler,
         rays,
+        Shadows::Traced,
     );
     let (fe, fb) = (ne as f32, nb as f32);
     let p_ref = it.p;

@@ -7,7 +7,8 @@
 //! hold is traced. The cache is filled before the pixels are rendered (see
 //! [`crate::irradiance_cache::build`]).
 
-use super::path_continuation::{trace_path, IndirectSource, PathSettings, PathStart};
+use super::light_sampling::DeferredShadows;
+use super::path_continuation::{trace_path_deferring, IndirectSource, PathSettings, PathStart};
 use super::RayCounts;
 use crate::irradiance_cache::environment::HeldEnvironment;
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, ShadingPoint, WorkState};
@@ -176,7 +177,8 @@ impl IcIntegrator {
     /// Radiance along the camera ray `ray`, whose closest hit `first_hit` the caller traced: a
     /// path traced to `max_depth` = bounces + 2 whose vertices take their Lambertian indirect
     /// light from the cache of their depth where it has records, and continue through the
-    /// glossy part of the BSDF.
+    /// glossy part of the BSDF. With `deferred`, the first vertex's light samples wait there for
+    /// their shadow rays.
     pub fn li(
         &self,
         scene: &Scene,
@@ -184,6 +186,7 @@ impl IcIntegrator {
         first_hit: Option<&Hit>,
         sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
+        deferred: Option<&mut DeferredShadows>,
     ) -> Rgb {
         let fresh;
         let cache = match &self.cache {
@@ -193,7 +196,7 @@ impl IcIntegrator {
                 &fresh
             }
         };
-        self.li_splatted(scene, cache, ray, first_hit, None, sampler, rays)
+        self.li_splatted(scene, cache, ray, first_hit, None, sampler, rays, deferred)
     }
 
     /// [`IcIntegrator::li`] with the cache `cache` and, for the first vertex, what splatting
@@ -208,6 +211,7 @@ impl IcIntegrator {
         splatted: Option<Splatted>,
         sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
+        deferred: Option<&mut DeferredShadows>,
     ) -> Rgb {
         // One light sample when the only light is a delta light (all samples are alike).
         let first_light_samples = if scene.lights.all_delta() && scene.lights.len() == 1 {
@@ -227,7 +231,16 @@ impl IcIntegrator {
             splatted: splatted.unwrap_or_default(),
         };
         let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
-        trace_path(scene, start, first, &mut source, &settings, sampler, rays)
+        trace_path_deferring(
+            scene,
+            start,
+            first,
+            &mut source,
+            &settings,
+            sampler,
+            rays,
+            deferred,
+        )
     }
 }
 

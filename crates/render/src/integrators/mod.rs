@@ -16,6 +16,7 @@ use crate::scene::Scene;
 use ircache_embree::Hit;
 use ircache_math::{Ray, Rgb};
 use ircache_scene::IntegratorDesc;
+use light_sampling::DeferredShadows;
 
 /// Rays traced, by kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -193,10 +194,25 @@ impl Integrator {
         sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Rgb {
+        self.li_deferring(scene, ray, first_hit, sampler, rays, None)
+    }
+
+    /// [`Integrator::li`], the first vertex's light samples leaving their shadow rays to
+    /// `deferred` where the integrator can (`path`, `ic`: [`DeferredShadows::resolve`] adds
+    /// their light); the others trace them at once.
+    pub fn li_deferring(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        first_hit: Option<&Hit>,
+        sampler: &mut dyn Sampler,
+        rays: &mut RayCounts,
+        deferred: Option<&mut DeferredShadows>,
+    ) -> Rgb {
         match self {
             Integrator::Direct(d) => d.li(scene, ray, first_hit, sampler, rays),
-            Integrator::Path(p) => p.li(scene, ray, first_hit, sampler, rays),
-            Integrator::Ic(c) => c.li(scene, ray, first_hit, sampler, rays),
+            Integrator::Path(p) => p.li(scene, ray, first_hit, sampler, rays, deferred),
+            Integrator::Ic(c) => c.li(scene, ray, first_hit, sampler, rays, deferred),
             Integrator::VolPath(v) => v.li(scene, ray, first_hit, sampler, rays),
         }
     }

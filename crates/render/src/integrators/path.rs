@@ -4,7 +4,8 @@
 //! directly, 2: direct light, 3: one indirect bounce). The loop itself is
 //! [`super::path_continuation::trace_path`] with no cache.
 
-use super::path_continuation::{trace_path, PathSettings, PathStart, Traced};
+use super::light_sampling::DeferredShadows;
+use super::path_continuation::{trace_path_deferring, PathSettings, PathStart, Traced};
 use super::RayCounts;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
@@ -23,7 +24,8 @@ pub struct PathIntegrator {
 }
 
 impl PathIntegrator {
-    /// Radiance along the camera ray `ray`, whose closest hit `first_hit` the caller traced.
+    /// Radiance along the camera ray `ray`, whose closest hit `first_hit` the caller traced;
+    /// with `deferred`, the first vertex's light samples wait there for their shadow rays.
     pub fn li(
         &self,
         scene: &Scene,
@@ -31,6 +33,7 @@ impl PathIntegrator {
         first_hit: Option<&Hit>,
         sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
+        deferred: Option<&mut DeferredShadows>,
     ) -> Rgb {
         let settings = PathSettings {
             max_depth: u32::try_from(self.max_depth).unwrap_or(u32::MAX),
@@ -39,6 +42,15 @@ impl PathIntegrator {
         };
         let start = PathStart::camera(*ray, self.hide_emitters);
         let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
-        trace_path(scene, start, first, &mut Traced, &settings, sampler, rays)
+        trace_path_deferring(
+            scene,
+            start,
+            first,
+            &mut Traced,
+            &settings,
+            sampler,
+            rays,
+            deferred,
+        )
     }
 }

@@ -9,7 +9,9 @@
 //! continues through the glossy part alone, and light samples are weighted against that part
 //! only. Where it declines, the whole BSDF is sampled, as in path tracing.
 
-use super::light_sampling::{sample_lights, BsdfStrategy, EnvironmentServed};
+use super::light_sampling::{
+    sample_lights, BsdfStrategy, DeferredShadows, EnvironmentServed, Shadows,
+};
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::environment::HeldEnvironment;
 use crate::irradiance_cache::gather::ShadingPoint;
@@ -179,6 +181,23 @@ pub fn trace_path(
     sampler: &mut dyn Sampler,
     rays: &mut RayCounts,
 ) -> Rgb {
+    trace_path_deferring(scene, start, first, source, settings, sampler, rays, None)
+}
+
+/// [`trace_path`], whose first vertex's light samples, with `deferred`, leave their shadow
+/// rays and what they bring to it ([`DeferredShadows::resolve`] adds that later) instead of the
+/// result.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_path_deferring(
+    scene: &Scene,
+    start: PathStart,
+    first: Option<Option<Interaction>>,
+    source: &mut dyn IndirectSource,
+    settings: &PathSettings,
+    sampler: &mut dyn Sampler,
+    rays: &mut RayCounts,
+    mut deferred: Option<&mut DeferredShadows>,
+) -> Rgb {
     let PathStart {
         mut ray,
         mut depth,
@@ -281,6 +300,10 @@ pub fn trace_path(
             1
         };
         let continues = !all_served && (depth + 2 < max_depth || scene.has_hittable_emitters);
+        let shadows = match deferred.as_deref_mut().filter(|_| depth == start.depth) {
+            Some(d) => Shadows::Deferred(d, beta),
+            None => Shadows::Traced,
+        };
         l += beta
             * sample_lights(
                 scene,
@@ -293,6 +316,7 @@ pub fn trace_path(
                 depth,
                 sampler,
                 rays,
+                shadows,
             );
         if !continues || (strategy == BsdfStrategy::Glossy && !bsdf.has_glossy()) {
             break;

@@ -96,7 +96,9 @@ fn direct_irradiance(
     rng: &mut Rng,
 ) -> Rgb {
     use crate::bsdf::{Bsdf, Diffuse, Lobe};
-    use crate::integrators::light_sampling::{sample_lights, BsdfStrategy, EnvironmentServed};
+    use crate::integrators::light_sampling::{
+        sample_lights, BsdfStrategy, EnvironmentServed, Shadows,
+    };
     let white = Bsdf::Single(Lobe::Diffuse(Diffuse {
         reflectance: Rgb::ONE,
     }));
@@ -116,6 +118,7 @@ fn direct_irradiance(
         0,
         rng,
         &mut rays,
+        Shadows::Traced,
     ) * std::f32::consts::PI
 }
 

@@ -275,6 +275,7 @@ impl Layer {
                             splatted,
                             &mut sampler,
                             &mut r,
+                            None,
                         ))
                     })
                     .collect();
