@@ -13,8 +13,9 @@
 //! - [`splatting`]: radiance cache splatting and the progressive walkthrough (001 ch. 4).
 //! - [`photon_map`]: photon tracing, the global and caustic maps, density estimation (001 §2.4, ch. 6).
 //! - [`temporal`]: animations: temporal radiance caching, age-based invalidation (001 ch. 5).
-//! - [`render`]: the parallel, deterministic tile loop.
+//! - [`render`]: the parallel, deterministic tile loop; [`adaptive`]: adaptive pixel sampling.
 
+pub mod adaptive;
 pub mod bsdf;
 pub mod camera;
 pub mod film;

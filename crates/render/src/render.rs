@@ -3,6 +3,7 @@
 //! so the image is the same bit for bit for a given seed whatever the thread count or the order
 //! in which tiles finish.
 
+use crate::adaptive::SampleSums;
 use crate::film::Filter;
 use crate::integrators::light_sampling::DeferredShadows;
 use crate::integrators::{Integrator, RayCounts};
@@ -53,28 +54,7 @@ pub struct Sampling {
     pub adaptive: Option<Adaptive>,
 }
 
-/// Adaptive pixel sampling: every pixel first takes `spp` samples (the pilot); then each pixel
-/// takes as many more as its neighbourhood's pilot says it needs, in powers of two up to
-/// `max_spp`: the counts that bring the image's root-mean-square relative error to `target`
-/// with the fewest samples (a pixel's count ∝ the standard deviation of its relative value).
-/// The samples are the prefixes of one progressive sequence (the `sobol` sampler at `max_spp`:
-/// its prefixes stay stratified), so the added samples extend the stratification instead of
-/// starting another.
-///
-/// Unbiased: a pixel's sample count is decided from its eight neighbours' pilot samples, never
-/// from its own, so the count is independent of the samples it averages. (Deciding from a
-/// pixel's own samples stops the pixels whose first samples happened to miss a small bright
-/// source, a bias towards dark measured on Sponza.) The error per sample is estimated from the
-/// variance of the samples' luminance, relative as the error measure is,
-/// `var / (mean² + (0.1 ȳ)²)` with ȳ the image's mean pilot luminance (scale-free).
-/// Deterministic: every decision is a function of the pilot, which is.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Adaptive {
-    /// Target root-mean-square relative error over the image.
-    pub target: f32,
-    /// Most samples a pixel takes.
-    pub max_spp: u32,
-}
+pub use crate::adaptive::Adaptive;
 
 impl Sampling {
     /// The sampler a scene's sensor names.
@@ -117,11 +97,15 @@ impl RenderSettings {
     pub fn sampler(&self) -> SamplerSettings {
         let (kind, spp) = match self.sampling.adaptive {
             None => (self.sampling.sampler, self.spp),
-            Some(a) => (SamplerKind::Sobol, a.max_spp.max(self.spp)),
+            Some(a) => (
+                SamplerKind::Sobol,
+                a.max_spp.max(crate::adaptive::pilot_samples(self.spp)),
+            ),
         };
         let mut s =
             SamplerSettings::new(kind, spp, self.seed, self.width as u32, self.height as u32);
         s.jitter = self.sampling.jitter;
+        s.progressive = self.sampling.adaptive.is_some();
         s
     }
 
@@ -131,7 +115,7 @@ impl RenderSettings {
         let s = self.sampler();
         match self.sampling.adaptive {
             None => s.spp,
-            Some(_) => self.spp.max(1).min(s.spp),
+            Some(_) => crate::adaptive::pilot_samples(self.spp).min(s.spp),
         }
     }
 
@@ -226,10 +210,13 @@ pub fn render(
     let pixel_start = Instant::now();
     let rows = settings.rows();
     let first = settings.first_samples();
-    // Progress counts each pass as half of the pixels when there are two.
-    let passes = 1 + u64::from(settings.sampling.adaptive.is_some());
-    // One pass: every pixel taken on to its target count, tiles in parallel.
-    let run_pass = |targets: &[u32], states: &mut [PixelState], rays: &mut RayCounts| {
+    let pixels = (w * h) as u64;
+    // One pass: every pixel taken on to its target count, tiles in parallel; progress goes from
+    // `base` to `base + span` pixels over the pass.
+    let run_pass = |targets: &[u32],
+                    states: &mut [PixelState],
+                    rays: &mut RayCounts,
+                    (base, span): (u64, u64)| {
         let before = done.load(Ordering::Relaxed);
         let states_in: &[PixelState] = states;
         let tiles: Vec<(Vec<PixelState>, RayCounts)> = pool.install(|| {
@@ -245,7 +232,7 @@ pub fn render(
                         for x in x0..x1 {
                             let mut state = states_in[y * w + x];
                             let to = targets[y * w + x];
-                            if to > state.samples {
+                            if to > state.sums.samples {
                                 extend_pixel(
                                     scene,
                                     integrator,
@@ -262,7 +249,7 @@ pub fn render(
                     }
                     let n = out.len() as u64;
                     let total = done.fetch_add(n, Ordering::Relaxed) + n;
-                    progress(before / passes + (total - before) / passes);
+                    progress(base + (total - before) * span / pixels.max(1));
                     (out, rays)
                 })
                 .collect()
@@ -299,8 +286,8 @@ pub fn render(
                 &mut |layer, values| {
                     for (state, l) in states.iter_mut().zip(values) {
                         if let Some(l) = l {
-                            state.add(l);
-                            state.samples += 1;
+                            state.add(l, state.sums.samples, sampler.spp);
+                            state.sums.samples += 1;
                         }
                     }
                     progress(pixels * u64::from(layer + 1) / u64::from(sampler.spp.max(1)));
@@ -317,11 +304,29 @@ pub fn render(
         let pilot: Vec<u32> = (0..w * h)
             .map(|i| if rows.contains(&(i / w)) { first } else { 0 })
             .collect();
-        run_pass(&pilot, &mut states, &mut rays);
+        // Under adaptive sampling the pilot is the first half of the progress bar, each round
+        // half of what is left.
+        let adaptive_span = if settings.sampling.adaptive.is_some() {
+            pixels / 2
+        } else {
+            pixels
+        };
+        run_pass(&pilot, &mut states, &mut rays, (0, adaptive_span));
         if let Some(adaptive) = settings.sampling.adaptive {
-            let targets =
-                adaptive_targets(&states, w, h, &rows, first, sampler.spp, adaptive.target);
-            run_pass(&targets, &mut states, &mut rays);
+            let adaptive = Adaptive {
+                max_spp: adaptive.max_spp.min(sampler.spp),
+                ..adaptive
+            };
+            // Each round at least doubles one pixel; the cap only bounds the passes' overhead.
+            let mut left = pixels - adaptive_span;
+            for _ in 0..MAX_ROUNDS {
+                let sums: Vec<_> = states.iter().map(|s| s.sums).collect();
+                let Some(targets) = crate::adaptive::next_round(&sums, w, &adaptive) else {
+                    break;
+                };
+                run_pass(&targets, &mut states, &mut rays, (pixels - left, left / 2));
+                left -= left / 2;
+            }
         }
     }
     let (integrator, splat_stats) = match &splatted {
@@ -333,7 +338,7 @@ pub fn render(
     for (i, state) in states.iter().enumerate() {
         image.set(i % w, i / w, state.value());
         invalid_samples += state.invalid;
-        samples += u64::from(state.samples);
+        samples += u64::from(state.sums.samples);
     }
     let pixel_seconds = pixel_start.elapsed().as_secs_f64();
     let cache = match (integrator.cache(), cache_stats) {
@@ -377,27 +382,26 @@ fn tile_bounds(tile: usize, tiles_x: usize, w: usize, h: usize) -> (usize, usize
     (x0, y0, (x0 + TILE).min(w), (y0 + TILE).min(h))
 }
 
+/// Most rounds of adaptive sampling after the pilot.
+const MAX_ROUNDS: usize = 32;
+
 /// A pixel's running sums over the samples taken so far.
 #[derive(Clone, Copy, Debug, Default)]
 struct PixelState {
     /// Sum of the samples' values.
     sum: Rgb,
-    /// Sums of the samples' luminance and its square.
-    lum: (f64, f64),
-    /// Samples taken (the prefix `0..samples` of the pixel's sequence).
-    samples: u32,
+    /// The samples taken and their luminance sums (for adaptive sampling).
+    sums: SampleSums,
     /// Samples dropped as invalid (counted in `samples`, as zero).
     invalid: u64,
 }
 
 impl PixelState {
-    /// Adds a sample's value to the sums (an invalid one is counted and left out).
-    fn add(&mut self, l: Rgb) {
+    /// Adds sample `index` of `0..to` to the sums (an invalid one is counted and left out).
+    fn add(&mut self, l: Rgb, index: u32, to: u32) {
         if l.is_valid_radiance() {
             self.sum += l;
-            let luminance = f64::from(l.luminance());
-            self.lum.0 += luminance;
-            self.lum.1 += luminance * luminance;
+            self.sums.add(index, to, Some(f64::from(l.luminance())));
         } else {
             self.invalid += 1;
         }
@@ -405,89 +409,10 @@ impl PixelState {
 
     /// The pixel's value: the mean of its samples.
     fn value(&self) -> Rgb {
-        self.sum / self.samples.max(1) as f32
-    }
-
-    /// Mean and unbiased variance of one sample's luminance.
-    fn luminance_moments(&self) -> (f64, f64) {
-        let n = f64::from(self.samples.max(1));
-        let mean = self.lum.0 / n;
-        let var = ((self.lum.1 - self.lum.0 * mean) / (n - 1.0).max(1.0)).max(0.0);
-        (mean, var)
+        self.sum / self.sums.samples.max(1) as f32
     }
 }
 
-/// Each pixel's sample count for the adaptive pass (see [`Adaptive`]): from the pilot of its
-/// eight neighbours (not its own), the relative variance v of one sample; the counts n ∝ √v
-/// that bring the image's mean relative variance Σ (v / n) / P to target² with the fewest
-/// samples, rounded to a power of two within `[first, max_spp]`. Pixels outside the rendered
-/// rows stay at 0.
-fn adaptive_targets(
-    states: &[PixelState],
-    w: usize,
-    h: usize,
-    rows: &std::ops::Range<usize>,
-    first: u32,
-    max_spp: u32,
-    target: f32,
-) -> Vec<u32> {
-    let rendered = states.iter().filter(|s| s.samples > 0);
-    let (total, count) = rendered.fold((0.0f64, 0u64), |(t, c), s| {
-        (t + s.luminance_moments().0, c + 1)
-    });
-    let floor = (0.1 * total / count.max(1) as f64)
-        .powi(2)
-        .max(f64::MIN_POSITIVE);
-    let relative_variance: Vec<f64> = states
-        .iter()
-        .map(|s| {
-            let (mean, var) = s.luminance_moments();
-            var / (mean * mean + floor)
-        })
-        .collect();
-    // Each rendered pixel's neighbourhood estimate of its relative variance per sample.
-    let neighbourhood: Vec<Option<f64>> = (0..w * h)
-        .map(|i| {
-            let (x, y) = (i % w, i / w);
-            if !rows.contains(&y) {
-                return None;
-            }
-            let (mut sum, mut n) = (0.0, 0u32);
-            for ny in y.saturating_sub(1)..(y + 2).min(h) {
-                for nx in x.saturating_sub(1)..(x + 2).min(w) {
-                    if (nx, ny) != (x, y) && rows.contains(&ny) {
-                        sum += relative_variance[ny * w + nx];
-                        n += 1;
-                    }
-                }
-            }
-            Some(if n > 0 { sum / f64::from(n) } else { 0.0 })
-        })
-        .collect();
-    // The counts that minimise the mean relative variance Σ v/n for their total are n ∝ √v;
-    // scaled so that the mean reaches target², n = √v · Σ√v / (P · target²).
-    let (sum_sqrt, pixels) = neighbourhood
-        .iter()
-        .flatten()
-        .fold((0.0, 0u64), |(s, n), v| (s + v.sqrt(), n + 1));
-    let scale = sum_sqrt / (pixels.max(1) as f64 * f64::from(target).powi(2));
-    neighbourhood
-        .iter()
-        .map(|v| match v {
-            None => 0,
-            Some(v) => {
-                let want = (v.sqrt() * scale).max(1.0);
-                // The nearest power of two (in ratio): prefixes of the sequence stay nets.
-                let spp = 2f64.powf(want.log2().round()) as u32;
-                spp.clamp(first, max_spp.max(first))
-            }
-        })
-        .collect()
-}
-
-/// Takes pixel (x, y)'s samples `state.samples..to`: filter-importance-sampled estimates, with
-/// their luminance and its square for the adaptive pass. Samples that the integrator returns as
-/// non-finite or negative count as zero and are counted (Mitsuba drops them too).
 /// The camera ray of sample `sample` of pixel (x, y): its film position from the sampler's film
 /// dimensions through the pixel filter. The pixel pass and the splatting G-buffer both trace it.
 pub fn camera_ray(
@@ -505,6 +430,9 @@ pub fn camera_ray(
     scene.camera.generate_ray(film)
 }
 
+/// Takes pixel (x, y)'s samples `state.sums.samples..to`: filter-importance-sampled estimates,
+/// with their luminance sums for adaptive sampling. Samples that the integrator returns as
+/// non-finite or negative count as zero and are counted (Mitsuba drops them too).
 #[allow(clippy::too_many_arguments)]
 fn extend_pixel(
     scene: &Scene,
@@ -522,7 +450,8 @@ fn extend_pixel(
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
     let mut hits = [None; 16];
     let mut l = [Rgb::ZERO; 16];
-    let mut done = state.samples;
+    state.sums.extend_to(to);
+    let mut done = state.sums.samples;
     while done < to {
         let n = (to - done).min(16);
         for (k, ray) in (done..done + n).zip(&mut camera) {
@@ -544,10 +473,10 @@ fn extend_pixel(
             );
         }
         deferred.resolve(scene, &mut l[..n]);
-        for &li in &l[..n] {
-            state.add(li);
+        for (k, &li) in (done..).zip(&l[..n]) {
+            state.add(li, k, to);
         }
         done += n as u32;
     }
-    state.samples = to;
+    state.sums.samples = to;
 }

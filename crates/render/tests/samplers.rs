@@ -153,3 +153,87 @@ fn every_sampler_gives_the_same_image_for_any_thread_count() {
     // The samplers differ.
     assert!(images[0] != images[2] && images[2] != images[4]);
 }
+
+/// The floor under the sphere seen widely, lit by BSDF samples alone: a pixel's relative
+/// variance grows with its distance from the sphere's foot (the sphere covers less of its
+/// hemisphere), from about 10 to over 1000, so adaptive sampling has something to find.
+fn floor_by_bsdf_samples(spp: u32) -> SceneDesc {
+    let (mut desc, _) = floor_under_a_sphere(spp, "sobol");
+    desc.sensor = sensor(
+        Vec3::new(4.0, 0.0, 3.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        70.0,
+        24,
+        spp,
+    );
+    desc.sensor.sampler = "multijitter".into();
+    desc.integrator = IntegratorDesc {
+        kind: "direct".into(),
+        emitter_samples: 0,
+        bsdf_samples: 1,
+        ..IntegratorDesc::default()
+    };
+    desc
+}
+
+/// Mean squared relative error against `reference`, with the floor `(0.1 ȳ)²` of adaptive
+/// sampling's own measure.
+fn relative_mse(img: &ircache_image::Image, reference: &ircache_image::Image) -> f64 {
+    let mean = reference.pixels.iter().map(|p| f64::from(p.g)).sum::<f64>()
+        / reference.pixels.len() as f64;
+    img.pixels
+        .iter()
+        .zip(&reference.pixels)
+        .map(|(a, b)| {
+            let (a, b) = (f64::from(a.g), f64::from(b.g));
+            (a - b).powi(2) / (b * b + (0.1 * mean).powi(2))
+        })
+        .sum::<f64>()
+        / img.pixels.len() as f64
+}
+
+#[test]
+fn adaptive_sampling_lowers_the_error_at_equal_samples_and_stays_unbiased() {
+    let reference = render_desc(&floor_by_bsdf_samples(4096), 2, 1).image;
+    let adaptive = Sampling {
+        sampler: SamplerKind::Sobol,
+        jitter: true,
+        adaptive: Some(Adaptive {
+            target: 0.03,
+            max_spp: 1024,
+        }),
+    };
+    let (mut uniform_error, mut adaptive_error, mut spp_sum) = (0.0, 0.0, 0.0);
+    let (mut mean_adaptive, mut mean_reference) = (0.0, 0.0);
+    for seed in 2..6 {
+        let out = render_sampled(&floor_by_bsdf_samples(8), adaptive, 2, seed);
+        let pixels = out.image.pixels.len() as f64;
+        let spp = out.samples as f64 / pixels;
+        // Uniform sampling at the adaptive run's mean count rounded up (in its favour).
+        let uniform_spp = spp.ceil() as u32;
+        let uniform = render_desc(&floor_by_bsdf_samples(uniform_spp), 2, seed).image;
+        let (e_u, e_a) = (
+            relative_mse(&uniform, &reference),
+            relative_mse(&out.image, &reference),
+        );
+        eprintln!(
+            "seed {seed}: adaptive {spp:.1} spp {e_a:.3e}, uniform {uniform_spp} spp {e_u:.3e}"
+        );
+        uniform_error += e_u;
+        adaptive_error += e_a;
+        spp_sum += spp;
+        mean_adaptive += pixel_mean(&out.image);
+        mean_reference += pixel_mean(&reference);
+    }
+    assert!(
+        spp_sum / 4.0 > 12.0,
+        "the target asked for more than the pilot"
+    );
+    assert!(
+        adaptive_error < 0.7 * uniform_error,
+        "adaptive {adaptive_error:.3e} against uniform {uniform_error:.3e} at equal samples"
+    );
+    // Counts never depend on a pixel's own samples directly: no bias towards dark.
+    let ratio = mean_adaptive / mean_reference;
+    assert!((ratio - 1.0).abs() < 0.01, "mean {ratio}");
+}

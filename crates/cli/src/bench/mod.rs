@@ -15,6 +15,7 @@
 //!   Mitsuba rendered at more samples until it reaches `ic`'s error (see [`peers`]).
 //! - `temporal`: animations, the cache kept over time, flicker measured (see [`temporal`]).
 
+mod adaptive;
 mod cache_vs_path;
 mod media;
 mod peers;
@@ -59,7 +60,8 @@ pub struct BenchArgs {
     /// temporal (animations: the cache kept over time against a cache per frame and against
     /// Mitsuba 3 per frame, flicker measured), photons (the final gather, caustic map and
     /// photon records against the cache without photons and Mitsuba 3, by rendering), media
-    /// (the cache in fog against volpath, volpath against Mitsuba 3's volpath).
+    /// (the cache in fog against volpath, volpath against Mitsuba 3's volpath), adaptive
+    /// (adaptive pixel sampling against uniform sampling, by rendering).
     #[arg(long, default_value = "all")]
     pub only: String,
     /// temporal: only the animations whose name contains this (still, cube, light, lamp).
@@ -152,6 +154,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "media" {
         media::run_all(!args.no_mitsuba)?;
+    }
+    if args.only == "all" || args.only == "adaptive" {
+        adaptive::run_all(&shared)?;
     }
     if args.only == "all" || args.only == "temporal" {
         temporal::run_all(!args.no_mitsuba, args.case.as_deref())?;

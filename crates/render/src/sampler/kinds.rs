@@ -138,6 +138,10 @@ pub struct SamplerSettings {
     pub seed: u64,
     /// Jitter within strata (`false`: stratum centres), for the stratified kinds.
     pub jitter: bool,
+    /// `sobol`: every prefix of a pixel's samples of a power-of-two length is a net (for adaptive
+    /// sampling, which takes prefixes); `false`: only all `spp` are, and the pixels' sample sets
+    /// together are blue noise (see `PixelSampler::sobol_index`).
+    pub progressive: bool,
     /// Image width (the Sobol' sampler's Morton curve).
     pub width: u32,
     /// Image height.
@@ -201,6 +205,7 @@ impl SamplerSettings {
             spp,
             seed,
             jitter: true,
+            progressive: false,
             width,
             height,
             grid,
@@ -291,6 +296,20 @@ pub struct PixelSampler<'a> {
 /// keeps.
 const CACHED_DIMS: usize = 48;
 
+/// A permutation of `0..2^32` that maps every octave `[2^t, 2^(t+1))` (and 0, 1) to itself: the
+/// bits below `j`'s highest are nested-scrambled (each flipped by a hash of the bits above it),
+/// so that every prefix `0..2^k` maps to itself.
+#[inline]
+fn octave_shuffle(j: u32, seed: u32) -> u32 {
+    if j < 2 {
+        return j;
+    }
+    // With the highest bit at the top, Burley's scramble flips each bit by a hash of those
+    // above; an even seed leaves the top bit itself.
+    let shift = j.leading_zeros();
+    owen_scramble(j << shift, seed & !1) >> shift
+}
+
 impl PixelSampler<'_> {
     /// Moves to sample `index` (< the sample count), dimension `dim`.
     #[inline]
@@ -356,6 +375,13 @@ impl PixelSampler<'_> {
     ///
     /// The digits above the sample's own depend on the pixel alone; they are computed once per
     /// dimension and pixel.
+    ///
+    /// Progressive: the sample's own bits are not permuted digit by digit (a permuted digit
+    /// above the prefix's would take the prefix out of its aligned block, and the block's net
+    /// property with it) but shuffled within each octave `[2^t, 2^(t+1))` of the sample index,
+    /// which every prefix of a power-of-two length keeps, then XORed with a constant (which maps
+    /// aligned blocks to aligned blocks); both differ per dimension and pixel, so that dimension
+    /// pairs do not pair the same points.
     fn sobol_index(&mut self, dim: u32) -> u64 {
         let Grid {
             log2_spp, digits, ..
@@ -385,6 +411,16 @@ impl PixelSampler<'_> {
             }
             None => permuted(first_pixel_digit, digits),
         };
+        if self.s.progressive {
+            // Seeded by pixel and dimension: a shuffle shared by the pixels would give every
+            // pixel the same pairing of one dimension's points with another's.
+            // The XOR moves each aligned prefix block to another aligned block (so sample 0 is
+            // not the same point of every pixel's block).
+            let h = hash64(self.morton, salt ^ 0x0c7a);
+            let mask = (1u64 << log2_spp) - 1;
+            let own = u64::from(octave_shuffle(self.index, h as u32)) ^ ((h >> 32) & mask);
+            return high | own;
+        }
         let mut index = high | permuted(last, first_pixel_digit);
         if odd {
             index |= (morton & 1) ^ (hash64(morton >> 1, salt) & 1);
