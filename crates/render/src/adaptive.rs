@@ -9,10 +9,11 @@
 //! smooth pixels, which stratification serves far better than 1/n, and misjudges edges).
 //!
 //! To spend a budget of samples with the least mean squared error Σ mᵢ(nᵢ), each pixel's
-//! marginal gain −∂mᵢ/∂nᵢ must be equal; with mᵢ ∝ 1/nᵢ that is mᵢ/nᵢ equal. Each round
-//! estimates mᵢ, doubles the pixels with the highest mᵢ/nᵢ until the predicted image error
-//! meets the target, and measures again; so the counts approach the optimum through
-//! measurements taken at growing sample counts, not one guess from a small pilot.
+//! marginal gain −∂mᵢ/∂nᵢ must be equal; with mᵢ = wᵢ/nᵢ (wᵢ the error of one sample) that is
+//! nᵢ ∝ √wᵢ, scaled so that the mean of mᵢ is the target². Each round estimates wᵢ, doubles the
+//! pixels below their share, and measures again; so the counts approach the optimum through
+//! measurements taken at growing sample counts, not one guess from a small pilot (whose
+//! estimate of a heavy-tailed pixel's error is low).
 //!
 //! A pixel's error is pooled from its neighbours (a 5 × 5 window without the pixel), never its
 //! own samples: a pixel whose first samples happen to miss a small bright source would look
@@ -133,11 +134,10 @@ pub fn next_round(sums: &[SampleSums], w: usize, adaptive: &Adaptive) -> Option<
         let (a, b, c, d) = (at(x1, y1), at(x0, y1), at(x1, y0), at(x0, y0));
         (a.0 - b.0 - c.0 + d.0, a.1 + d.1 - b.1 - c.1)
     };
-    // Each rendered pixel's estimated relative squared error now.
-    let error: Vec<Option<f64>> = (0..sums.len())
+    // Each rendered pixel's one-sample error wᵢ, pooled from its window without it.
+    let one_sample: Vec<Option<f64>> = (0..sums.len())
         .map(|i| {
-            let s = &sums[i];
-            if s.samples == 0 {
+            if sums[i].samples == 0 {
                 return None;
             }
             let (mut e, mut n) = window(i % w, i / w);
@@ -145,36 +145,34 @@ pub fn next_round(sums: &[SampleSums], w: usize, adaptive: &Adaptive) -> Option<
                 e -= own;
                 n -= 1;
             }
-            Some(
-                if n > 0 {
-                    (e / f64::from(n)).max(0.0)
-                } else {
-                    0.0
-                } / f64::from(s.samples),
-            )
+            Some(if n > 0 {
+                (e / f64::from(n)).max(0.0)
+            } else {
+                0.0
+            })
         })
         .collect();
     let target = f64::from(adaptive.target).powi(2) * rendered.len() as f64;
-    let total: f64 = error.iter().flatten().sum();
+    // The image's estimated error now, Σ mᵢ = Σ wᵢ/nᵢ.
+    let total: f64 = one_sample
+        .iter()
+        .zip(sums)
+        .filter_map(|(w, s)| w.map(|w| w / f64::from(s.samples)))
+        .sum();
     if total <= target {
         return None;
     }
     // The counts that bring Σ wᵢ/nᵢ to the target with the fewest samples are nᵢ ∝ √wᵢ,
     // nᵢ = √wᵢ · Σ√w / (P t²); pixels whose count is below its share (nearest power of two in
     // ratio) double, and are measured again before they double again.
-    let sqrt_sum: f64 = error
-        .iter()
-        .zip(sums)
-        .filter_map(|(e, s)| e.map(|e| (e * f64::from(s.samples)).sqrt()))
-        .sum();
-    let scale = sqrt_sum / target;
+    let scale = one_sample.iter().flatten().map(|w| w.sqrt()).sum::<f64>() / target;
     let mut counts: Vec<u32> = sums.iter().map(|s| s.samples).collect();
     let mut doubled = false;
-    for (i, e) in error.iter().enumerate() {
-        let (Some(e), n) = (*e, sums[i].samples) else {
+    for (i, w) in one_sample.iter().enumerate() {
+        let (Some(w), n) = (*w, sums[i].samples) else {
             continue;
         };
-        let share = (e * f64::from(n)).sqrt() * scale;
+        let share = w.sqrt() * scale;
         if share > std::f64::consts::SQRT_2 * f64::from(n) && 2 * n <= adaptive.max_spp {
             counts[i] = 2 * n;
             doubled = true;

@@ -12,7 +12,6 @@
 use super::cache_vs_path::{fmt_time, measure_image, time_to, Point};
 use anyhow::{Context, Result};
 use ircache_image::Image;
-use ircache_render::film::Filter;
 use ircache_render::integrators::Integrator;
 use ircache_render::render::{render, Adaptive, RenderSettings, Sampling};
 use ircache_render::sampler::SamplerKind;
@@ -32,15 +31,13 @@ fn render_with(
     let mut d = desc.integrator.clone();
     d.kind = integrator.into();
     let integ = Integrator::from_desc(&d).map_err(anyhow::Error::msg)?;
+    let scene_settings = RenderSettings::from_desc(desc, 0, 0).map_err(anyhow::Error::msg)?;
     let settings = RenderSettings {
-        width: desc.sensor.film.width as usize / scale,
-        height: desc.sensor.film.height as usize / scale,
+        width: scene_settings.width / scale,
+        height: scene_settings.height / scale,
         spp,
-        seed: 0,
-        threads: 0,
-        filter: Filter::from_desc(&desc.sensor.film.filter),
-        band: None,
         sampling,
+        ..scene_settings
     };
     let out = render(scene, &integ, &settings, &|_| {})?;
     let pixels = (settings.width * settings.height) as f64;

@@ -11,7 +11,6 @@ use anyhow::{Context, Result};
 use ircache_image::blur::gaussian_blur;
 use ircache_image::compare::compare;
 use ircache_image::Image;
-use ircache_render::film::Filter;
 use ircache_render::integrators::Integrator;
 use ircache_render::render::{render, RenderOutput, RenderSettings, Sampling};
 use ircache_render::scene::Scene;
@@ -60,14 +59,9 @@ pub(super) fn run(
         }
     }
     let settings = RenderSettings {
-        width: desc.sensor.film.width as usize,
-        height: desc.sensor.film.height as usize,
         spp,
-        seed: 0,
-        threads: 0,
-        filter: Filter::from_desc(&desc.sensor.film.filter),
-        band: None,
         sampling: Sampling::default(),
+        ..RenderSettings::from_desc(desc, 0, 0).map_err(anyhow::Error::msg)?
     };
     Ok(render(scene, &integ, &settings, &|_| {})?)
 }

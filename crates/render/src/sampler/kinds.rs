@@ -413,9 +413,9 @@ impl PixelSampler<'_> {
         };
         if self.s.progressive {
             // Seeded by pixel and dimension: a shuffle shared by the pixels would give every
-            // pixel the same pairing of one dimension's points with another's.
-            // The XOR moves each aligned prefix block to another aligned block (so sample 0 is
-            // not the same point of every pixel's block).
+            // pixel the same pairing of one dimension's points with another's, and without the
+            // XOR (which moves each aligned prefix block to another) sample 0 would be the same
+            // point of every pixel's block.
             let h = hash64(self.morton, salt ^ 0x0c7a);
             let mask = (1u64 << log2_spp) - 1;
             let own = u64::from(octave_shuffle(self.index, h as u32)) ^ ((h >> 32) & mask);
