@@ -454,6 +454,7 @@ fn extend_pixel(
     let mut done = state.sums.samples;
     while done < to {
         let n = (to - done).min(16);
+        sampler.begin_batch(done, n);
         for (k, ray) in (done..done + n).zip(&mut camera) {
             *ray = camera_ray(scene, settings, &mut sampler, x, y, k);
         }

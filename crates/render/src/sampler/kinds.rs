@@ -13,7 +13,9 @@
 //!   hashed base-4 digit permutations (pbrt-v4's `ZSobolSampler`, Ahmed and Wonka 2020), so that
 //!   neighbouring pixels' samples are stratified together; each 2-D pair is a (0, 2)-sequence.
 
-use super::permute::{hash32, hash64, owen_scramble, permute, sobol_0, sobol_1, to_unit};
+use super::permute::{
+    hash32, hash64, owen_scramble, permute, permute_pow2, sobol_0, sobol_1, to_unit,
+};
 use super::Sampler;
 use ircache_math::Vec2;
 
@@ -231,6 +233,7 @@ impl SamplerSettings {
             dim: 0,
             high_digits: [u64::MAX; CACHED_DIMS],
             dim_hashes: [0; CACHED_DIMS],
+            batch: Batch::default(),
         }
     }
 }
@@ -290,6 +293,45 @@ pub struct PixelSampler<'a> {
     high_digits: [u64; CACHED_DIMS],
     /// Per dimension, the pixel's hash of it (0 until computed).
     dim_hashes: [u64; CACHED_DIMS],
+    /// The values of a batch of consecutive samples, each dimension's filled at its first draw.
+    batch: Batch,
+}
+
+/// Dimensions a batch holds: the film position and the first three path vertices' blocks.
+const BATCH_DIMS: usize = 2 + 3 * super::dims::PER_VERTEX as usize;
+/// Samples a batch holds (the pixel pass's packet width).
+pub const BATCH_SAMPLES: usize = 16;
+
+/// One draw's form, as a batch holds it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Form {
+    Empty,
+    One,
+    Two,
+}
+
+/// A batch of consecutive samples' values, per dimension, in the form first drawn there. A
+/// sample's draw is a chain of dependent hashes and permutations (Kensler's is a dozen
+/// dependent multiplications); drawn one at a time as the path needs it, it costs the chain's
+/// latency each time, while filling the batch's samples in one loop overlaps them (they are
+/// independent). The values are the sampler's own, computed by the same function.
+#[derive(Clone, Debug)]
+struct Batch {
+    first: u32,
+    len: u32,
+    forms: [Form; BATCH_DIMS],
+    values: [[Vec2; BATCH_SAMPLES]; BATCH_DIMS],
+}
+
+impl Default for Batch {
+    fn default() -> Self {
+        Batch {
+            first: 0,
+            len: 0,
+            forms: [Form::Empty; BATCH_DIMS],
+            values: [[Vec2::ZERO; BATCH_SAMPLES]; BATCH_DIMS],
+        }
+    }
 }
 
 /// Dimensions whose per-pixel values (Sobol' pixel digits, dimension hashes) a pixel sampler
@@ -317,6 +359,73 @@ impl PixelSampler<'_> {
         debug_assert!(index < self.s.spp);
         self.index = index;
         self.dim = dim;
+    }
+
+    /// Announces that samples `first..first + len` (`len` ≤ [`BATCH_SAMPLES`]) are drawn
+    /// next, interleaved: each dimension's values for all of them are then computed together at
+    /// its first draw. The values do not change.
+    pub fn begin_batch(&mut self, first: u32, len: u32) {
+        debug_assert!(len as usize <= BATCH_SAMPLES && first + len <= self.s.spp);
+        self.batch.first = first;
+        self.batch.len = len;
+        self.batch.forms = [Form::Empty; BATCH_DIMS];
+    }
+
+    /// Where the current sample's value of dimension `dim` in `form` lies in the batch: the
+    /// dimension and the sample's place; filled first where empty. `None` where the batch does
+    /// not hold it.
+    #[inline]
+    fn batched(&mut self, dim: u32, form: Form) -> Option<(usize, usize)> {
+        let lane = self.index.wrapping_sub(self.batch.first);
+        let d = dim as usize;
+        if lane >= self.batch.len || d >= BATCH_DIMS {
+            return None;
+        }
+        match self.batch.forms[d] {
+            f if f == form => {}
+            Form::Empty => self.fill(d, form),
+            _ => return None,
+        }
+        Some((d, lane as usize))
+    }
+
+    /// Computes dimension `d` in `form` for every sample of the batch.
+    #[cold]
+    fn fill(&mut self, d: usize, form: Form) {
+        let s = self.s;
+        if form == Form::Two
+            && s.kind == SamplerKind::MultiJitter
+            && s.spp.is_power_of_two()
+            && s.grid.a.is_power_of_two()
+            && s.jitter
+        {
+            self.fill_multijitter_pow2(d);
+            self.batch.forms[d] = form;
+            return;
+        }
+        let index = self.index;
+        let (first, len) = (self.batch.first, self.batch.len);
+        for lane in 0..len {
+            self.index = first + lane;
+            self.batch.values[d][lane as usize] = match form {
+                Form::Two => self.sample_2d(d as u32),
+                _ => Vec2::new(self.sample_1d(d as u32), 0.0),
+            };
+        }
+        self.batch.forms[d] = form;
+        self.index = index;
+    }
+
+    /// [`Self::sample_2d`] of `multijitter` on power-of-two grids for the whole batch, written as
+    /// one loop over the samples without branches or cycle walking, whose independent chains
+    /// overlap (an AVX2 build of it measured no faster): the same operations on the same
+    /// values, so the same bits (a test compares the two).
+    fn fill_multijitter_pow2(&mut self, d: usize) {
+        let seed = self.dim_seed(d as u32, 0);
+        let (first, pixel_seed, grid, spp) =
+            (self.batch.first, self.pixel_seed, self.s.grid, self.s.spp);
+        let values = &mut self.batch.values[d];
+        multijitter_pow2(values, first, d as u32, pixel_seed, seed, grid, spp);
     }
 
     #[inline]
@@ -522,20 +631,65 @@ impl PixelSampler<'_> {
     }
 }
 
+/// `multijitter`'s 2-D values of dimension `dim` for samples `first..first + BATCH_SAMPLES`
+/// of a pixel (`pixel_seed`, the dimension's `seed`) on a power-of-two grid: Kensler 2013,
+/// listing 5, as [`PixelSampler::sample_2d`] computes it one sample at a time.
+#[inline]
+fn multijitter_pow2(
+    values: &mut [Vec2; BATCH_SAMPLES],
+    first: u32,
+    dim: u32,
+    pixel_seed: u64,
+    seed: u32,
+    grid: Grid,
+    spp: u32,
+) {
+    let (m, k) = (grid.a, grid.b);
+    let (seed_x, seed_y) = (
+        seed.wrapping_mul(0xa511_e9b3),
+        seed.wrapping_mul(0x63d8_3595),
+    );
+    let (wn, wm, wk) = (spp - 1, m - 1, k - 1);
+    let log2_m = m.trailing_zeros();
+    let (m_f, k_f) = (m as f32, k as f32);
+    let mut xs = [0.0f32; BATCH_SAMPLES];
+    let mut ys = [0.0f32; BATCH_SAMPLES];
+    for (lane, (x, y)) in xs.iter_mut().zip(&mut ys).enumerate() {
+        let index = first.wrapping_add(lane as u32);
+        let p = permute_pow2(index & wn, wn, seed);
+        let (p_div_m, p_mod_m) = (p >> log2_m, p & wm);
+        let sx = permute_pow2(p_mod_m, wm, seed_x);
+        let sy = permute_pow2(p_div_m, wk, seed_y);
+        let h = hash64(pixel_seed, u64::from(index) << 32 | u64::from(dim));
+        let (jx, jy) = (to_unit(h as u32), to_unit((h >> 32) as u32));
+        *x = ((p_mod_m as f32 + (sy as f32 + jx) / k_f) / m_f).min(ONE_MINUS_EPS);
+        *y = ((p_div_m as f32 + (sx as f32 + jy) / m_f) / k_f).min(ONE_MINUS_EPS);
+    }
+    for ((v, x), y) in values.iter_mut().zip(xs).zip(ys) {
+        *v = Vec2::new(x, y);
+    }
+}
+
 /// The largest f32 below 1.
 const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 impl Sampler for PixelSampler<'_> {
     #[inline]
     fn next_1d(&mut self) -> f32 {
-        let u = self.sample_1d(self.dim);
+        let u = match self.batched(self.dim, Form::One) {
+            Some((d, lane)) => self.batch.values[d][lane].x,
+            None => self.sample_1d(self.dim),
+        };
         self.dim += 1;
         u.min(ONE_MINUS_EPS)
     }
 
     #[inline]
     fn next_2d(&mut self) -> Vec2 {
-        let u = self.sample_2d(self.dim);
+        let u = match self.batched(self.dim, Form::Two) {
+            Some((d, lane)) => self.batch.values[d][lane],
+            None => self.sample_2d(self.dim),
+        };
         self.dim += 2;
         u.min(Vec2::splat(ONE_MINUS_EPS))
     }

@@ -23,24 +23,7 @@ pub fn permute(mut i: u32, n: u32, seed: u32) -> u32 {
     w |= w >> 16;
     let p = seed;
     loop {
-        i ^= p;
-        i = i.wrapping_mul(0xe170_893d);
-        i ^= p >> 16;
-        i ^= (i & w) >> 4;
-        i ^= p >> 8;
-        i = i.wrapping_mul(0x0929_eb3f);
-        i ^= p >> 23;
-        i ^= (i & w) >> 1;
-        i = i.wrapping_mul(1 | p >> 27);
-        i = i.wrapping_mul(0x6935_fa69);
-        i ^= (i & w) >> 11;
-        i = i.wrapping_mul(0x74dc_b303);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0x9e50_1cc3);
-        i ^= (i & w) >> 2;
-        i = i.wrapping_mul(0xc860_a3df);
-        i &= w;
-        i ^= i >> 5;
+        i = kensler_round(i, w, p);
         if i < n {
             break;
         }
@@ -51,6 +34,39 @@ pub fn permute(mut i: u32, n: u32, seed: u32) -> u32 {
     } else {
         i.wrapping_add(p) % n
     }
+}
+
+/// [`permute`] for a power-of-two `n` given as its mask `w = n − 1` (the value always falls in
+/// range, so there is no cycle walking): straight-line code, whose chains for several indices
+/// overlap.
+#[inline(always)]
+#[must_use]
+pub fn permute_pow2(i: u32, w: u32, seed: u32) -> u32 {
+    kensler_round(i, w, seed).wrapping_add(seed) & w
+}
+
+/// One round of Kensler's hash of `i` under the mask `w` (seed `p`): invertible on `[0, w]`.
+#[inline(always)]
+fn kensler_round(mut i: u32, w: u32, p: u32) -> u32 {
+    i ^= p;
+    i = i.wrapping_mul(0xe170_893d);
+    i ^= p >> 16;
+    i ^= (i & w) >> 4;
+    i ^= p >> 8;
+    i = i.wrapping_mul(0x0929_eb3f);
+    i ^= p >> 23;
+    i ^= (i & w) >> 1;
+    i = i.wrapping_mul(1 | p >> 27);
+    i = i.wrapping_mul(0x6935_fa69);
+    i ^= (i & w) >> 11;
+    i = i.wrapping_mul(0x74dc_b303);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0x9e50_1cc3);
+    i ^= (i & w) >> 2;
+    i = i.wrapping_mul(0xc860_a3df);
+    i &= w;
+    i ^= i >> 5;
+    i
 }
 
 /// 32 well-mixed bits from a key and a salt.

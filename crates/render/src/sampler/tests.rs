@@ -296,3 +296,53 @@ fn progressive_sobol_prefixes_of_every_power_of_two_are_nets_and_pairs_independe
     let c = chi2(&joint, 64);
     assert!(c < 130.0, "χ² {c:.1}");
 }
+
+/// A batch (the pixel pass draws 16 samples interleaved) gives every draw the value the sampler
+/// gives one sample at a time, bit for bit: each kind, power-of-two and other counts, batches
+/// cut short, a dimension drawn as 1-D by one sample and 2-D by another, dimensions past the
+/// batch's.
+#[test]
+fn batched_draws_equal_single_draws_bit_for_bit() {
+    for (kind, _) in SamplerKind::ALL {
+        for spp in [1, 4, 16, 35, 64, 100] {
+            let s = settings(kind, spp);
+            let plan = |i: u32, d: u32| (i * 7 + d * 3).is_multiple_of(5);
+            let single = |x: u32, y: u32, i: u32, d: u32| {
+                let mut p = s.pixel(x, y);
+                p.set_sample(i, d);
+                if plan(i, d) {
+                    Vec2::new(p.next_1d(), -1.0)
+                } else {
+                    p.next_2d()
+                }
+            };
+            for (x, y) in [(0, 0), (5, 3), (63, 47)] {
+                let mut p = s.pixel(x, y);
+                let mut first = 0;
+                while first < s.spp {
+                    let len = (s.spp - first).min(16).min(3 + first % 16);
+                    p.begin_batch(first, len);
+                    // Interleaved as the pixel pass draws: every sample's dimension d, then d + 1.
+                    for d in (0..40).step_by(3) {
+                        for i in first..first + len {
+                            p.set_sample(i, d);
+                            let v = if plan(i, d) {
+                                Vec2::new(p.next_1d(), -1.0)
+                            } else {
+                                p.next_2d()
+                            };
+                            let w = single(x, y, i, d);
+                            assert_eq!(
+                                (v.x.to_bits(), v.y.to_bits()),
+                                (w.x.to_bits(), w.y.to_bits()),
+                                "{} spp {spp} pixel ({x}, {y}) sample {i} dim {d}",
+                                kind.name()
+                            );
+                        }
+                    }
+                    first += len;
+                }
+            }
+        }
+    }
+}
