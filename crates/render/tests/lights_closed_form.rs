@@ -790,3 +790,112 @@ fn environment_relative_variance_has_its_closed_form() {
     assert_eq!(variance(vec![constant]), 0.0);
     assert_eq!(variance(vec![]), 0.0);
 }
+
+/// At a path's last vertex on a Lambertian floor under a rectangular light, the path tracer
+/// takes light samples alone (no BSDF ray: the one that would only look for emitters) and still
+/// converges to ρ/π · E of the form factor; where a light is not sampled in proportion to what
+/// the floor receives from it (a triangle emitter, an environment) the BSDF ray is traced.
+#[test]
+fn light_samples_stand_alone_at_a_lambertian_last_vertex() {
+    use ircache_math::ray::Ray;
+    use ircache_render::integrators::path_continuation::{
+        trace_path, PathSettings, PathStart, Traced,
+    };
+    use ircache_render::integrators::RayCounts;
+    use ircache_render::scene::Scene;
+    let (rho, radiance, w, l, h) = (0.5f64, 2.0f32, 1.0f32, 0.6f32, 0.5f32);
+    let floor = ShapeDesc {
+        media: Default::default(),
+        id: None,
+        geometry: Geometry::Mesh(rectangle(
+            Vec3::new(-10.0, -10.0, 0.0),
+            Vec3::X,
+            Vec3::Y,
+            20.0,
+            20.0,
+            Vec3::Z,
+        )),
+        bsdf: common::diffuse(Rgb::splat(rho as f32)),
+        emitter: None,
+        location: common::here(),
+    };
+    // The receiver at the origin lies below the light's corner (the form factor's case).
+    let light = emitting_shape(
+        Geometry::Mesh(rectangle(
+            Vec3::new(0.0, 0.0, h),
+            Vec3::X,
+            Vec3::Y,
+            w,
+            l,
+            Vec3::ZERO,
+        )),
+        Rgb::splat(radiance),
+    );
+    let triangle = emitting_shape(
+        Geometry::Mesh(TriangleMesh {
+            positions: vec![
+                Vec3::new(-3.0, -3.0, 2.0),
+                Vec3::new(-2.0, -3.0, 2.0),
+                Vec3::new(-3.0, -2.0, 2.0),
+            ],
+            normals: None,
+            uvs: None,
+            indices: vec![[0, 2, 1]],
+        }),
+        Rgb::splat(0.01),
+    );
+    let render = |shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>| {
+        let scene = Scene::build(&light_scene(shapes, emitters)).unwrap();
+        let eye = Vec3::new(0.002, 0.001, 0.3);
+        let ray = Ray::new(eye, (Vec3::ZERO - eye).normalize());
+        let settings = PathSettings {
+            max_depth: 2,
+            rr_depth: 5,
+            first_light_samples: 1,
+        };
+        let mut rays = RayCounts::default();
+        let mut rng = Rng::new(11, 5);
+        let n = 40_000;
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let start = PathStart::camera(ray, true);
+            let v = f64::from(
+                trace_path(
+                    &scene,
+                    start,
+                    None,
+                    &mut Traced,
+                    &settings,
+                    &mut rng,
+                    &mut rays,
+                )
+                .g,
+            );
+            sum += v;
+            sum2 += v * v;
+        }
+        let mean = sum / f64::from(n);
+        let se = ((sum2 / f64::from(n) - mean * mean) / f64::from(n)).sqrt();
+        (mean, se, rays.bounce)
+    };
+    let expect = rho / std::f64::consts::PI
+        * rectangle_irradiance(
+            f64::from(radiance),
+            f64::from(w),
+            f64::from(l),
+            f64::from(h),
+        );
+    let (mean, se, bounces) = render(vec![floor.clone(), light.clone()], vec![]);
+    assert_eq!(bounces, 0, "a BSDF ray was traced at the last vertex");
+    assert!(
+        (mean - expect).abs() < 4.0 * se + 1e-4 * expect,
+        "{mean} ± {se} against {expect}"
+    );
+    let (_, _, bounces) = render(vec![floor.clone(), light.clone(), triangle], vec![]);
+    assert!(bounces > 30_000, "triangle emitter: {bounces} BSDF rays");
+    let sky = EmitterDesc::Constant {
+        radiance: Rgb::splat(0.01),
+    };
+    let (_, _, bounces) = render(vec![floor, light], vec![sky]);
+    assert!(bounces > 30_000, "environment: {bounces} BSDF rays");
+}

@@ -1,8 +1,12 @@
 //! Direct illumination (Mitsuba 3's `direct`): at the first surface, `emitter_samples` light
 //! samples and `bsdf_samples` BSDF samples combined with the power heuristic, weighted by their
-//! sample counts; emitters seen directly are added as they are.
+//! sample counts; emitters seen directly are added as they are. Where the light samples suffice
+//! (a Lambertian surface under lights sampled in proportion to what it receives,
+//! [`light_samples_suffice`]) they stand alone, as in `path`.
 
-use super::light_sampling::{sample_lights, BsdfStrategy, EnvironmentServed, Shadows};
+use super::light_sampling::{
+    light_samples_suffice, sample_lights, BsdfStrategy, EnvironmentServed, Shadows,
+};
 use super::{mis_weight, RayCounts};
 use crate::bsdf::Bsdf;
 use crate::sampler::{dims, Sampler};
@@ -62,7 +66,7 @@ impl DirectIntegrator {
 /// Direct light reflected at `it` towards `wo_local`: `ne` light samples
 /// ([`sample_lights`]) and `nb` BSDF samples combined by the power heuristic weighted by the
 /// sample counts (Veach 1997 §9.2); emission found by BSDF samples through delta lobes counts
-/// fully.
+/// fully. No BSDF samples where the light samples suffice.
 #[allow(clippy::too_many_arguments)]
 pub fn estimate_direct(
     scene: &Scene,
@@ -74,6 +78,11 @@ pub fn estimate_direct(
     sampler: &mut dyn Sampler,
     rays: &mut RayCounts,
 ) -> Rgb {
+    let nb = if light_samples_suffice(scene, bsdf, true) {
+        0
+    } else {
+        nb
+    };
     let mut l = sample_lights(
         scene,
         it,

@@ -1,7 +1,10 @@
 //! Unidirectional path tracing, step for step Mitsuba 3's `path` integrator: emitter sampling and
 //! BSDF sampling combined by the power heuristic, Russian roulette from `rr_depth` on with
 //! probability min(max(β)·η², 0.95), and `max_depth` counting path vertices (1: emitters seen
-//! directly, 2: direct light, 3: one indirect bounce). The loop itself is
+//! directly, 2: direct light, 3: one indirect bounce). One difference: at a path's last vertex,
+//! where the BSDF sample would only look for emitters, a Lambertian surface under lights that are
+//! sampled in proportion to what it receives takes its light samples alone and traces no BSDF
+//! ray ([`super::light_sampling::light_samples_suffice`]). The loop itself is
 //! [`super::path_continuation::trace_path`] with no cache.
 
 use super::light_sampling::DeferredShadows;

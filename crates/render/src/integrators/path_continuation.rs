@@ -2,7 +2,9 @@
 //! follows a path with it. At each vertex: emission found by the previous sample (with MIS),
 //! light samples (see [`super::light_sampling`]), and the continuation through the BSDF, as
 //! Mitsuba 3's `path` integrator does, with `max_depth` counting vertices the same way (so a
-//! cached render with N bounces is path tracing at `max_depth` N + 2 with parts looked up).
+//! cached render with N bounces is path tracing at `max_depth` N + 2 with parts looked up); at
+//! the last vertex, where they suffice, light samples stand alone
+//! ([`super::light_sampling::light_samples_suffice`]).
 //!
 //! A cache plugs in through [`IndirectSource`]: at a vertex whose BSDF has a Lambertian part, it
 //! may serve that part's indirect light as `k(wo) E / π` (E the cached irradiance); the path then
@@ -10,7 +12,7 @@
 //! only. Where it declines, the whole BSDF is sampled, as in path tracing.
 
 use super::light_sampling::{
-    sample_lights, BsdfStrategy, DeferredShadows, EnvironmentServed, Shadows,
+    light_samples_suffice, sample_lights, BsdfStrategy, DeferredShadows, EnvironmentServed, Shadows,
 };
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::environment::HeldEnvironment;
@@ -299,7 +301,10 @@ pub fn trace_path_deferring(
         } else {
             1
         };
-        let continues = !all_served && (depth + 2 < max_depth || scene.has_hittable_emitters);
+        let last = depth + 2 >= max_depth;
+        let continues = !all_served
+            && (!last
+                || (scene.has_hittable_emitters && !light_samples_suffice(scene, &bsdf, last)));
         let shadows = match deferred.as_deref_mut().filter(|_| depth == start.depth) {
             Some(d) => Shadows::Deferred(d, beta),
             None => Shadows::Traced,

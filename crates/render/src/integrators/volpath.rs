@@ -242,9 +242,20 @@ impl VolPathIntegrator {
                     break;
                 }
             }
+            // Without media, the last light samples stand alone where `path`'s do (a medium
+            // would emit or scatter along the last ray, which must then be traced).
+            let alone = !scene.has_media()
+                && super::light_sampling::light_samples_suffice(
+                    scene,
+                    &bsdf,
+                    depth + 2 >= max_depth,
+                );
             if bsdf.has_smooth() && !scene.lights.is_empty() {
                 let vertex = Vertex::Surface(&it, &bsdf, wo_local);
-                l += beta * sample_light(scene, &vertex, medium, depth, true, sampler, rng, rays);
+                l += beta * sample_light(scene, &vertex, medium, depth, !alone, sampler, rng, rays);
+            }
+            if alone {
+                break;
             }
             let strategy = super::light_sampling::BsdfStrategy::All;
             let Some((bs, wi)) = super::path_continuation::sample_continuation(

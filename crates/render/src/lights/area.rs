@@ -134,6 +134,12 @@ impl MeshLight {
         Some((rect.spherical(p_ref)?, *n))
     }
 
+    /// True when the light is one flat rectangle (sampled by solid angle where it is near).
+    #[must_use]
+    pub fn is_rectangle(&self) -> bool {
+        self.rectangle.is_some()
+    }
+
     /// Emitted radiance on the front side.
     #[must_use]
     pub fn radiance(&self) -> Rgb {

@@ -179,6 +179,9 @@ pub struct LightSet {
     scene_radius: f32,
     /// Emitters chosen for photons in proportion to their power's luminance.
     by_power: Distribution1D,
+    /// Every light is sampled within a bounded factor of what a Lambertian surface receives
+    /// from it (see [`LightSet::samples_diffuse_well`]).
+    diffuse_well: bool,
 }
 
 impl LightSet {
@@ -256,7 +259,13 @@ impl LightSet {
             .iter()
             .map(|l| l.power(scene_radius).luminance())
             .collect();
+        let diffuse_well = lights.iter().all(|l| match l {
+            Light::Mesh(m) => m.is_rectangle(),
+            Light::Sphere(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => true,
+            Light::Constant(_) | Light::Envmap(_) => false,
+        });
         LightSet {
+            diffuse_well,
             by_power: Distribution1D::new(&powers),
             lights,
             bounds,
@@ -265,6 +274,17 @@ impl LightSet {
             scene_center,
             scene_radius,
         }
+    }
+
+    /// True when every light's samples have a density within a bounded factor of the light a
+    /// Lambertian surface receives from it, wherever the surface is: rectangles (by solid angle
+    /// near, by area far), spheres (their cone), points, spots and distant directions. Not for
+    /// other meshes (by area, unbounded next to them) nor environments (a sphere's worth of
+    /// samples for a hemisphere's light, against a cosine-weighted BSDF sample that sees it
+    /// all): there a BSDF sample combined by MIS pays.
+    #[must_use]
+    pub fn samples_diffuse_well(&self) -> bool {
+        self.diffuse_well
     }
 
     /// True when the scene has no emitter.
