@@ -45,9 +45,10 @@ pub struct RenderArgs {
     #[arg(long)]
     pub sampler: Option<String>,
     /// Adaptive pixel sampling to this root-mean-square relative error over the image (e.g.
-    /// 0.02): every pixel takes --spp samples, then as many more (a power of two, up to
-    /// --max-spp) as the variance of its eight neighbours' first samples says it needs;
-    /// unbiased, since no pixel decides from its own samples.
+    /// 0.02; with `ic`, 0.01 and a pilot of --spp 4): every pixel takes --spp samples (a
+    /// power of two, the pilot), then rounds double the pixels whose error, estimated from the
+    /// two halves of their neighbours' samples, is above their share, up to --max-spp; no
+    /// pixel decides from its own samples.
     #[arg(long, value_name = "REL_ERROR")]
     pub adaptive: Option<f32>,
     /// Most samples a pixel takes under --adaptive (default: 8 × --spp).

@@ -64,7 +64,9 @@ pub struct BenchArgs {
     /// (adaptive pixel sampling against uniform sampling, by rendering).
     #[arg(long, default_value = "all")]
     pub only: String,
-    /// temporal: only the animations whose name contains this (still, cube, light, lamp).
+    /// temporal: only the animations whose name contains this (still, cube, light, lamp);
+    /// adaptive: only the cases of this integrator (path, ic) or whose name contains it
+    /// (e.g. "cornell-glossy d5 ic").
     #[arg(long)]
     pub case: Option<String>,
 }
@@ -156,7 +158,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         media::run_all(!args.no_mitsuba)?;
     }
     if args.only == "all" || args.only == "adaptive" {
-        adaptive::run_all(&shared)?;
+        adaptive::run_all(&shared, args.case.as_deref())?;
     }
     if args.only == "all" || args.only == "temporal" {
         temporal::run_all(!args.no_mitsuba, args.case.as_deref())?;
