@@ -2,7 +2,8 @@
 //! rendering (issue 9).
 //!
 //! For each scene: uniform series with the default sampler (`multijitter`) and with `sobol` (the
-//! sequence adaptive sampling takes prefixes of) at 4, 16, 64, … spp, and adaptive renders
+//! sequence adaptive sampling takes prefixes of) at 4, 16, 64, … spp (`ic`: the square grids of
+//! [`super::next_square_count`]), and adaptive renders
 //! (pilot 8 spp; `ic` 4) at two or three targets (estimated root-mean-square relative error, chosen per
 //! scene to span about 16 to 150 samples a pixel); for each adaptive render, the time each uniform series needs
 //! to reach its relMSE_trim, interpolated between the two renders that bracket it (log–log).
@@ -147,7 +148,7 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
             "{} d{depth} {integrator}",
             file.split('/').next().unwrap_or(file)
         );
-        if only.is_some_and(|o| o != integrator && !name.contains(o)) {
+        if only.is_some_and(|o| o != integrator && !name.starts_with(o)) {
             continue;
         }
         let path = shared.join("scenes").join(file);
@@ -179,11 +180,8 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
         };
         // The cache's pixel pass is cheap beside its pre-pass and mostly converged where the
         // records serve: a pilot of 4 and a cap of 128 (measured: 8 gave rounds no room).
-        let (pilot, max_spp) = if integrator == "ic" {
-            (4, 128)
-        } else {
-            (8, 512)
-        };
+        let cache = integrator == "ic";
+        let (pilot, max_spp) = if cache { (4, 128) } else { (8, 512) };
         let adaptive: Vec<(f32, Point, f64)> = targets
             .iter()
             .map(|&target| {
@@ -219,19 +217,8 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
                 if p.error <= lowest || p.seconds > cap || spp >= 4096 {
                     return Ok((points, by_samples));
                 }
-                // The cache's error flattens at its records' bias: a series by fours would
-                // interpolate along a chord above the curve and overstate uniform's time, so
-                // `ic` steps through square grids (4, 8 = 2 × 4, 16, 36, 64, 144, 256).
-                spp = if integrator == "ic" {
-                    match spp {
-                        4 => 8,
-                        8 => 16,
-                        16 => 36,
-                        36 => 64,
-                        64 => 144,
-                        144 => 256,
-                        n => super::next_sample_count(n),
-                    }
+                spp = if cache {
+                    super::next_square_count(spp)
                 } else {
                     super::next_sample_count(spp)
                 };

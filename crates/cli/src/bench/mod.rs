@@ -65,7 +65,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = "all")]
     pub only: String,
     /// temporal: only the animations whose name contains this (still, cube, light, lamp);
-    /// adaptive: only the cases of this integrator (path, ic) or whose name contains it
+    /// adaptive: only the cases of this integrator (path, ic) or whose name begins with it
     /// (e.g. "cornell-glossy d5 ic").
     #[arg(long)]
     pub case: Option<String>,
@@ -104,6 +104,22 @@ pub fn find_shared(explicit: Option<&Path>) -> Result<PathBuf> {
 /// while between 16 and 64 spp the curve passes 8.6e-4 there, and 42 spp in 7.68 s reach 8.7e-4).
 pub(super) fn next_sample_count(spp: u32) -> u32 {
     spp * 4
+}
+
+/// The sample count after `spp` in a finer series for a cache, whose error flattens at its
+/// records' bias: a series by fours would interpolate along a chord above that curve and
+/// overstate the time to an error between its renders. Square grids (and 8 = 2 × 4) about
+/// doubling: 4, 8, 16, 36, 64, 144, 256, then by fours.
+pub(super) fn next_square_count(spp: u32) -> u32 {
+    match spp {
+        4 => 8,
+        8 => 16,
+        16 => 36,
+        36 => 64,
+        64 => 144,
+        144 => 256,
+        n => next_sample_count(n),
+    }
 }
 
 fn pool(threads: usize) -> Result<rayon::ThreadPool> {
