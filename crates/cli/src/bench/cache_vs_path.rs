@@ -102,8 +102,8 @@ pub(super) fn fmt_time(t: Option<f64>, cap: f64) -> String {
     t.map_or(format!("> {cap:.0} s"), |t| format!("{t:.1} s"))
 }
 
-/// Runs the comparison.
-pub fn run_all(shared: &Path) -> Result<()> {
+/// Runs the comparison (`only`: the cases whose name, as "sponza-sun d3", begins with it).
+pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
     let cases = [
         ("cornell-box", 3, "cornell-box-d3"),
         ("cornell-box", 10, "cornell-box-d10"),
@@ -126,6 +126,9 @@ pub fn run_all(shared: &Path) -> Result<()> {
         "path→blur"
     );
     for (name, depth, reference) in cases {
+        if only.is_some_and(|o| !format!("{name} d{depth}").starts_with(o)) {
+            continue;
+        }
         let scene_path = shared.join(format!("scenes/{name}/scene.xml"));
         let reference =
             ircache_image::read_image(&shared.join(format!("references/{reference}.exr")))
@@ -187,6 +190,9 @@ pub fn run_all(shared: &Path) -> Result<()> {
         }
     }
     println!("  * the path tracer's error at the cache's time (interpolated between its renders)");
+    if only.is_some() {
+        return Ok(());
+    }
 
     println!("\nThe cost of depth: -ab 8 against -ab 1 (16 spp)");
     for name in ["cornell-glossy", "sponza-sun"] {

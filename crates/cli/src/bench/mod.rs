@@ -66,7 +66,8 @@ pub struct BenchArgs {
     pub only: String,
     /// temporal: only the animations whose name contains this (still, cube, light, lamp);
     /// adaptive: only the cases of this integrator (path, ic) or whose name begins with it
-    /// (e.g. "cornell-glossy d5 ic").
+    /// (e.g. "cornell-glossy d5 ic"); cache: only the scenes whose name begins with it
+    /// (e.g. "sponza-sun d3").
     #[arg(long)]
     pub case: Option<String>,
 }
@@ -156,7 +157,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         }
     }
     if args.only == "all" || args.only == "cache" {
-        cache_vs_path::run_all(&shared)?;
+        cache_vs_path::run_all(&shared, args.case.as_deref())?;
     }
     if args.only == "all" || args.only == "radiance" {
         radiance::run_all(&shared, !args.no_mitsuba)?;

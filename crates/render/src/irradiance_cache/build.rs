@@ -414,11 +414,6 @@ pub fn fill_for_points(
     stats
 }
 
-/// How many times the divisions a neighbourhood must need before its records are gathered
-/// again. Measured (BENCHMARKS.md): at 16 the lamp room's mean luminance goes from −3.5 % to
-/// −0.8 % and its blurred error falls 3.4×, for +40 % time on Sponza and none on the Cornell box.
-pub const REGATHER_AT: f64 = 16.0;
-
 /// Gathers again, with more rays, the records whose neighbourhood is noisy: where a small bright
 /// patch is seen from afar, a gather of the base divisions catches it in a ray or none, and
 /// interpolation turns that noise into blotches. A record's need is judged from its
@@ -428,10 +423,11 @@ pub const REGATHER_AT: f64 = 16.0;
 /// stays unbiased (choosing by a record's own value would bias it, as re-sampling only the
 /// cells that look bright does). The new gather has the rays that bring the worst neighbour's
 /// relative error to `record_error × accuracy`, at most `divisions + supersamples`; it is
-/// done when that is at least [`REGATHER_AT`] times the divisions (a neighbour's error at
-/// least four times the target: where small bright patches make the gathers heavy-tailed). Records made by other processes or read
-/// from a file are left as they are; records a new gather makes at deeper levels are not kept.
-/// With `next`, a record gathered again gets the new gather's next-frame estimate.
+/// done when that is at least `regather_at` times the divisions (16: a neighbour's error four
+/// times the target; off by default, see [`super::params::IcParams::regather_at`]). Records made
+/// by other processes or read from a file are left as they are; records a new gather makes at
+/// deeper levels are not kept. With `next`, a record gathered again gets the new gather's
+/// next-frame estimate.
 pub fn regather_noisy(
     scene: &Scene,
     cache: &mut IrradianceCache,
@@ -442,7 +438,7 @@ pub fn regather_noisy(
 ) {
     let params = cache.params.clone();
     let target = params.record_error * params.accuracy;
-    if target <= 0.0 || params.supersamples == 0 {
+    if target <= 0.0 || params.supersamples == 0 || params.regather_at <= 0.0 {
         return;
     }
     let cap = params.divisions + params.supersamples;
@@ -475,7 +471,7 @@ pub fn regather_noisy(
                             .map(|j| recs[j as usize].ray_variance)
                             .fold(0.0f32, f32::max);
                         let need = (f64::from(worst) / f64::from(target * target)).ceil();
-                        (need >= REGATHER_AT * params.divisions as f64)
+                        (need >= f64::from(params.regather_at) * params.divisions as f64)
                             .then(|| (site, i, sp, (need as usize).min(cap)))
                     },
                 )

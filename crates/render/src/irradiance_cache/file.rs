@@ -670,7 +670,7 @@ mod tests {
         let e = CacheFile::open(&path, &other, false)
             .unwrap_err()
             .to_string();
-        assert!(e.contains("accuracy 0.35 (now 0.5)"), "{e}");
+        assert!(e.contains("accuracy 0.3 (now 0.5)"), "{e}");
         assert!(CacheFile::open(&path, &other, true).is_ok());
         let c = read(&path).unwrap();
         assert_eq!(c.header, header());
@@ -680,7 +680,7 @@ mod tests {
         let mut other = header();
         other.params.divisions = 256;
         let why = c.header.mismatch(&other).unwrap();
-        assert!(why.contains("divisions 512 (now 256)"), "{why}");
+        assert!(why.contains("divisions 1024 (now 256)"), "{why}");
         other.scene_hash ^= 1;
         assert!(c.header.mismatch(&other).unwrap().contains("another scene"));
         // Every record-shaping setting of the table survives the header and, when changed, is
@@ -690,6 +690,7 @@ mod tests {
             ("divisions", "300"),
             ("supersamples", "100"),
             ("record_error", "0.5"),
+            ("regather_at", "16"),
             ("resolution", "64"),
             ("bounces", "5"),
             ("deeper_bounces", "cache"),

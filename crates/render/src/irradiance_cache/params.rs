@@ -143,6 +143,10 @@ pub struct IcParams {
     /// super-sampling stops once the gather's own error estimate is below
     /// `record_error × accuracy`; 0 spends every super-sample.
     pub record_error: f32,
+    /// Gather a record again, with up to `divisions + supersamples` rays, where its neighbours'
+    /// gathers say the neighbourhood needs at least this many times the divisions
+    /// ([`super::build::regather_noisy`]); 0: never.
+    pub regather_at: f32,
     /// Where the bounces beyond a record's own level come from (`--deeper-bounces`).
     pub deeper: Deeper,
     /// Light samples per pixel sample for the direct term (stratified over the light when a
@@ -186,8 +190,14 @@ pub struct IcParams {
 impl Default for IcParams {
     fn default() -> Self {
         IcParams {
-            accuracy: 0.35,
-            divisions: 512,
+            // Both by measurement (BENCHMARKS.md, "Where a record's rays pay"): at 16 spp the
+            // pixel pass costs the same whatever the cache does, so rays spent on records pay
+            // until their noise stops being the error that is left. Against 0.35 and 512 (with
+            // re-gathering at 16), blurred relMSE_trim × time: Cornell box d3 0.52×, Sponza d3
+            // 0.78×, cornell-glossy d5 0.78×, the lamp room d7 1.14× (its median 0.92×, its
+            // mean luminance 0.9924 → 0.9958).
+            accuracy: 0.3,
+            divisions: 1024,
             // Radiance's 128 would floor Tabellion's footprint radii at size/256 (4× Sponza's
             // error, measured); the floor stays for records the camera does not see.
             resolution: 1024.0,
@@ -198,6 +208,11 @@ impl Default for IcParams {
             direct_samples: 4,
             supersamples: 1536,
             record_error: 0.1,
+            // Off by measurement (BENCHMARKS.md, "Where a record's rays pay"): at 16 it doubled
+            // Sponza's gather rays at -ab 1 for 19 % less blurred error (blurred error × time
+            // 1.47× that without it at 4 spp) and tied on the lamp room, the Cornell box and
+            // cornell-glossy (also with radiance records).
+            regather_at: 0.0,
             ambient_weight: 0,
             // Chosen by measurement (BENCHMARKS.md): at equal time Tabellion–Lamorlette's metric
             // reaches about half Ward's error on Sponza and two thirds on the Cornell box.
@@ -208,7 +223,7 @@ impl Default for IcParams {
             deeper: Deeper::PathTraced,
             radiance_cache: false,
             radiance_order: 10,
-            radiance_accuracy: 0.35,
+            radiance_accuracy: 0.3,
             cached_environment: CachedEnvironment::Auto,
             photons: None,
             caustic_photons: 0,
@@ -366,6 +381,21 @@ pub const PARAMS: &[ParamSpec] = &[
         get: |p| p.record_error.to_string(),
         set: |p, v| {
             p.record_error = number(v, 0.0, 10.0, "a fraction of the accuracy")?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "regather_at",
+        aliases: &[],
+        value: "K",
+        help: "gather a record again, with up to divisions + supersamples rays, where the \
+               records serving around it estimate that their neighbourhood needs at least K \
+               times the divisions to reach --record-error (small bright patches seen from \
+               afar; the choice never looks at the record's own samples); 0: never",
+        shapes_records: true,
+        get: |p| p.regather_at.to_string(),
+        set: |p, v| {
+            p.regather_at = number(v, 0.0, 1.0e6, "a multiple of the divisions (0: never)")?;
             Ok(())
         },
     },
