@@ -45,7 +45,7 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
     println!(
         "\nThe cache in the fog, one bounce (max_depth 3), 16 spp; reference: volpath at 4096 spp"
     );
-    let cheap = [("divisions", "128"), ("supersamples", "0")];
+    let cheap = [("media_divisions", "128"), ("supersamples", "0")];
     let variants: [(&str, Vec<(&str, &str)>); 6] = [
         ("stage 1: camera rays tracked", vec![("media_march", "0")]),
         (
@@ -58,10 +58,10 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
             vec![("media_gradient", "none")],
         ),
         (
-            "--divisions 128 --supersamples 0, gradient none",
+            "--media-divisions 128 --supersamples 0, gradient none",
             [cheap.as_slice(), &[("media_gradient", "none")]].concat(),
         ),
-        ("--divisions 128 --supersamples 0", cheap.to_vec()),
+        ("--media-divisions 128 --supersamples 0", cheap.to_vec()),
     ];
     let mut forms = Vec::new();
     for (label, params) in &variants {

@@ -98,7 +98,7 @@ pub fn make_record(
     site: &RecordSite,
     key: u64,
 ) -> (Record, MediaCacheStats) {
-    let strata = Stratification::from_divisions(params.divisions);
+    let strata = Stratification::from_divisions(params.media_divisions);
     let frame = Frame::from_z(site.n);
     let origin = offset_ray_origin(site.p, site.ng, site.n, scene.scale);
     let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
