@@ -148,7 +148,7 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
             "{} d{depth} {integrator}",
             file.split('/').next().unwrap_or(file)
         );
-        if only.is_some_and(|o| o != integrator && !name.starts_with(o)) {
+        if !(only == Some(integrator) || super::selected(only, &name)) {
             continue;
         }
         let path = shared.join("scenes").join(file);

@@ -126,7 +126,7 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
         "path→blur"
     );
     for (name, depth, reference) in cases {
-        if only.is_some_and(|o| !format!("{name} d{depth}").starts_with(o)) {
+        if !super::selected(only, &format!("{name} d{depth}")) {
             continue;
         }
         let scene_path = shared.join(format!("scenes/{name}/scene.xml"));

@@ -123,6 +123,12 @@ pub(super) fn next_square_count(spp: u32) -> u32 {
     }
 }
 
+/// Whether `--case` (`only`) selects the case named `name` ("sponza-sun d3 …"): no filter, or
+/// a beginning of the name.
+pub(super) fn selected(only: Option<&str>, name: &str) -> bool {
+    only.is_none_or(|o| name.starts_with(o))
+}
+
 fn pool(threads: usize) -> Result<rayon::ThreadPool> {
     Ok(rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
