@@ -285,9 +285,11 @@ fn supersampling_lowers_record_error_at_equal_rays_on_sponza() {
             )
         })
         .collect();
-    let run = |samples: usize, supersamples: usize, seed: u64| -> Vec<f32> {
+    use ircache_render::irradiance_cache::params::GatherPattern;
+    let run = |samples: usize, supersamples: usize, pattern: GatherPattern, seed: u64| {
         let p = IcParams {
             supersamples,
+            gather_pattern: pattern,
             ..IcParams::default()
         };
         let (r, _) = irradiance_at_points(
@@ -298,9 +300,9 @@ fn supersampling_lowers_record_error_at_equal_rays_on_sponza() {
             0,
             seed,
         );
-        r.iter().map(|x| x.indirect.g).collect()
+        r.iter().map(|x| x.indirect.g).collect::<Vec<f32>>()
     };
-    let truth = run(65536, 0, 100);
+    let truth = run(65536, 0, GatherPattern::Multijittered, 100);
     let mean_truth = truth.iter().sum::<f32>() / truth.len() as f32;
     let error = |e: &[f32]| -> (f32, f32) {
         let mse = e
@@ -312,21 +314,40 @@ fn supersampling_lowers_record_error_at_equal_rays_on_sponza() {
         let mean = e.iter().sum::<f32>() / e.len() as f32;
         (mse.sqrt() / mean_truth, mean / mean_truth)
     };
-    let (mut plain, mut adaptive) = (0.0, 0.0);
-    for seed in 1..=3 {
-        let (ep, mp) = error(&run(1536, 0, seed));
-        let (ea, ma) = error(&run(1024, 512, seed));
-        eprintln!(
-            "seed {seed}: plain {ep:.4} (mean {mp:.4}), super-sampled {ea:.4} (mean {ma:.4})"
+    // Radiance's jittered gathers gain more than 5 %; multi-jittered ones already meet a
+    // patch's edges more evenly with plain rays, and gain less (4 % here; in renders at the
+    // defaults, where super-samples go only to records that need them, they still halve the
+    // records' noise: BENCHMARKS.md).
+    let mut super_sampled = Vec::new();
+    for (pattern, gain) in [
+        (GatherPattern::Jittered, 0.95),
+        (GatherPattern::Multijittered, 1.0),
+    ] {
+        let (mut plain, mut adaptive) = (0.0, 0.0);
+        for seed in 1..=3 {
+            let (ep, mp) = error(&run(1536, 0, pattern, seed));
+            let (ea, ma) = error(&run(1024, 512, pattern, seed));
+            eprintln!(
+                "{pattern:?} seed {seed}: plain {ep:.4} (mean {mp:.4}), super-sampled {ea:.4} \
+                 (mean {ma:.4})"
+            );
+            // Unbiased: the choice of cells never looks at their own samples.
+            assert!((ma - 1.0).abs() < 0.03, "super-sampled mean ratio {ma}");
+            plain += ep;
+            adaptive += ea;
+        }
+        assert!(
+            adaptive < gain * plain,
+            "{pattern:?}: super-sampling {adaptive:.4} vs plain {plain:.4} (sum over 3 seeds)"
         );
-        // Unbiased: the choice of cells never looks at their own samples.
-        assert!((ma - 1.0).abs() < 0.03, "super-sampled mean ratio {ma}");
-        plain += ep;
-        adaptive += ea;
+        super_sampled.push(adaptive);
     }
+    // The same rays, multi-jittered, err less (6 % here).
     assert!(
-        adaptive < 0.95 * plain,
-        "super-sampling {adaptive:.4} vs plain {plain:.4} (sum over 3 seeds)"
+        super_sampled[1] < 0.98 * super_sampled[0],
+        "multi-jittered {:.4} against jittered {:.4}",
+        super_sampled[1],
+        super_sampled[0]
     );
 }
 

@@ -728,7 +728,7 @@ fn stratified_rays(
     };
     let frame = Frame::from_z(n);
     strata.for_each_direction(
-        || rng.next_2d(),
+        |_, _| rng.next_2d(),
         |_, _, _, d| f(scene.spawn_ray(it, frame.from_local(d))),
     );
 }

@@ -47,6 +47,8 @@ impl RayCounts {
 }
 
 /// An integrator with its parameters.
+// One lives per render, so the cache integrator's larger settings cost nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 pub enum Integrator {
     /// Direct illumination only (Mitsuba's `direct`).

@@ -662,8 +662,9 @@ impl Gatherer<'_> {
         };
         let mut dirs = Vec::with_capacity(strata.cells());
         let mut jitter = vec![Vec2::ZERO; strata.cells()];
+        let layout = self.cache.params.gather_pattern.layout(strata, &mut rng);
         strata.for_each_direction(
-            || rng.next_2d(),
+            |j, k| layout.jitter(j, k, rng.next_2d()),
             |j, k, u, d| {
                 jitter[j * strata.azimuthal + k] = u;
                 dirs.push((j, k, d));

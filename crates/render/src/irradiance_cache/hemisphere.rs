@@ -8,8 +8,11 @@
 //! Gradients are returned in the local frame (x, y tangent, z the normal) with the conventions of
 //! 3.15: E(x, n) ≈ E + (n_i × n)·∇_r E + (x − x_i)·∇_t E (absolute gradients, ERRATA 5).
 
-use ircache_math::{Rgb, Vec2, Vec3};
+use ircache_math::{Rgb, Rng, Vec2, Vec3};
 use std::f64::consts::PI;
+
+/// The largest `f32` below 1: a jitter stays inside its cell.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// The hemisphere's division into cells.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,13 +39,13 @@ impl Stratification {
         self.polar * self.azimuthal
     }
 
-    /// Calls `f(j, k, jitter, direction)` for every cell with the jitter drawn from `next_2d` (3.5), sector
-    /// by sector: each sector's edge angle is computed once and the jitter within it (at most π/4
-    /// for N ≥ 8) by polynomials.
+    /// Calls `f(j, k, jitter, direction)` for every cell with the jitter `jitter(j, k)` (3.5), sector
+    /// by sector (k outer, j inner: the order `jitter` is called in): each sector's edge angle is
+    /// computed once and the jitter within it (at most π/4 for N ≥ 8) by polynomials.
     #[inline]
     pub fn for_each_direction(
         &self,
-        mut next_2d: impl FnMut() -> Vec2,
+        mut jitter: impl FnMut(usize, usize) -> Vec2,
         mut f: impl FnMut(usize, usize, Vec2, Vec3),
     ) {
         let two_pi = 2.0 * std::f32::consts::PI;
@@ -52,7 +55,7 @@ impl Stratification {
         for k in 0..self.azimuthal {
             let (s0, c0) = (k as f32 * sector).sin_cos();
             for j in 0..self.polar {
-                let u = next_2d();
+                let u = jitter(j, k);
                 let s2 = ((j as f32 + u.x) * inv_m).min(1.0);
                 let sin_t = s2.sqrt();
                 let cos_t = (1.0 - s2).max(0.0).sqrt();
@@ -64,6 +67,33 @@ impl Stratification {
                 let (sp, cp) = (s0 * cd + c0 * sd, c0 * cd - s0 * sd);
                 f(j, k, u, Vec3::new(cp * sin_t, sp * sin_t, cos_t));
             }
+        }
+    }
+
+    /// A multi-jittered pattern (Chiu, Shirley and Wang 1994) drawn from `rng`: within polar
+    /// ring j the N cells take distinct ones of N fine sub-rings, and within sector k the M cells
+    /// distinct ones of M fine sub-sectors, by random permutations; so the M·N samples are
+    /// jittered in their cells and Latin in both angles.
+    #[must_use]
+    pub fn multijitter(&self, rng: &mut Rng) -> CellJitter {
+        let (m, n) = (self.polar, self.azimuthal);
+        // Fisher–Yates per ring and per sector (tables: a hashed permutation per cell cost 5 %
+        // of a Sponza render).
+        let shuffled = |rows: usize, len: usize, rng: &mut Rng| {
+            let mut v: Vec<u16> = (0..rows).flat_map(|_| 0..len as u16).collect();
+            for row in v.chunks_mut(len) {
+                for i in (1..len).rev() {
+                    // Multiply-shift (Lemire): no division; its bias, below 2⁻²⁰ here, is
+                    // far under the gather's noise.
+                    let pick = (u64::from(rng.next_u32()) * (i as u64 + 1)) >> 32;
+                    row.swap(i, pick as usize);
+                }
+            }
+            v
+        };
+        CellJitter {
+            strata: *self,
+            fine: Some((shuffled(m, n, rng), shuffled(n, m, rng))),
         }
     }
 
@@ -96,6 +126,38 @@ impl Stratification {
         let k = ((phi * self.azimuthal as f32 / (2.0 * std::f32::consts::PI)) as usize)
             .min(self.azimuthal - 1);
         Some(j * self.azimuthal + k)
+    }
+}
+
+/// Where each cell's sample lies within it: plain jitter, or a multi-jittered pattern
+/// ([`Stratification::multijitter`]).
+#[derive(Clone, Debug)]
+pub struct CellJitter {
+    strata: Stratification,
+    /// Multi-jittered: per ring j the fine sub-ring of each sector's cell (`[j * N + k]`), and
+    /// per sector k the fine sub-sector of each ring's cell (`[k * M + j]`).
+    fine: Option<(Vec<u16>, Vec<u16>)>,
+}
+
+impl CellJitter {
+    /// Plain jitter: the uniform sample is the offset in its cell.
+    #[must_use]
+    pub fn plain(strata: Stratification) -> CellJitter {
+        CellJitter { strata, fine: None }
+    }
+
+    /// The offset in cell (j, k) of the sample made from a uniform `u`.
+    #[inline]
+    #[must_use]
+    pub fn jitter(&self, j: usize, k: usize, u: Vec2) -> Vec2 {
+        let Some((ring, sector)) = &self.fine else {
+            return u;
+        };
+        let (m, n) = (self.strata.polar, self.strata.azimuthal);
+        Vec2::new(
+            ((f32::from(ring[j * n + k]) + u.x) / n as f32).min(ONE_BELOW),
+            ((f32::from(sector[k * m + j]) + u.y) / m as f32).min(ONE_BELOW),
+        )
     }
 }
 
@@ -519,7 +581,56 @@ pub fn to_world(g: &LocalGradient, s: Vec3, t: Vec3) -> [Vec3; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use ircache_math::Rng;
+
+    #[test]
+    fn multijittered_gathers_are_jittered_in_cells_and_latin_in_both_angles() {
+        // Each sample in its own cell, and over all cells exactly one in each of the M·N fine
+        // sub-rings (sin²θ) and each of the M·N fine sub-sectors (φ); for several seeds and a
+        // non-square grid.
+        for (divisions, seed) in [(1024, 1u64), (300, 7), (64, 11)] {
+            let strata = Stratification::from_divisions(divisions);
+            let (m, n) = (strata.polar, strata.azimuthal);
+            let mut rng = Rng::keyed(seed, &[]);
+            let layout = strata.multijitter(&mut rng);
+            let (mut rings, mut sectors) = (vec![0u32; m * n], vec![0u32; m * n]);
+            strata.for_each_direction(
+                |j, k| layout.jitter(j, k, rng.next_2d()),
+                |j, k, _, d| {
+                    assert_eq!(strata.cell_of(d), Some(j * n + k), "cell ({j}, {k})");
+                    let s2 = (1.0 - d.z * d.z) as f64;
+                    let phi = (d.y as f64).atan2(d.x as f64).rem_euclid(2.0 * PI);
+                    let fine = (m * n) as f64;
+                    rings[((s2 * fine) as usize).min(m * n - 1)] += 1;
+                    sectors[((phi / (2.0 * PI) * fine) as usize).min(m * n - 1)] += 1;
+                },
+            );
+            // f32 directions may land a hair across a fine boundary: allow a handful.
+            let off = |v: &[u32]| v.iter().filter(|&&c| c != 1).count();
+            assert!(
+                off(&rings) <= 4,
+                "{divisions}: {} sub-rings not hit once",
+                off(&rings)
+            );
+            assert!(
+                off(&sectors) <= 4,
+                "{divisions}: {} sub-sectors not hit once",
+                off(&sectors)
+            );
+            // Plain jitter breaks the Latin property (so the check above can fail).
+            let (mut plain, mut rng) = (vec![0u32; m * n], Rng::keyed(seed, &[]));
+            strata.for_each_direction(
+                |_, _| rng.next_2d(),
+                |_, _, _, d| {
+                    let s2 = (1.0 - d.z * d.z) as f64;
+                    plain[((s2 * (m * n) as f64) as usize).min(m * n - 1)] += 1;
+                },
+            );
+            assert!(
+                off(&plain) > m * n / 8,
+                "{divisions}: plain jitter looked Latin"
+            );
+        }
+    }
 
     #[test]
     fn the_hessian_is_the_second_difference_of_the_reprojection() {
@@ -530,7 +641,7 @@ mod tests {
         let mut h = HemisphereSamples::new(strata);
         let mut rng = Rng::keyed(9, &[]);
         strata.for_each_direction(
-            || rng.next_2d(),
+            |_, _| rng.next_2d(),
             |j, k, _, w| {
                 let i = j * strata.azimuthal + k;
                 let (n, r) = if w.x > 0.6 {

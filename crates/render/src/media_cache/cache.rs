@@ -90,6 +90,9 @@ pub struct RecordSite {
     pub footprint: f32,
 }
 
+/// The key of a record's layout stream (beyond every cell's index).
+const LAYOUT_KEY: u64 = u64::MAX;
+
 /// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced.
 #[must_use]
 pub fn make_record(
@@ -105,6 +108,9 @@ pub fn make_record(
         .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()]);
     let d = |v: Vec3| v.as_dvec3();
     let n = strata.azimuthal;
+    let layout = params
+        .gather_pattern
+        .layout(strata, &mut Rng::keyed(key, &[LAYOUT_KEY]));
     let g = gather(
         &view,
         d(origin),
@@ -115,7 +121,7 @@ pub fn make_record(
             gradients: params.media_gradient != MediaGradient::None,
             ..March::default()
         },
-        |j, k| Rng::keyed(key, &[(j * n + k) as u64]).next_2d(),
+        |j, k| layout.jitter(j, k, Rng::keyed(key, &[(j * n + k) as u64]).next_2d()),
     );
     let total = g.total_irradiance();
     let e = Rgb::new(total[0] as f32, total[1] as f32, total[2] as f32);

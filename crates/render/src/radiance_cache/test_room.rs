@@ -27,7 +27,7 @@ pub fn gather(p: DVec3, frame: DMat3, strata: Stratification, seed: u64) -> Hemi
     let mut s = HemisphereSamples::new(strata);
     let mut rng = Rng::new(seed, 3);
     let mut cells = Vec::new();
-    strata.for_each_direction(|| rng.next_2d(), |j, k, _, d| cells.push((j, k, d)));
+    strata.for_each_direction(|_, _| rng.next_2d(), |j, k, _, d| cells.push((j, k, d)));
     for (j, k, d) in cells {
         let (l, r) = room(p, frame * d.as_dvec3().normalize());
         let cell = j * strata.azimuthal + k;
