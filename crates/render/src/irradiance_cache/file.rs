@@ -700,6 +700,7 @@ mod tests {
             ("neighbour_clamp", "on"),
             ("gradients", "rotation"),
             ("gradient_formula", "krivanek"),
+            ("gather_pattern", "jittered"),
             ("radiance_cache", "on"),
             ("cached_environment", "all"),
             ("radiance_order", "5"),
