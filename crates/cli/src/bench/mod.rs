@@ -67,7 +67,8 @@ pub struct BenchArgs {
     /// temporal: only the animations whose name contains this (still, cube, light, lamp);
     /// adaptive: only the cases of this integrator (path, ic) or whose name begins with it
     /// (e.g. "cornell-glossy d5 ic"); cache: only the scenes whose name begins with it
-    /// (e.g. "sponza-sun d3").
+    /// (e.g. "sponza-sun d3"); peers: only the scenes whose name begins with it
+    /// ("cornell-glossy").
     #[arg(long)]
     pub case: Option<String>,
 }
@@ -159,7 +160,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         if args.no_mitsuba {
             println!("\nircache against Mitsuba 3: skipped (--no-mitsuba)");
         } else {
-            peers::run_all(&shared)?;
+            peers::run_all(&shared, args.case.as_deref())?;
         }
     }
     if args.only == "all" || args.only == "cache" {

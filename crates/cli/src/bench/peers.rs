@@ -67,7 +67,7 @@ pub(super) fn multijitter_series(
 }
 
 /// Runs the comparison.
-pub fn run_all(shared: &Path) -> Result<()> {
+pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
     // (scene, max_depth of the reference and of `ic`, reference)
     let cases = [
         ("cornell-box", 3, "cornell-box-d3"),
@@ -76,6 +76,9 @@ pub fn run_all(shared: &Path) -> Result<()> {
     ];
     println!("\nircache against Mitsuba 3 at its best (2 threads, same run; relMSE_trim, blurred σ = 2 px)");
     for (name, depth, reference) in cases {
+        if !super::selected(only, name) {
+            continue;
+        }
         let scene_path = shared.join(format!("scenes/{name}/scene.xml"));
         let reference =
             ircache_image::read_image(&shared.join(format!("references/{reference}.exr")))?;
