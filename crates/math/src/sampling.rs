@@ -4,6 +4,10 @@
 use crate::{INV_PI, PI};
 use glam::{Vec2, Vec3};
 
+/// The largest `f32` below 1: where a sample in `[0, 1)` is built by arithmetic that can round
+/// up to 1, clamping to this keeps it in its stratum.
+pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+
 /// Concentric (Shirley–Chiu) map from the unit square to the unit disk.
 #[must_use]
 pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {

@@ -8,11 +8,9 @@
 //! Gradients are returned in the local frame (x, y tangent, z the normal) with the conventions of
 //! 3.15: E(x, n) ≈ E + (n_i × n)·∇_r E + (x − x_i)·∇_t E (absolute gradients, ERRATA 5).
 
+use ircache_math::sampling::ONE_MINUS_EPSILON;
 use ircache_math::{Rgb, Rng, Vec2, Vec3};
 use std::f64::consts::PI;
-
-/// The largest `f32` below 1: a jitter stays inside its cell.
-const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// The hemisphere's division into cells.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,7 +76,9 @@ impl Stratification {
     pub fn multijitter(&self, rng: &mut Rng) -> CellJitter {
         let (m, n) = (self.polar, self.azimuthal);
         // Fisher–Yates per ring and per sector (tables: a hashed permutation per cell cost 5 %
-        // of a Sponza render).
+        // of a Sponza render). u16 holds them: at the largest divisions (10⁶, times a radiance
+        // record's factor 8) N ≈ √(8π·10⁶) ≈ 5000.
+        debug_assert!(m.max(n) <= usize::from(u16::MAX));
         let shuffled = |rows: usize, len: usize, rng: &mut Rng| {
             let mut v: Vec<u16> = (0..rows).flat_map(|_| 0..len as u16).collect();
             for row in v.chunks_mut(len) {
@@ -155,8 +155,8 @@ impl CellJitter {
         };
         let (m, n) = (self.strata.polar, self.strata.azimuthal);
         Vec2::new(
-            ((f32::from(ring[j * n + k]) + u.x) / n as f32).min(ONE_BELOW),
-            ((f32::from(sector[k * m + j]) + u.y) / m as f32).min(ONE_BELOW),
+            ((f32::from(ring[j * n + k]) + u.x) / n as f32).min(ONE_MINUS_EPSILON),
+            ((f32::from(sector[k * m + j]) + u.y) / m as f32).min(ONE_MINUS_EPSILON),
         )
     }
 }
@@ -592,16 +592,19 @@ mod tests {
             let (m, n) = (strata.polar, strata.azimuthal);
             let mut rng = Rng::keyed(seed, &[]);
             let layout = strata.multijitter(&mut rng);
+            // The fine sub-ring (sin²θ) and sub-sector (φ) of M·N each holding `d`.
+            let fine = |x: f64| ((x * (m * n) as f64) as usize).min(m * n - 1);
+            let sub_ring = |d: Vec3| fine(f64::from(1.0 - d.z * d.z));
+            let sub_sector = |d: Vec3| {
+                fine(f64::from(d.y).atan2(f64::from(d.x)).rem_euclid(2.0 * PI) / (2.0 * PI))
+            };
             let (mut rings, mut sectors) = (vec![0u32; m * n], vec![0u32; m * n]);
             strata.for_each_direction(
                 |j, k| layout.jitter(j, k, rng.next_2d()),
                 |j, k, _, d| {
                     assert_eq!(strata.cell_of(d), Some(j * n + k), "cell ({j}, {k})");
-                    let s2 = (1.0 - d.z * d.z) as f64;
-                    let phi = (d.y as f64).atan2(d.x as f64).rem_euclid(2.0 * PI);
-                    let fine = (m * n) as f64;
-                    rings[((s2 * fine) as usize).min(m * n - 1)] += 1;
-                    sectors[((phi / (2.0 * PI) * fine) as usize).min(m * n - 1)] += 1;
+                    rings[sub_ring(d)] += 1;
+                    sectors[sub_sector(d)] += 1;
                 },
             );
             // f32 directions may land a hair across a fine boundary: allow a handful.
@@ -618,13 +621,7 @@ mod tests {
             );
             // Plain jitter breaks the Latin property (so the check above can fail).
             let (mut plain, mut rng) = (vec![0u32; m * n], Rng::keyed(seed, &[]));
-            strata.for_each_direction(
-                |_, _| rng.next_2d(),
-                |_, _, _, d| {
-                    let s2 = (1.0 - d.z * d.z) as f64;
-                    plain[((s2 * (m * n) as f64) as usize).min(m * n - 1)] += 1;
-                },
-            );
+            strata.for_each_direction(|_, _| rng.next_2d(), |_, _, _, d| plain[sub_ring(d)] += 1);
             assert!(
                 off(&plain) > m * n / 8,
                 "{divisions}: plain jitter looked Latin"

@@ -17,6 +17,7 @@ use super::permute::{
     hash32, hash64, owen_scramble, permute, permute_pow2, sobol_0, sobol_1, to_unit,
 };
 use super::Sampler;
+use ircache_math::sampling::ONE_MINUS_EPSILON;
 use ircache_math::Vec2;
 
 /// A sampler plugin.
@@ -593,7 +594,7 @@ impl PixelSampler<'_> {
                     (p_mod_m as f32 + (sy as f32 + jx) / k as f32) / m as f32,
                     (p_div_m as f32 + (sx as f32 + jy) / m as f32) / k as f32,
                 )
-                .min(Vec2::splat(ONE_MINUS_EPS))
+                .min(Vec2::splat(ONE_MINUS_EPSILON))
             }
             SamplerKind::Orthogonal => Vec2::new(self.orthogonal(dim), self.orthogonal(dim + 1)),
             SamplerKind::LowDiscrepancy => {
@@ -662,16 +663,13 @@ fn multijitter_pow2(
         let sy = permute_pow2(p_div_m, wk, seed_y);
         let h = hash64(pixel_seed, u64::from(index) << 32 | u64::from(dim));
         let (jx, jy) = (to_unit(h as u32), to_unit((h >> 32) as u32));
-        *x = ((p_mod_m as f32 + (sy as f32 + jx) / k_f) / m_f).min(ONE_MINUS_EPS);
-        *y = ((p_div_m as f32 + (sx as f32 + jy) / m_f) / k_f).min(ONE_MINUS_EPS);
+        *x = ((p_mod_m as f32 + (sy as f32 + jx) / k_f) / m_f).min(ONE_MINUS_EPSILON);
+        *y = ((p_div_m as f32 + (sx as f32 + jy) / m_f) / k_f).min(ONE_MINUS_EPSILON);
     }
     for ((v, x), y) in values.iter_mut().zip(xs).zip(ys) {
         *v = Vec2::new(x, y);
     }
 }
-
-/// The largest f32 below 1.
-const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 impl Sampler for PixelSampler<'_> {
     #[inline]
@@ -681,7 +679,7 @@ impl Sampler for PixelSampler<'_> {
             None => self.sample_1d(self.dim),
         };
         self.dim += 1;
-        u.min(ONE_MINUS_EPS)
+        u.min(ONE_MINUS_EPSILON)
     }
 
     #[inline]
@@ -691,7 +689,7 @@ impl Sampler for PixelSampler<'_> {
             None => self.sample_2d(self.dim),
         };
         self.dim += 2;
-        u.min(Vec2::splat(ONE_MINUS_EPS))
+        u.min(Vec2::splat(ONE_MINUS_EPSILON))
     }
 
     #[inline]
