@@ -54,9 +54,7 @@ impl Stratification {
             let (s0, c0) = (k as f32 * sector).sin_cos();
             for j in 0..self.polar {
                 let u = jitter(j, k);
-                let s2 = ((j as f32 + u.x) * inv_m).min(1.0);
-                let sin_t = s2.sqrt();
-                let cos_t = (1.0 - s2).max(0.0).sqrt();
+                let (sin_t, cos_t) = polar_sin_cos(j, u.x, self.polar, inv_m);
                 let (sd, cd) = if fast {
                     ircache_math::sampling::sin_cos_quarter(u.y * sector)
                 } else {
@@ -101,9 +99,7 @@ impl Stratification {
     #[inline]
     #[must_use]
     pub fn direction(&self, j: usize, k: usize, u: Vec2) -> Vec3 {
-        let s2 = ((j as f32 + u.x) / self.polar as f32).min(1.0);
-        let sin_t = s2.sqrt();
-        let cos_t = (1.0 - s2).max(0.0).sqrt();
+        let (sin_t, cos_t) = polar_sin_cos(j, u.x, self.polar, 1.0 / self.polar as f32);
         let phi = 2.0 * std::f32::consts::PI * (k as f32 + u.y) / self.azimuthal as f32;
         let (sp, cp) = phi.sin_cos();
         Vec3::new(cp * sin_t, sp * sin_t, cos_t)
@@ -127,6 +123,17 @@ impl Stratification {
             .min(self.azimuthal - 1);
         Some(j * self.azimuthal + k)
     }
+}
+
+/// sin θ and cos θ of the sample at jitter `u` < 1 in polar ring `j` of `m` (sin²θ = (j + u)/m).
+/// cos²θ is computed as (m − j − u)/m, not 1 − sin²θ: in the last ring j + u rounds to m in
+/// f32 when u is within an ulp of 1, which put the ray exactly on the horizon, where the gather
+/// drops it (the furnace test's three-bounce deficit of 1.1e-5).
+#[inline]
+fn polar_sin_cos(j: usize, u: f32, m: usize, inv_m: f32) -> (f32, f32) {
+    let sin2 = ((j as f32 + u) * inv_m).min(1.0);
+    let cos2 = (((m - j) as f32 - u) * inv_m).max(0.0);
+    (sin2.sqrt(), cos2.sqrt())
 }
 
 /// Where each cell's sample lies within it: plain jitter, or a multi-jittered pattern
@@ -581,6 +588,25 @@ pub fn to_world(g: &LocalGradient, s: Vec3, t: Vec3) -> [Vec3; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn no_gather_direction_lies_on_the_horizon() {
+        // The largest jitter below 1 in the last ring: sin²θ = (M − 1 + u)/M rounds to 1 in f32,
+        // which put the ray on the horizon before cos²θ was computed as (M − j − u)/M. Both
+        // routes to a direction must stay above it, and keep unit length.
+        let u = Vec2::new(ircache_math::sampling::ONE_MINUS_EPSILON, 0.5);
+        for divisions in [64, 300, 1024, 4096, 100_000] {
+            let strata = Stratification::from_divisions(divisions);
+            let (m, n) = (strata.polar, strata.azimuthal);
+            let d = strata.direction(m - 1, 0, u);
+            assert!(d.z > 0.0, "{divisions} divisions: {d:?}");
+            assert!((d.length() - 1.0).abs() < 1e-6);
+            let mut lowest = f32::INFINITY;
+            strata.for_each_direction(|_, _| u, |_, _, _, d| lowest = lowest.min(d.z));
+            assert!(lowest > 0.0, "{divisions} divisions ({m} × {n})");
+            assert_eq!(strata.cell_of(d), Some((m - 1) * n));
+        }
+    }
 
     #[test]
     fn multijittered_gathers_are_jittered_in_cells_and_latin_in_both_angles() {
