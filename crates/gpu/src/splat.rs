@@ -155,9 +155,134 @@ impl GpuSplatter {
         camera: &Camera,
         filter_reach: f32,
     ) -> Result<(), GpuError> {
-        let Some(store) = cache.levels.first() else {
+        let Some(input) = SplatInput::pack(buffer, g, cache, ids, camera, filter_reach) else {
             return Ok(());
         };
+        let job = self.upload(&input);
+        self.dispatch(&job);
+        self.read(&job, buffer)
+    }
+
+    /// Uploads a packed input: the buffers and the bind group of one dispatch.
+    #[must_use]
+    pub fn upload(&self, input: &SplatInput) -> SplatJob {
+        let device = &self.gpu.device;
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let storage = wgpu::BufferUsages::STORAGE;
+        let params_buffer = init(
+            "params",
+            bytemuck::bytes_of(&input.params),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let records_buffer = init("records", bytemuck::cast_slice(&input.records), storage);
+        let samples_buffer = init("samples", bytemuck::cast_slice(&input.samples), storage);
+        let start_buffer = init("tile start", bytemuck::cast_slice(&input.start), storage);
+        let lists_buffer = init("tile records", bytemuck::cast_slice(&input.lists), storage);
+        let sums_buffer = init(
+            "sums",
+            bytemuck::cast_slice(&input.sums),
+            storage | wgpu::BufferUsages::COPY_SRC,
+        );
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("splat"),
+            layout: &self.layout,
+            entries: &[
+                (0, &params_buffer),
+                (1, &records_buffer),
+                (2, &samples_buffer),
+                (3, &start_buffer),
+                (4, &lists_buffer),
+                (5, &sums_buffer),
+            ]
+            .map(|(binding, b)| wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            }),
+        });
+        SplatJob {
+            bind,
+            sums: sums_buffer,
+            tiles: (input.params.tiles_x, input.tiles_y),
+        }
+    }
+
+    /// Submits the splat of an uploaded job (its sums accumulate: a second dispatch adds the
+    /// records again).
+    pub fn dispatch(&self, job: &SplatJob) {
+        let device = &self.gpu.device;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &job.bind, &[]);
+            pass.dispatch_workgroups(job.tiles.0, job.tiles.1, 1);
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// Waits for the GPU to finish what was submitted.
+    ///
+    /// # Errors
+    /// When the device reports an error.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.gpu
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Reported(e.to_string()))?;
+        self.gpu.check()
+    }
+
+    /// Reads a job's sums back into `buffer` (written only once they are back and checked).
+    ///
+    /// # Errors
+    /// When the read-back fails or the device reported an error.
+    pub fn read(&self, job: &SplatJob, buffer: &mut SplatBuffer) -> Result<(), GpuError> {
+        let bytes = self.gpu.read_back(&job.sums)?;
+        self.gpu.check()?;
+        let sums: &[GpuSums] = bytemuck::cast_slice(&bytes);
+        for (p, s) in buffer.pixels.iter_mut().zip(sums) {
+            p.irradiance =
+                ircache_math::Rgb::new(s.irradiance[0], s.irradiance[1], s.irradiance[2]);
+            p.weight = s.irradiance[3];
+            p.count = s.count;
+            p.min_error = s.min_error;
+        }
+        Ok(())
+    }
+}
+
+/// One splat's input as the GPU reads it, packed on the CPU: the records, the samples, the sums
+/// so far, and the records binned per 16 × 16 tile.
+#[derive(Debug)]
+pub struct SplatInput {
+    params: GpuParams,
+    tiles_y: u32,
+    records: Vec<GpuRecord>,
+    samples: Vec<GpuSample>,
+    sums: Vec<GpuSums>,
+    start: Vec<u32>,
+    lists: Vec<u32>,
+}
+
+impl SplatInput {
+    /// Packs the level-0 records `ids` of `cache` over `g`'s samples and `buffer`'s sums;
+    /// `None` when no record touches the film.
+    #[must_use]
+    pub fn pack(
+        buffer: &SplatBuffer,
+        g: &GBuffer,
+        cache: &IrradianceCache,
+        ids: Range<usize>,
+        camera: &Camera,
+        filter_reach: f32,
+    ) -> Option<SplatInput> {
+        let store = cache.levels.first()?;
         let (w, h) = (g.width, g.height);
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
         let rects = record_rects(cache, ids.clone(), camera, (w, h), filter_reach);
@@ -187,33 +312,28 @@ impl GpuSplatter {
             }
         }
         if lists.is_empty() {
-            return Ok(());
+            return None;
         }
+        let v = |v: ircache_math::Vec3, w: f32| [v.x, v.y, v.z, w];
         let records: Vec<GpuRecord> = store.records()[ids]
             .iter()
-            .map(|r| {
-                let v = |v: ircache_math::Vec3, w: f32| [v.x, v.y, v.z, w];
-                GpuRecord {
-                    p_r: v(r.p, r.r),
-                    n: v(r.n, 0.0),
-                    e: [r.e.r, r.e.g, r.e.b, 0.0],
-                    gt: r.grad_t.map(|g| v(g, 0.0)),
-                    gr: r.grad_r.map(|g| v(g, 0.0)),
-                }
+            .map(|r| GpuRecord {
+                p_r: v(r.p, r.r),
+                n: v(r.n, 0.0),
+                e: [r.e.r, r.e.g, r.e.b, 0.0],
+                gt: r.grad_t.map(|g| v(g, 0.0)),
+                gr: r.grad_r.map(|g| v(g, 0.0)),
             })
             .collect();
         let samples: Vec<GpuSample> = g
             .samples
             .iter()
             .map(|s| match &s.point {
-                Some(sp) => {
-                    let v = |v: ircache_math::Vec3, w: f32| [v.x, v.y, v.z, w];
-                    GpuSample {
-                        p: v(sp.it.p, 1.0),
-                        n: v(sp.n, 0.0),
-                        n_bump: v(sp.n_bump, 0.0),
-                    }
-                }
+                Some(sp) => GpuSample {
+                    p: v(sp.it.p, 1.0),
+                    n: v(sp.n, 0.0),
+                    n_bump: v(sp.n_bump, 0.0),
+                },
                 None => GpuSample::zeroed(),
             })
             .collect();
@@ -245,65 +365,39 @@ impl GpuSplatter {
             accuracy,
             pad: [0; 2],
         };
-        let device = &self.gpu.device;
-        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
-        let storage = wgpu::BufferUsages::STORAGE;
-        let params_buffer = init(
-            "params",
-            bytemuck::bytes_of(&params),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let records_buffer = init("records", bytemuck::cast_slice(&records), storage);
-        let samples_buffer = init("samples", bytemuck::cast_slice(&samples), storage);
-        let start_buffer = init("tile start", bytemuck::cast_slice(&start), storage);
-        let lists_buffer = init("tile records", bytemuck::cast_slice(&lists), storage);
-        let sums_buffer = init(
-            "sums",
-            bytemuck::cast_slice(&sums),
-            storage | wgpu::BufferUsages::COPY_SRC,
-        );
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("splat"),
-            layout: &self.layout,
-            entries: &[
-                (0, &params_buffer),
-                (1, &records_buffer),
-                (2, &samples_buffer),
-                (3, &start_buffer),
-                (4, &lists_buffer),
-                (5, &sums_buffer),
-            ]
-            .map(|(binding, b)| wgpu::BindGroupEntry {
-                binding,
-                resource: b.as_entire_binding(),
-            }),
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(tiles_x as u32, tiles_y as u32, 1);
-        }
-        self.gpu.queue.submit([encoder.finish()]);
-        let bytes = self.gpu.read_back(&sums_buffer)?;
-        self.gpu.check()?;
-        let sums: &[GpuSums] = bytemuck::cast_slice(&bytes);
-        for (p, s) in buffer.pixels.iter_mut().zip(sums) {
-            p.irradiance =
-                ircache_math::Rgb::new(s.irradiance[0], s.irradiance[1], s.irradiance[2]);
-            p.weight = s.irradiance[3];
-            p.count = s.count;
-            p.min_error = s.min_error;
-        }
-        Ok(())
+        Some(SplatInput {
+            params,
+            tiles_y: tiles_y as u32,
+            records,
+            samples,
+            sums,
+            start,
+            lists,
+        })
     }
+
+    /// Bytes uploaded: records, samples, sums and tile lists.
+    #[must_use]
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of_val(self.records.as_slice())
+            + std::mem::size_of_val(self.samples.as_slice())
+            + std::mem::size_of_val(self.sums.as_slice())
+            + 4 * (self.start.len() + self.lists.len())
+    }
+
+    /// Record entries in the tile lists (a record once per tile its rectangle touches).
+    #[must_use]
+    pub fn entries(&self) -> usize {
+        self.lists.len()
+    }
+}
+
+/// An uploaded splat: what [`GpuSplatter::dispatch`] runs and [`GpuSplatter::read`] reads.
+#[derive(Debug)]
+pub struct SplatJob {
+    bind: wgpu::BindGroup,
+    sums: wgpu::Buffer,
+    tiles: (u32, u32),
 }
 
 impl Splatter for GpuSplatter {

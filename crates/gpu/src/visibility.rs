@@ -13,6 +13,7 @@
 use crate::Gpu;
 use bytemuck::{Pod, Zeroable};
 use ircache_math::{Frame, Rgb, Vec3};
+use ircache_render::camera::Camera;
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingPoint, WorkState};
 use ircache_render::irradiance_cache::plane::HemispherePlane;
 use ircache_render::scene::{Scene, ShapeGeometry};
@@ -43,6 +44,9 @@ pub struct PlaneVisibility {
     near: f32,
     far: f32,
 }
+
+/// What each pixel of a view sees: (shape, primitive) or nothing.
+pub type Seen = Vec<Option<(u32, u32)>>;
 
 /// The primitive of a sphere's shell triangles.
 pub const SPHERE: u32 = u32::MAX;
@@ -132,7 +136,7 @@ impl PlaneVisibility {
                 binding: 0,
                 visibility: wgpu::ShaderStages::VERTEX,
                 ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
                     has_dynamic_offset: false,
                     min_binding_size: None,
                 },
@@ -197,6 +201,12 @@ impl PlaneVisibility {
         }
     }
 
+    /// Triangles rasterised (spheres' shells included).
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
     /// The triangle each pixel of `plane` above `sp` sees: (shape, primitive) or `None`, in the
     /// plane's pixel order (row j from y = −s, column i from x = −s).
     ///
@@ -206,8 +216,73 @@ impl PlaneVisibility {
         &self,
         plane: &HemispherePlane,
         sp: &ShadingPoint,
-    ) -> Result<Vec<Option<(u32, u32)>>, crate::GpuError> {
+    ) -> Result<Seen, crate::GpuError> {
+        Ok(self
+            .planes(plane, std::slice::from_ref(sp))?
+            .pop()
+            .unwrap_or_default())
+    }
+
+    /// [`PlaneVisibility::triangles`] for many points at once: their planes are rasterised side
+    /// by side into one atlas, a viewport each, in as few passes as the device's largest
+    /// texture allows (the thesis's record computation at GPU rates, one submission for
+    /// thousands of records).
+    ///
+    /// # Errors
+    /// When the GPU fails.
+    pub fn planes(
+        &self,
+        plane: &HemispherePlane,
+        points: &[ShadingPoint],
+    ) -> Result<Vec<Seen>, crate::GpuError> {
         let n = plane.pixels as u32;
+        let views: Vec<[[f32; 4]; 4]> =
+            points.iter().map(|sp| self.plane_view(plane, sp)).collect();
+        let texels = self.rasterise(&views, n, n)?;
+        Ok(texels
+            .into_iter()
+            .map(|ids| {
+                let n = n as usize;
+                let mut result = vec![None; n * n];
+                for r in 0..n {
+                    // Texture row r is NDC y = 1 − 2(r + ½)/N: plane row N − 1 − r.
+                    let j = n - 1 - r;
+                    for (i, &id) in ids[r * n..][..n].iter().enumerate() {
+                        result[j * n + i] = self.triangle_of(id);
+                    }
+                }
+                result
+            })
+            .collect())
+    }
+
+    /// The triangle each pixel of `camera`'s `width × height` film sees through its centre, in
+    /// film order (row 0 at the top): the geometry of a G-buffer by rasterisation (001 §4.5).
+    ///
+    /// # Errors
+    /// When the GPU fails.
+    pub fn camera_view(
+        &self,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Seen, crate::GpuError> {
+        let view = camera_clip(camera);
+        let ids = self.rasterise(&[view], width, height)?;
+        Ok(ids
+            .first()
+            .map(|ids| ids.iter().map(|&id| self.triangle_of(id)).collect())
+            .unwrap_or_default())
+    }
+
+    /// A rasterised id (triangle + 1; 0 for nothing) as (shape, primitive).
+    fn triangle_of(&self, id: u32) -> Option<(u32, u32)> {
+        id.checked_sub(1)
+            .and_then(|t| self.triangles.get(t as usize).copied())
+    }
+
+    /// The world-to-clip matrix (column-major) of the plane above `sp`.
+    fn plane_view(&self, plane: &HemispherePlane, sp: &ShadingPoint) -> [[f32; 4]; 4] {
         let frame = Frame::from_z(sp.n);
         let (s, near, far) = (plane.half_size as f32, self.near, self.far);
         // Camera space (frame.s, frame.t, n) from the record's position; x and y over s·z
@@ -216,117 +291,143 @@ impl PlaneVisibility {
         let row = |a: Vec3| [a.x, a.y, a.z, -a.dot(p)];
         let (rx, ry, rz) = (row(frame.s), row(frame.t), row(frame.n));
         let a = far / (far - near);
-        let to_clip_rows = [rx.map(|v| v / s), ry.map(|v| v / s), rz.map(|v| v * a), rz];
-        let mut to_clip = to_clip_rows;
+        let mut to_clip = [rx.map(|v| v / s), ry.map(|v| v / s), rz.map(|v| v * a), rz];
         to_clip[2][3] -= near * a;
-        // Column-major for WGSL.
-        let mut columns = [[0f32; 4]; 4];
-        for (r, row) in to_clip.iter().enumerate() {
-            for (c, v) in row.iter().enumerate() {
-                columns[c][r] = *v;
-            }
-        }
+        column_major(to_clip)
+    }
+
+    /// Rasterises the scene through each view into a `width × height` tile of an atlas (one
+    /// viewport and one instanced draw per view, as many views per pass as the device's largest
+    /// texture holds) and returns each tile's ids, row 0 at the top.
+    fn rasterise(
+        &self,
+        views: &[[[f32; 4]; 4]],
+        width: u32,
+        height: u32,
+    ) -> Result<Vec<Vec<u32>>, crate::GpuError> {
         let device = &self.gpu.device;
-        let view = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("view"),
-            contents: bytemuck::cast_slice(&columns),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("visibility"),
-            layout: &self.layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: view.as_entire_binding(),
-            }],
-        });
-        let size = wgpu::Extent3d {
-            width: n,
-            height: n,
-            depth_or_array_layers: 1,
-        };
-        let texture = |format, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("visibility"),
-                size,
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
-        let ids = texture(
-            FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-        );
-        let depth = texture(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT);
-        let ids_view = ids.create_view(&wgpu::TextureViewDescriptor::default());
-        let depth_view = depth.create_view(&wgpu::TextureViewDescriptor::default());
-        let row_bytes = (4 * n).div_ceil(256) * 256;
-        let out = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("visibility out"),
-            size: u64::from(row_bytes * n),
-            usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("visibility"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &ids_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &bind, &[]);
-            pass.set_vertex_buffer(0, self.vertices.slice(..));
-            pass.draw(0..self.vertex_count, 0..1);
+        let largest = device.limits().max_texture_dimension_2d;
+        if width > largest || height > largest {
+            return Err(crate::GpuError::Device(format!(
+                "a {width} × {height} view exceeds the device's largest texture ({largest})"
+            )));
         }
-        encoder.copy_texture_to_buffer(
-            ids.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &out,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row_bytes),
-                    rows_per_image: Some(n),
+        let columns = (largest / width).clamp(1, 64);
+        let rows = (largest / height).clamp(1, 64);
+        let mut out = Vec::with_capacity(views.len());
+        for batch in views.chunks((columns * rows) as usize) {
+            let count = batch.len() as u32;
+            let (used_columns, used_rows) = (columns.min(count), count.div_ceil(columns));
+            let (atlas_w, atlas_h) = (used_columns * width, used_rows * height);
+            let view_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("views"),
+                contents: bytemuck::cast_slice(batch),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("visibility"),
+                layout: &self.layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: view_buffer.as_entire_binding(),
+                }],
+            });
+            let size = wgpu::Extent3d {
+                width: atlas_w,
+                height: atlas_h,
+                depth_or_array_layers: 1,
+            };
+            let texture = |format, usage| {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("visibility"),
+                    size,
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+            };
+            let ids = texture(
+                FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            );
+            let depth = texture(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT);
+            let ids_view = ids.create_view(&wgpu::TextureViewDescriptor::default());
+            let depth_view = depth.create_view(&wgpu::TextureViewDescriptor::default());
+            let row_bytes = (4 * atlas_w).div_ceil(256) * 256;
+            let read = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("visibility out"),
+                size: u64::from(row_bytes * atlas_h),
+                usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut encoder =
+                device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+            {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("visibility"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &ids_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(1.0),
+                            store: wgpu::StoreOp::Discard,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    ..Default::default()
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.set_vertex_buffer(0, self.vertices.slice(..));
+                for k in 0..count {
+                    let (x, y) = ((k % columns) * width, (k / columns) * height);
+                    // The scissor as well as the viewport: no fragment of one view in another's
+                    // tile, whatever the device's guard band.
+                    pass.set_viewport(x as f32, y as f32, width as f32, height as f32, 0.0, 1.0);
+                    pass.set_scissor_rect(x, y, width, height);
+                    // The instance index selects the view.
+                    pass.draw(0..self.vertex_count, k..k + 1);
+                }
+            }
+            encoder.copy_texture_to_buffer(
+                ids.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &read,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row_bytes),
+                        rows_per_image: Some(atlas_h),
+                    },
                 },
-            },
-            size,
-        );
-        self.gpu.queue.submit([encoder.finish()]);
-        let bytes = self.gpu.read_back(&out)?;
-        self.gpu.check()?;
-        let n = n as usize;
-        let mut result = vec![None; n * n];
-        for r in 0..n {
-            // Texture row r is NDC y = 1 − 2(r + ½)/N: plane row N − 1 − r.
-            let j = n - 1 - r;
-            let texels: &[u32] = bytemuck::cast_slice(&bytes[r * row_bytes as usize..][..4 * n]);
-            for (i, &id) in texels.iter().enumerate() {
-                result[j * n + i] = id
-                    .checked_sub(1)
-                    .and_then(|t| self.triangles.get(t as usize).copied());
+                size,
+            );
+            self.gpu.queue.submit([encoder.finish()]);
+            let bytes = self.gpu.read_back(&read)?;
+            self.gpu.check()?;
+            for k in 0..count {
+                let (x, y) = ((k % columns) * width, (k / columns) * height);
+                let mut tile = Vec::with_capacity((width * height) as usize);
+                for r in 0..height {
+                    let at = ((y + r) * row_bytes + 4 * x) as usize;
+                    tile.extend_from_slice(bytemuck::cast_slice::<u8, u32>(
+                        &bytes[at..at + 4 * width as usize],
+                    ));
+                }
+                out.push(tile);
             }
         }
-        Ok(result)
+        Ok(out)
     }
 
     /// The radiance through each pixel's centre of `plane` above `sp`, as
@@ -375,4 +476,38 @@ impl PlaneVisibility {
         });
         Ok((out, fallbacks))
     }
+}
+
+/// Rows of a 4 × 4 matrix as WGSL's column-major array.
+fn column_major(rows: [[f32; 4]; 4]) -> [[f32; 4]; 4] {
+    let mut columns = [[0f32; 4]; 4];
+    for (r, row) in rows.iter().enumerate() {
+        for (c, v) in row.iter().enumerate() {
+            columns[c][r] = *v;
+        }
+    }
+    columns
+}
+
+/// `camera`'s world-to-clip matrix (column-major): clip x = −x/tan½x and y = y/tan½y over
+/// w = z in camera space (the film's x runs along camera −x, its y along −y, NDC y up), depth
+/// (z − near)·far / ((far − near)·z), so that each pixel centre sees what
+/// [`Camera::generate_ray`] sees through it.
+fn camera_clip(camera: &Camera) -> [[f32; 4]; 4] {
+    let to_camera = camera.to_world.inverse();
+    let row = |r: usize| {
+        let m = to_camera.row(r);
+        [m.x, m.y, m.z, m.w]
+    };
+    let (x, y, z) = (row(0), row(1), row(2));
+    let (near, far) = (camera.near_clip, camera.far_clip);
+    let a = far / (far - near);
+    let mut depth = z.map(|v| v * a);
+    depth[3] -= near * a;
+    column_major([
+        x.map(|v| -v / camera.tan_half_x),
+        y.map(|v| v / camera.tan_half_y),
+        depth,
+        z,
+    ])
 }

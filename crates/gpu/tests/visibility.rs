@@ -99,3 +99,67 @@ fn rasterised_planes_see_what_the_rays_see() {
     let rms = (squared / points as f64).sqrt();
     assert!(rms < 0.01, "rasterised against ray-cast planes: RMS {rms}");
 }
+
+/// Planes rasterised side by side in batches (more than one atlas: 4 096 planes fill one) see
+/// what the rays see, at both ends of each batch; so does the camera's view, pixel centre by
+/// pixel centre, at an odd film size.
+#[test]
+fn batched_planes_and_the_camera_view_see_what_the_rays_see() {
+    let Some(gpu) = gpu() else { return };
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/scenes/cornell-box/scene.xml"
+    );
+    let desc = ircache_scene::load_scene(
+        std::path::Path::new(path),
+        &[("max_depth".into(), "3".into())],
+        &ircache_scene::obj_scene::ObjCamera::default(),
+    )
+    .expect("the shared cornell-box loads");
+    let scene = Scene::build(&desc).expect("scene builds");
+    let visibility = PlaneVisibility::new(gpu, &scene);
+    let plane = HemispherePlane::new(16, 2.0);
+    let points = visible_sites(&scene, 4100, 9);
+    assert_eq!(points.len(), 4100);
+    let planes = visibility.planes(&plane, &points).expect("rasterised");
+    assert_eq!(planes.len(), points.len());
+    let (mut pixels, mut agree) = (0usize, 0usize);
+    for k in (0..8).chain(4088..4100) {
+        let (sp, seen) = (&points[k], &planes[k]);
+        let frame = ircache_math::Frame::from_z(sp.n);
+        for j in 0..plane.pixels {
+            for i in 0..plane.pixels {
+                let d = frame.from_local(plane.direction(i, j));
+                let hit = scene.intersect(&scene.spawn_ray(&sp.it, d));
+                pixels += 1;
+                agree += usize::from(hit.map(|h| (h.shape, h.prim)) == seen[j * plane.pixels + i]);
+            }
+        }
+    }
+    assert!(
+        agree as f64 > 0.99 * pixels as f64,
+        "{agree} of {pixels} batched plane pixels see the rays' triangle"
+    );
+    let (w, h) = (97u32, 61u32);
+    let camera = ircache_render::camera::Camera::new(&desc.sensor, w, h);
+    let ids = visibility.camera_view(&camera, w, h).expect("rasterised");
+    assert_eq!(ids.len(), (w * h) as usize);
+    let mut agree = 0;
+    let mut seen_something = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let film =
+                ircache_math::Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+            let hit = scene.intersect(&camera.generate_ray(film));
+            let id = ids[(y * w + x) as usize];
+            seen_something += usize::from(id.is_some());
+            agree += usize::from(hit.map(|h| (h.shape, h.prim)) == id);
+        }
+    }
+    let n = (w * h) as usize;
+    assert!(seen_something > n / 2, "the camera sees the box");
+    assert!(
+        agree as f64 > 0.99 * n as f64,
+        "{agree} of {n} camera pixels see the ray's triangle"
+    );
+}

@@ -17,6 +17,7 @@
 
 mod adaptive;
 mod cache_vs_path;
+mod gpu;
 mod media;
 mod peers;
 mod photons;
@@ -56,7 +57,8 @@ pub struct BenchArgs {
     /// multijitter, by rendering), cache (the cache against path tracing by rendering, and the
     /// cost of depth), radiance (radiance caching against tracing the same lobes and against
     /// Mitsuba 3, by rendering), splat (splatting against the lookup: per record, per frame),
-    /// plane (records from a rasterised plane against the stratified gather, Table 4.1),
+    /// plane (records from a rasterised plane against the stratified gather, Table 4.1), gpu
+    /// (the GPU passes' own speed: splat kernel, rasterised views and planes),
     /// temporal (animations: the cache kept over time against a cache per frame and against
     /// Mitsuba 3 per frame, flicker measured), photons (the final gather, caustic map and
     /// photon records against the cache without photons and Mitsuba 3, by rendering), media
@@ -171,6 +173,9 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     if args.only == "all" || args.only == "splat" {
         splat::run_all(&shared)?;
+    }
+    if args.only == "all" || args.only == "gpu" {
+        gpu::run_all(&shared)?;
     }
     if args.only == "all" || args.only == "plane" {
         plane::run_all(&shared)?;

@@ -27,21 +27,22 @@ use rayon::prelude::*;
 use std::path::Path;
 use std::time::Instant;
 
-fn settings(width: usize, height: usize) -> RenderSettings {
+pub(super) fn settings(width: usize, height: usize, threads: usize) -> RenderSettings {
     RenderSettings {
         width,
         height,
         spp: 1,
         seed: 1,
-        threads: 2,
+        threads,
         filter: Filter::Box,
         band: None,
         sampling: Sampling::default(),
     }
 }
 
-/// The `ic` integrator with its cache filled for a `width × height` view at accuracy `a`.
-fn filled(
+/// The `ic` integrator with its cache filled for `s`'s view at accuracy `accuracy`, on `s`'s
+/// threads.
+pub(super) fn filled(
     scene: &Scene,
     desc: &ircache_scene::SceneDesc,
     s: &RenderSettings,
@@ -57,7 +58,9 @@ fn filled(
     ic.params
         .set("divisions", "64")
         .map_err(anyhow::Error::msg)?;
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(s.threads)
+        .build()?;
     let t = Instant::now();
     let (ready, _) = integrator.prepare(scene, s, &pool)?;
     let seconds = t.elapsed().as_secs_f64();
@@ -68,7 +71,7 @@ fn filled(
 }
 
 /// Best of three.
-fn best<T>(mut f: impl FnMut() -> T) -> (f64, T) {
+pub(super) fn best<T>(mut f: impl FnMut() -> T) -> (f64, T) {
     let mut out = None;
     let mut best = f64::INFINITY;
     for _ in 0..3 {
@@ -239,7 +242,7 @@ pub fn run_all(shared: &Path) -> Result<()> {
         (640, 480, ["0.35", "0.06"]),
         (1920, 1080, ["0.75", "0.165"]),
     ] {
-        let s = settings(width, height);
+        let s = settings(width, height, 2);
         for accuracy in accuracies {
             let (ic, fill) = filled(&scene, &desc, &s, accuracy)?;
             let cache = ic.cache.clone().expect("filled");
@@ -253,7 +256,7 @@ pub fn run_all(shared: &Path) -> Result<()> {
         }
     }
     // A warm-cache frame, the whole pixel pass.
-    let s = settings(640, 480);
+    let s = settings(640, 480, 2);
     let (ic, _) = filled(&scene, &desc, &s, "0.35")?;
     let records = ic.cache.as_ref().map_or(0, |c| c.levels[0].len());
     let mut splatting = ic.clone();

@@ -2,12 +2,9 @@
 // each pixel keeping the nearest triangle's index + 1 (0: nothing), so that a record's plane of
 // pixels (irradiance_cache::plane) is filled by rasterising instead of one ray per pixel.
 
-struct View {
-    // Column-major world-to-clip matrix.
-    to_clip: mat4x4<f32>,
-}
-
-@group(0) @binding(0) var<uniform> view: View;
+// Column-major world-to-clip matrices, one per view; the instance index selects it (each view
+// drawn into its own viewport of an atlas).
+@group(0) @binding(0) var<storage, read> views: array<mat4x4<f32>>;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -15,9 +12,13 @@ struct VertexOut {
 }
 
 @vertex
-fn vertex(@location(0) position: vec3<f32>, @location(1) triangle: u32) -> VertexOut {
+fn vertex(
+    @location(0) position: vec3<f32>,
+    @location(1) triangle: u32,
+    @builtin(instance_index) view: u32,
+) -> VertexOut {
     var out: VertexOut;
-    out.clip = view.to_clip * vec4<f32>(position, 1.0);
+    out.clip = views[view] * vec4<f32>(position, 1.0);
     out.triangle = triangle;
     return out;
 }

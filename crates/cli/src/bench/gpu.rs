@@ -1,0 +1,232 @@
+//! `ircache bench --only gpu`: the GPU passes' own speed (issue 12; 001 §4.4–§4.6), on every
+//! core of the machine, next to the thesis's figures (NOTES-001 §C.8):
+//!
+//! - Splatting on Sponza (one bounce) at 1920×1080 with about 10 K and 100 K records: the CPU's
+//!   packing (tile binning), the upload, the kernel alone (best of ten, the buffers resident)
+//!   and the read-back, next to the CPU splatter on all cores; and how many samples' sums
+//!   differ from the CPU's.
+//! - The camera's view rasterised at 1920×1080 (the geometry of a G-buffer by rasterisation),
+//!   read back, and how many pixels see the triangle Embree's ray through the pixel centre hits.
+//! - Records' hemisphere planes (64 × 64) rasterised in batches of thousands: planes per second
+//!   on Sponza and the Cornell box, and agreement with one ray per pixel.
+//! - A warm-cache frame at 1920×1080, 1 spp, with the GPU splatting: the whole pixel pass,
+//!   whose G-buffer and shading run on the CPU.
+
+use anyhow::Result;
+use std::path::Path;
+
+/// Runs the benchmark; says so and returns where no device exists.
+#[cfg(feature = "gpu")]
+pub fn run_all(shared: &Path) -> Result<()> {
+    use super::splat::{best, filled, settings};
+    use ircache_gpu::splat::{GpuSplatter, SplatInput};
+    use ircache_gpu::visibility::PlaneVisibility;
+    use ircache_render::integrators::ic::PixelPass;
+    use ircache_render::integrators::Integrator;
+    use ircache_render::irradiance_cache::plane::HemispherePlane;
+    use ircache_render::irradiance_cache::points::visible_sites;
+    use ircache_render::render::render;
+    use ircache_render::scene::Scene;
+    use ircache_render::splatting::buffer::splat;
+    use ircache_render::splatting::{GBuffer, SplatBuffer};
+    use ircache_scene::obj_scene::ObjCamera;
+    use rayon::prelude::*;
+    use std::sync::Arc;
+    use std::time::Instant;
+
+    let gpu = match ircache_gpu::Gpu::new() {
+        Ok(g) => Arc::new(g),
+        Err(e) => {
+            println!("\nThe GPU passes: not measured ({e})");
+            return Ok(());
+        }
+    };
+    let threads = std::thread::available_parallelism()?.get();
+    println!(
+        "\nThe GPU passes on {}, {threads} CPU threads",
+        gpu.describe()
+    );
+    let splatter = Arc::new(GpuSplatter::new(gpu.clone()));
+    let load = |path: &Path| -> Result<(ircache_scene::SceneDesc, Scene)> {
+        let defines = vec![("max_depth".to_string(), "3".to_string())];
+        let mut desc = ircache_scene::load_scene(path, &defines, &ObjCamera::default())?;
+        desc.integrator.kind = "ic".into();
+        let scene = Scene::build(&desc)?;
+        Ok((desc, scene))
+    };
+    let (desc, scene) = load(&shared.join("scenes/sponza-sun/scene.xml"))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
+    let (width, height) = (1920, 1080);
+    let s = settings(width, height, threads);
+    let camera = ircache_render::camera::Camera::new(&desc.sensor, width as u32, height as u32);
+
+    // Splatting.
+    let mut warm = None;
+    for accuracy in ["0.75", "0.165"] {
+        let (ic, fill) = filled(&scene, &desc, &s, accuracy)?;
+        let cache = ic.cache.clone().expect("filled");
+        let n = cache.levels[0].len();
+        let reach = s.filter.radius();
+        let samplers = s.sampler();
+        let (g_time, g) =
+            pool.install(|| best(|| GBuffer::build(&scene, &cache, &s, &samplers, 0)));
+        let (cpu_time, on_cpu) = pool.install(|| {
+            best(|| {
+                let mut b = SplatBuffer::new(&g);
+                splat(&mut b, &g, &cache, 0..n, &scene.camera, reach);
+                b
+            })
+        });
+        let empty = SplatBuffer::new(&g);
+        let (pack_time, input) =
+            best(|| SplatInput::pack(&empty, &g, &cache, 0..n, &scene.camera, reach));
+        let Some(input) = input else {
+            println!("  a {accuracy}: no record on the film");
+            continue;
+        };
+        let (upload_time, job) = best(|| {
+            let job = splatter.upload(&input);
+            splatter.wait().map(|()| job)
+        });
+        let job = job?;
+        // The result from the first dispatch on freshly uploaded sums.
+        splatter.dispatch(&job);
+        splatter.wait()?;
+        let mut on_gpu = SplatBuffer::new(&g);
+        let t = Instant::now();
+        splatter.read(&job, &mut on_gpu)?;
+        let read_time = t.elapsed().as_secs_f64();
+        let mut kernel = f64::INFINITY;
+        for _ in 0..10 {
+            let t = Instant::now();
+            splatter.dispatch(&job);
+            splatter.wait()?;
+            kernel = kernel.min(t.elapsed().as_secs_f64());
+        }
+        let differing = on_gpu
+            .pixels
+            .iter()
+            .zip(&on_cpu.pixels)
+            .filter(|(a, b)| a.irradiance() != b.irradiance())
+            .count();
+        println!(
+            "  splat {width}×{height}, {n:>6} records (a {accuracy}, filled in {fill:.1} s; {} \
+             tile entries): kernel {:.2} ms; pack {:.1} ms, upload {:.1} ms ({:.0} MB), read-back \
+             {:.1} ms; CPU splatter {:.1} ms; CPU G-buffer {:.1} ms; {differing} of {} samples \
+             differ from the CPU's",
+            input.entries(),
+            kernel * 1e3,
+            pack_time * 1e3,
+            upload_time * 1e3,
+            input.bytes() as f64 / 1e6,
+            read_time * 1e3,
+            cpu_time * 1e3,
+            g_time * 1e3,
+            on_gpu.pixels.len(),
+        );
+        println!("    [thesis, 1000×1000: 4 076 records splatted in 188 ms (Sibenik), 242 ms (Sponza); target 100 K at 1080p ≤ 2 ms]");
+        warm = Some(ic);
+    }
+
+    // The camera's view rasterised.
+    let visibility = PlaneVisibility::new(gpu.clone(), &scene);
+    let (raster_time, ids) = best(|| visibility.camera_view(&camera, width as u32, height as u32));
+    let ids = ids?;
+    let agree = pool.install(|| {
+        (0..width * height)
+            .into_par_iter()
+            .filter(|&k| {
+                let (x, y) = (k % width, k / width);
+                let film = ircache_math::Vec2::new(
+                    (x as f32 + 0.5) / width as f32,
+                    (y as f32 + 0.5) / height as f32,
+                );
+                let hit = scene.intersect(&camera.generate_ray(film));
+                hit.map(|h| (h.shape, h.prim)) == ids[k]
+            })
+            .count()
+    });
+    println!(
+        "  camera view rasterised at {width}×{height} ({} triangles), read back: {:.2} ms; {:.3} % \
+         of pixels see Embree's triangle",
+        visibility.triangle_count(),
+        raster_time * 1e3,
+        100.0 * agree as f64 / (width * height) as f64
+    );
+
+    // Planes rasterised in batches.
+    let plane = HemispherePlane::new(64, 2.0);
+    for (name, path) in [
+        ("sponza-sun", shared.join("scenes/sponza-sun/scene.xml")),
+        ("cornell-box", shared.join("scenes/cornell-box/scene.xml")),
+    ] {
+        let (_, scene) = load(&path)?;
+        let visibility = PlaneVisibility::new(gpu.clone(), &scene);
+        let points = visible_sites(&scene, 8192, 11);
+        let (t, planes) = best(|| visibility.planes(&plane, &points));
+        let planes = planes?;
+        let (pixels, agree) = pool.install(|| {
+            points
+                .par_iter()
+                .zip(&planes)
+                .take(256)
+                .map(|(sp, seen)| {
+                    let frame = ircache_math::Frame::from_z(sp.n);
+                    let mut agree = 0;
+                    for j in 0..plane.pixels {
+                        for i in 0..plane.pixels {
+                            let d = frame.from_local(plane.direction(i, j));
+                            let hit = scene.intersect(&scene.spawn_ray(&sp.it, d));
+                            agree += usize::from(
+                                hit.map(|h| (h.shape, h.prim)) == seen[j * plane.pixels + i],
+                            );
+                        }
+                    }
+                    (plane.pixels * plane.pixels, agree)
+                })
+                .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+        });
+        println!(
+            "  planes 64×64 on {name} ({} triangles): {} planes in {:.1} ms, {:.0} planes/s \
+             rasterised and read back; {:.2} % of the first 256 planes' pixels see the ray's triangle",
+            visibility.triangle_count(),
+            points.len(),
+            t * 1e3,
+            points.len() as f64 / t,
+            100.0 * agree as f64 / pixels.max(1) as f64
+        );
+    }
+
+    // A warm-cache frame with the GPU splatting.
+    if let Some(ic) = warm {
+        let records = ic.cache.as_ref().map_or(0, |c| c.levels[0].len());
+        let mut on_gpu = ic.clone();
+        on_gpu.pixel_pass = PixelPass::Splat;
+        on_gpu.splatter = Some(splatter.clone());
+        let mut on_cpu = ic.clone();
+        on_cpu.pixel_pass = PixelPass::Splat;
+        let (gpu_frame, out) =
+            best(|| render(&scene, &Integrator::Ic(on_gpu.clone()), &s, &|_| {}));
+        out?;
+        let (cpu_frame, out) =
+            best(|| render(&scene, &Integrator::Ic(on_cpu.clone()), &s, &|_| {}));
+        out?;
+        println!(
+            "  warm-cache frame {width}×{height}, 1 spp, {records} records, {threads} threads: GPU \
+             splatting {:.1} ms, CPU splatting {:.1} ms (G-buffer and shading on the CPU) [target \
+             ≤ 16 ms]",
+            gpu_frame * 1e3,
+            cpu_frame * 1e3
+        );
+    }
+    Ok(())
+}
+
+/// Without the `gpu` feature: says so.
+#[cfg(not(feature = "gpu"))]
+pub fn run_all(_: &Path) -> Result<()> {
+    println!("\nThe GPU passes: not measured (built without the gpu feature)");
+    Ok(())
+}
