@@ -29,9 +29,15 @@ pub fn splatter() -> Result<GpuSplatting> {
         splatter,
         device: device.clone(),
         summary: Box::new(move || {
+            let first = counts
+                .first_failure
+                .lock()
+                .ok()
+                .and_then(|f| f.clone())
+                .map_or(String::new(), |f| format!(" (the first: {f})"));
             format!(
                 "GPU {device}: {} splat calls on the GPU ({} with radiance records, whose glossy \
-                 sums the CPU added), {} failed and ran on the CPU",
+                 sums the CPU added), {} failed and ran on the CPU{first}",
                 counts.gpu_calls.load(Ordering::Relaxed),
                 counts.glossy_on_cpu.load(Ordering::Relaxed),
                 counts.failures.load(Ordering::Relaxed)

@@ -81,6 +81,8 @@ pub struct GpuSplatter {
     pub glossy_on_cpu: AtomicU64,
     /// Calls the GPU failed (read-back or device errors); the CPU did them whole.
     pub failures: AtomicU64,
+    /// The first failure's message (later ones often only repeat its consequence).
+    pub first_failure: std::sync::Mutex<Option<String>>,
 }
 
 impl GpuSplatter {
@@ -142,6 +144,7 @@ impl GpuSplatter {
             gpu_calls: AtomicU64::new(0),
             glossy_on_cpu: AtomicU64::new(0),
             failures: AtomicU64::new(0),
+            first_failure: std::sync::Mutex::new(None),
         }
     }
 
@@ -426,8 +429,11 @@ impl Splatter for GpuSplatter {
                     splat_parts(buffer, g, cache, ids, camera, filter_reach, Sums::Glossy);
                 }
             }
-            Err(_) => {
+            Err(e) => {
                 self.failures.fetch_add(1, Ordering::Relaxed);
+                if let Ok(mut first) = self.first_failure.lock() {
+                    first.get_or_insert_with(|| e.to_string());
+                }
                 splat(buffer, g, cache, ids, camera, filter_reach);
             }
         }

@@ -87,28 +87,53 @@ fn extrapolate(rec: Record, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return e;
 }
 
+// A tile's records pass through workgroup memory in chunks of 64 (11 KB: within every device's
+// 16 KB), loaded by the first 64 invocations: every sample of the tile reads every record of its
+// list, so each is read from global memory once per tile instead of once per sample.
+const CHUNK: u32 = 64u;
+var<workgroup> chunk: array<Record, CHUNK>;
+
 @compute @workgroup_size(16, 16, 1)
-fn splat(@builtin(global_invocation_id) id: vec3<u32>) {
-    if id.x >= params.width || id.y >= params.height {
-        return;
-    }
+fn splat(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    // Every invocation stays to the end: the barriers need the whole workgroup.
+    let inside = id.x < params.width && id.y < params.height;
     let i = id.y * params.width + id.x;
-    let s = samples[i];
-    if s.p.w == 0.0 {
-        return;
+    var s: Sample;
+    var out: Sums;
+    if inside {
+        s = samples[i];
+        out = sums[i];
     }
-    let tile = (id.y / TILE) * params.tiles_x + id.x / TILE;
-    var out = sums[i];
-    for (var k = tile_start[tile]; k < tile_start[tile + 1u]; k = k + 1u) {
-        let rec = records[tile_records[k]];
-        let err = record_error(rec, s.p.xyz, s.n.xyz);
-        if err < 0.0 || err > 1.0 {
-            continue;
+    let served = inside && s.p.w != 0.0;
+    let tile = group.y * params.tiles_x + group.x;
+    let first = tile_start[tile];
+    let end = tile_start[tile + 1u];
+    for (var base = first; base < end; base = base + CHUNK) {
+        workgroupBarrier();
+        if local < CHUNK && base + local < end {
+            chunk[local] = records[tile_records[base + local]];
         }
-        let w = record_weight(err);
-        out.irradiance = out.irradiance + vec4<f32>(extrapolate(rec, s.p.xyz, s.n_bump.xyz) * w, w);
-        out.count = out.count + 1u;
-        out.min_error = min(out.min_error, err);
+        workgroupBarrier();
+        if served {
+            let count = min(CHUNK, end - base);
+            for (var k = 0u; k < count; k = k + 1u) {
+                let rec = chunk[k];
+                let err = record_error(rec, s.p.xyz, s.n.xyz);
+                if err < 0.0 || err > 1.0 {
+                    continue;
+                }
+                let w = record_weight(err);
+                out.irradiance = out.irradiance + vec4<f32>(extrapolate(rec, s.p.xyz, s.n_bump.xyz) * w, w);
+                out.count = out.count + 1u;
+                out.min_error = min(out.min_error, err);
+            }
+        }
     }
-    sums[i] = out;
+    if served {
+        sums[i] = out;
+    }
 }
