@@ -3,10 +3,13 @@
 //!
 //! The records' film rectangles are the CPU splatter's
 //! ([`ircache_render::splatting::buffer::record_rects`]); the CPU files each record under the
-//! 16 × 16 tiles its rectangle touches, in index order, and one invocation per sample walks its
-//! tile's list. So a sample meets the same records in the same order as on the CPU and the
-//! sums agree to the GPU's rounding, with no float blending, whose order no GPU fixes (the
-//! thesis blends splatted quads into a float target). The glossy sums of radiance records (they
+//! 16 × 16 tiles its rectangle touches, in index order, and one workgroup per touched tile, one
+//! invocation per sample, walks the tile's list. So a sample meets the same records in the same
+//! order as on the CPU and the sums agree to the GPU's rounding, with no float blending, whose
+//! order no GPU fixes (the thesis blends splatted quads into a float target). The G-buffer's
+//! samples stay on the GPU while the G-buffer holds the same filling
+//! ([`GBuffer::filling`]); each call sends its records and the sums of the tiles they touch and
+//! reads those sums back, so the miss search's small batches move little. The glossy sums of radiance records (they
 //! need the rotation and the BRDF coefficients on the GPU) are not there yet: the CPU adds them
 //! ([`ircache_render::splatting::buffer::splat_parts`] with `Sums::Glossy`), counted in
 //! [`GpuSplatter::glossy_on_cpu`].
@@ -66,7 +69,22 @@ struct GpuParams {
     metric: u32,
     gradients: u32,
     accuracy: f32,
-    pad: [u32; 2],
+    tile_count: u32,
+    pad: u32,
+}
+
+/// Samples in a tile (`TILE`² in `splat.wgsl`).
+const TILE_SAMPLES: usize = TILE * TILE;
+
+/// Workgroups along x of a dispatch (`GROUPS_X`): touched tiles beyond wrap to further rows, so
+/// that no film exceeds a device's 65 535 workgroups a dimension.
+const GROUPS_X: u32 = 32_768;
+
+/// A G-buffer's samples kept on the GPU, and the filling they copy.
+#[derive(Debug)]
+struct Resident {
+    filling: std::sync::Weak<()>,
+    samples: wgpu::Buffer,
 }
 
 /// Splatting on a GPU: a [`Splatter`].
@@ -83,6 +101,8 @@ pub struct GpuSplatter {
     pub failures: AtomicU64,
     /// The first failure's message (later ones often only repeat its consequence).
     pub first_failure: std::sync::Mutex<Option<String>>,
+    /// The samples of the last G-buffer splatted over.
+    resident: std::sync::Mutex<Option<Resident>>,
 }
 
 impl GpuSplatter {
@@ -122,6 +142,7 @@ impl GpuSplatter {
                 storage(3, true),
                 storage(4, true),
                 storage(5, false),
+                storage(6, true),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -145,6 +166,7 @@ impl GpuSplatter {
             glossy_on_cpu: AtomicU64::new(0),
             failures: AtomicU64::new(0),
             first_failure: std::sync::Mutex::new(None),
+            resident: std::sync::Mutex::new(None),
         }
     }
 
@@ -161,14 +183,67 @@ impl GpuSplatter {
         let Some(input) = SplatInput::pack(buffer, g, cache, ids, camera, filter_reach) else {
             return Ok(());
         };
-        let job = self.upload(&input);
+        let samples = self.resident_samples(g);
+        let job = self.upload(&input, &samples);
         self.dispatch(&job);
         self.read(&job, buffer)
     }
 
-    /// Uploads a packed input: the buffers and the bind group of one dispatch.
+    /// `g`'s samples on the GPU: those already there while `g` holds the same filling, else
+    /// uploaded (and kept in place of the previous G-buffer's).
+    pub fn resident_samples(&self, g: &GBuffer) -> wgpu::Buffer {
+        let mut resident = self
+            .resident
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if let Some(r) = resident.as_ref() {
+            if r.filling
+                .upgrade()
+                .is_some_and(|f| Arc::ptr_eq(&f, g.filling()))
+            {
+                return r.samples.clone();
+            }
+        }
+        let v = |v: ircache_math::Vec3, w: f32| [v.x, v.y, v.z, w];
+        let samples: Vec<GpuSample> = g
+            .samples
+            .iter()
+            .map(|s| match &s.point {
+                Some(sp) => GpuSample {
+                    p: v(sp.it.p, 1.0),
+                    n: v(sp.n, 0.0),
+                    n_bump: v(sp.n_bump, 0.0),
+                },
+                None => GpuSample::zeroed(),
+            })
+            .collect();
+        let buffer = self
+            .gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("samples"),
+                contents: bytemuck::cast_slice(&samples),
+                usage: wgpu::BufferUsages::STORAGE,
+            });
+        *resident = Some(Resident {
+            filling: Arc::downgrade(g.filling()),
+            samples: buffer.clone(),
+        });
+        buffer
+    }
+
+    /// Drops the resident samples (the next call uploads them again).
+    pub fn forget_samples(&self) {
+        *self
+            .resident
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner) = None;
+    }
+
+    /// Uploads a packed input over resident `samples`: the buffers and the bind group of one
+    /// dispatch.
     #[must_use]
-    pub fn upload(&self, input: &SplatInput) -> SplatJob {
+    pub fn upload(&self, input: &SplatInput, samples: &wgpu::Buffer) -> SplatJob {
         let device = &self.gpu.device;
         let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -184,7 +259,7 @@ impl GpuSplatter {
             wgpu::BufferUsages::UNIFORM,
         );
         let records_buffer = init("records", bytemuck::cast_slice(&input.records), storage);
-        let samples_buffer = init("samples", bytemuck::cast_slice(&input.samples), storage);
+        let tiles_buffer = init("tiles", bytemuck::cast_slice(&input.tiles), storage);
         let start_buffer = init("tile start", bytemuck::cast_slice(&input.start), storage);
         let lists_buffer = init("tile records", bytemuck::cast_slice(&input.lists), storage);
         let sums_buffer = init(
@@ -198,20 +273,24 @@ impl GpuSplatter {
             entries: &[
                 (0, &params_buffer),
                 (1, &records_buffer),
-                (2, &samples_buffer),
+                (2, samples),
                 (3, &start_buffer),
                 (4, &lists_buffer),
                 (5, &sums_buffer),
+                (6, &tiles_buffer),
             ]
             .map(|(binding, b)| wgpu::BindGroupEntry {
                 binding,
                 resource: b.as_entire_binding(),
             }),
         });
+        let count = input.params.tile_count;
         SplatJob {
             bind,
             sums: sums_buffer,
-            tiles: (input.params.tiles_x, input.tiles_y),
+            groups: (count.min(GROUPS_X), count.div_ceil(GROUPS_X)),
+            tiles: input.tiles.clone(),
+            size: (input.params.width as usize, input.params.height as usize),
         }
     }
 
@@ -224,7 +303,7 @@ impl GpuSplatter {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &job.bind, &[]);
-            pass.dispatch_workgroups(job.tiles.0, job.tiles.1, 1);
+            pass.dispatch_workgroups(job.groups.0, job.groups.1, 1);
         }
         self.gpu.queue.submit([encoder.finish()]);
     }
@@ -249,26 +328,41 @@ impl GpuSplatter {
         let bytes = self.gpu.read_back(&job.sums)?;
         self.gpu.check()?;
         let sums: &[GpuSums] = bytemuck::cast_slice(&bytes);
-        for (p, s) in buffer.pixels.iter_mut().zip(sums) {
-            p.irradiance =
-                ircache_math::Rgb::new(s.irradiance[0], s.irradiance[1], s.irradiance[2]);
-            p.weight = s.irradiance[3];
-            p.count = s.count;
-            p.min_error = s.min_error;
+        let (w, h) = job.size;
+        let tiles_x = w.div_ceil(TILE);
+        for (&tile, tile_sums) in job.tiles.iter().zip(sums.chunks_exact(TILE_SAMPLES)) {
+            let (x0, y0) = (
+                tile as usize % tiles_x * TILE,
+                tile as usize / tiles_x * TILE,
+            );
+            for (k, s) in tile_sums.iter().enumerate() {
+                let (x, y) = (x0 + k % TILE, y0 + k / TILE);
+                if x < w && y < h {
+                    let p = &mut buffer.pixels[y * w + x];
+                    p.irradiance =
+                        ircache_math::Rgb::new(s.irradiance[0], s.irradiance[1], s.irradiance[2]);
+                    p.weight = s.irradiance[3];
+                    p.count = s.count;
+                    p.min_error = s.min_error;
+                }
+            }
         }
         Ok(())
     }
 }
 
-/// One splat's input as the GPU reads it, packed on the CPU: the records, the samples, the sums
-/// so far, and the records binned per 16 × 16 tile.
+/// One splat's input as the GPU reads it, packed on the CPU: the records, the 16 × 16 tiles they
+/// touch with each tile's records in index order, and those tiles' sums so far (the samples stay
+/// on the GPU: [`GpuSplatter::resident_samples`]).
 #[derive(Debug)]
 pub struct SplatInput {
     params: GpuParams,
-    tiles_y: u32,
     records: Vec<GpuRecord>,
-    samples: Vec<GpuSample>,
+    /// Touched tiles (row-major film tile indices).
+    tiles: Vec<u32>,
+    /// Per touched tile, `TILE_SAMPLES` sums in the tile's row-major order.
     sums: Vec<GpuSums>,
+    /// Compressed rows of `lists` per touched tile.
     start: Vec<u32>,
     lists: Vec<u32>,
 }
@@ -295,27 +389,36 @@ impl SplatInput {
                 (r[0] / TILE..r[2].div_ceil(TILE)).map(move |tx| ty * tiles_x + tx)
             })
         };
-        let mut start = vec![0u32; tiles_x * tiles_y + 1];
+        let mut per_tile = vec![0u32; tiles_x * tiles_y];
         for &r in rects.iter().flatten() {
             for t in tiles_of(r) {
-                start[t + 1] += 1;
+                per_tile[t] += 1;
             }
         }
-        for t in 0..tiles_x * tiles_y {
-            start[t + 1] += start[t];
+        // Touched tiles, compacted; each one's slot in `start`.
+        let tiles: Vec<u32> = (0..per_tile.len() as u32)
+            .filter(|&t| per_tile[t as usize] > 0)
+            .collect();
+        if tiles.is_empty() {
+            return None;
+        }
+        let mut slot = vec![u32::MAX; per_tile.len()];
+        let mut start = Vec::with_capacity(tiles.len() + 1);
+        start.push(0u32);
+        for (k, &t) in tiles.iter().enumerate() {
+            slot[t as usize] = k as u32;
+            start.push(start[k] + per_tile[t as usize]);
         }
         let mut fill = start.clone();
-        let mut lists = vec![0u32; start[tiles_x * tiles_y] as usize];
+        let mut lists = vec![0u32; start[tiles.len()] as usize];
         for (k, r) in rects.iter().enumerate() {
             if let Some(r) = *r {
                 for t in tiles_of(r) {
-                    lists[fill[t] as usize] = k as u32;
-                    fill[t] += 1;
+                    let c = slot[t] as usize;
+                    lists[fill[c] as usize] = k as u32;
+                    fill[c] += 1;
                 }
             }
-        }
-        if lists.is_empty() {
-            return None;
         }
         let v = |v: ircache_math::Vec3, w: f32| [v.x, v.y, v.z, w];
         let records: Vec<GpuRecord> = store.records()[ids]
@@ -328,28 +431,25 @@ impl SplatInput {
                 gr: r.grad_r.map(|g| v(g, 0.0)),
             })
             .collect();
-        let samples: Vec<GpuSample> = g
-            .samples
-            .iter()
-            .map(|s| match &s.point {
-                Some(sp) => GpuSample {
-                    p: v(sp.it.p, 1.0),
-                    n: v(sp.n, 0.0),
-                    n_bump: v(sp.n_bump, 0.0),
-                },
-                None => GpuSample::zeroed(),
-            })
-            .collect();
-        let sums: Vec<GpuSums> = buffer
-            .pixels
-            .iter()
-            .map(|p| GpuSums {
-                irradiance: [p.irradiance.r, p.irradiance.g, p.irradiance.b, p.weight],
-                count: p.count,
-                min_error: p.min_error,
-                pad: [0; 2],
-            })
-            .collect();
+        let mut sums = vec![GpuSums::zeroed(); tiles.len() * TILE_SAMPLES];
+        for (&tile, tile_sums) in tiles.iter().zip(sums.chunks_exact_mut(TILE_SAMPLES)) {
+            let (x0, y0) = (
+                tile as usize % tiles_x * TILE,
+                tile as usize / tiles_x * TILE,
+            );
+            for (k, s) in tile_sums.iter_mut().enumerate() {
+                let (x, y) = (x0 + k % TILE, y0 + k / TILE);
+                if x < w && y < h {
+                    let p = &buffer.pixels[y * w + x];
+                    *s = GpuSums {
+                        irradiance: [p.irradiance.r, p.irradiance.g, p.irradiance.b, p.weight],
+                        count: p.count,
+                        min_error: p.min_error,
+                        pad: [0; 2],
+                    };
+                }
+            }
+        }
         let (metric, accuracy) = store.metric();
         let params = GpuParams {
             width: w as u32,
@@ -366,26 +466,31 @@ impl SplatInput {
                 GradientMode::Full => 2,
             },
             accuracy,
-            pad: [0; 2],
+            tile_count: tiles.len() as u32,
+            pad: 0,
         };
         Some(SplatInput {
             params,
-            tiles_y: tiles_y as u32,
             records,
-            samples,
+            tiles,
             sums,
             start,
             lists,
         })
     }
 
-    /// Bytes uploaded: records, samples, sums and tile lists.
+    /// Bytes uploaded: records, sums and tile lists (the samples apart).
     #[must_use]
     pub fn bytes(&self) -> usize {
         std::mem::size_of_val(self.records.as_slice())
-            + std::mem::size_of_val(self.samples.as_slice())
             + std::mem::size_of_val(self.sums.as_slice())
-            + 4 * (self.start.len() + self.lists.len())
+            + 4 * (self.tiles.len() + self.start.len() + self.lists.len())
+    }
+
+    /// Tiles touched.
+    #[must_use]
+    pub fn tile_count(&self) -> usize {
+        self.tiles.len()
     }
 
     /// Record entries in the tile lists (a record once per tile its rectangle touches).
@@ -400,7 +505,12 @@ impl SplatInput {
 pub struct SplatJob {
     bind: wgpu::BindGroup,
     sums: wgpu::Buffer,
-    tiles: (u32, u32),
+    /// Workgroups dispatched along x and y.
+    groups: (u32, u32),
+    /// The touched tiles, whose sums come back.
+    tiles: Vec<u32>,
+    /// Film size.
+    size: (usize, usize),
 }
 
 impl Splatter for GpuSplatter {

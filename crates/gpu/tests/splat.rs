@@ -111,8 +111,13 @@ fn gpu_splatting_equals_the_cpu_splatter() {
             ErrorMetric::Ward | ErrorMetric::Hessian => 1.0 / accuracy,
         };
         let min_error_tolerance = 1e-4 + normal_scale * (4.0 * f32::EPSILON).sqrt();
+        // Layer 1 refills layer 0's G-buffer in place, as the splat pass does: the GPU's copy
+        // of the samples must follow.
+        let mut g = GBuffer::build(&scene, &cache, &s, &samplers, 0);
         for layer in 0..2 {
-            let g = GBuffer::build(&scene, &cache, &s, &samplers, layer);
+            if layer > 0 {
+                g.rebuild(&scene, &cache, &s, &samplers, layer);
+            }
             let mut cpu = SplatBuffer::new(&g);
             CpuSplatter.splat(&mut cpu, &g, &cache, 0..n, &scene.camera, reach);
             // On the GPU in three calls, as the miss search splats batches.

@@ -1,9 +1,10 @@
 // Radiance cache splatting of irradiance records (paper 001 ch. 4, Algorithm 3; NOTES-001 §C.2):
 // each sample of a layer sums the weighted, gradient-extrapolated irradiance (000 eq. 3.15) of
 // every record whose influence covers it. Records are binned per 16 × 16 tile on the CPU (each
-// record under the tiles its film rectangle touches, in index order), and one invocation per
-// sample walks its tile's list: the sums are the CPU splatter's, in the same order, with no
-// float blending (whose order a GPU does not fix).
+// record under the tiles its film rectangle touches, in index order); one workgroup per touched
+// tile, one invocation per sample, walks the tile's list: the sums are the CPU splatter's, in
+// the same order, with no float blending (whose order a GPU does not fix). The samples cover
+// the film; the sums, the touched tiles only (TILE² each, row-major within the tile).
 
 struct Record {
     p_r: vec4<f32>,   // position, radius
@@ -34,18 +35,21 @@ struct Params {
     metric: u32,    // 0 Ward, 1 Tabellion, 2 Hessian
     gradients: u32, // 0 none, 1 rotation, 2 full
     accuracy: f32,
-    pad0: u32,
-    pad1: u32,
+    tile_count: u32, // touched tiles
+    pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> records: array<Record>;
 @group(0) @binding(2) var<storage, read> samples: array<Sample>;
-@group(0) @binding(3) var<storage, read> tile_start: array<u32>;
+@group(0) @binding(3) var<storage, read> tile_start: array<u32>;   // per touched tile
 @group(0) @binding(4) var<storage, read> tile_records: array<u32>;
-@group(0) @binding(5) var<storage, read_write> sums: array<Sums>;
+@group(0) @binding(5) var<storage, read_write> sums: array<Sums>; // per touched tile, TILE²
+@group(0) @binding(6) var<storage, read> tiles: array<u32>;       // touched tiles' film indices
 
 const TILE: u32 = 16u;
+// Workgroups along x; touched tiles beyond wrap to further rows (`splat::GROUPS_X`).
+const GROUPS_X: u32 = 32768u;
 
 // `irradiance_cache::record::ErrorMetric::error`; negative when the record lies in front.
 fn record_error(rec: Record, p: vec3<f32>, n: vec3<f32>) -> f32 {
@@ -95,23 +99,29 @@ var<workgroup> chunk: array<Record, CHUNK>;
 
 @compute @workgroup_size(16, 16, 1)
 fn splat(
-    @builtin(global_invocation_id) id: vec3<u32>,
     @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(local_invocation_id) lid: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    // Every invocation stays to the end: the barriers need the whole workgroup.
-    let inside = id.x < params.width && id.y < params.height;
-    let i = id.y * params.width + id.x;
-    var s: Sample;
-    var out: Sums;
-    if inside {
-        s = samples[i];
-        out = sums[i];
+    let t = group.y * GROUPS_X + group.x;
+    // Uniform across the workgroup: the barriers below see all of it or none.
+    if t >= params.tile_count {
+        return;
     }
+    let tile = tiles[t];
+    let x = (tile % params.tiles_x) * TILE + lid.x;
+    let y = (tile / params.tiles_x) * TILE + lid.y;
+    // Every invocation stays to the end: the barriers need the whole workgroup.
+    let inside = x < params.width && y < params.height;
+    let slot = t * TILE * TILE + local;
+    var s: Sample;
+    if inside {
+        s = samples[y * params.width + x];
+    }
+    var out = sums[slot];
     let served = inside && s.p.w != 0.0;
-    let tile = group.y * params.tiles_x + group.x;
-    let first = tile_start[tile];
-    let end = tile_start[tile + 1u];
+    let first = tile_start[t];
+    let end = tile_start[t + 1u];
     for (var base = first; base < end; base = base + CHUNK) {
         workgroupBarrier();
         if local < CHUNK && base + local < end {
@@ -134,6 +144,6 @@ fn splat(
         }
     }
     if served {
-        sums[i] = out;
+        sums[slot] = out;
     }
 }

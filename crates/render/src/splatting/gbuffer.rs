@@ -11,6 +11,7 @@ use crate::scene::Scene;
 use ircache_embree::Hit;
 use ircache_math::{Ray, Vec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// One pixel's sample of the layer.
 #[derive(Clone, Copy, Debug)]
@@ -34,8 +35,13 @@ pub struct GBuffer {
     pub height: usize,
     /// Sample index of this layer in every pixel.
     pub layer: u32,
-    /// The samples.
+    /// The samples. Filled by [`GBuffer::build`] and [`GBuffer::rebuild`] only: each filling
+    /// has its own [`GBuffer::filling`].
     pub samples: Vec<GSample>,
+    /// A token of this filling, renewed by each: a splatter that keeps the samples elsewhere
+    /// (the GPU's) holds a weak reference to it and knows its copy current while that upgrades
+    /// to this very token (the allocation a weak reference keeps alive is never reused).
+    filling: Arc<()>,
 }
 
 impl GBuffer {
@@ -59,9 +65,16 @@ impl GBuffer {
             height: settings.height,
             layer,
             samples: vec![empty; settings.width * settings.height],
+            filling: Arc::new(()),
         };
         g.rebuild(scene, cache, settings, samplers, layer);
         g
+    }
+
+    /// The token of this filling of the samples (see the field).
+    #[must_use]
+    pub fn filling(&self) -> &Arc<()> {
+        &self.filling
     }
 
     /// Makes this buffer (of the same size) hold layer `layer` instead, reusing its memory.
@@ -77,6 +90,7 @@ impl GBuffer {
         assert_eq!(self.samples.len(), w * h, "G-buffer of another size");
         let rows = settings.rows();
         self.layer = layer;
+        self.filling = Arc::new(());
         self.samples
             .par_chunks_mut(w)
             .enumerate()
