@@ -24,6 +24,7 @@ use ircache_render::splatting::buffer::{
     record_rects, splat, splat_parts, SplatBuffer, Splatter, Sums,
 };
 use ircache_render::splatting::GBuffer;
+use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -207,7 +208,7 @@ impl GpuSplatter {
         let v = |v: ircache_math::Vec3, w: f32| [v.x, v.y, v.z, w];
         let samples: Vec<GpuSample> = g
             .samples
-            .iter()
+            .par_iter()
             .map(|s| match &s.point {
                 Some(sp) => GpuSample {
                     p: v(sp.it.p, 1.0),
@@ -432,24 +433,28 @@ impl SplatInput {
             })
             .collect();
         let mut sums = vec![GpuSums::zeroed(); tiles.len() * TILE_SAMPLES];
-        for (&tile, tile_sums) in tiles.iter().zip(sums.chunks_exact_mut(TILE_SAMPLES)) {
-            let (x0, y0) = (
-                tile as usize % tiles_x * TILE,
-                tile as usize / tiles_x * TILE,
-            );
-            for (k, s) in tile_sums.iter_mut().enumerate() {
-                let (x, y) = (x0 + k % TILE, y0 + k / TILE);
-                if x < w && y < h {
-                    let p = &buffer.pixels[y * w + x];
-                    *s = GpuSums {
-                        irradiance: [p.irradiance.r, p.irradiance.g, p.irradiance.b, p.weight],
-                        count: p.count,
-                        min_error: p.min_error,
-                        pad: [0; 2],
-                    };
+        let tile_sums = sums.par_chunks_exact_mut(TILE_SAMPLES);
+        tiles
+            .par_iter()
+            .zip(tile_sums)
+            .for_each(|(&tile, tile_sums)| {
+                let (x0, y0) = (
+                    tile as usize % tiles_x * TILE,
+                    tile as usize / tiles_x * TILE,
+                );
+                for (k, s) in tile_sums.iter_mut().enumerate() {
+                    let (x, y) = (x0 + k % TILE, y0 + k / TILE);
+                    if x < w && y < h {
+                        let p = &buffer.pixels[y * w + x];
+                        *s = GpuSums {
+                            irradiance: [p.irradiance.r, p.irradiance.g, p.irradiance.b, p.weight],
+                            count: p.count,
+                            min_error: p.min_error,
+                            pad: [0; 2],
+                        };
+                    }
                 }
-            }
-        }
+            });
         let (metric, accuracy) = store.metric();
         let params = GpuParams {
             width: w as u32,

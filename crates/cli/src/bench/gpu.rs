@@ -9,6 +9,8 @@
 //!   read back, and how many pixels see the triangle Embree's ray through the pixel centre hits.
 //! - Records' hemisphere planes (64 × 64) rasterised in batches of thousands: planes per second
 //!   on Sponza and the Cornell box, and agreement with one ray per pixel.
+//! - The walkthrough (`ircache view`'s frames) at 512×512 on the Cornell box and Sponza, its
+//!   records splatted on the CPU and on the GPU: frames per second while filling and full.
 //! - A warm-cache frame at 1920×1080, 1 spp, with the GPU splatting: the whole pixel pass,
 //!   whose G-buffer and shading run on the CPU.
 
@@ -129,8 +131,8 @@ pub fn run_all(shared: &Path) -> Result<()> {
         // A call of the miss search's size: the last 100 records, whole (pack, upload,
         // dispatch, read-back) through the splatter, the samples resident.
         let few = n.saturating_sub(100)..n;
+        let mut b = SplatBuffer::new(&g);
         let (few_gpu, _) = best(|| {
-            let mut b = SplatBuffer::new(&g);
             ircache_render::splatting::buffer::Splatter::splat(
                 splatter.as_ref(),
                 &mut b,
@@ -141,12 +143,8 @@ pub fn run_all(shared: &Path) -> Result<()> {
                 reach,
             );
         });
-        let (few_cpu, _) = pool.install(|| {
-            best(|| {
-                let mut b = SplatBuffer::new(&g);
-                splat(&mut b, &g, &cache, few.clone(), &scene.camera, reach);
-            })
-        });
+        let (few_cpu, _) =
+            pool.install(|| best(|| splat(&mut b, &g, &cache, few.clone(), &scene.camera, reach)));
         println!(
             "  splat {width}×{height}, {n:>6} records (a {accuracy}, filled in {fill:.1} s; {} \
              tile entries over {} tiles): kernel {:.2} ms; pack {:.1} ms, upload {:.1} ms ({:.0} \
@@ -239,6 +237,15 @@ pub fn run_all(shared: &Path) -> Result<()> {
             points.len() as f64 / t,
             100.0 * agree as f64 / pixels.max(1) as f64
         );
+    }
+
+    // The walkthrough, splatting on the CPU and on the GPU.
+    for (name, path) in [
+        ("cornell-box", shared.join("scenes/cornell-box/scene.xml")),
+        ("sponza-sun", shared.join("scenes/sponza-sun/scene.xml")),
+    ] {
+        super::splat::walkthrough(name, &path, threads, None)?;
+        super::splat::walkthrough(name, &path, threads, Some(splatter.clone()))?;
     }
 
     // A warm-cache frame with the GPU splatting.

@@ -162,8 +162,14 @@ fn frame(
     });
 }
 
-/// Frames per second of the walkthrough on `scene` at 512×512: while filling, and full.
-fn walkthrough(name: &str, path: &Path) -> Result<()> {
+/// Frames per second of the walkthrough on `scene` at 512×512 on `threads` threads, its
+/// records splatted by `splatter` (`None`: the CPU's): while filling, and full.
+pub(super) fn walkthrough(
+    name: &str,
+    path: &Path,
+    threads: usize,
+    splatter: Option<std::sync::Arc<dyn ircache_render::splatting::buffer::Splatter>>,
+) -> Result<()> {
     use ircache_render::integrators::RayCounts;
     use ircache_render::splatting::walkthrough::Walkthrough;
     let defines = vec![("max_depth".to_string(), "3".to_string())];
@@ -179,7 +185,11 @@ fn walkthrough(name: &str, path: &Path) -> Result<()> {
     };
     // As `ircache view` runs it.
     ic.params.direct_samples = ircache_render::splatting::walkthrough::WALKTHROUGH_LIGHT_SAMPLES;
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
+    let on = if splatter.is_some() { "GPU" } else { "CPU" };
+    ic.splatter = splatter;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()?;
     let mut walk = pool.install(|| Walkthrough::new(scene, &ic, 512, 512, 1, &pool))?;
     let mut rays = RayCounts::default();
     let (mut filling, mut filling_time) = (0u32, 0.0f64);
@@ -204,7 +214,7 @@ fn walkthrough(name: &str, path: &Path) -> Result<()> {
     let png = ircache_image::png::encode(&walk.image(false), 0.0).map_err(anyhow::Error::msg)?;
     let encode = t.elapsed().as_secs_f64();
     println!(
-        "  walkthrough {name:<12} 512×512: filling {:.1} fps ({filling} frames to {} records), \
+        "  walkthrough {name:<12} 512×512, {threads} threads, splatting on the {on}: filling {:.1} fps ({filling} frames to {} records), \
          full {:.1} fps; PNG encoding {:.1} ms ({} kB) [thesis: 5 and 32 fps]",
         f64::from(filling) / filling_time.max(1e-9),
         walk.cache().levels.first().map_or(0, |s| s.len()),
@@ -217,8 +227,18 @@ fn walkthrough(name: &str, path: &Path) -> Result<()> {
 
 /// Runs the benchmark.
 pub fn run_all(shared: &Path) -> Result<()> {
-    walkthrough("cornell-box", &shared.join("scenes/cornell-box/scene.xml"))?;
-    walkthrough("sponza-sun", &shared.join("scenes/sponza-sun/scene.xml"))?;
+    walkthrough(
+        "cornell-box",
+        &shared.join("scenes/cornell-box/scene.xml"),
+        2,
+        None,
+    )?;
+    walkthrough(
+        "sponza-sun",
+        &shared.join("scenes/sponza-sun/scene.xml"),
+        2,
+        None,
+    )?;
     let path = shared.join("scenes/sponza-sun/scene.xml");
     let defines = vec![("max_depth".to_string(), "3".to_string())];
     let mut desc = ircache_scene::load_scene(&path, &defines, &ObjCamera::default())?;
