@@ -5,13 +5,18 @@
 //!   layer of samples, a [`ircache_render::splatting::buffer::Splatter`] the `splat` integrator
 //!   and the walkthrough use in place of the CPU's.
 //! - [`visibility`] (`shaders/visibility.wgsl`): the scene's triangles rasterised through a view,
-//!   the nearest per pixel: a record's hemisphere plane filled by rasterising.
+//!   the nearest per pixel: a record's hemisphere plane filled by rasterising, thousands to a
+//!   pass; the camera's view; a shadow map.
+//! - [`frame`] (`shaders/frame.wgsl`): a whole frame with a warm cache, the thesis's pipeline
+//!   (G-buffer by rasterisation, splatting, direct light by a shadow map, composition) for
+//!   Lambertian scenes of constant albedo under one directional light.
 //!
 //! Nothing else in ircache depends on this crate; the CLI uses it behind its `gpu` feature (on
 //! by default). Without a device, [`Gpu::new`] says so ([`GpuError::NoDevice`]). On machines
 //! without a GPU, Mesa's lavapipe (a software Vulkan device, Debian's `mesa-vulkan-drivers`) runs
 //! the same shaders; the tests use it and say when no device exists.
 
+pub mod frame;
 pub mod splat;
 pub mod visibility;
 
@@ -33,6 +38,9 @@ pub enum GpuError {
     /// The device reported an error (validation, out of memory) for a pass.
     #[error("the GPU reported: {0}")]
     Reported(String),
+    /// The scene holds what a GPU pass does not serve.
+    #[error("not served on the GPU: {0}")]
+    Unsupported(String),
 }
 
 /// An open device and its queue.

@@ -266,7 +266,7 @@ impl GpuSplatter {
         let sums_buffer = init(
             "sums",
             bytemuck::cast_slice(&input.sums),
-            storage | wgpu::BufferUsages::COPY_SRC,
+            storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("splat"),
@@ -300,13 +300,16 @@ impl GpuSplatter {
     pub fn dispatch(&self, job: &SplatJob) {
         let device = &self.gpu.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &job.bind, &[]);
-            pass.dispatch_workgroups(job.groups.0, job.groups.1, 1);
-        }
+        self.encode(&mut encoder, job);
         self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// Records the splat of an uploaded job into `encoder`.
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, job: &SplatJob) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &job.bind, &[]);
+        pass.dispatch_workgroups(job.groups.0, job.groups.1, 1);
     }
 
     /// Waits for the GPU to finish what was submitted.
@@ -380,8 +383,38 @@ impl SplatInput {
         camera: &Camera,
         filter_reach: f32,
     ) -> Option<SplatInput> {
+        Self::pack_over(
+            Some(buffer),
+            (g.width, g.height),
+            cache,
+            ids,
+            camera,
+            filter_reach,
+        )
+    }
+
+    /// [`SplatInput::pack`] for a `size` film whose sums start at zero (a frame whose samples
+    /// the GPU made: [`crate::frame`]).
+    #[must_use]
+    pub fn pack_fresh(
+        size: (usize, usize),
+        cache: &IrradianceCache,
+        ids: Range<usize>,
+        camera: &Camera,
+        filter_reach: f32,
+    ) -> Option<SplatInput> {
+        Self::pack_over(None, size, cache, ids, camera, filter_reach)
+    }
+
+    fn pack_over(
+        buffer: Option<&SplatBuffer>,
+        (w, h): (usize, usize),
+        cache: &IrradianceCache,
+        ids: Range<usize>,
+        camera: &Camera,
+        filter_reach: f32,
+    ) -> Option<SplatInput> {
         let store = cache.levels.first()?;
-        let (w, h) = (g.width, g.height);
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
         let rects = record_rects(cache, ids.clone(), camera, (w, h), filter_reach);
         // Tile lists in index order (compressed rows).
@@ -444,15 +477,26 @@ impl SplatInput {
                 );
                 for (k, s) in tile_sums.iter_mut().enumerate() {
                     let (x, y) = (x0 + k % TILE, y0 + k / TILE);
-                    if x < w && y < h {
-                        let p = &buffer.pixels[y * w + x];
-                        *s = GpuSums {
-                            irradiance: [p.irradiance.r, p.irradiance.g, p.irradiance.b, p.weight],
-                            count: p.count,
-                            min_error: p.min_error,
-                            pad: [0; 2],
-                        };
-                    }
+                    *s = match buffer {
+                        Some(b) if x < w && y < h => {
+                            let p = &b.pixels[y * w + x];
+                            GpuSums {
+                                irradiance: [
+                                    p.irradiance.r,
+                                    p.irradiance.g,
+                                    p.irradiance.b,
+                                    p.weight,
+                                ],
+                                count: p.count,
+                                min_error: p.min_error,
+                                pad: [0; 2],
+                            }
+                        }
+                        _ => GpuSums {
+                            min_error: f32::INFINITY,
+                            ..GpuSums::zeroed()
+                        },
+                    };
                 }
             });
         let (metric, accuracy) = store.metric();
@@ -498,6 +542,17 @@ impl SplatInput {
         self.tiles.len()
     }
 
+    /// Per film tile (row-major), its place among the touched tiles; `u32::MAX` where untouched.
+    #[must_use]
+    pub fn tile_slots(&self) -> Vec<u32> {
+        let (w, h) = (self.params.width as usize, self.params.height as usize);
+        let mut slots = vec![u32::MAX; w.div_ceil(TILE) * h.div_ceil(TILE)];
+        for (k, &t) in self.tiles.iter().enumerate() {
+            slots[t as usize] = k as u32;
+        }
+        slots
+    }
+
     /// Record entries in the tile lists (a record once per tile its rectangle touches).
     #[must_use]
     pub fn entries(&self) -> usize {
@@ -509,7 +564,7 @@ impl SplatInput {
 #[derive(Debug)]
 pub struct SplatJob {
     bind: wgpu::BindGroup,
-    sums: wgpu::Buffer,
+    pub(crate) sums: wgpu::Buffer,
     /// Workgroups dispatched along x and y.
     groups: (u32, u32),
     /// The touched tiles, whose sums come back.

@@ -32,12 +32,12 @@ struct GpuVertex {
 #[derive(Debug)]
 pub struct PlaneVisibility {
     gpu: Arc<Gpu>,
-    pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
-    vertices: wgpu::Buffer,
-    vertex_count: u32,
+    pub(crate) pipeline: wgpu::RenderPipeline,
+    pub(crate) layout: wgpu::BindGroupLayout,
+    pub(crate) vertices: wgpu::Buffer,
+    pub(crate) vertex_count: u32,
     /// Per triangle index: (shape, primitive); primitive [`SPHERE`] for a sphere's shell.
-    triangles: Vec<(u32, u32)>,
+    pub(crate) triangles: Vec<(u32, u32)>,
     /// Spheres rasterised as shells.
     pub spheres: usize,
     /// Near clipping distance (a fraction of the scene's size: scale-free).
@@ -84,8 +84,8 @@ fn sphere_shell(center: Vec3, radius: f32) -> Vec<[Vec3; 3]> {
     out
 }
 
-const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+pub(crate) const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+pub(crate) const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 impl PlaneVisibility {
     /// Uploads `scene`'s triangles.
@@ -273,6 +273,65 @@ impl PlaneVisibility {
             .first()
             .map(|ids| ids.iter().map(|&id| self.triangle_of(id)).collect())
             .unwrap_or_default())
+    }
+
+    /// A bind group of views (column-major world-to-clip matrices; instance k draws view k).
+    pub(crate) fn views(&self, matrices: &[[[f32; 4]; 4]]) -> wgpu::BindGroup {
+        let device = &self.gpu.device;
+        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("views"),
+            contents: bytemuck::cast_slice(matrices),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("visibility"),
+            layout: &self.layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: buffer.as_entire_binding(),
+            }],
+        })
+    }
+
+    /// Records a pass drawing the scene through view 0 of `views` over the whole of `ids` and
+    /// `depth`, keeping the depth when `store_depth` (a shadow map).
+    pub(crate) fn draw(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        views: &wgpu::BindGroup,
+        ids: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        store_depth: bool,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("visibility"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: ids,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: if store_depth {
+                        wgpu::StoreOp::Store
+                    } else {
+                        wgpu::StoreOp::Discard
+                    },
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, views, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.draw(0..self.vertex_count, 0..1);
     }
 
     /// A rasterised id (triangle + 1; 0 for nothing) as (shape, primitive).
@@ -479,7 +538,7 @@ impl PlaneVisibility {
 }
 
 /// Rows of a 4 × 4 matrix as WGSL's column-major array.
-fn column_major(rows: [[f32; 4]; 4]) -> [[f32; 4]; 4] {
+pub(crate) fn column_major(rows: [[f32; 4]; 4]) -> [[f32; 4]; 4] {
     let mut columns = [[0f32; 4]; 4];
     for (r, row) in rows.iter().enumerate() {
         for (c, v) in row.iter().enumerate() {
@@ -493,7 +552,7 @@ fn column_major(rows: [[f32; 4]; 4]) -> [[f32; 4]; 4] {
 /// w = z in camera space (the film's x runs along camera −x, its y along −y, NDC y up), depth
 /// (z − near)·far / ((far − near)·z), so that each pixel centre sees what
 /// [`Camera::generate_ray`] sees through it.
-fn camera_clip(camera: &Camera) -> [[f32; 4]; 4] {
+pub(crate) fn camera_clip(camera: &Camera) -> [[f32; 4]; 4] {
     let to_camera = camera.to_world.inverse();
     let row = |r: usize| {
         let m = to_camera.row(r);

@@ -53,6 +53,10 @@ pub struct BenchArgs {
     /// Skip the Mitsuba 3 comparison.
     #[arg(long)]
     pub no_mitsuba: bool,
+    /// Folder for the images of the parts that make some (gpu: the GPU frame and the same frame
+    /// ray traced, PNG).
+    #[arg(long)]
+    pub images: Option<PathBuf>,
     /// Which parts: all, rays, path, gather, ic, peers (ircache against Mitsuba 3 with
     /// multijitter, by rendering), cache (the cache against path tracing by rendering, and the
     /// cost of depth), radiance (radiance caching against tracing the same lobes and against
@@ -175,7 +179,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         splat::run_all(&shared)?;
     }
     if args.only == "all" || args.only == "gpu" {
-        gpu::run_all(&shared)?;
+        gpu::run_all(&shared, args.images.as_deref())?;
     }
     if args.only == "all" || args.only == "plane" {
         plane::run_all(&shared)?;

@@ -55,7 +55,7 @@ const GROUPS_X: u32 = 32768u;
 fn record_error(rec: Record, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let d = p - rec.p_r.xyz;
     let dist = length(d);
-    if dot(d, n + rec.n.xyz) < -0.1 * dist {
+    if dist > 1e-4 * rec.p_r.w && dot(d, n + rec.n.xyz) < -0.1 * dist {
         return -1.0;
     }
     let normal = sqrt(max(1.0 - min(dot(n, rec.n.xyz), 1.0), 0.0));

@@ -222,7 +222,10 @@ impl ErrorMetric {
         let (rp, rn, rr) = (rec.position(), rec.normal(), rec.radius());
         let d = p - rp;
         let dist = d.length();
-        if d.dot(n + rn) < -0.1 * dist {
+        // Ward's in-front test, not within a ten-thousandth of the radius: there the point is
+        // the record's own up to rounding (a GPU's G-buffer finds it a few ulps off, often
+        // just behind the surface), not a point the record lies in front of.
+        if dist > 1e-4 * rr && d.dot(n + rn) < -0.1 * dist {
             return None;
         }
         let normal = (1.0 - n.dot(rn).min(1.0)).max(0.0).sqrt();

@@ -299,6 +299,16 @@ impl LightSet {
         self.lights.len()
     }
 
+    /// When the scene's only emitter is a directional light: the unit direction towards it and
+    /// its irradiance (the light a rasteriser's shadow map serves).
+    #[must_use]
+    pub fn only_directional(&self) -> Option<(Vec3, Rgb)> {
+        match self.lights.as_slice() {
+            [Light::Directional(l)] => Some((l.wi, l.irradiance)),
+            _ => None,
+        }
+    }
+
     /// The scene's bounding sphere `(centre, radius)` given at construction.
     #[must_use]
     pub fn scene_bounds(&self) -> (Vec3, f32) {

@@ -1,0 +1,557 @@
+//! A whole frame on the GPU (001 §4.5, the thesis's pipeline; NOTES-001 §C.1), the passes of
+//! `shaders/frame.wgsl` around [`crate::splat`]: the camera's view rasterised
+//! ([`crate::visibility`]), the G-buffer made from it on the GPU (each pixel centre's hit found
+//! on its rasterised triangle), the cache's records splatted over it, and each pixel composed
+//! from the splatted indirect irradiance and the direct light through a shadow map.
+//!
+//! For what a rasteriser serves without ray tracing: Lambertian surfaces of constant albedo
+//! (no textures, no normal or bump maps, triangle meshes) under one directional light, as
+//! `sponza-sun`; [`GpuFrame::new`] names what else a scene holds. The cache must be warm:
+//! samples no record covers stay without indirect light and are counted
+//! ([`FrameImage::misses`]; the CPU's splat pass gathers records there).
+
+use crate::splat::{GpuSplatter, SplatInput, SplatJob};
+use crate::visibility::{camera_clip, column_major, PlaneVisibility, DEPTH, FORMAT, SPHERE};
+use crate::{Gpu, GpuError};
+use bytemuck::{Pod, Zeroable};
+use ircache_math::{Frame, Rgb, Vec3};
+use ircache_render::camera::Camera;
+use ircache_render::irradiance_cache::build::is_record_site;
+use ircache_render::irradiance_cache::IrradianceCache;
+use ircache_render::scene::{Scene, ShapeGeometry};
+use std::sync::Arc;
+use wgpu::util::DeviceExt;
+
+/// A triangle as `frame.wgsl` reads it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuTriangle {
+    p: [[f32; 4]; 3],
+    n: [[f32; 4]; 3],
+}
+
+/// A shape's albedos and record sites, front and back (`Shape`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuShape {
+    front: [f32; 4],
+    back: [f32; 4],
+}
+
+/// The camera (`Camera`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuCamera {
+    to_world: [[f32; 4]; 4],
+    origin: [f32; 4],
+    tan_half: [f32; 4],
+    size: [u32; 4],
+}
+
+/// The directional light and its shadow map (`Light`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuLight {
+    to_clip: [[f32; 4]; 4],
+    to_light: [f32; 4],
+    irradiance: [f32; 4],
+    bias: [f32; 4],
+}
+
+/// The scene on the GPU for whole frames: its triangles, shapes, light and shadow map.
+#[derive(Debug)]
+pub struct GpuFrame {
+    gpu: Arc<Gpu>,
+    visibility: PlaneVisibility,
+    splatter: Arc<GpuSplatter>,
+    gbuffer: wgpu::ComputePipeline,
+    compose: wgpu::ComputePipeline,
+    triangles: wgpu::Buffer,
+    shapes: wgpu::Buffer,
+    light: wgpu::Buffer,
+    shadow: wgpu::TextureView,
+}
+
+/// One frame's resources: its targets, the records packed and uploaded, the bind groups.
+#[derive(Debug)]
+pub struct FrameJob {
+    size: (u32, u32),
+    view: wgpu::BindGroup,
+    ids: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    splat: SplatJob,
+    sums_bytes: u64,
+    gbuffer: wgpu::BindGroup,
+    compose: wgpu::BindGroup,
+    image: wgpu::Buffer,
+    misses: wgpu::Buffer,
+    samples: wgpu::Buffer,
+}
+
+/// A composed frame read back.
+#[derive(Clone, Debug)]
+pub struct FrameImage {
+    /// Radiance per pixel, row-major from the top.
+    pub pixels: Vec<Rgb>,
+    /// Record sites no record covered (no indirect light there).
+    pub misses: u32,
+}
+
+/// Shadow map size in texels (each side).
+pub const SHADOW_MAP: u32 = 4096;
+
+impl GpuFrame {
+    /// The scene's triangles, materials and light on `gpu`, its shadow map (of `shadow_map`²
+    /// texels) rasterised once; `splatter` splats the records.
+    ///
+    /// # Errors
+    /// [`GpuError::Unsupported`] naming what the scene holds that this pipeline does not serve.
+    pub fn new(
+        gpu: Arc<Gpu>,
+        splatter: Arc<GpuSplatter>,
+        scene: &Scene,
+        cache: &IrradianceCache,
+        shadow_map: u32,
+    ) -> Result<GpuFrame, GpuError> {
+        let unsupported = |what: String| Err(GpuError::Unsupported(what));
+        let Some((to_light, irradiance)) = scene.lights.only_directional() else {
+            return unsupported(format!(
+                "the GPU frame serves one directional light; the scene has {} emitters of other kinds",
+                scene.lights.len()
+            ));
+        };
+        let mut shapes = Vec::with_capacity(scene.shapes.len());
+        for (k, shape) in scene.shapes.iter().enumerate() {
+            let material = &scene.materials[shape.material];
+            let name = shape.name.as_deref().unwrap_or("(unnamed)");
+            if matches!(shape.geometry, ShapeGeometry::Sphere { .. }) {
+                return unsupported(format!("shape {k} ({name}) is a sphere"));
+            }
+            let bsdf = material.at(ircache_math::Vec2::ZERO);
+            if material.is_textured() || !bsdf.is_diffuse_only() || shape.area_light.is_some() {
+                return unsupported(format!(
+                    "shape {k} ({name}) is not a Lambertian surface of constant albedo"
+                ));
+            }
+            let side = |up: f32| {
+                let wo = Vec3::new(0.0, 0.0, up);
+                let a = bsdf.lambertian_albedo(wo);
+                let site = !cache.is_excluded(k as u32) && is_record_site(&bsdf, wo, false);
+                [a.r, a.g, a.b, if site { 1.0 } else { 0.0 }]
+            };
+            shapes.push(GpuShape {
+                front: side(1.0),
+                back: side(-1.0),
+            });
+        }
+        let visibility = PlaneVisibility::new(gpu.clone(), scene);
+        let triangles: Vec<GpuTriangle> = visibility
+            .triangles
+            .iter()
+            .map(|&(shape, prim)| {
+                let ShapeGeometry::Mesh(m) = &scene.shapes[shape as usize].geometry else {
+                    unreachable!("spheres were refused above ({SPHERE})")
+                };
+                let idx = m.indices[prim as usize].map(|i| i as usize);
+                let v = |v: Vec3, w: f32| [v.x, v.y, v.z, w];
+                let flat = scene.shapes[shape as usize].flat;
+                let normals = m.normals.as_ref().filter(|_| !flat);
+                GpuTriangle {
+                    p: [0, 1, 2].map(|k| {
+                        let w = if k == 0 { f32::from_bits(shape) } else { 0.0 };
+                        v(m.positions[idx[k]], w)
+                    }),
+                    n: [0, 1, 2].map(|k| match normals {
+                        Some(n) => v(n[idx[k]], 1.0),
+                        None => [0.0; 4],
+                    }),
+                }
+            })
+            .collect();
+        let device = &gpu.device;
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let storage = wgpu::BufferUsages::STORAGE;
+        let triangles = init("triangles", bytemuck::cast_slice(&triangles), storage);
+        let shapes = init("shapes", bytemuck::cast_slice(&shapes), storage);
+        // The shadow map: an orthographic view along the light over the scene's bounding
+        // sphere, depth (along the light's travel) from 0 to 1 across it.
+        let (centre, radius) = scene.lights.scene_bounds();
+        let radius = radius.max(f32::MIN_POSITIVE);
+        let frame = Frame::from_z(-to_light);
+        let row = |a: Vec3, scale: f32, offset: f32| {
+            [
+                a.x * scale,
+                a.y * scale,
+                a.z * scale,
+                -a.dot(centre) * scale + offset,
+            ]
+        };
+        let to_clip = column_major([
+            row(frame.s, 1.0 / radius, 0.0),
+            row(frame.t, 1.0 / radius, 0.0),
+            row(frame.n, 0.5 / radius, 0.5),
+            [0.0, 0.0, 0.0, 1.0],
+        ]);
+        let light = GpuLight {
+            to_clip,
+            to_light: [to_light.x, to_light.y, to_light.z, 0.0],
+            irradiance: [irradiance.r, irradiance.g, irradiance.b, 0.0],
+            bias: [1.0 / shadow_map as f32, shadow_map as f32, 0.0, 0.0],
+        };
+        let light = init(
+            "light",
+            bytemuck::bytes_of(&light),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let target = |w: u32, h: u32, format, usage| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("frame target"),
+                    size: wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+                .create_view(&wgpu::TextureViewDescriptor::default())
+        };
+        let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let shadow_ids = target(shadow_map, shadow_map, FORMAT, attachment);
+        let shadow = target(
+            shadow_map,
+            shadow_map,
+            DEPTH,
+            attachment | wgpu::TextureUsages::TEXTURE_BINDING,
+        );
+        let shadow_view = visibility.views(&[to_clip]);
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        visibility.draw(&mut encoder, &shadow_view, &shadow_ids, &shadow, true);
+        gpu.queue.submit([encoder.finish()]);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("frame.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/frame.wgsl").into()),
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                cache: None,
+            })
+        };
+        let gbuffer = pipeline("gbuffer");
+        let compose = pipeline("compose");
+        gpu.check()?;
+        Ok(GpuFrame {
+            gpu,
+            visibility,
+            splatter,
+            gbuffer,
+            compose,
+            triangles,
+            shapes,
+            light,
+            shadow,
+        })
+    }
+
+    /// A frame of `cache` (warm: its level-0 records, as they are) through `camera` at
+    /// `width × height`: the targets made, the records packed and uploaded.
+    ///
+    /// # Errors
+    /// When the cache has no record on the film, or the GPU fails.
+    pub fn prepare(
+        &self,
+        cache: &IrradianceCache,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        filter_reach: f32,
+    ) -> Result<FrameJob, GpuError> {
+        let device = &self.gpu.device;
+        let (w, h) = (width as usize, height as usize);
+        let n = cache.levels.first().map_or(0, |s| s.len());
+        let input = SplatInput::pack_fresh((w, h), cache, 0..n, camera, filter_reach)
+            .ok_or_else(|| GpuError::Unsupported("no record reaches the film".into()))?;
+        let slots = input.tile_slots();
+        let storage = wgpu::BufferUsages::STORAGE;
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let samples = buffer(
+            "frame samples",
+            48 * (w * h) as u64,
+            storage | wgpu::BufferUsages::COPY_SRC,
+        );
+        let hits = buffer("frame hits", 4 * (w * h) as u64, storage);
+        let image = buffer(
+            "frame image",
+            16 * (w * h) as u64,
+            storage | wgpu::BufferUsages::COPY_SRC,
+        );
+        let misses = buffer(
+            "frame misses",
+            4,
+            storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        );
+        let slots = init("tile slots", bytemuck::cast_slice(&slots), storage);
+        let splat = self.splatter.upload(&input, &samples);
+        let inverse = camera.to_world;
+        let cam = GpuCamera {
+            to_world: inverse.to_cols_array_2d(),
+            origin: [camera.origin.x, camera.origin.y, camera.origin.z, 1.0],
+            tan_half: [camera.tan_half_x, camera.tan_half_y, 0.0, 0.0],
+            size: [width, height, width.div_ceil(16), 0],
+        };
+        let cam = init(
+            "camera",
+            bytemuck::bytes_of(&cam),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let target = |format, usage| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("camera view"),
+                    size: wgpu::Extent3d {
+                        width,
+                        height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+                .create_view(&wgpu::TextureViewDescriptor::default())
+        };
+        let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let ids = target(FORMAT, attachment | wgpu::TextureUsages::TEXTURE_BINDING);
+        let depth = target(DEPTH, attachment);
+        let bind = |pipeline: &wgpu::ComputePipeline, entries: &[(u32, wgpu::BindingResource)]| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("frame"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries
+                    .iter()
+                    .map(|(binding, resource)| wgpu::BindGroupEntry {
+                        binding: *binding,
+                        resource: resource.clone(),
+                    })
+                    .collect::<Vec<_>>(),
+            })
+        };
+        let gbuffer = bind(
+            &self.gbuffer,
+            &[
+                (0, cam.as_entire_binding()),
+                (1, wgpu::BindingResource::TextureView(&ids)),
+                (2, self.triangles.as_entire_binding()),
+                (3, self.shapes.as_entire_binding()),
+                (4, samples.as_entire_binding()),
+                (5, hits.as_entire_binding()),
+            ],
+        );
+        let compose = bind(
+            &self.compose,
+            &[
+                (0, cam.as_entire_binding()),
+                (3, self.shapes.as_entire_binding()),
+                (4, samples.as_entire_binding()),
+                (5, hits.as_entire_binding()),
+                (6, splat.sums.as_entire_binding()),
+                (7, slots.as_entire_binding()),
+                (8, self.light.as_entire_binding()),
+                (9, wgpu::BindingResource::TextureView(&self.shadow)),
+                (10, image.as_entire_binding()),
+                (11, misses.as_entire_binding()),
+            ],
+        );
+        let view = self.visibility.views(&[camera_clip(camera)]);
+        let sums_bytes = splat.sums.size();
+        self.gpu.check()?;
+        Ok(FrameJob {
+            size: (width, height),
+            view,
+            ids,
+            depth,
+            splat,
+            sums_bytes,
+            gbuffer,
+            compose,
+            image,
+            misses,
+            samples,
+        })
+    }
+
+    /// Renders the frame: rasterises the camera's view, makes the G-buffer, clears the sums and
+    /// splats the records, composes; one submission.
+    pub fn render(&self, job: &FrameJob) {
+        let device = &self.gpu.device;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        self.visibility
+            .draw(&mut encoder, &job.view, &job.ids, &job.depth, false);
+        let groups = (job.size.0.div_ceil(16), job.size.1.div_ceil(16));
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+            pass.set_pipeline(&self.gbuffer);
+            pass.set_bind_group(0, &job.gbuffer, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        encoder.clear_buffer(&job.splat.sums, 0, Some(job.sums_bytes));
+        encoder.clear_buffer(&job.misses, 0, None);
+        self.splatter.encode(&mut encoder, &job.splat);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+            pass.set_pipeline(&self.compose);
+            pass.set_bind_group(0, &job.compose, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// Waits for the frame.
+    ///
+    /// # Errors
+    /// When the device reports an error.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.splatter.wait()
+    }
+
+    /// Reads the splatted sums back into `buffer` (of the frame's size).
+    ///
+    /// # Errors
+    /// When the read-back fails or the device reported an error.
+    pub fn read_sums(
+        &self,
+        job: &FrameJob,
+        buffer: &mut ircache_render::splatting::SplatBuffer,
+    ) -> Result<(), GpuError> {
+        self.splatter.read(&job.splat, buffer)
+    }
+
+    /// Reads the G-buffer back: per pixel, the position and the normal facing the viewer where
+    /// the pixel sees a record site, `None` elsewhere.
+    ///
+    /// # Errors
+    /// When the read-back fails or the device reported an error.
+    pub fn read_sites(&self, job: &FrameJob) -> Result<Vec<Option<(Vec3, Vec3)>>, GpuError> {
+        let bytes = self.gpu.read_back(&job.samples)?;
+        self.gpu.check()?;
+        let samples: &[[[f32; 4]; 3]] = bytemuck::cast_slice(&bytes);
+        Ok(samples
+            .iter()
+            .map(|[p, n, _]| {
+                (p[3] != 0.0).then(|| (Vec3::new(p[0], p[1], p[2]), Vec3::new(n[0], n[1], n[2])))
+            })
+            .collect())
+    }
+
+    /// Reads the composed frame back.
+    ///
+    /// # Errors
+    /// When the read-back fails or the device reported an error.
+    pub fn read(&self, job: &FrameJob) -> Result<FrameImage, GpuError> {
+        let bytes = self.gpu.read_back(&job.image)?;
+        let misses = self.gpu.read_back(&job.misses)?;
+        self.gpu.check()?;
+        let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        Ok(FrameImage {
+            pixels: texels.iter().map(|t| Rgb::new(t[0], t[1], t[2])).collect(),
+            misses: bytemuck::cast_slice::<u8, u32>(&misses)[0],
+        })
+    }
+}
+
+/// The frame [`GpuFrame`] renders, by ray tracing on the CPU: each pixel centre's hit by
+/// Embree, its indirect irradiance looked up in the cache (the same records and weights the
+/// splat sums), its direct light by a shadow ray. The GPU frame's reference.
+#[must_use]
+pub fn traced_frame(
+    scene: &Scene,
+    cache: &IrradianceCache,
+    camera: &Camera,
+    width: u32,
+    height: u32,
+) -> FrameImage {
+    use ircache_render::irradiance_cache::gather::ShadingPoint;
+    use rayon::prelude::*;
+    let (w, h) = (width as usize, height as usize);
+    let Some((to_light, irradiance)) = scene.lights.only_directional() else {
+        return FrameImage {
+            pixels: vec![Rgb::ZERO; w * h],
+            misses: 0,
+        };
+    };
+    let mode = cache.params.gradients;
+    let shaded: Vec<(Rgb, bool)> = (0..w * h)
+        .into_par_iter()
+        .map(|k| {
+            let film = ircache_math::Vec2::new(
+                ((k % w) as f32 + 0.5) / w as f32,
+                ((k / w) as f32 + 0.5) / h as f32,
+            );
+            let ray = camera.generate_ray(film);
+            let Some(it) = scene.intersect(&ray) else {
+                return (Rgb::ZERO, false);
+            };
+            let sp = ShadingPoint::facing(it, -ray.d);
+            let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+            let wo_local = it.frame.to_local(-ray.d);
+            let albedo = bsdf.lambertian_albedo(wo_local);
+            let site = !cache.is_excluded(it.shape) && is_record_site(&bsdf, wo_local, false);
+            let (mut e, mut missed) = (Rgb::ZERO, false);
+            if site {
+                match cache
+                    .levels
+                    .first()
+                    .and_then(|s| s.interpolate(sp.it.p, sp.n, sp.n_bump, 1.0, mode))
+                {
+                    Some(i) => e = i.e,
+                    None => missed = true,
+                }
+            }
+            let cosine = sp.n.dot(to_light);
+            if cosine > 0.0
+                && !scene
+                    .accel
+                    .occluded(&scene.shadow_ray(&it, to_light, f32::INFINITY))
+            {
+                e += irradiance * cosine;
+            }
+            (albedo * e / std::f32::consts::PI, missed)
+        })
+        .collect();
+    FrameImage {
+        misses: shaded.iter().filter(|s| s.1).count() as u32,
+        pixels: shaded.into_iter().map(|s| s.0).collect(),
+    }
+}

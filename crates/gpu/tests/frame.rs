@@ -1,0 +1,146 @@
+//! A whole frame on the GPU (issue 12): the G-buffer from the rasterised camera view, the
+//! records splatted, direct light through a shadow map, composed, against the same frame ray
+//! traced on the CPU ([`ircache_gpu::frame::traced_frame`]) on Sponza under its sun with a warm
+//! cache. On lavapipe where there is no GPU; with no device the test fails and says so, unless
+//! `IRCACHE_GPU_TESTS=skip`. Scenes the pipeline does not serve are refused by name.
+
+use ircache_gpu::frame::{traced_frame, GpuFrame};
+use ircache_gpu::splat::GpuSplatter;
+use ircache_gpu::{Gpu, GpuError};
+use ircache_render::integrators::Integrator;
+use ircache_render::irradiance_cache::gather::ShadingPoint;
+use ircache_render::render::RenderSettings;
+use ircache_render::scene::Scene;
+use std::sync::Arc;
+
+fn gpu() -> Option<Arc<Gpu>> {
+    match Gpu::new() {
+        Ok(g) => Some(Arc::new(g)),
+        Err(e @ GpuError::NoDevice(_))
+            if std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip") =>
+        {
+            eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {e}");
+            None
+        }
+        Err(e) => panic!("{e} (set IRCACHE_GPU_TESTS=skip to skip the GPU tests)"),
+    }
+}
+
+fn load(name: &str, width: u32, height: u32) -> ircache_scene::SceneDesc {
+    let path = format!(
+        "{}/../../../shared/scenes/{name}/scene.xml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let mut desc = ircache_scene::load_scene(
+        std::path::Path::new(&path),
+        &[("max_depth".into(), "3".into())],
+        &ircache_scene::obj_scene::ObjCamera::default(),
+    )
+    .expect("the shared scene loads");
+    desc.integrator.kind = "ic".into();
+    desc.sensor.film.width = width;
+    desc.sensor.film.height = height;
+    desc
+}
+
+#[test]
+fn the_gpu_frame_equals_the_traced_frame() {
+    let Some(gpu) = gpu() else { return };
+    let (w, h) = (160u32, 90u32);
+    let desc = load("sponza-sun", w, h);
+    let scene = Scene::build(&desc).expect("scene builds");
+    let s = RenderSettings::from_desc(&desc, 1, 2).expect("sampler");
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("pool");
+    let integrator = Integrator::from_desc(&desc.integrator).expect("integrator");
+    let (ready, _) = integrator.prepare(&scene, &s, &pool).expect("pre-pass");
+    let Integrator::Ic(ic) = ready else {
+        panic!("not the cache's integrator")
+    };
+    let cache = ic.cache.expect("filled");
+    let splatter = Arc::new(GpuSplatter::new(gpu.clone()));
+    let frame = GpuFrame::new(gpu, splatter, &scene, &cache, 2048).expect("served");
+    let camera = ircache_render::camera::Camera::new(&desc.sensor, w, h);
+    let job = frame
+        .prepare(&cache, &camera, w, h, s.filter.radius())
+        .expect("prepared");
+    frame.render(&job);
+    frame.wait().expect("rendered");
+    let on_gpu = frame.read(&job).expect("read back");
+    let traced = pool.install(|| traced_frame(&scene, &cache, &camera, w, h));
+    let n = (w * h) as usize;
+    assert_eq!(on_gpu.pixels.len(), n);
+    let lum = |p: &[ircache_math::Rgb]| p.iter().map(|c| f64::from(c.luminance())).sum::<f64>();
+    let (a, b) = (lum(&on_gpu.pixels), lum(&traced.pixels));
+    // Pixels that agree: the same hit, the same records, the same shadow; they part at triangle
+    // and shadow edges (a texel of the shadow map against an exact shadow ray).
+    let close = on_gpu
+        .pixels
+        .iter()
+        .zip(&traced.pixels)
+        .filter(|(x, y)| {
+            let d = **x - **y;
+            d.r.abs().max(d.g.abs()).max(d.b.abs())
+                <= 1e-3 * x.max_channel().max(y.max_channel()).max(1e-6)
+        })
+        .count();
+    eprintln!(
+        "GPU frame: mean luminance {:.5} against {:.5} traced; {close} of {n} pixels within 1e-3; misses {} and {}",
+        a / n as f64,
+        b / n as f64,
+        on_gpu.misses,
+        traced.misses
+    );
+    // The G-buffer: each site's position and normal are Embree's, but at triangle edges.
+    let sites = frame.read_sites(&job).expect("sites");
+    let mut same_sites = 0;
+    for (k, site) in sites.iter().enumerate() {
+        let film = ircache_math::Vec2::new(
+            ((k % w as usize) as f32 + 0.5) / w as f32,
+            ((k / w as usize) as f32 + 0.5) / h as f32,
+        );
+        let ray = camera.generate_ray(film);
+        let sp = scene
+            .intersect(&ray)
+            .map(|it| ShadingPoint::facing(it, -ray.d));
+        same_sites += usize::from(match (site, sp) {
+            (Some((p, normal)), Some(sp)) => {
+                (*p - sp.it.p).length() <= 1e-4 * (sp.it.p - camera.origin).length()
+                    && (*normal - sp.n).length() <= 1e-4
+            }
+            (None, None) => true,
+            _ => false,
+        });
+    }
+    assert!(
+        same_sites as f64 > 0.99 * n as f64,
+        "{same_sites} of {n} G-buffer samples are Embree's"
+    );
+    assert!(b > 0.0);
+    assert!(
+        (a / b - 1.0).abs() < 0.005,
+        "mean luminance {a} against {b}"
+    );
+    assert!(
+        close as f64 > 0.98 * n as f64,
+        "{close} of {n} pixels agree"
+    );
+    assert!(on_gpu.misses.abs_diff(traced.misses) <= n as u32 / 1000);
+}
+
+#[test]
+fn scenes_the_gpu_frame_does_not_serve_are_refused_by_name() {
+    let Some(gpu) = gpu() else { return };
+    // The Cornell box's light is an area light.
+    let desc = load("cornell-box", 32, 32);
+    let scene = Scene::build(&desc).expect("scene builds");
+    let cache = ircache_render::irradiance_cache::IrradianceCache::new(
+        &scene,
+        &ircache_render::irradiance_cache::IcParams::default(),
+    );
+    let splatter = Arc::new(GpuSplatter::new(gpu.clone()));
+    let err = GpuFrame::new(gpu, splatter, &scene, &cache, 64).expect_err("refused");
+    assert!(err.to_string().contains("directional light"), "{err}");
+}
