@@ -7,8 +7,9 @@
 //! For what a rasteriser serves without ray tracing: Lambertian surfaces of constant albedo
 //! (no textures, no normal or bump maps, triangle meshes) under one directional light, as
 //! `sponza-sun`; [`GpuFrame::new`] names what else a scene holds. The cache must be warm:
-//! samples no record covers stay without indirect light and are counted
-//! ([`FrameImage::misses`]; the CPU's splat pass gathers records there).
+//! records serve a sample up to error 1, else 2, else 4, as the `ic` pixel pass looks them up
+//! ([`LOOKUP_THRESHOLDS`]); samples none serves stay without indirect light and are counted
+//! ([`FrameImage::misses`]; the CPU gathers a record there).
 
 use crate::splat::{GpuSplatter, SplatInput, SplatJob};
 use crate::visibility::{camera_clip, column_major, PlaneVisibility, DEPTH, FORMAT, SPHERE};
@@ -79,7 +80,8 @@ pub struct FrameJob {
     view: wgpu::BindGroup,
     ids: wgpu::TextureView,
     depth: wgpu::TextureView,
-    splat: SplatJob,
+    /// The splat at each of [`LOOKUP_THRESHOLDS`], into one sums buffer.
+    splat: Vec<SplatJob>,
     sums_bytes: u64,
     gbuffer: wgpu::BindGroup,
     compose: wgpu::BindGroup,
@@ -96,6 +98,10 @@ pub struct FrameImage {
     /// Record sites no record covered (no indirect light there).
     pub misses: u32,
 }
+
+/// The error thresholds at which records serve a sample, each where the ones before served
+/// none: the `ic` pixel pass's lookup (`integrators::ic`).
+pub const LOOKUP_THRESHOLDS: [f32; 3] = [1.0, 2.0, 4.0];
 
 /// Shadow map size in texels (each side).
 pub const SHADOW_MAP: u32 = 4096;
@@ -285,9 +291,16 @@ impl GpuFrame {
         let device = &self.gpu.device;
         let (w, h) = (width as usize, height as usize);
         let n = cache.levels.first().map_or(0, |s| s.len());
-        let input = SplatInput::pack_fresh((w, h), cache, 0..n, camera, filter_reach)
-            .ok_or_else(|| GpuError::Unsupported("no record reaches the film".into()))?;
-        let slots = input.tile_slots();
+        // The lookup's thresholds (the `ic` pixel pass's fallback): 1, then 2 and 4 where
+        // none served.
+        let inputs: Vec<SplatInput> = LOOKUP_THRESHOLDS
+            .iter()
+            .filter_map(|&t| SplatInput::pack_film((w, h), cache, 0..n, camera, filter_reach, t))
+            .collect();
+        if inputs.len() < LOOKUP_THRESHOLDS.len() {
+            return Err(GpuError::Unsupported("no record reaches the film".into()));
+        }
+        let slots = inputs[0].tile_slots();
         let storage = wgpu::BufferUsages::STORAGE;
         let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -321,7 +334,15 @@ impl GpuFrame {
             storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
         let slots = init("tile slots", bytemuck::cast_slice(&slots), storage);
-        let splat = self.splatter.upload(&input, &samples);
+        let first = self.splatter.upload(&inputs[0], &samples);
+        let mut splat = vec![];
+        for input in &inputs[1..] {
+            splat.push(
+                self.splatter
+                    .upload_over(input, &samples, Some(&first.sums)),
+            );
+        }
+        splat.insert(0, first);
         let inverse = camera.to_world;
         let cam = GpuCamera {
             to_world: inverse.to_cols_array_2d(),
@@ -386,7 +407,7 @@ impl GpuFrame {
                 (3, self.shapes.as_entire_binding()),
                 (4, samples.as_entire_binding()),
                 (5, hits.as_entire_binding()),
-                (6, splat.sums.as_entire_binding()),
+                (6, splat[0].sums.as_entire_binding()),
                 (7, slots.as_entire_binding()),
                 (8, self.light.as_entire_binding()),
                 (9, wgpu::BindingResource::TextureView(&self.shadow)),
@@ -395,7 +416,7 @@ impl GpuFrame {
             ],
         );
         let view = self.visibility.views(&[camera_clip(camera)]);
-        let sums_bytes = splat.sums.size();
+        let sums_bytes = splat[0].sums.size();
         self.gpu.check()?;
         Ok(FrameJob {
             size: (width, height),
@@ -426,9 +447,11 @@ impl GpuFrame {
             pass.set_bind_group(0, &job.gbuffer, &[]);
             pass.dispatch_workgroups(groups.0, groups.1, 1);
         }
-        encoder.clear_buffer(&job.splat.sums, 0, Some(job.sums_bytes));
+        encoder.clear_buffer(&job.splat[0].sums, 0, Some(job.sums_bytes));
         encoder.clear_buffer(&job.misses, 0, None);
-        self.splatter.encode(&mut encoder, &job.splat);
+        for splat in &job.splat {
+            self.splatter.encode(&mut encoder, splat);
+        }
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
             pass.set_pipeline(&self.compose);
@@ -455,7 +478,7 @@ impl GpuFrame {
         job: &FrameJob,
         buffer: &mut ircache_render::splatting::SplatBuffer,
     ) -> Result<(), GpuError> {
-        self.splatter.read(&job.splat, buffer)
+        self.splatter.read(&job.splat[0], buffer)
     }
 
     /// Reads the G-buffer back: per pixel, the position and the normal facing the viewer where
@@ -530,11 +553,12 @@ pub fn traced_frame(
             let site = !cache.is_excluded(it.shape) && is_record_site(&bsdf, wo_local, false);
             let (mut e, mut missed) = (Rgb::ZERO, false);
             if site {
-                match cache
-                    .levels
-                    .first()
-                    .and_then(|s| s.interpolate(sp.it.p, sp.n, sp.n_bump, 1.0, mode))
-                {
+                let served = cache.levels.first().and_then(|s| {
+                    LOOKUP_THRESHOLDS
+                        .iter()
+                        .find_map(|&t| s.interpolate(sp.it.p, sp.n, sp.n_bump, t, mode))
+                });
+                match served {
                     Some(i) => e = i.e,
                     None => missed = true,
                 }

@@ -21,7 +21,7 @@ use ircache_render::irradiance_cache::gather::IrradianceCache;
 use ircache_render::irradiance_cache::record::{ErrorMetric, GradientMode, NO_RADIANCE};
 use ircache_render::render::TILE;
 use ircache_render::splatting::buffer::{
-    record_rects, splat, splat_parts, SplatBuffer, Splatter, Sums,
+    record_rects_at, splat, splat_parts, SplatBuffer, Splatter, Sums,
 };
 use ircache_render::splatting::GBuffer;
 use rayon::prelude::*;
@@ -71,7 +71,7 @@ struct GpuParams {
     gradients: u32,
     accuracy: f32,
     tile_count: u32,
-    pad: u32,
+    threshold: f32,
 }
 
 /// Samples in a tile (`TILE`² in `splat.wgsl`).
@@ -245,6 +245,18 @@ impl GpuSplatter {
     /// dispatch.
     #[must_use]
     pub fn upload(&self, input: &SplatInput, samples: &wgpu::Buffer) -> SplatJob {
+        self.upload_over(input, samples, None)
+    }
+
+    /// [`GpuSplatter::upload`] adding into `sums` (of `input`'s layout, already on the GPU)
+    /// instead of uploading `input`'s: passes that share one film's sums.
+    #[must_use]
+    pub fn upload_over(
+        &self,
+        input: &SplatInput,
+        samples: &wgpu::Buffer,
+        sums: Option<&wgpu::Buffer>,
+    ) -> SplatJob {
         let device = &self.gpu.device;
         let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -263,11 +275,14 @@ impl GpuSplatter {
         let tiles_buffer = init("tiles", bytemuck::cast_slice(&input.tiles), storage);
         let start_buffer = init("tile start", bytemuck::cast_slice(&input.start), storage);
         let lists_buffer = init("tile records", bytemuck::cast_slice(&input.lists), storage);
-        let sums_buffer = init(
-            "sums",
-            bytemuck::cast_slice(&input.sums),
-            storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        );
+        let sums_buffer = match sums {
+            Some(b) => b.clone(),
+            None => init(
+                "sums",
+                bytemuck::cast_slice(&input.sums),
+                storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            ),
+        };
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("splat"),
             layout: &self.layout,
@@ -383,29 +398,45 @@ impl SplatInput {
         camera: &Camera,
         filter_reach: f32,
     ) -> Option<SplatInput> {
+        let size = (g.width, g.height);
         Self::pack_over(
             Some(buffer),
-            (g.width, g.height),
+            size,
             cache,
             ids,
             camera,
             filter_reach,
+            1.0,
+            false,
         )
     }
 
-    /// [`SplatInput::pack`] for a `size` film whose sums start at zero (a frame whose samples
-    /// the GPU made: [`crate::frame`]).
+    /// [`SplatInput::pack`] for a whole `size` film whose sums stay on the GPU (a frame whose
+    /// samples the GPU made: [`crate::frame`]): every tile listed, touched or not, so that passes
+    /// at several thresholds share one sums buffer; records serve up to error `threshold`, and
+    /// above 1 only samples that none served yet (the lookup's fallback).
     #[must_use]
-    pub fn pack_fresh(
+    pub fn pack_film(
         size: (usize, usize),
         cache: &IrradianceCache,
         ids: Range<usize>,
         camera: &Camera,
         filter_reach: f32,
+        threshold: f32,
     ) -> Option<SplatInput> {
-        Self::pack_over(None, size, cache, ids, camera, filter_reach)
+        Self::pack_over(
+            None,
+            size,
+            cache,
+            ids,
+            camera,
+            filter_reach,
+            threshold,
+            true,
+        )
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn pack_over(
         buffer: Option<&SplatBuffer>,
         (w, h): (usize, usize),
@@ -413,10 +444,12 @@ impl SplatInput {
         ids: Range<usize>,
         camera: &Camera,
         filter_reach: f32,
+        threshold: f32,
+        every_tile: bool,
     ) -> Option<SplatInput> {
         let store = cache.levels.first()?;
         let (tiles_x, tiles_y) = (w.div_ceil(TILE), h.div_ceil(TILE));
-        let rects = record_rects(cache, ids.clone(), camera, (w, h), filter_reach);
+        let rects = record_rects_at(cache, ids.clone(), camera, (w, h), filter_reach, threshold);
         // Tile lists in index order (compressed rows).
         let tiles_of = |r: [usize; 4]| {
             (r[1] / TILE..r[3].div_ceil(TILE)).flat_map(move |ty| {
@@ -431,9 +464,9 @@ impl SplatInput {
         }
         // Touched tiles, compacted; each one's slot in `start`.
         let tiles: Vec<u32> = (0..per_tile.len() as u32)
-            .filter(|&t| per_tile[t as usize] > 0)
+            .filter(|&t| every_tile || per_tile[t as usize] > 0)
             .collect();
-        if tiles.is_empty() {
+        if per_tile.iter().all(|&c| c == 0) {
             return None;
         }
         let mut slot = vec![u32::MAX; per_tile.len()];
@@ -516,7 +549,7 @@ impl SplatInput {
             },
             accuracy,
             tile_count: tiles.len() as u32,
-            pad: 0,
+            threshold,
         };
         Some(SplatInput {
             params,

@@ -74,7 +74,7 @@ pub struct BenchArgs {
     /// adaptive: only the cases of this integrator (path, ic) or whose name begins with it
     /// (e.g. "cornell-glossy d5 ic"); cache: only the scenes whose name begins with it
     /// (e.g. "sponza-sun d3"); peers: only the scenes whose name begins with it
-    /// ("cornell-glossy").
+    /// ("cornell-glossy"); gpu: "frame" for the whole frame on the GPU alone.
     #[arg(long)]
     pub case: Option<String>,
 }
@@ -179,7 +179,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         splat::run_all(&shared)?;
     }
     if args.only == "all" || args.only == "gpu" {
-        gpu::run_all(&shared, args.images.as_deref())?;
+        gpu::run_all(&shared, args.images.as_deref(), args.case.as_deref())?;
     }
     if args.only == "all" || args.only == "plane" {
         plane::run_all(&shared)?;

@@ -36,7 +36,7 @@ struct Params {
     gradients: u32, // 0 none, 1 rotation, 2 full
     accuracy: f32,
     tile_count: u32, // touched tiles
-    pad: u32,
+    threshold: f32,  // records serve up to this error; above 1, only samples none served yet
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -69,10 +69,10 @@ fn record_error(rec: Record, p: vec3<f32>, n: vec3<f32>) -> f32 {
     return dist / rr + normal / params.accuracy;
 }
 
-// `ErrorMetric::weight` at threshold 1.
+// `ErrorMetric::weight` at `params.threshold`.
 fn record_weight(e: f32) -> f32 {
     if params.metric == 1u {
-        return max(1.0 - e, 1e-6);
+        return max(1.0 - e / params.threshold, 1e-6);
     }
     return 1.0 / max(e, 1e-4);
 }
@@ -119,7 +119,8 @@ fn splat(
         s = samples[y * params.width + x];
     }
     var out = sums[slot];
-    let served = inside && s.p.w != 0.0;
+    // Above threshold 1, as the lookup's fallback: only samples no record served so far.
+    let served = inside && s.p.w != 0.0 && (params.threshold <= 1.0 || out.irradiance.w == 0.0);
     let first = tile_start[t];
     let end = tile_start[t + 1u];
     for (var base = first; base < end; base = base + CHUNK) {
@@ -133,7 +134,7 @@ fn splat(
             for (var k = 0u; k < count; k = k + 1u) {
                 let rec = chunk[k];
                 let err = record_error(rec, s.p.xyz, s.n.xyz);
-                if err < 0.0 || err > 1.0 {
+                if err < 0.0 || err > params.threshold {
                     continue;
                 }
                 let w = record_weight(err);

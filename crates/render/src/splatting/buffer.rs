@@ -134,8 +134,22 @@ pub fn record_rects(
     cache: &IrradianceCache,
     ids: Range<usize>,
     camera: &crate::camera::Camera,
+    size: (usize, usize),
+    filter_reach: f32,
+) -> Vec<Option<[usize; 4]>> {
+    record_rects_at(cache, ids, camera, size, filter_reach, 1.0)
+}
+
+/// [`record_rects`] for records serving up to error `threshold`: every metric's error grows
+/// with the distance as dist / R, so the influence sphere's radius grows `threshold`-fold.
+#[must_use]
+pub fn record_rects_at(
+    cache: &IrradianceCache,
+    ids: Range<usize>,
+    camera: &crate::camera::Camera,
     (w, h): (usize, usize),
     filter_reach: f32,
+    threshold: f32,
 ) -> Vec<Option<[usize; 4]>> {
     let Some(store) = cache.levels.first() else {
         return Vec::new();
@@ -144,7 +158,7 @@ pub fn record_rects(
     ids.into_par_iter()
         .map(|id| {
             let (centre, reach) = store.reach(id as u32);
-            let bounds = camera.sphere_bounds(&to_camera, centre, reach)?;
+            let bounds = camera.sphere_bounds(&to_camera, centre, reach * threshold)?;
             pixel_rect(bounds, w, h, filter_reach)
         })
         .collect()
