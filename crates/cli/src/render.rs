@@ -350,6 +350,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             settings.spp
         );
     }
+    // The thesis's pipeline whole on the GPU where the scene and the options allow it.
+    if let Some(gpu) = &gpu {
+        if crate::gpu::whole_frame(gpu, args, &scene, &integrator, &settings, &output)? {
+            for note in &desc.notes {
+                eprintln!("note: {note}");
+            }
+            return Ok(());
+        }
+    }
     let show = !args.quiet && std::io::stderr().is_terminal();
     let bar = if show {
         let b = ProgressBar::new((settings.width * settings.height) as u64);

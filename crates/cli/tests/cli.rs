@@ -818,6 +818,62 @@ fn radiance_cache_renders_reports_and_reuses_its_records() {
     assert!(b["radiance_records"].as_u64().unwrap() >= radiance, "{b}");
 }
 
+/// `--gpu` on Sponza under its sun: the whole frame on the GPU (rasterised, splatted, shadow
+/// mapped, composed; `ircache_gpu::frame`) gives the CPU splat pass's image, up to its other
+/// sampling of the pixels (R₂ offsets against the sampler's) and its records gathered at misses
+/// (the GPU frame serves those samples at thresholds 2 and 4), and the loaders' notes.
+#[cfg(feature = "gpu")]
+#[test]
+fn the_whole_frame_on_the_gpu_renders_the_splat_pass_image() {
+    let d = temp_dir("gpu-frame");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/scenes/sponza-sun/scene.xml"
+    );
+    let base = [
+        "render",
+        scene,
+        "--integrator",
+        "splat",
+        "--spp",
+        "4",
+        "--width",
+        "96",
+        "--height",
+        "72",
+    ];
+    let run = |extra: &[&str]| ircache(&[&base[..], extra].concat(), &d);
+    let gpu = run(&["--gpu", "-o", "gpu.exr"]);
+    if !gpu.status.success()
+        && stderr(&gpu).contains("no GPU device")
+        && std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip")
+    {
+        eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {}", stderr(&gpu));
+        return;
+    }
+    assert!(gpu.status.success(), "{}", stderr(&gpu));
+    let said = stderr(&gpu);
+    assert!(said.contains("the whole frame on the GPU"), "{said}");
+    assert!(said.contains("degenerate"), "the loader's note: {said}");
+    let cpu = run(&["-q", "-o", "cpu.exr"]);
+    assert!(cpu.status.success(), "{}", stderr(&cpu));
+    let o = ircache(
+        &["compare", "gpu.exr", "cpu.exr", "--blur", "2", "--json"],
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (rel, lum) = (
+        j["relMSE_trim"].as_f64().unwrap(),
+        j["lum_ratio"].as_f64().unwrap(),
+    );
+    eprintln!(
+        "whole GPU frame against the CPU splat pass: blurred relMSE_trim {rel}, luminance {lum}"
+    );
+    assert!(rel < 2e-2, "blurred relMSE_trim {rel}");
+    assert!((lum - 1.0).abs() < 0.03, "mean luminance ratio {lum}");
+}
+
 /// `--gpu` (the `gpu` feature, on by default): the splat integrator's image equals the CPU
 /// splatter's to the GPU's rounding (on lavapipe, which `scripts/setup.sh` installs where there
 /// is no GPU, bit for bit); it is refused for other integrators; without a device it says so and
@@ -848,6 +904,12 @@ fn gpu_splatting_renders_the_cpu_image_and_says_what_it_cannot_do() {
         return;
     }
     assert!(gpu.status.success(), "{}", stderr(&gpu));
+    // The Cornell box's area light is not the whole GPU frame's: it says so and splats.
+    assert!(
+        stderr(&gpu).contains("does not serve this scene"),
+        "{}",
+        stderr(&gpu)
+    );
     let cpu = run(&["-o", "cpu.exr"]);
     assert!(cpu.status.success(), "{}", stderr(&cpu));
     let o = ircache(&["compare", "gpu.exr", "cpu.exr", "--json"], &d);

@@ -12,7 +12,9 @@
 //! ([`FrameImage::misses`]; the CPU gathers a record there).
 
 use crate::splat::{GpuSplatter, SplatInput, SplatJob};
-use crate::visibility::{camera_clip, column_major, PlaneVisibility, DEPTH, FORMAT, SPHERE};
+use crate::visibility::{
+    camera_clip_shifted, column_major, PlaneVisibility, DEPTH, FORMAT, SPHERE,
+};
 use crate::{Gpu, GpuError};
 use bytemuck::{Pod, Zeroable};
 use ircache_math::{Frame, Rgb, Vec3};
@@ -77,6 +79,10 @@ pub struct GpuFrame {
 #[derive(Debug)]
 pub struct FrameJob {
     size: (u32, u32),
+    camera: Camera,
+    camera_data: GpuCamera,
+    camera_buffer: wgpu::Buffer,
+    view_buffer: wgpu::Buffer,
     view: wgpu::BindGroup,
     ids: wgpu::TextureView,
     depth: wgpu::TextureView,
@@ -95,13 +101,23 @@ pub struct FrameJob {
 pub struct FrameImage {
     /// Radiance per pixel, row-major from the top.
     pub pixels: Vec<Rgb>,
-    /// Record sites no record covered (no indirect light there).
+    /// Record sites no record served (no indirect light there), summed over the layers.
     pub misses: u32,
 }
 
 /// The error thresholds at which records serve a sample, each where the ones before served
 /// none: the `ic` pixel pass's lookup (`integrators::ic`).
 pub const LOOKUP_THRESHOLDS: [f32; 3] = [1.0, 2.0, 4.0];
+
+/// Layer `k`'s offset from the pixel centres, in pixels, each coordinate in [−½, ½): the R₂
+/// sequence (the plastic number's powers), well spread at every count of layers; layer 0 at
+/// the centre.
+#[must_use]
+pub fn layer_jitter(k: u32) -> [f32; 2] {
+    // 1/g and 1/g² for g the plastic number, the root of x³ = x + 1.
+    const A: [f64; 2] = [0.754_877_666_246_692_7, 0.569_840_290_998_053_2];
+    A.map(|a| ((0.5 + f64::from(k) * a).fract() - 0.5) as f32)
+}
 
 /// Shadow map size in texels (each side).
 pub const SHADOW_MAP: u32 = 4096;
@@ -326,7 +342,7 @@ impl GpuFrame {
         let image = buffer(
             "frame image",
             16 * (w * h) as u64,
-            storage | wgpu::BufferUsages::COPY_SRC,
+            storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
         let misses = buffer(
             "frame misses",
@@ -343,17 +359,16 @@ impl GpuFrame {
             );
         }
         splat.insert(0, first);
-        let inverse = camera.to_world;
         let cam = GpuCamera {
-            to_world: inverse.to_cols_array_2d(),
+            to_world: camera.to_world.to_cols_array_2d(),
             origin: [camera.origin.x, camera.origin.y, camera.origin.z, 1.0],
             tan_half: [camera.tan_half_x, camera.tan_half_y, 0.0, 0.0],
             size: [width, height, width.div_ceil(16), 0],
         };
-        let cam = init(
+        let camera_buffer = init(
             "camera",
             bytemuck::bytes_of(&cam),
-            wgpu::BufferUsages::UNIFORM,
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
         let target = |format, usage| {
             device
@@ -392,7 +407,7 @@ impl GpuFrame {
         let gbuffer = bind(
             &self.gbuffer,
             &[
-                (0, cam.as_entire_binding()),
+                (0, camera_buffer.as_entire_binding()),
                 (1, wgpu::BindingResource::TextureView(&ids)),
                 (2, self.triangles.as_entire_binding()),
                 (3, self.shapes.as_entire_binding()),
@@ -403,7 +418,7 @@ impl GpuFrame {
         let compose = bind(
             &self.compose,
             &[
-                (0, cam.as_entire_binding()),
+                (0, camera_buffer.as_entire_binding()),
                 (3, self.shapes.as_entire_binding()),
                 (4, samples.as_entire_binding()),
                 (5, hits.as_entire_binding()),
@@ -415,11 +430,17 @@ impl GpuFrame {
                 (11, misses.as_entire_binding()),
             ],
         );
-        let view = self.visibility.views(&[camera_clip(camera)]);
+        let (view_buffer, view) = self
+            .visibility
+            .views_buffer(&[camera_clip_shifted(camera, [0.0; 2])]);
         let sums_bytes = splat[0].sums.size();
         self.gpu.check()?;
         Ok(FrameJob {
             size: (width, height),
+            camera: camera.clone(),
+            camera_data: cam,
+            camera_buffer,
+            view_buffer,
             view,
             ids,
             depth,
@@ -433,9 +454,28 @@ impl GpuFrame {
         })
     }
 
-    /// Renders the frame: rasterises the camera's view, makes the G-buffer, clears the sums and
-    /// splats the records, composes; one submission.
+    /// Renders the frame through the pixel centres: [`GpuFrame::render_layer`] alone.
     pub fn render(&self, job: &FrameJob) {
+        self.render_layer(job, [0.0, 0.0], false);
+    }
+
+    /// Renders one layer of the frame through points `jitter` pixels from the pixel centres
+    /// (each coordinate in [−½, ½)), added to the layers before when `accumulate`: rasterises
+    /// the camera's view shifted by the jitter, makes the G-buffer, clears the sums and splats
+    /// the records, composes; one submission. [`GpuFrame::read`] gives the layers' mean, a box
+    /// filter's estimate.
+    pub fn render_layer(&self, job: &FrameJob, jitter: [f32; 2], accumulate: bool) {
+        let (w, h) = (job.size.0 as f32, job.size.1 as f32);
+        let queue = &self.gpu.queue;
+        let mut camera = job.camera_data;
+        camera.tan_half[2] = jitter[0];
+        camera.tan_half[3] = jitter[1];
+        queue.write_buffer(&job.camera_buffer, 0, bytemuck::bytes_of(&camera));
+        // Film x grows with NDC x and film y against NDC y: the point at film (x + ½ + jx) / w
+        // moves to pixel x's centre.
+        let shift = [-2.0 * jitter[0] / w, 2.0 * jitter[1] / h];
+        let view = camera_clip_shifted(&job.camera, shift);
+        queue.write_buffer(&job.view_buffer, 0, bytemuck::cast_slice(&[view]));
         let device = &self.gpu.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         self.visibility
@@ -448,7 +488,10 @@ impl GpuFrame {
             pass.dispatch_workgroups(groups.0, groups.1, 1);
         }
         encoder.clear_buffer(&job.splat[0].sums, 0, Some(job.sums_bytes));
-        encoder.clear_buffer(&job.misses, 0, None);
+        if !accumulate {
+            encoder.clear_buffer(&job.misses, 0, None);
+            encoder.clear_buffer(&job.image, 0, None);
+        }
         for splat in &job.splat {
             self.splatter.encode(&mut encoder, splat);
         }
@@ -458,7 +501,7 @@ impl GpuFrame {
             pass.set_bind_group(0, &job.compose, &[]);
             pass.dispatch_workgroups(groups.0, groups.1, 1);
         }
-        self.gpu.queue.submit([encoder.finish()]);
+        queue.submit([encoder.finish()]);
     }
 
     /// Waits for the frame.
@@ -507,25 +550,29 @@ impl GpuFrame {
         let misses = self.gpu.read_back(&job.misses)?;
         self.gpu.check()?;
         let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+        // Each texel sums its layers, w counting them.
         Ok(FrameImage {
-            pixels: texels.iter().map(|t| Rgb::new(t[0], t[1], t[2])).collect(),
+            pixels: texels
+                .iter()
+                .map(|t| Rgb::new(t[0], t[1], t[2]) / t[3].max(1.0))
+                .collect(),
             misses: bytemuck::cast_slice::<u8, u32>(&misses)[0],
         })
     }
 }
 
-/// The frame [`GpuFrame`] renders, by ray tracing on the CPU: each pixel centre's hit by
-/// Embree, its indirect irradiance looked up in the cache (the same records and weights the
-/// splat sums), its direct light by a shadow ray. The GPU frame's reference.
+/// The frame [`GpuFrame`] renders, by ray tracing on the CPU: at each pixel centre moved by
+/// each of `jitters` (pixels), the hit by Embree, its indirect irradiance looked up in the cache
+/// (the same records and weights the splat sums), its direct light by a shadow ray; the mean
+/// over the jitters. The GPU frame's reference.
 #[must_use]
 pub fn traced_frame(
     scene: &Scene,
     cache: &IrradianceCache,
     camera: &Camera,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
+    jitters: &[[f32; 2]],
 ) -> FrameImage {
-    use ircache_render::irradiance_cache::gather::ShadingPoint;
     use rayon::prelude::*;
     let (w, h) = (width as usize, height as usize);
     let Some((to_light, irradiance)) = scene.lights.only_directional() else {
@@ -534,48 +581,68 @@ pub fn traced_frame(
             misses: 0,
         };
     };
-    let mode = cache.params.gradients;
-    let shaded: Vec<(Rgb, bool)> = (0..w * h)
+    let shaded: Vec<(Rgb, u32)> = (0..w * h)
         .into_par_iter()
         .map(|k| {
-            let film = ircache_math::Vec2::new(
-                ((k % w) as f32 + 0.5) / w as f32,
-                ((k / w) as f32 + 0.5) / h as f32,
-            );
-            let ray = camera.generate_ray(film);
-            let Some(it) = scene.intersect(&ray) else {
-                return (Rgb::ZERO, false);
-            };
-            let sp = ShadingPoint::facing(it, -ray.d);
-            let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
-            let wo_local = it.frame.to_local(-ray.d);
-            let albedo = bsdf.lambertian_albedo(wo_local);
-            let site = !cache.is_excluded(it.shape) && is_record_site(&bsdf, wo_local, false);
-            let (mut e, mut missed) = (Rgb::ZERO, false);
-            if site {
-                let served = cache.levels.first().and_then(|s| {
-                    LOOKUP_THRESHOLDS
-                        .iter()
-                        .find_map(|&t| s.interpolate(sp.it.p, sp.n, sp.n_bump, t, mode))
-                });
-                match served {
-                    Some(i) => e = i.e,
-                    None => missed = true,
-                }
-            }
-            let cosine = sp.n.dot(to_light);
-            if cosine > 0.0
-                && !scene
-                    .accel
-                    .occluded(&scene.shadow_ray(&it, to_light, f32::INFINITY))
-            {
-                e += irradiance * cosine;
-            }
-            (albedo * e / std::f32::consts::PI, missed)
+            jitters.iter().fold((Rgb::ZERO, 0), |(sum, missed), j| {
+                let (l, m) =
+                    traced_pixel(scene, cache, camera, (w, h), k, *j, to_light, irradiance);
+                (sum + l / jitters.len() as f32, missed + u32::from(m))
+            })
         })
         .collect();
     FrameImage {
-        misses: shaded.iter().filter(|s| s.1).count() as u32,
+        misses: shaded.iter().map(|s| s.1).sum(),
         pixels: shaded.into_iter().map(|s| s.0).collect(),
     }
+}
+
+/// One traced sample of [`traced_frame`]: the radiance and whether no record served the site.
+#[allow(clippy::too_many_arguments)]
+fn traced_pixel(
+    scene: &Scene,
+    cache: &IrradianceCache,
+    camera: &Camera,
+    (w, h): (usize, usize),
+    k: usize,
+    jitter: [f32; 2],
+    to_light: Vec3,
+    irradiance: Rgb,
+) -> (Rgb, bool) {
+    use ircache_render::irradiance_cache::gather::ShadingPoint;
+    let mode = cache.params.gradients;
+    let film = ircache_math::Vec2::new(
+        ((k % w) as f32 + 0.5 + jitter[0]) / w as f32,
+        ((k / w) as f32 + 0.5 + jitter[1]) / h as f32,
+    );
+    let ray = camera.generate_ray(film);
+    let Some(it) = scene.intersect(&ray) else {
+        return (Rgb::ZERO, false);
+    };
+    let sp = ShadingPoint::facing(it, -ray.d);
+    let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+    let wo_local = it.frame.to_local(-ray.d);
+    let albedo = bsdf.lambertian_albedo(wo_local);
+    let site = !cache.is_excluded(it.shape) && is_record_site(&bsdf, wo_local, false);
+    let (mut e, mut missed) = (Rgb::ZERO, false);
+    if site {
+        let served = cache.levels.first().and_then(|s| {
+            LOOKUP_THRESHOLDS
+                .iter()
+                .find_map(|&t| s.interpolate(sp.it.p, sp.n, sp.n_bump, t, mode))
+        });
+        match served {
+            Some(i) => e = i.e,
+            None => missed = true,
+        }
+    }
+    let cosine = sp.n.dot(to_light);
+    if cosine > 0.0
+        && !scene
+            .accel
+            .occluded(&scene.shadow_ray(&it, to_light, f32::INFINITY))
+    {
+        e += irradiance * cosine;
+    }
+    (albedo * e / std::f32::consts::PI, missed)
 }

@@ -277,20 +277,29 @@ impl PlaneVisibility {
 
     /// A bind group of views (column-major world-to-clip matrices; instance k draws view k).
     pub(crate) fn views(&self, matrices: &[[[f32; 4]; 4]]) -> wgpu::BindGroup {
+        self.views_buffer(matrices).1
+    }
+
+    /// [`PlaneVisibility::views`] and its buffer, which can be written again.
+    pub(crate) fn views_buffer(
+        &self,
+        matrices: &[[[f32; 4]; 4]],
+    ) -> (wgpu::Buffer, wgpu::BindGroup) {
         let device = &self.gpu.device;
         let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("views"),
             contents: bytemuck::cast_slice(matrices),
-            usage: wgpu::BufferUsages::STORAGE,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         });
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("visibility"),
             layout: &self.layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: buffer.as_entire_binding(),
             }],
-        })
+        });
+        (buffer, group)
     }
 
     /// Records a pass drawing the scene through view 0 of `views` over the whole of `ids` and
@@ -553,6 +562,12 @@ pub(crate) fn column_major(rows: [[f32; 4]; 4]) -> [[f32; 4]; 4] {
 /// (z − near)·far / ((far − near)·z), so that each pixel centre sees what
 /// [`Camera::generate_ray`] sees through it.
 pub(crate) fn camera_clip(camera: &Camera) -> [[f32; 4]; 4] {
+    camera_clip_shifted(camera, [0.0, 0.0])
+}
+
+/// [`camera_clip`] with the image shifted by `ndc` (in normalised device coordinates, y up):
+/// what lies at NDC (u, v) lands at (u + ndc₀, v + ndc₁).
+pub(crate) fn camera_clip_shifted(camera: &Camera, ndc: [f32; 2]) -> [[f32; 4]; 4] {
     let to_camera = camera.to_world.inverse();
     let row = |r: usize| {
         let m = to_camera.row(r);
@@ -563,10 +578,11 @@ pub(crate) fn camera_clip(camera: &Camera) -> [[f32; 4]; 4] {
     let a = far / (far - near);
     let mut depth = z.map(|v| v * a);
     depth[3] -= near * a;
-    column_major([
-        x.map(|v| -v / camera.tan_half_x),
-        y.map(|v| v / camera.tan_half_y),
-        depth,
-        z,
-    ])
+    let mut clip_x = x.map(|v| -v / camera.tan_half_x);
+    let mut clip_y = y.map(|v| v / camera.tan_half_y);
+    for k in 0..4 {
+        clip_x[k] += ndc[0] * z[k];
+        clip_y[k] += ndc[1] * z[k];
+    }
+    column_major([clip_x, clip_y, depth, z])
 }

@@ -4,7 +4,7 @@
 //! cache. On lavapipe where there is no GPU; with no device the test fails and says so, unless
 //! `IRCACHE_GPU_TESTS=skip`. Scenes the pipeline does not serve are refused by name.
 
-use ircache_gpu::frame::{traced_frame, GpuFrame};
+use ircache_gpu::frame::{layer_jitter, traced_frame, GpuFrame};
 use ircache_gpu::splat::GpuSplatter;
 use ircache_gpu::{Gpu, GpuError};
 use ircache_render::integrators::Integrator;
@@ -71,7 +71,7 @@ fn the_gpu_frame_equals_the_traced_frame() {
     frame.render(&job);
     frame.wait().expect("rendered");
     let on_gpu = frame.read(&job).expect("read back");
-    let traced = pool.install(|| traced_frame(&scene, &cache, &camera, w, h));
+    let traced = pool.install(|| traced_frame(&scene, &cache, &camera, (w, h), &[[0.0; 2]]));
     let n = (w * h) as usize;
     assert_eq!(on_gpu.pixels.len(), n);
     let lum = |p: &[ircache_math::Rgb]| p.iter().map(|c| f64::from(c.luminance())).sum::<f64>();
@@ -130,6 +130,39 @@ fn the_gpu_frame_equals_the_traced_frame() {
         "{close} of {n} pixels agree"
     );
     assert!(on_gpu.misses.abs_diff(traced.misses) <= n as u32 / 1000);
+
+    // Four layers, each through points moved from the pixel centres (the raster shifted to
+    // match): their mean against the same points traced.
+    let jitters: Vec<[f32; 2]> = (0..4).map(layer_jitter).collect();
+    assert!(jitters[1..].iter().all(|j| j[0] != 0.0 && j[1] != 0.0));
+    for (k, j) in jitters.iter().enumerate() {
+        frame.render_layer(&job, *j, k > 0);
+    }
+    frame.wait().expect("rendered");
+    let on_gpu = frame.read(&job).expect("read back");
+    let traced = pool.install(|| traced_frame(&scene, &cache, &camera, (w, h), &jitters));
+    let (a, b) = (lum(&on_gpu.pixels), lum(&traced.pixels));
+    let close = on_gpu
+        .pixels
+        .iter()
+        .zip(&traced.pixels)
+        .filter(|(x, y)| {
+            let d = **x - **y;
+            d.r.abs().max(d.g.abs()).max(d.b.abs())
+                <= 1e-3 * x.max_channel().max(y.max_channel()).max(1e-6)
+        })
+        .count();
+    eprintln!(
+        "GPU frame, 4 jittered layers: mean luminance {a} against {b}; {close} of {n} within 1e-3"
+    );
+    assert!(
+        (a / b - 1.0).abs() < 0.005,
+        "mean luminance {a} against {b}"
+    );
+    assert!(
+        close as f64 > 0.95 * n as f64,
+        "{close} of {n} pixels agree"
+    );
 }
 
 #[test]

@@ -289,7 +289,15 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
         }
         let image = frame.read(&job)?;
         let (traced_time, traced) = pool.install(|| {
-            best(|| traced_frame(&scene, &cache, &camera, width as u32, height as u32))
+            best(|| {
+                traced_frame(
+                    &scene,
+                    &cache,
+                    &camera,
+                    (width as u32, height as u32),
+                    &[[0.0; 2]],
+                )
+            })
         });
         let n = image.pixels.len();
         let lum = |p: &[ircache_math::Rgb]| p.iter().map(|c| f64::from(c.luminance())).sum::<f64>();

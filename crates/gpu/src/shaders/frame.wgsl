@@ -2,7 +2,8 @@
 // Lambertian surfaces with constant albedos under one directional light: `gbuffer` turns the
 // rasterised camera view (triangle ids) into the splat pass's samples, each hit found on its
 // triangle along the camera ray through the pixel centre; after the splat, `compose` shades
-// each pixel: albedo/π × (splatted indirect irradiance + direct light through a shadow map).
+// each pixel: albedo/π × (splatted indirect irradiance + direct light through a shadow map),
+// added to the layers before (jittered layers average to a box filter's estimate).
 
 struct Triangle {
     p0: vec4<f32>, // w: the shape's index (bits)
@@ -16,7 +17,7 @@ struct Triangle {
 struct Camera {
     to_world: mat4x4<f32>,
     origin: vec4<f32>,
-    tan_half: vec4<f32>, // x, y
+    tan_half: vec4<f32>, // x, y; zw: the layer's jitter from the pixel centres, in pixels
     size: vec4<u32>,     // width, height, tiles_x
 }
 
@@ -74,8 +75,9 @@ fn gbuffer(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let tri = triangles[triangle - 1u];
-    // `Camera::generate_ray` through the pixel centre.
-    let film = (vec2<f32>(id.xy) + 0.5) / vec2<f32>(f32(w), f32(h));
+    // `Camera::generate_ray` through the pixel centre moved by the layer's jitter (the raster
+    // was shifted to match).
+    let film = (vec2<f32>(id.xy) + 0.5 + camera.tan_half.zw) / vec2<f32>(f32(w), f32(h));
     let d_cam = normalize(vec3<f32>((1.0 - 2.0 * film.x) * camera.tan_half.x, (1.0 - 2.0 * film.y) * camera.tan_half.y, 1.0));
     let d = normalize((camera.to_world * vec4<f32>(d_cam, 0.0)).xyz);
     let o = camera.origin.xyz;
@@ -131,8 +133,9 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let i = id.y * w + id.x;
     let hit = hits[i];
+    // Layers add up; w counts them.
     if hit == NONE {
-        image[i] = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+        image[i] = image[i] + vec4<f32>(0.0, 0.0, 0.0, 1.0);
         return;
     }
     let shape = hit & ~BACK;
@@ -167,5 +170,5 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         e = e + light.irradiance.xyz * cosine * lit;
     }
-    image[i] = vec4<f32>(albedo / PI * e, 1.0);
+    image[i] = image[i] + vec4<f32>(albedo / PI * e, 1.0);
 }
