@@ -64,15 +64,17 @@ struct GpuLight {
 /// The scene on the GPU for whole frames: its triangles, shapes, light and shadow map.
 #[derive(Debug)]
 pub struct GpuFrame {
-    gpu: Arc<Gpu>,
-    visibility: PlaneVisibility,
+    pub(crate) gpu: Arc<Gpu>,
+    pub(crate) visibility: PlaneVisibility,
     splatter: Arc<GpuSplatter>,
     gbuffer: wgpu::ComputePipeline,
     compose: wgpu::ComputePipeline,
-    triangles: wgpu::Buffer,
-    shapes: wgpu::Buffer,
-    light: wgpu::Buffer,
-    shadow: wgpu::TextureView,
+    /// Records from rasterised planes ([`crate::records`]).
+    pub(crate) records: wgpu::ComputePipeline,
+    pub(crate) triangles: wgpu::Buffer,
+    pub(crate) shapes: wgpu::Buffer,
+    pub(crate) light: wgpu::Buffer,
+    pub(crate) shadow: wgpu::TextureView,
 }
 
 /// One frame's resources: its targets, the records packed and uploaded, the bind groups.
@@ -277,6 +279,18 @@ impl GpuFrame {
         };
         let gbuffer = pipeline("gbuffer");
         let compose = pipeline("compose");
+        let records_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("records.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/records.wgsl").into()),
+        });
+        let records = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("records"),
+            layout: None,
+            module: &records_module,
+            entry_point: Some("record"),
+            compilation_options: wgpu::PipelineCompilationOptions::default(),
+            cache: None,
+        });
         gpu.check()?;
         Ok(GpuFrame {
             gpu,
@@ -284,6 +298,7 @@ impl GpuFrame {
             splatter,
             gbuffer,
             compose,
+            records,
             triangles,
             shapes,
             light,

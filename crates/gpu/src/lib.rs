@@ -10,6 +10,8 @@
 //! - [`frame`] (`shaders/frame.wgsl`): a whole frame with a warm cache, the thesis's pipeline
 //!   (G-buffer by rasterisation, splatting, direct light by a shadow map, composition) for
 //!   Lambertian scenes of constant albedo under one directional light.
+//! - [`records`] (`shaders/records.wgsl`): records computed by hemisphere rasterisation, their
+//!   planes rasterised, shaded and summed on the GPU, for the same scenes.
 //!
 //! Nothing else in ircache depends on this crate; the CLI uses it behind its `gpu` feature (on
 //! by default). Without a device, [`Gpu::new`] says so ([`GpuError::NoDevice`]). On machines
@@ -17,6 +19,7 @@
 //! the same shaders; the tests use it and say when no device exists.
 
 pub mod frame;
+pub mod records;
 pub mod splat;
 pub mod visibility;
 

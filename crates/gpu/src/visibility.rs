@@ -343,6 +343,77 @@ impl PlaneVisibility {
         pass.draw(0..self.vertex_count, 0..1);
     }
 
+    /// Atlas columns and rows of `width × height` views the device's largest texture holds (64
+    /// at most each way).
+    ///
+    /// # Errors
+    /// When one view exceeds the device's largest texture.
+    pub(crate) fn atlas_grid(
+        &self,
+        width: u32,
+        height: u32,
+    ) -> Result<(u32, u32), crate::GpuError> {
+        let largest = self.gpu.device.limits().max_texture_dimension_2d;
+        if width > largest || height > largest {
+            return Err(crate::GpuError::Device(format!(
+                "a {width} × {height} view exceeds the device's largest texture ({largest})"
+            )));
+        }
+        Ok((
+            (largest / width).clamp(1, 64),
+            (largest / height).clamp(1, 64),
+        ))
+    }
+
+    /// Records a pass drawing views 0..`count` of `views` side by side into an atlas of
+    /// `columns` tiles of `tile` pixels a row (`ids`, `depth`): one viewport and one instanced
+    /// draw per view.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn draw_atlas(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        views: &wgpu::BindGroup,
+        count: u32,
+        (width, height): (u32, u32),
+        columns: u32,
+        ids: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+    ) {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("visibility"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: ids,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Discard,
+                }),
+                stencil_ops: None,
+            }),
+            ..Default::default()
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, views, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        for k in 0..count {
+            let (x, y) = ((k % columns) * width, (k / columns) * height);
+            // The scissor as well as the viewport: no fragment of one view in another's tile,
+            // whatever the device's guard band.
+            pass.set_viewport(x as f32, y as f32, width as f32, height as f32, 0.0, 1.0);
+            pass.set_scissor_rect(x, y, width, height);
+            // The instance index selects the view.
+            pass.draw(0..self.vertex_count, k..k + 1);
+        }
+    }
+
     /// A rasterised id (triangle + 1; 0 for nothing) as (shape, primitive).
     fn triangle_of(&self, id: u32) -> Option<(u32, u32)> {
         id.checked_sub(1)
@@ -350,7 +421,7 @@ impl PlaneVisibility {
     }
 
     /// The world-to-clip matrix (column-major) of the plane above `sp`.
-    fn plane_view(&self, plane: &HemispherePlane, sp: &ShadingPoint) -> [[f32; 4]; 4] {
+    pub(crate) fn plane_view(&self, plane: &HemispherePlane, sp: &ShadingPoint) -> [[f32; 4]; 4] {
         let frame = Frame::from_z(sp.n);
         let (s, near, far) = (plane.half_size as f32, self.near, self.far);
         // Camera space (frame.s, frame.t, n) from the record's position; x and y over s·z
@@ -374,14 +445,7 @@ impl PlaneVisibility {
         height: u32,
     ) -> Result<Vec<Vec<u32>>, crate::GpuError> {
         let device = &self.gpu.device;
-        let largest = device.limits().max_texture_dimension_2d;
-        if width > largest || height > largest {
-            return Err(crate::GpuError::Device(format!(
-                "a {width} × {height} view exceeds the device's largest texture ({largest})"
-            )));
-        }
-        let columns = (largest / width).clamp(1, 64);
-        let rows = (largest / height).clamp(1, 64);
+        let (columns, rows) = self.atlas_grid(width, height)?;
         let mut out = Vec::with_capacity(views.len());
         for batch in views.chunks((columns * rows) as usize) {
             let count = batch.len() as u32;
@@ -433,41 +497,15 @@ impl PlaneVisibility {
             });
             let mut encoder =
                 device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-            {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("visibility"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &ids_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(1.0),
-                            store: wgpu::StoreOp::Discard,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    ..Default::default()
-                });
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &bind, &[]);
-                pass.set_vertex_buffer(0, self.vertices.slice(..));
-                for k in 0..count {
-                    let (x, y) = ((k % columns) * width, (k / columns) * height);
-                    // The scissor as well as the viewport: no fragment of one view in another's
-                    // tile, whatever the device's guard band.
-                    pass.set_viewport(x as f32, y as f32, width as f32, height as f32, 0.0, 1.0);
-                    pass.set_scissor_rect(x, y, width, height);
-                    // The instance index selects the view.
-                    pass.draw(0..self.vertex_count, k..k + 1);
-                }
-            }
+            self.draw_atlas(
+                &mut encoder,
+                &bind,
+                count,
+                (width, height),
+                columns,
+                &ids_view,
+                &depth_view,
+            );
             encoder.copy_texture_to_buffer(
                 ids.as_image_copy(),
                 wgpu::TexelCopyBufferInfo {

@@ -72,17 +72,20 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
     let camera = scene.camera.clone();
 
     // Splatting.
-    // `--case frame`: the whole frame alone.
-    let only_frame = case == Some("frame");
+    // `--case` splat, views (the camera's view, planes, records from planes), frame or
+    // walkthrough: that part alone.
+    let want = |part: &str| case.is_none_or(|c| c == part);
     let mut warm = None;
-    let accuracies: &[&str] = if only_frame {
+    let accuracies: &[&str] = if want("splat") {
+        &["0.75", "0.15"]
+    } else if want("frame") {
         &["0.15"]
     } else {
-        &["0.75", "0.15"]
+        &[]
     };
     for &accuracy in accuracies {
         let (ic, fill) = filled(&scene, &desc, &s, accuracy)?;
-        if only_frame {
+        if !want("splat") {
             warm = Some(ic);
             continue;
         }
@@ -189,7 +192,7 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
     }
 
     // The camera's view rasterised.
-    if !only_frame {
+    if want("views") {
         let visibility = PlaneVisibility::new(gpu.clone(), &scene);
         let (raster_time, ids) =
             best(|| visibility.camera_view(&camera, width as u32, height as u32));
@@ -218,7 +221,7 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
     }
 
     // Planes rasterised in batches.
-    if !only_frame {
+    if want("views") {
         let plane = HemispherePlane::new(64, 2.0);
         for (name, path) in [
             ("sponza-sun", shared.join("scenes/sponza-sun/scene.xml")),
@@ -259,12 +262,15 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
             points.len() as f64 / t,
             100.0 * agree as f64 / pixels.max(1) as f64
         );
+            if name == "sponza-sun" {
+                plane_records(&gpu, &splatter, &scene, &points, &plane, &pool)?;
+            }
         }
     }
 
     // A whole frame on the GPU, the cache warm (the pre-pass's records, which the `ic` pixel
     // pass serves from at thresholds 1, 2 and 4).
-    if let Some(ic) = &warm {
+    if let Some(ic) = warm.as_ref().filter(|_| want("frame")) {
         use ircache_gpu::frame::{traced_frame, GpuFrame, SHADOW_MAP};
         let cache = ic.cache.clone().expect("filled");
         let frame = GpuFrame::new(gpu.clone(), splatter.clone(), &scene, &cache, SHADOW_MAP)?;
@@ -345,7 +351,7 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
     }
 
     // The walkthrough, splatting on the CPU and on the GPU.
-    let walks = if only_frame {
+    let walks = if !want("walkthrough") {
         Vec::new()
     } else {
         vec![
@@ -359,7 +365,7 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
     }
 
     // A warm-cache frame with the GPU splatting.
-    if let Some(ic) = warm.filter(|_| !only_frame) {
+    if let Some(ic) = warm.filter(|_| want("splat")) {
         let records = ic.cache.as_ref().map_or(0, |c| c.levels[0].len());
         let mut on_gpu = ic.clone();
         on_gpu.pixel_pass = PixelPass::Splat;
@@ -380,6 +386,86 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
             cpu_frame * 1e3
         );
     }
+    Ok(())
+}
+
+/// Records computed whole on the GPU from their rasterised planes (`ircache_gpu::records`) at
+/// `points`, against the same planes ray cast and shaded on the CPU's threads.
+#[cfg(feature = "gpu")]
+fn plane_records(
+    gpu: &std::sync::Arc<ircache_gpu::Gpu>,
+    splatter: &std::sync::Arc<ircache_gpu::splat::GpuSplatter>,
+    scene: &ircache_render::scene::Scene,
+    points: &[ircache_render::irradiance_cache::gather::ShadingPoint],
+    plane: &ircache_render::irradiance_cache::plane::HemispherePlane,
+    pool: &rayon::ThreadPool,
+) -> Result<()> {
+    use ircache_gpu::frame::GpuFrame;
+    use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
+    use ircache_render::irradiance_cache::params::Deeper;
+    use ircache_render::irradiance_cache::plane::PlaneEstimator;
+    use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
+    use rayon::prelude::*;
+    use std::time::Instant;
+    let cache = IrradianceCache::new(scene, &IcParams::default());
+    let frame = GpuFrame::new(
+        gpu.clone(),
+        splatter.clone(),
+        scene,
+        &cache,
+        ircache_gpu::frame::SHADOW_MAP,
+    )?;
+    let (t, records) = super::splat::best(|| frame.plane_records(plane, points));
+    let records = records?;
+    let light = SceneRadiance {
+        scene,
+        deeper: Deeper::PathTraced,
+    };
+    let g = Gatherer {
+        light: &light,
+        cache: &cache,
+        seed: 5,
+        next: None,
+    };
+    let start = Instant::now();
+    let traced: Vec<f64> = pool.install(|| {
+        points
+            .par_iter()
+            .enumerate()
+            .map_init(
+                || WorkState::new(cache.levels.len()),
+                |st, (k, sp)| {
+                    let pixels = plane.sample(&g, st, sp, 0, k as u64);
+                    f64::from(
+                        plane
+                            .irradiance(&pixels, PlaneEstimator::BorderCompensation)
+                            .luminance(),
+                    )
+                },
+            )
+            .collect()
+    });
+    let cpu = start.elapsed().as_secs_f64();
+    let mut relative: Vec<f64> = records
+        .iter()
+        .zip(&traced)
+        .filter(|(_, &b)| b > 0.0)
+        .map(|(r, &b)| ((f64::from(r.irradiance.luminance()) - b) / b).abs())
+        .collect();
+    relative.sort_by(f64::total_cmp);
+    let rms = (relative.iter().map(|r| r * r).sum::<f64>() / relative.len().max(1) as f64).sqrt();
+    println!(
+        "  records from 64×64 planes computed on the GPU (rasterised, shaded by the shadow map, \
+         summed with border compensation): {:.0} records/s; ray cast and shaded on {} CPU threads \
+         {:.0} records/s; irradiance against the ray-cast planes: median {:.2} %, RMS {:.2} % \
+         ({} lit records)",
+        points.len() as f64 / t,
+        pool.current_num_threads(),
+        points.len() as f64 / cpu,
+        100.0 * relative.get(relative.len() / 2).copied().unwrap_or(0.0),
+        100.0 * rms,
+        relative.len()
+    );
     Ok(())
 }
 

@@ -74,7 +74,8 @@ pub struct BenchArgs {
     /// adaptive: only the cases of this integrator (path, ic) or whose name begins with it
     /// (e.g. "cornell-glossy d5 ic"); cache: only the scenes whose name begins with it
     /// (e.g. "sponza-sun d3"); peers: only the scenes whose name begins with it
-    /// ("cornell-glossy"); gpu: "frame" for the whole frame on the GPU alone.
+    /// ("cornell-glossy"); gpu: splat, views (the camera's view, planes, records from planes), frame or
+    /// walkthrough alone.
     #[arg(long)]
     pub case: Option<String>,
 }

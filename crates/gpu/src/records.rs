@@ -1,0 +1,184 @@
+//! Records computed by hemisphere rasterisation on the GPU (001 §4.4.2, Table 4.1; NOTES-001
+//! §C.4), the pass of `shaders/records.wgsl`: the planes above many records rasterised side by
+//! side into an atlas ([`crate::visibility`]), each pixel shaded on the GPU as a rasteriser
+//! shades it (one bounce: the hit's albedo/π times the directional light through the shadow
+//! map of [`GpuFrame`]), and summed with [`HemispherePlane`]'s border-compensated weights into
+//! each record's irradiance, with the harmonic mean distance of the pixels' hits. For the scenes
+//! [`GpuFrame`] serves, records of the first bounce; gradients are not made here.
+
+use crate::frame::GpuFrame;
+use crate::GpuError;
+use bytemuck::{Pod, Zeroable};
+use ircache_math::{Frame, Rgb};
+use ircache_render::irradiance_cache::gather::ShadingPoint;
+use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
+use wgpu::util::DeviceExt;
+
+/// A record's plane as the shader reads it (`Plane`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuPlane {
+    origin: [f32; 4],
+    s: [f32; 4],
+    t: [f32; 4],
+    n: [f32; 4],
+    ng: [f32; 4],
+}
+
+/// The pass's constants (`Params`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuParams {
+    pixels: u32,
+    columns: u32,
+    count: u32,
+    half_size: f32,
+}
+
+/// Workgroups along x (`GROUPS_X` in `records.wgsl`).
+const GROUPS_X: u32 = 32_768;
+
+/// A record computed from its rasterised plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlaneRecord {
+    /// Irradiance, border-compensated.
+    pub irradiance: Rgb,
+    /// Harmonic mean distance of the pixels' hits; `None` where the plane saw nothing.
+    pub harmonic_distance: Option<f32>,
+}
+
+impl GpuFrame {
+    /// The records at `points`, each from `plane` rasterised above it and shaded on the GPU, in
+    /// as few passes as the device's largest texture allows.
+    ///
+    /// # Errors
+    /// When the GPU fails.
+    pub fn plane_records(
+        &self,
+        plane: &HemispherePlane,
+        points: &[ShadingPoint],
+    ) -> Result<Vec<PlaneRecord>, GpuError> {
+        let device = &self.gpu.device;
+        let n = plane.pixels as u32;
+        let (columns, rows) = self.visibility.atlas_grid(n, n)?;
+        let weights: Vec<f32> = plane
+            .weights(PlaneEstimator::BorderCompensation)
+            .iter()
+            .map(|&w| w as f32)
+            .collect();
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let storage = wgpu::BufferUsages::STORAGE;
+        let weights = init("plane weights", bytemuck::cast_slice(&weights), storage);
+        let mut out = Vec::with_capacity(points.len());
+        for batch in points.chunks((columns * rows) as usize) {
+            let count = batch.len() as u32;
+            let views: Vec<[[f32; 4]; 4]> = batch
+                .iter()
+                .map(|sp| self.visibility.plane_view(plane, sp))
+                .collect();
+            let views = self.visibility.views(&views);
+            let planes: Vec<GpuPlane> = batch
+                .iter()
+                .map(|sp| {
+                    let frame = Frame::from_z(sp.n);
+                    let v = |v: ircache_math::Vec3| [v.x, v.y, v.z, 0.0];
+                    let ng = sp.it.ng * sp.n.dot(sp.it.ng).signum();
+                    GpuPlane {
+                        origin: v(sp.it.p),
+                        s: v(frame.s),
+                        t: v(frame.t),
+                        n: v(frame.n),
+                        ng: v(ng),
+                    }
+                })
+                .collect();
+            let planes = init("planes", bytemuck::cast_slice(&planes), storage);
+            let params = GpuParams {
+                pixels: n,
+                columns,
+                count,
+                half_size: plane.half_size as f32,
+            };
+            let params = init(
+                "record params",
+                bytemuck::bytes_of(&params),
+                wgpu::BufferUsages::UNIFORM,
+            );
+            let records = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("plane records"),
+                size: 16 * u64::from(count),
+                usage: storage | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let (atlas_w, atlas_h) = (columns.min(count) * n, count.div_ceil(columns) * n);
+            let target = |format, usage| {
+                device
+                    .create_texture(&wgpu::TextureDescriptor {
+                        label: Some("plane atlas"),
+                        size: wgpu::Extent3d {
+                            width: atlas_w,
+                            height: atlas_h,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format,
+                        usage,
+                        view_formats: &[],
+                    })
+                    .create_view(&wgpu::TextureViewDescriptor::default())
+            };
+            let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+            let ids = target(
+                crate::visibility::FORMAT,
+                attachment | wgpu::TextureUsages::TEXTURE_BINDING,
+            );
+            let depth = target(crate::visibility::DEPTH, attachment);
+            fn resource(b: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+                b.as_entire_binding()
+            }
+            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("plane records"),
+                layout: &self.records.get_bind_group_layout(0),
+                entries: &[
+                    (0, resource(&params)),
+                    (1, wgpu::BindingResource::TextureView(&ids)),
+                    (2, resource(&self.triangles)),
+                    (3, resource(&self.shapes)),
+                    (4, resource(&planes)),
+                    (5, resource(&weights)),
+                    (6, resource(&self.light)),
+                    (7, wgpu::BindingResource::TextureView(&self.shadow)),
+                    (8, resource(&records)),
+                ]
+                .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource }),
+            });
+            let mut encoder =
+                device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+            self.visibility
+                .draw_atlas(&mut encoder, &views, count, (n, n), columns, &ids, &depth);
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+                pass.set_pipeline(&self.records);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.dispatch_workgroups(count.min(GROUPS_X), count.div_ceil(GROUPS_X), 1);
+            }
+            self.gpu.queue.submit([encoder.finish()]);
+            let bytes = self.gpu.read_back(&records)?;
+            self.gpu.check()?;
+            let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+            out.extend(values.iter().map(|v| PlaneRecord {
+                irradiance: Rgb::new(v[0], v[1], v[2]),
+                harmonic_distance: (v[3] > 0.0).then_some(v[3]),
+            }));
+        }
+        Ok(out)
+    }
+}
