@@ -132,7 +132,14 @@ pub fn whole_frame(
             );
             return Ok(false);
         }
-        Err(e) => return Err(e.into()),
+        // The device refused the scene's buffers (too large for it, say).
+        Err(e) => {
+            eprintln!(
+                "note: the whole frame could not be set up on the GPU ({e}): splatting on the GPU, \
+                 the rest on the CPU"
+            );
+            return Ok(false);
+        }
     };
     let (w, h) = (settings.width as u32, settings.height as u32);
     let job = frame.prepare(&cache, &scene.camera, w, h, settings.filter.radius())?;
