@@ -105,6 +105,17 @@ pub fn whole_frame(
         );
         return Ok(false);
     }
+    if let Err(e) = GpuFrame::serves(scene) {
+        let why = match e {
+            ircache_gpu::GpuError::Unsupported(why) => why,
+            e => e.to_string(),
+        };
+        eprintln!(
+            "note: the whole frame on the GPU does not serve this scene ({why}): splatting on the \
+             GPU, the rest on the CPU"
+        );
+        return Ok(false);
+    }
     let t0 = Instant::now();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
@@ -125,13 +136,6 @@ pub fn whole_frame(
         SHADOW_MAP,
     ) {
         Ok(frame) => frame,
-        Err(ircache_gpu::GpuError::Unsupported(why)) => {
-            eprintln!(
-                "note: the whole frame on the GPU does not serve this scene ({why}): splatting on \
-                 the GPU, the rest on the CPU"
-            );
-            return Ok(false);
-        }
         // The device refused the scene's buffers (too large for it, say).
         Err(e) => {
             eprintln!(

@@ -125,26 +125,19 @@ pub fn layer_jitter(k: u32) -> [f32; 2] {
 pub const SHADOW_MAP: u32 = 4096;
 
 impl GpuFrame {
-    /// The scene's triangles, materials and light on `gpu`, its shadow map (of `shadow_map`²
-    /// texels) rasterised once; `splatter` splats the records.
+    /// Whether the pipeline serves `scene`: one directional light and nothing else that emits,
+    /// triangle meshes of Lambertian materials of constant albedo.
     ///
     /// # Errors
     /// [`GpuError::Unsupported`] naming what the scene holds that this pipeline does not serve.
-    pub fn new(
-        gpu: Arc<Gpu>,
-        splatter: Arc<GpuSplatter>,
-        scene: &Scene,
-        cache: &IrradianceCache,
-        shadow_map: u32,
-    ) -> Result<GpuFrame, GpuError> {
+    pub fn serves(scene: &Scene) -> Result<(), GpuError> {
         let unsupported = |what: String| Err(GpuError::Unsupported(what));
-        let Some((to_light, irradiance)) = scene.lights.only_directional() else {
+        if scene.lights.only_directional().is_none() {
             return unsupported(format!(
                 "the GPU frame serves one directional light; the scene has {} emitters of other kinds",
                 scene.lights.len()
             ));
-        };
-        let mut shapes = Vec::with_capacity(scene.shapes.len());
+        }
         for (k, shape) in scene.shapes.iter().enumerate() {
             let material = &scene.materials[shape.material];
             let name = shape.name.as_deref().unwrap_or("(unnamed)");
@@ -157,6 +150,29 @@ impl GpuFrame {
                     "shape {k} ({name}) is not a Lambertian surface of constant albedo"
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// The scene's triangles, materials and light on `gpu`, its shadow map (of `shadow_map`²
+    /// texels) rasterised once; `splatter` splats the records.
+    ///
+    /// # Errors
+    /// [`GpuError::Unsupported`] naming what the scene holds that this pipeline does not serve.
+    pub fn new(
+        gpu: Arc<Gpu>,
+        splatter: Arc<GpuSplatter>,
+        scene: &Scene,
+        cache: &IrradianceCache,
+        shadow_map: u32,
+    ) -> Result<GpuFrame, GpuError> {
+        Self::serves(scene)?;
+        let Some((to_light, irradiance)) = scene.lights.only_directional() else {
+            return Err(GpuError::Unsupported("no directional light".into()));
+        };
+        let mut shapes = Vec::with_capacity(scene.shapes.len());
+        for (k, shape) in scene.shapes.iter().enumerate() {
+            let bsdf = scene.materials[shape.material].at(ircache_math::Vec2::ZERO);
             let side = |up: f32| {
                 let wo = Vec3::new(0.0, 0.0, up);
                 let a = bsdf.lambertian_albedo(wo);
