@@ -142,7 +142,70 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
         100.0 * rms(1),
         params.divisions
     );
+    let references: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+    on_the_gpu(&scene, &cache, &plane, &points, &references)?;
     rasterised(&scene, &light, &g, &plane, &points[..RASTERISED])
+}
+
+/// Border compensation with each record computed whole on the GPU (`ircache_gpu::records`:
+/// rasterised, shaded through the shadow map, summed), by the same protocol: where the scene is
+/// one the GPU frame serves and a device exists.
+#[cfg(feature = "gpu")]
+fn on_the_gpu(
+    scene: &Scene,
+    cache: &IrradianceCache,
+    plane: &HemispherePlane,
+    points: &[ShadingPoint],
+    references: &[f64],
+) -> Result<()> {
+    use ircache_gpu::frame::GpuFrame;
+    if GpuFrame::serves(scene).is_err() {
+        return Ok(());
+    }
+    let gpu = match ircache_gpu::Gpu::new() {
+        Ok(gpu) => std::sync::Arc::new(gpu),
+        Err(e) => {
+            println!("    on the GPU: not measured ({e})");
+            return Ok(());
+        }
+    };
+    let splatter = std::sync::Arc::new(ircache_gpu::splat::GpuSplatter::new(gpu.clone()));
+    let frame = GpuFrame::new(
+        gpu.clone(),
+        splatter,
+        scene,
+        cache,
+        ircache_gpu::frame::SHADOW_MAP,
+    )?;
+    let t = Instant::now();
+    let records = frame.plane_records(plane, points)?;
+    let seconds = t.elapsed().as_secs_f64();
+    let (mut squared, mut lit) = (0.0f64, 0usize);
+    for (r, &reference) in records.iter().zip(references) {
+        if reference > 0.0 {
+            squared += ((f64::from(r.irradiance.luminance()) - reference) / reference).powi(2);
+            lit += 1;
+        }
+    }
+    println!(
+        "    {:<28} {:>6.1} %   (each record rasterised, shaded and summed on {}: {:.0} records/s)",
+        "border compensation, GPU",
+        100.0 * (squared / lit.max(1) as f64).sqrt(),
+        gpu.describe(),
+        points.len() as f64 / seconds
+    );
+    Ok(())
+}
+
+#[cfg(not(feature = "gpu"))]
+fn on_the_gpu(
+    _: &Scene,
+    _: &IrradianceCache,
+    _: &HemispherePlane,
+    _: &[ShadingPoint],
+    _: &[f64],
+) -> Result<()> {
+    Ok(())
 }
 
 /// Points whose planes are also rasterised.
