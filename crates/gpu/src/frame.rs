@@ -281,7 +281,13 @@ impl GpuFrame {
         gpu.queue.submit([encoder.finish()]);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("frame.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/frame.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(
+                concat!(
+                    include_str!("shaders/surface.wgsl"),
+                    include_str!("shaders/frame.wgsl")
+                )
+                .into(),
+            ),
         });
         let pipeline = |entry: &str| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -297,7 +303,13 @@ impl GpuFrame {
         let compose = pipeline("compose");
         let records_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("records.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("shaders/records.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(
+                concat!(
+                    include_str!("shaders/surface.wgsl"),
+                    include_str!("shaders/records.wgsl")
+                )
+                .into(),
+            ),
         });
         let records = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("records"),

@@ -3,16 +3,8 @@
 // rasterised camera view (triangle ids) into the splat pass's samples, each hit found on its
 // triangle along the camera ray through the pixel centre; after the splat, `compose` shades
 // each pixel: albedo/π × (splatted indirect irradiance + direct light through a shadow map),
-// added to the layers before (jittered layers average to a box filter's estimate).
-
-struct Triangle {
-    p0: vec4<f32>, // w: the shape's index (bits)
-    p1: vec4<f32>,
-    p2: vec4<f32>,
-    n0: vec4<f32>, // w: 1 where the mesh has vertex normals
-    n1: vec4<f32>,
-    n2: vec4<f32>,
-}
+// added to the layers before (jittered layers average to a box filter's estimate). Prepended:
+// `surface.wgsl` (triangles, shapes, the light; a ray's hit; the light through the shadow map).
 
 struct Camera {
     to_world: mat4x4<f32>,
@@ -27,18 +19,6 @@ struct Sample {
     n_bump: vec4<f32>,
 }
 
-struct Shape {
-    front: vec4<f32>, // albedo seen from the front; w = 1 where the front is a record site
-    back: vec4<f32>,
-}
-
-struct Light {
-    to_clip: mat4x4<f32>,  // world to the shadow map's orthographic clip space
-    to_light: vec4<f32>,   // unit direction towards the light
-    irradiance: vec4<f32>,
-    bias: vec4<f32>,       // x: a texel in depth units; y: the map's size in texels
-}
-
 struct Sums {
     irradiance: vec4<f32>,
     count: u32,
@@ -50,7 +30,6 @@ struct Sums {
 const NONE: u32 = 0xffffffffu;
 const BACK: u32 = 0x80000000u;
 const TILE: u32 = 16u;
-const PI: f32 = 3.14159265358979;
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var ids: texture_2d<u32>;
@@ -80,41 +59,13 @@ fn gbuffer(@builtin(global_invocation_id) id: vec3<u32>) {
     let film = (vec2<f32>(id.xy) + 0.5 + camera.tan_half.zw) / vec2<f32>(f32(w), f32(h));
     let d_cam = normalize(vec3<f32>((1.0 - 2.0 * film.x) * camera.tan_half.x, (1.0 - 2.0 * film.y) * camera.tan_half.y, 1.0));
     let d = normalize((camera.to_world * vec4<f32>(d_cam, 0.0)).xyz);
-    let o = camera.origin.xyz;
-    let e1 = tri.p1.xyz - tri.p0.xyz;
-    let e2 = tri.p2.xyz - tri.p0.xyz;
-    let ng_raw = cross(e1, e2);
-    let t = dot(tri.p0.xyz - o, ng_raw) / dot(d, ng_raw);
-    let p = o + t * d;
-    // Barycentric coordinates of p.
-    let v = p - tri.p0.xyz;
-    let d00 = dot(e1, e1);
-    let d01 = dot(e1, e2);
-    let d11 = dot(e2, e2);
-    let d20 = dot(v, e1);
-    let d21 = dot(v, e2);
-    let denom = d00 * d11 - d01 * d01;
-    let b1 = (d11 * d20 - d01 * d21) / denom;
-    let b2 = (d00 * d21 - d01 * d20) / denom;
-    let b0 = 1.0 - b1 - b2;
-    let ng = normalize(ng_raw);
-    var ns = ng;
-    if tri.n0.w > 0.5 {
-        let interpolated = b0 * tri.n0.xyz + b1 * tri.n1.xyz + b2 * tri.n2.xyz;
-        if dot(interpolated, interpolated) > 0.0 {
-            ns = normalize(interpolated);
-        }
-    }
-    // `ShadingPoint::facing`: the normal on the viewer's side.
-    let back = dot(ns, -d) < 0.0;
-    let n = select(ns, -ns, back);
-    let shape = bitcast<u32>(tri.p0.w);
-    let site = select(shapes[shape].front.w, shapes[shape].back.w, back) > 0.5;
-    s.p = vec4<f32>(p, select(0.0, 1.0, site));
-    s.n = vec4<f32>(n, 0.0);
+    let hit = surface_hit(tri, camera.origin.xyz, d);
+    let site = select(shapes[hit.shape].front.w, shapes[hit.shape].back.w, hit.back) > 0.5;
+    s.p = vec4<f32>(hit.p, select(0.0, 1.0, site));
+    s.n = vec4<f32>(hit.n, 0.0);
     s.n_bump = s.n;
     samples[i] = s;
-    hits[i] = select(shape, shape | BACK, back);
+    hits[i] = select(hit.shape, hit.shape | BACK, hit.back);
 }
 
 @group(0) @binding(6) var<storage, read> sums: array<Sums>;   // per touched tile, TILE²
@@ -155,20 +106,6 @@ fn compose(@builtin(global_invocation_id) id: vec3<u32>) {
             atomicAdd(&misses, 1u);
         }
     }
-    // Direct light through the shadow map, with a slope-scaled bias of a texel or more.
-    let cosine = dot(n, light.to_light.xyz);
-    if cosine > 0.0 {
-        let c = light.to_clip * vec4<f32>(s.p.xyz, 1.0);
-        let uv = vec2<f32>(0.5 + 0.5 * c.x, 0.5 - 0.5 * c.y);
-        var lit = 1.0;
-        if all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0)) {
-            let texel = vec2<i32>(uv * light.bias.y);
-            let stored = textureLoad(shadow, texel, 0);
-            let slope = sqrt(max(1.0 - cosine * cosine, 0.0)) / cosine;
-            let bias = light.bias.x * (1.5 + min(slope, 16.0));
-            lit = select(0.0, 1.0, c.z - bias <= stored);
-        }
-        e = e + light.irradiance.xyz * cosine * lit;
-    }
+    e = e + sun_irradiance(light, shadow, s.p.xyz, n);
     image[i] = image[i] + vec4<f32>(albedo / PI * e, 1.0);
 }
