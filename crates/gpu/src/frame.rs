@@ -23,7 +23,6 @@ use ircache_render::irradiance_cache::build::is_record_site;
 use ircache_render::irradiance_cache::IrradianceCache;
 use ircache_render::scene::{Scene, ShapeGeometry};
 use std::sync::Arc;
-use wgpu::util::DeviceExt;
 
 /// A triangle as `frame.wgsl` reads it.
 #[repr(C)]
@@ -105,6 +104,11 @@ pub struct FrameImage {
     pub pixels: Vec<Rgb>,
     /// Record sites no record served (no indirect light there), summed over the layers.
     pub misses: u32,
+}
+
+/// The whole of `texture`.
+pub(crate) fn view_of(texture: &wgpu::Texture) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor::default())
 }
 
 /// The error thresholds at which records serve a sample, each where the ones before served
@@ -209,16 +213,9 @@ impl GpuFrame {
             })
             .collect();
         let device = &gpu.device;
-        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
         let storage = wgpu::BufferUsages::STORAGE;
-        let triangles = init("triangles", bytemuck::cast_slice(&triangles), storage);
-        let shapes = init("shapes", bytemuck::cast_slice(&shapes), storage);
+        let triangles = gpu.buffer("triangles", bytemuck::cast_slice(&triangles), storage);
+        let shapes = gpu.buffer("shapes", bytemuck::cast_slice(&shapes), storage);
         // The shadow map: an orthographic view along the light over the scene's bounding
         // sphere, depth (along the light's travel) from 0 to 1 across it.
         let (centre, radius) = scene.lights.scene_bounds();
@@ -244,40 +241,32 @@ impl GpuFrame {
             irradiance: [irradiance.r, irradiance.g, irradiance.b, 0.0],
             bias: [1.0 / shadow_map as f32, shadow_map as f32, 0.0, 0.0],
         };
-        let light = init(
+        let light = gpu.buffer(
             "light",
             bytemuck::bytes_of(&light),
             wgpu::BufferUsages::UNIFORM,
         );
-        let target = |w: u32, h: u32, format, usage| {
-            device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("frame target"),
-                    size: wgpu::Extent3d {
-                        width: w,
-                        height: h,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                })
-                .create_view(&wgpu::TextureViewDescriptor::default())
-        };
+        let map = (shadow_map, shadow_map);
         let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
-        let shadow_ids = target(shadow_map, shadow_map, FORMAT, attachment);
-        let shadow = target(
-            shadow_map,
-            shadow_map,
+        let shadow_ids = view_of(&gpu.texture("shadow map ids", map, FORMAT, attachment));
+        let shadow = view_of(&gpu.texture(
+            "shadow map",
+            map,
             DEPTH,
             attachment | wgpu::TextureUsages::TEXTURE_BINDING,
-        );
+        ));
         let shadow_view = visibility.views(&[to_clip]);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        visibility.draw(&mut encoder, &shadow_view, &shadow_ids, &shadow, true);
+        visibility.draw_atlas(
+            &mut encoder,
+            &shadow_view,
+            1,
+            map,
+            1,
+            &shadow_ids,
+            &shadow,
+            true,
+        );
         gpu.queue.submit([encoder.finish()]);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("frame.wgsl"),
@@ -361,13 +350,6 @@ impl GpuFrame {
         }
         let slots = inputs[0].tile_slots();
         let storage = wgpu::BufferUsages::STORAGE;
-        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
         let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -392,48 +374,40 @@ impl GpuFrame {
             4,
             storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
-        let slots = init("tile slots", bytemuck::cast_slice(&slots), storage);
-        let first = self.splatter.upload(&inputs[0], &samples);
-        let mut splat = vec![];
+        let slots = self
+            .gpu
+            .buffer("tile slots", bytemuck::cast_slice(&slots), storage);
+        // The passes after the first add into its sums.
+        let mut splat = vec![self.splatter.upload(&inputs[0], &samples)];
         for input in &inputs[1..] {
-            splat.push(
-                self.splatter
-                    .upload_over(input, &samples, Some(&first.sums)),
-            );
+            let job = self
+                .splatter
+                .upload_over(input, &samples, Some(&splat[0].sums));
+            splat.push(job);
         }
-        splat.insert(0, first);
         let cam = GpuCamera {
             to_world: camera.to_world.to_cols_array_2d(),
             origin: [camera.origin.x, camera.origin.y, camera.origin.z, 1.0],
             tan_half: [camera.tan_half_x, camera.tan_half_y, 0.0, 0.0],
             size: [width, height, width.div_ceil(16), 0],
         };
-        let camera_buffer = init(
+        let camera_buffer = self.gpu.buffer(
             "camera",
             bytemuck::bytes_of(&cam),
             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         );
-        let target = |format, usage| {
-            device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("camera view"),
-                    size: wgpu::Extent3d {
-                        width,
-                        height,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                })
-                .create_view(&wgpu::TextureViewDescriptor::default())
-        };
         let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
-        let ids = target(FORMAT, attachment | wgpu::TextureUsages::TEXTURE_BINDING);
-        let depth = target(DEPTH, attachment);
+        let ids = view_of(&self.gpu.texture(
+            "camera view",
+            (width, height),
+            FORMAT,
+            attachment | wgpu::TextureUsages::TEXTURE_BINDING,
+        ));
+        let depth = view_of(
+            &self
+                .gpu
+                .texture("camera depth", (width, height), DEPTH, attachment),
+        );
         let bind = |pipeline: &wgpu::ComputePipeline, entries: &[(u32, wgpu::BindingResource)]| {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("frame"),
@@ -521,8 +495,16 @@ impl GpuFrame {
         queue.write_buffer(&job.view_buffer, 0, bytemuck::cast_slice(&[view]));
         let device = &self.gpu.device;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        self.visibility
-            .draw(&mut encoder, &job.view, &job.ids, &job.depth, false);
+        self.visibility.draw_atlas(
+            &mut encoder,
+            &job.view,
+            1,
+            job.size,
+            1,
+            &job.ids,
+            &job.depth,
+            false,
+        );
         let groups = (job.size.0.div_ceil(16), job.size.1.div_ceil(16));
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());

@@ -6,13 +6,12 @@
 //! each record's irradiance, with the harmonic mean distance of the pixels' hits. For the scenes
 //! [`GpuFrame`] serves, records of the first bounce; gradients are not made here.
 
-use crate::frame::GpuFrame;
+use crate::frame::{view_of, GpuFrame};
 use crate::GpuError;
 use bytemuck::{Pod, Zeroable};
 use ircache_math::{Frame, Rgb};
 use ircache_render::irradiance_cache::gather::ShadingPoint;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
-use wgpu::util::DeviceExt;
 
 /// A record's plane as the shader reads it (`Plane`).
 #[repr(C)]
@@ -66,15 +65,10 @@ impl GpuFrame {
             .iter()
             .map(|&w| w as f32)
             .collect();
-        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
         let storage = wgpu::BufferUsages::STORAGE;
-        let weights = init("plane weights", bytemuck::cast_slice(&weights), storage);
+        let weights = self
+            .gpu
+            .buffer("plane weights", bytemuck::cast_slice(&weights), storage);
         let mut out = Vec::with_capacity(points.len());
         for batch in points.chunks((columns * rows) as usize) {
             let count = batch.len() as u32;
@@ -98,14 +92,16 @@ impl GpuFrame {
                     }
                 })
                 .collect();
-            let planes = init("planes", bytemuck::cast_slice(&planes), storage);
+            let planes = self
+                .gpu
+                .buffer("planes", bytemuck::cast_slice(&planes), storage);
             let params = GpuParams {
                 pixels: n,
                 columns,
                 count,
                 half_size: plane.half_size as f32,
             };
-            let params = init(
+            let params = self.gpu.buffer(
                 "record params",
                 bytemuck::bytes_of(&params),
                 wgpu::BufferUsages::UNIFORM,
@@ -117,30 +113,20 @@ impl GpuFrame {
                 mapped_at_creation: false,
             });
             let (atlas_w, atlas_h) = (columns.min(count) * n, count.div_ceil(columns) * n);
-            let target = |format, usage| {
-                device
-                    .create_texture(&wgpu::TextureDescriptor {
-                        label: Some("plane atlas"),
-                        size: wgpu::Extent3d {
-                            width: atlas_w,
-                            height: atlas_h,
-                            depth_or_array_layers: 1,
-                        },
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format,
-                        usage,
-                        view_formats: &[],
-                    })
-                    .create_view(&wgpu::TextureViewDescriptor::default())
-            };
+            let atlas = (atlas_w, atlas_h);
             let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
-            let ids = target(
+            let ids = view_of(&self.gpu.texture(
+                "plane atlas",
+                atlas,
                 crate::visibility::FORMAT,
                 attachment | wgpu::TextureUsages::TEXTURE_BINDING,
-            );
-            let depth = target(crate::visibility::DEPTH, attachment);
+            ));
+            let depth = view_of(&self.gpu.texture(
+                "plane atlas depth",
+                atlas,
+                crate::visibility::DEPTH,
+                attachment,
+            ));
             fn resource(b: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
                 b.as_entire_binding()
             }
@@ -162,8 +148,16 @@ impl GpuFrame {
             });
             let mut encoder =
                 device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-            self.visibility
-                .draw_atlas(&mut encoder, &views, count, (n, n), columns, &ids, &depth);
+            self.visibility.draw_atlas(
+                &mut encoder,
+                &views,
+                count,
+                (n, n),
+                columns,
+                &ids,
+                &depth,
+                false,
+            );
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
                 pass.set_pipeline(&self.records);

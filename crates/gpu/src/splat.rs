@@ -28,7 +28,6 @@ use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
-use wgpu::util::DeviceExt;
 
 /// A record as the shader reads it (`Record` in `splat.wgsl`).
 #[repr(C)]
@@ -218,14 +217,11 @@ impl GpuSplatter {
                 None => GpuSample::zeroed(),
             })
             .collect();
-        let buffer = self
-            .gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("samples"),
-                contents: bytemuck::cast_slice(&samples),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
+        let buffer = self.gpu.buffer(
+            "samples",
+            bytemuck::cast_slice(&samples),
+            wgpu::BufferUsages::STORAGE,
+        );
         *resident = Some(Resident {
             filling: Arc::downgrade(g.filling()),
             samples: buffer.clone(),
@@ -258,13 +254,7 @@ impl GpuSplatter {
         sums: Option<&wgpu::Buffer>,
     ) -> SplatJob {
         let device = &self.gpu.device;
-        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
+        let init = |label: &str, contents: &[u8], usage| self.gpu.buffer(label, contents, usage);
         let storage = wgpu::BufferUsages::STORAGE;
         let params_buffer = init(
             "params",

@@ -18,7 +18,6 @@ use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingP
 use ircache_render::irradiance_cache::plane::HemispherePlane;
 use ircache_render::scene::{Scene, ShapeGeometry};
 use std::sync::Arc;
-use wgpu::util::DeviceExt;
 
 /// A vertex as the shader reads it.
 #[repr(C)]
@@ -121,11 +120,11 @@ impl PlaneVisibility {
             }
         }
         let device = &gpu.device;
-        let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("scene triangles"),
-            contents: bytemuck::cast_slice(&vertices),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
+        let vertex_buffer = gpu.buffer(
+            "scene triangles",
+            bytemuck::cast_slice(&vertices),
+            wgpu::BufferUsages::VERTEX,
+        );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("visibility.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("shaders/visibility.wgsl").into()),
@@ -285,62 +284,23 @@ impl PlaneVisibility {
         &self,
         matrices: &[[[f32; 4]; 4]],
     ) -> (wgpu::Buffer, wgpu::BindGroup) {
-        let device = &self.gpu.device;
-        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("views"),
-            contents: bytemuck::cast_slice(matrices),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        });
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("visibility"),
-            layout: &self.layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buffer.as_entire_binding(),
-            }],
-        });
+        let buffer = self.gpu.buffer(
+            "views",
+            bytemuck::cast_slice(matrices),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        );
+        let group = self
+            .gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("visibility"),
+                layout: &self.layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: buffer.as_entire_binding(),
+                }],
+            });
         (buffer, group)
-    }
-
-    /// Records a pass drawing the scene through view 0 of `views` over the whole of `ids` and
-    /// `depth`, keeping the depth when `store_depth` (a shadow map).
-    pub(crate) fn draw(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        views: &wgpu::BindGroup,
-        ids: &wgpu::TextureView,
-        depth: &wgpu::TextureView,
-        store_depth: bool,
-    ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("visibility"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: ids,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: if store_depth {
-                        wgpu::StoreOp::Store
-                    } else {
-                        wgpu::StoreOp::Discard
-                    },
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, views, &[]);
-        pass.set_vertex_buffer(0, self.vertices.slice(..));
-        pass.draw(0..self.vertex_count, 0..1);
     }
 
     /// Atlas columns and rows of `width × height` views the device's largest texture holds (64
@@ -367,7 +327,7 @@ impl PlaneVisibility {
 
     /// Records a pass drawing views 0..`count` of `views` side by side into an atlas of
     /// `columns` tiles of `tile` pixels a row (`ids`, `depth`): one viewport and one instanced
-    /// draw per view.
+    /// draw per view. The depth is kept when `store_depth` (a shadow map: one view, one tile).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn draw_atlas(
         &self,
@@ -378,6 +338,7 @@ impl PlaneVisibility {
         columns: u32,
         ids: &wgpu::TextureView,
         depth: &wgpu::TextureView,
+        store_depth: bool,
     ) {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("visibility"),
@@ -394,7 +355,11 @@ impl PlaneVisibility {
                 view: depth,
                 depth_ops: Some(wgpu::Operations {
                     load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
+                    store: if store_depth {
+                        wgpu::StoreOp::Store
+                    } else {
+                        wgpu::StoreOp::Discard
+                    },
                 }),
                 stencil_ops: None,
             }),
@@ -451,41 +416,22 @@ impl PlaneVisibility {
             let count = batch.len() as u32;
             let (used_columns, used_rows) = (columns.min(count), count.div_ceil(columns));
             let (atlas_w, atlas_h) = (used_columns * width, used_rows * height);
-            let view_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("views"),
-                contents: bytemuck::cast_slice(batch),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
-            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("visibility"),
-                layout: &self.layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: view_buffer.as_entire_binding(),
-                }],
-            });
+            let bind = self.views(batch);
             let size = wgpu::Extent3d {
                 width: atlas_w,
                 height: atlas_h,
                 depth_or_array_layers: 1,
             };
-            let texture = |format, usage| {
-                device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some("visibility"),
-                    size,
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format,
-                    usage,
-                    view_formats: &[],
-                })
-            };
-            let ids = texture(
+            let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+            let ids = self.gpu.texture(
+                "visibility",
+                (atlas_w, atlas_h),
                 FORMAT,
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                attachment | wgpu::TextureUsages::COPY_SRC,
             );
-            let depth = texture(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT);
+            let depth = self
+                .gpu
+                .texture("visibility", (atlas_w, atlas_h), DEPTH, attachment);
             let ids_view = ids.create_view(&wgpu::TextureViewDescriptor::default());
             let depth_view = depth.create_view(&wgpu::TextureViewDescriptor::default());
             let row_bytes = (4 * atlas_w).div_ceil(256) * 256;
@@ -505,6 +451,7 @@ impl PlaneVisibility {
                 columns,
                 &ids_view,
                 &depth_view,
+                false,
             );
             encoder.copy_texture_to_buffer(
                 ids.as_image_copy(),
