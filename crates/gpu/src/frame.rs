@@ -106,6 +106,37 @@ pub struct FrameImage {
     pub misses: u32,
 }
 
+/// How two images of one frame agree ([`FrameImage::agreement`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Agreement {
+    /// The sums of the two images' luminances.
+    pub luminance: (f64, f64),
+    /// Pixels whose channels all agree within 1e-3 of the larger image's largest channel there.
+    pub within: usize,
+}
+
+impl FrameImage {
+    /// How this image agrees with `other`, pixel by pixel.
+    #[must_use]
+    pub fn agreement(&self, other: &FrameImage) -> Agreement {
+        let luminance = |p: &[Rgb]| p.iter().map(|c| f64::from(c.luminance())).sum::<f64>();
+        let within = self
+            .pixels
+            .iter()
+            .zip(&other.pixels)
+            .filter(|(x, y)| {
+                let d = **x - **y;
+                d.r.abs().max(d.g.abs()).max(d.b.abs())
+                    <= 1e-3 * x.max_channel().max(y.max_channel()).max(1e-6)
+            })
+            .count();
+        Agreement {
+            luminance: (luminance(&self.pixels), luminance(&other.pixels)),
+            within,
+        }
+    }
+}
+
 /// The whole of `texture`.
 pub(crate) fn view_of(texture: &wgpu::Texture) -> wgpu::TextureView {
     texture.create_view(&wgpu::TextureViewDescriptor::default())

@@ -4,39 +4,18 @@
 //! cache. On lavapipe where there is no GPU; with no device the test fails and says so, unless
 //! `IRCACHE_GPU_TESTS=skip`. Scenes the pipeline does not serve are refused by name.
 
+mod common;
+
 use ircache_gpu::frame::{layer_jitter, traced_frame, GpuFrame};
 use ircache_gpu::splat::GpuSplatter;
-use ircache_gpu::{Gpu, GpuError};
 use ircache_render::integrators::Integrator;
 use ircache_render::irradiance_cache::gather::ShadingPoint;
 use ircache_render::render::RenderSettings;
 use ircache_render::scene::Scene;
 use std::sync::Arc;
 
-fn gpu() -> Option<Arc<Gpu>> {
-    match Gpu::new() {
-        Ok(g) => Some(Arc::new(g)),
-        Err(e @ GpuError::NoDevice(_))
-            if std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip") =>
-        {
-            eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {e}");
-            None
-        }
-        Err(e) => panic!("{e} (set IRCACHE_GPU_TESTS=skip to skip the GPU tests)"),
-    }
-}
-
 fn load(name: &str, width: u32, height: u32) -> ircache_scene::SceneDesc {
-    let path = format!(
-        "{}/../../../shared/scenes/{name}/scene.xml",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let mut desc = ircache_scene::load_scene(
-        std::path::Path::new(&path),
-        &[("max_depth".into(), "3".into())],
-        &ircache_scene::obj_scene::ObjCamera::default(),
-    )
-    .expect("the shared scene loads");
+    let mut desc = common::shared(name);
     desc.integrator.kind = "ic".into();
     desc.sensor.film.width = width;
     desc.sensor.film.height = height;
@@ -45,7 +24,7 @@ fn load(name: &str, width: u32, height: u32) -> ircache_scene::SceneDesc {
 
 #[test]
 fn the_gpu_frame_equals_the_traced_frame() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     let (w, h) = (160u32, 90u32);
     // The cache filled for a narrower view (4:3) than the frame's (16:9): towards the frame's
     // sides records serve at thresholds 2 and 4 only, and beyond them none does.
@@ -74,20 +53,10 @@ fn the_gpu_frame_equals_the_traced_frame() {
     let traced = pool.install(|| traced_frame(&scene, &cache, &camera, (w, h), &[[0.0; 2]]));
     let n = (w * h) as usize;
     assert_eq!(on_gpu.pixels.len(), n);
-    let lum = |p: &[ircache_math::Rgb]| p.iter().map(|c| f64::from(c.luminance())).sum::<f64>();
-    let (a, b) = (lum(&on_gpu.pixels), lum(&traced.pixels));
     // Pixels that agree: the same hit, the same records, the same shadow; they part at triangle
     // and shadow edges (a texel of the shadow map against an exact shadow ray).
-    let close = on_gpu
-        .pixels
-        .iter()
-        .zip(&traced.pixels)
-        .filter(|(x, y)| {
-            let d = **x - **y;
-            d.r.abs().max(d.g.abs()).max(d.b.abs())
-                <= 1e-3 * x.max_channel().max(y.max_channel()).max(1e-6)
-        })
-        .count();
+    let agreement = on_gpu.agreement(&traced);
+    let ((a, b), close) = (agreement.luminance, agreement.within);
     eprintln!(
         "GPU frame: mean luminance {:.5} against {:.5} traced; {close} of {n} pixels within 1e-3; misses {} and {}",
         a / n as f64,
@@ -141,17 +110,8 @@ fn the_gpu_frame_equals_the_traced_frame() {
     frame.wait().expect("rendered");
     let on_gpu = frame.read(&job).expect("read back");
     let traced = pool.install(|| traced_frame(&scene, &cache, &camera, (w, h), &jitters));
-    let (a, b) = (lum(&on_gpu.pixels), lum(&traced.pixels));
-    let close = on_gpu
-        .pixels
-        .iter()
-        .zip(&traced.pixels)
-        .filter(|(x, y)| {
-            let d = **x - **y;
-            d.r.abs().max(d.g.abs()).max(d.b.abs())
-                <= 1e-3 * x.max_channel().max(y.max_channel()).max(1e-6)
-        })
-        .count();
+    let agreement = on_gpu.agreement(&traced);
+    let ((a, b), close) = (agreement.luminance, agreement.within);
     eprintln!(
         "GPU frame, 4 jittered layers: mean luminance {a} against {b}; {close} of {n} within 1e-3"
     );
@@ -167,7 +127,7 @@ fn the_gpu_frame_equals_the_traced_frame() {
 
 #[test]
 fn scenes_the_gpu_frame_does_not_serve_are_refused_by_name() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     // The Cornell box's light is an area light.
     let desc = load("cornell-box", 32, 32);
     let scene = Scene::build(&desc).expect("scene builds");

@@ -5,9 +5,10 @@
 //! distance against the rays' hits. On lavapipe where there is no GPU; with no device the test
 //! fails and says so, unless `IRCACHE_GPU_TESTS=skip`.
 
+mod common;
+
 use ircache_gpu::frame::GpuFrame;
 use ircache_gpu::splat::GpuSplatter;
-use ircache_gpu::{Gpu, GpuError};
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
 use ircache_render::irradiance_cache::params::Deeper;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
@@ -16,32 +17,10 @@ use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
 use ircache_render::scene::Scene;
 use std::sync::Arc;
 
-fn gpu() -> Option<Arc<Gpu>> {
-    match Gpu::new() {
-        Ok(g) => Some(Arc::new(g)),
-        Err(e @ GpuError::NoDevice(_))
-            if std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip") =>
-        {
-            eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {e}");
-            None
-        }
-        Err(e) => panic!("{e} (set IRCACHE_GPU_TESTS=skip to skip the GPU tests)"),
-    }
-}
-
 #[test]
 fn rasterised_records_equal_ray_cast_planes() {
-    let Some(gpu) = gpu() else { return };
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/scenes/sponza-sun/scene.xml"
-    );
-    let desc = ircache_scene::load_scene(
-        std::path::Path::new(path),
-        &[("max_depth".into(), "3".into())],
-        &ircache_scene::obj_scene::ObjCamera::default(),
-    )
-    .expect("the shared sponza-sun loads");
+    let Some(gpu) = common::gpu() else { return };
+    let desc = common::shared("sponza-sun");
     let scene = Scene::build(&desc).expect("scene builds");
     let cache = IrradianceCache::new(&scene, &IcParams::default());
     let splatter = Arc::new(GpuSplatter::new(gpu.clone()));

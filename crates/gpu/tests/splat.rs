@@ -5,8 +5,9 @@
 //! lavapipe (`scripts/setup.sh` installs it); with no device at all the test fails and says so,
 //! unless `IRCACHE_GPU_TESTS=skip`.
 
+mod common;
+
 use ircache_gpu::splat::GpuSplatter;
-use ircache_gpu::{Gpu, GpuError};
 use ircache_render::integrators::Integrator;
 use ircache_render::irradiance_cache::record::ErrorMetric;
 use ircache_render::irradiance_cache::IrradianceCache;
@@ -18,40 +19,11 @@ use ircache_scene::{ParamValue, SceneDesc, SourceLocation};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
-fn gpu() -> Option<Arc<Gpu>> {
-    match Gpu::new() {
-        Ok(g) => {
-            eprintln!("GPU: {}", g.describe());
-            Some(Arc::new(g))
-        }
-        Err(e @ GpuError::NoDevice(_))
-            if std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip") =>
-        {
-            eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {e}");
-            None
-        }
-        Err(e) => panic!("{e} (set IRCACHE_GPU_TESTS=skip to skip the GPU tests)"),
-    }
-}
-
 fn cornell(size: u32, params: &[(&str, &str)]) -> SceneDesc {
-    scene_at(
-        concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../../shared/scenes/cornell-box/scene.xml"
-        ),
-        size,
-        params,
-    )
+    splat_at(common::shared("cornell-box"), size, params)
 }
 
-fn scene_at(path: &str, size: u32, params: &[(&str, &str)]) -> SceneDesc {
-    let mut desc = ircache_scene::load_scene(
-        std::path::Path::new(path),
-        &[("max_depth".into(), "3".into())],
-        &ircache_scene::obj_scene::ObjCamera::default(),
-    )
-    .expect("the scene loads");
+fn splat_at(mut desc: SceneDesc, size: u32, params: &[(&str, &str)]) -> SceneDesc {
     desc.integrator.kind = "splat".into();
     for (n, v) in params {
         desc.integrator.extra.push((
@@ -88,7 +60,7 @@ fn prepared(desc: &SceneDesc) -> (Scene, IrradianceCache, RenderSettings) {
 
 #[test]
 fn gpu_splatting_equals_the_cpu_splatter() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     let splatter = GpuSplatter::new(gpu);
     for params in [
         &[][..],
@@ -181,13 +153,13 @@ fn gpu_splatting_equals_the_cpu_splatter() {
 /// and the CPU's glossy sums together equal the CPU splatter's.
 #[test]
 fn gpu_splatting_with_radiance_records_equals_the_cpu_splatter() {
-    let Some(gpu) = gpu() else { return };
+    let Some(gpu) = common::gpu() else { return };
     let splatter = GpuSplatter::new(gpu);
-    let desc = scene_at(
-        concat!(
+    let desc = splat_at(
+        common::load(concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../../scenes/cornell-rough/scene.xml"
-        ),
+        )),
         40,
         &[("radiance_cache", "on")],
     );

@@ -4,42 +4,20 @@
 //! lavapipe where there is no GPU; with no device the test fails and says so, unless
 //! `IRCACHE_GPU_TESTS=skip`.
 
+mod common;
+
 use ircache_gpu::visibility::PlaneVisibility;
-use ircache_gpu::{Gpu, GpuError};
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
 use ircache_render::irradiance_cache::params::Deeper;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
 use ircache_render::irradiance_cache::points::visible_sites;
 use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
 use ircache_render::scene::Scene;
-use std::sync::Arc;
-
-fn gpu() -> Option<Arc<Gpu>> {
-    match Gpu::new() {
-        Ok(g) => Some(Arc::new(g)),
-        Err(e @ GpuError::NoDevice(_))
-            if std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip") =>
-        {
-            eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {e}");
-            None
-        }
-        Err(e) => panic!("{e} (set IRCACHE_GPU_TESTS=skip to skip the GPU tests)"),
-    }
-}
 
 #[test]
 fn rasterised_planes_see_what_the_rays_see() {
-    let Some(gpu) = gpu() else { return };
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/scenes/cornell-box/scene.xml"
-    );
-    let desc = ircache_scene::load_scene(
-        std::path::Path::new(path),
-        &[("max_depth".into(), "3".into())],
-        &ircache_scene::obj_scene::ObjCamera::default(),
-    )
-    .expect("the shared cornell-box loads");
+    let Some(gpu) = common::gpu() else { return };
+    let desc = common::shared("cornell-box");
     let scene = Scene::build(&desc).expect("scene builds");
     let visibility = PlaneVisibility::new(gpu, &scene);
     assert_eq!(visibility.spheres, 0);
@@ -105,17 +83,8 @@ fn rasterised_planes_see_what_the_rays_see() {
 /// pixel centre, at an odd film size.
 #[test]
 fn batched_planes_and_the_camera_view_see_what_the_rays_see() {
-    let Some(gpu) = gpu() else { return };
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/scenes/cornell-box/scene.xml"
-    );
-    let desc = ircache_scene::load_scene(
-        std::path::Path::new(path),
-        &[("max_depth".into(), "3".into())],
-        &ircache_scene::obj_scene::ObjCamera::default(),
-    )
-    .expect("the shared cornell-box loads");
+    let Some(gpu) = common::gpu() else { return };
+    let desc = common::shared("cornell-box");
     let scene = Scene::build(&desc).expect("scene builds");
     let visibility = PlaneVisibility::new(gpu, &scene);
     let plane = HemispherePlane::new(16, 2.0);

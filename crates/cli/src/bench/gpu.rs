@@ -306,17 +306,8 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
             })
         });
         let n = image.pixels.len();
-        let lum = |p: &[ircache_math::Rgb]| p.iter().map(|c| f64::from(c.luminance())).sum::<f64>();
-        let close = image
-            .pixels
-            .iter()
-            .zip(&traced.pixels)
-            .filter(|(x, y)| {
-                let d = **x - **y;
-                d.r.abs().max(d.g.abs()).max(d.b.abs())
-                    <= 1e-3 * x.max_channel().max(y.max_channel()).max(1e-6)
-            })
-            .count();
+        let agreement = image.agreement(&traced);
+        let (a, b) = agreement.luminance;
         println!(
             "  whole frame on the GPU, {width}×{height}, {} records, shadow map {SHADOW_MAP}²: \
              {:.2} ms (camera view rasterised, G-buffer, splat, shadow-mapped sun, composition; \
@@ -327,8 +318,8 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
             render_time * 1e3,
             prepare_time * 1e3,
             traced_time * 1e3,
-            lum(&image.pixels) / lum(&traced.pixels).max(f64::MIN_POSITIVE),
-            100.0 * close as f64 / n as f64,
+            a / b.max(f64::MIN_POSITIVE),
+            100.0 * agreement.within as f64 / n as f64,
             image.misses,
             traced.misses,
         );
