@@ -52,18 +52,24 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
         gpu.describe()
     );
     let splatter = Arc::new(GpuSplatter::new(gpu.clone()));
-    let load = |path: &Path| -> Result<(ircache_scene::SceneDesc, Scene)> {
-        let defines = vec![("max_depth".to_string(), "3".to_string())];
-        let mut desc = ircache_scene::load_scene(path, &defines, &ObjCamera::default())?;
-        desc.integrator.kind = "ic".into();
-        let scene = Scene::build(&desc)?;
-        Ok((desc, scene))
-    };
-    let (mut desc, _) = load(&shared.join("scenes/sponza-sun/scene.xml"))?;
+    // The scene at one bounce, its film (so its camera) of `film`'s size where given.
+    let load =
+        |path: &Path, film: Option<(u32, u32)>| -> Result<(ircache_scene::SceneDesc, Scene)> {
+            let defines = vec![("max_depth".to_string(), "3".to_string())];
+            let mut desc = ircache_scene::load_scene(path, &defines, &ObjCamera::default())?;
+            desc.integrator.kind = "ic".into();
+            if let Some((w, h)) = film {
+                desc.sensor.film.width = w;
+                desc.sensor.film.height = h;
+            }
+            let scene = Scene::build(&desc)?;
+            Ok((desc, scene))
+        };
     // The camera of the 1920×1080 film (the scene's is 4:3).
-    desc.sensor.film.width = 1920;
-    desc.sensor.film.height = 1080;
-    let scene = Scene::build(&desc)?;
+    let (desc, scene) = load(
+        &shared.join("scenes/sponza-sun/scene.xml"),
+        Some((1920, 1080)),
+    )?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()?;
@@ -227,7 +233,7 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
             ("sponza-sun", shared.join("scenes/sponza-sun/scene.xml")),
             ("cornell-box", shared.join("scenes/cornell-box/scene.xml")),
         ] {
-            let (_, scene) = load(&path)?;
+            let (_, scene) = load(&path, None)?;
             let visibility = PlaneVisibility::new(gpu.clone(), &scene);
             let points = visible_sites(&scene, 8192, 11);
             let (t, planes) = best(|| visibility.planes(&plane, &points));
