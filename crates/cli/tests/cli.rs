@@ -818,6 +818,18 @@ fn radiance_cache_renders_reports_and_reuses_its_records() {
     assert!(b["radiance_records"].as_u64().unwrap() >= radiance, "{b}");
 }
 
+/// Whether a `--gpu` run found no device and `IRCACHE_GPU_TESTS=skip` lets the test skip
+/// (saying so); otherwise the test goes on and fails on the run's error.
+fn skipped_without_gpu(run: &Output) -> bool {
+    let skip = !run.status.success()
+        && stderr(run).contains("no GPU device")
+        && std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip");
+    if skip {
+        eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {}", stderr(run));
+    }
+    skip
+}
+
 /// `--gpu` on Sponza under its sun: the whole frame on the GPU (rasterised, splatted, shadow
 /// mapped, composed; `ircache_gpu::frame`) gives the CPU splat pass's image, up to its other
 /// sampling of the pixels (R₂ offsets against the sampler's) and its records gathered at misses
@@ -844,11 +856,7 @@ fn the_whole_frame_on_the_gpu_renders_the_splat_pass_image() {
     ];
     let run = |extra: &[&str]| ircache(&[&base[..], extra].concat(), &d);
     let gpu = run(&["--gpu", "-o", "gpu.exr"]);
-    if !gpu.status.success()
-        && stderr(&gpu).contains("no GPU device")
-        && std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip")
-    {
-        eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {}", stderr(&gpu));
+    if skipped_without_gpu(&gpu) {
         return;
     }
     assert!(gpu.status.success(), "{}", stderr(&gpu));
@@ -896,11 +904,7 @@ fn gpu_splatting_renders_the_cpu_image_and_says_what_it_cannot_do() {
     ];
     let run = |extra: &[&str]| ircache(&[&base[..], extra].concat(), &d);
     let gpu = run(&["--gpu", "-o", "gpu.exr"]);
-    if !gpu.status.success()
-        && stderr(&gpu).contains("no GPU device")
-        && std::env::var("IRCACHE_GPU_TESTS").as_deref() == Ok("skip")
-    {
-        eprintln!("SKIPPED (IRCACHE_GPU_TESTS=skip): {}", stderr(&gpu));
+    if skipped_without_gpu(&gpu) {
         return;
     }
     assert!(gpu.status.success(), "{}", stderr(&gpu));
