@@ -531,6 +531,27 @@ impl PlaneVisibility {
     }
 }
 
+/// How many pixels of `plane` above `sp` see in `seen` the triangle Embree's ray through the
+/// pixel centre hits: the check of a rasterised plane against ray casting.
+#[must_use]
+pub fn pixels_seeing_the_rays(
+    scene: &Scene,
+    plane: &HemispherePlane,
+    sp: &ShadingPoint,
+    seen: &Seen,
+) -> usize {
+    let frame = Frame::from_z(sp.n);
+    let mut agree = 0;
+    for j in 0..plane.pixels {
+        for i in 0..plane.pixels {
+            let d = frame.from_local(plane.direction(i, j));
+            let hit = scene.intersect(&scene.spawn_ray(&sp.it, d));
+            agree += usize::from(hit.map(|h| (h.shape, h.prim)) == seen[j * plane.pixels + i]);
+        }
+    }
+    agree
+}
+
 /// Rows of a 4 × 4 matrix as WGSL's column-major array.
 pub(crate) fn column_major(rows: [[f32; 4]; 4]) -> [[f32; 4]; 4] {
     let mut columns = [[0f32; 4]; 4];

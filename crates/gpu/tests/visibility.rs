@@ -6,7 +6,7 @@
 
 mod common;
 
-use ircache_gpu::visibility::PlaneVisibility;
+use ircache_gpu::visibility::{pixels_seeing_the_rays, PlaneVisibility};
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
 use ircache_render::irradiance_cache::params::Deeper;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
@@ -38,17 +38,8 @@ fn rasterised_planes_see_what_the_rays_see() {
     for sp in visible_sites(&scene, 12, 5) {
         points += 1;
         let seen = visibility.triangles(&plane, &sp).expect("rasterised");
-        let frame = ircache_math::Frame::from_z(sp.n);
-        for j in 0..plane.pixels {
-            for i in 0..plane.pixels {
-                let d = frame.from_local(plane.direction(i, j));
-                let hit = scene.intersect(&scene.spawn_ray(&sp.it, d));
-                pixels += 1;
-                if hit.map(|h| (h.shape, h.prim)) == seen[j * plane.pixels + i] {
-                    agree += 1;
-                }
-            }
-        }
+        pixels += plane.pixels * plane.pixels;
+        agree += pixels_seeing_the_rays(&scene, &plane, &sp, &seen);
         let key = points as u64;
         let mut st = WorkState::new(1);
         let (raster, _) = visibility
@@ -94,16 +85,8 @@ fn batched_planes_and_the_camera_view_see_what_the_rays_see() {
     assert_eq!(planes.len(), points.len());
     let (mut pixels, mut agree) = (0usize, 0usize);
     for k in (0..8).chain(4088..4100) {
-        let (sp, seen) = (&points[k], &planes[k]);
-        let frame = ircache_math::Frame::from_z(sp.n);
-        for j in 0..plane.pixels {
-            for i in 0..plane.pixels {
-                let d = frame.from_local(plane.direction(i, j));
-                let hit = scene.intersect(&scene.spawn_ray(&sp.it, d));
-                pixels += 1;
-                agree += usize::from(hit.map(|h| (h.shape, h.prim)) == seen[j * plane.pixels + i]);
-            }
-        }
+        pixels += plane.pixels * plane.pixels;
+        agree += pixels_seeing_the_rays(&scene, &plane, &points[k], &planes[k]);
     }
     assert!(
         agree as f64 > 0.99 * pixels as f64,

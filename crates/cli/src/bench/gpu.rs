@@ -25,7 +25,7 @@ use std::path::Path;
 pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Result<()> {
     use super::splat::{best, filled, settings};
     use ircache_gpu::splat::{GpuSplatter, SplatInput};
-    use ircache_gpu::visibility::PlaneVisibility;
+    use ircache_gpu::visibility::{pixels_seeing_the_rays, PlaneVisibility};
     use ircache_render::integrators::ic::PixelPass;
     use ircache_render::integrators::Integrator;
     use ircache_render::irradiance_cache::plane::HemispherePlane;
@@ -244,18 +244,10 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
                     .zip(&planes)
                     .take(256)
                     .map(|(sp, seen)| {
-                        let frame = ircache_math::Frame::from_z(sp.n);
-                        let mut agree = 0;
-                        for j in 0..plane.pixels {
-                            for i in 0..plane.pixels {
-                                let d = frame.from_local(plane.direction(i, j));
-                                let hit = scene.intersect(&scene.spawn_ray(&sp.it, d));
-                                agree += usize::from(
-                                    hit.map(|h| (h.shape, h.prim)) == seen[j * plane.pixels + i],
-                                );
-                            }
-                        }
-                        (plane.pixels * plane.pixels, agree)
+                        (
+                            plane.pixels * plane.pixels,
+                            pixels_seeing_the_rays(&scene, &plane, sp, seen),
+                        )
                     })
                     .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
             });
