@@ -100,8 +100,8 @@ pub fn whole_frame(
     };
     if let Some(option) = other {
         eprintln!(
-            "note: the whole frame on the GPU takes no {option}: splatting on the GPU, the rest on \
-             the CPU"
+            "note: the whole frame on the GPU does not take {option}: splatting on the GPU, the \
+             rest on the CPU"
         );
         return Ok(false);
     }

@@ -168,9 +168,11 @@ impl GpuFrame {
     pub fn serves(scene: &Scene) -> Result<(), GpuError> {
         let unsupported = |what: String| Err(GpuError::Unsupported(what));
         if scene.lights.only_directional().is_none() {
+            let n = scene.lights.len();
             return unsupported(format!(
-                "the GPU frame serves one directional light; the scene has {} emitters of other kinds",
-                scene.lights.len()
+                "the GPU frame serves one directional light and no other emitter, not the scene's \
+                 {n} emitter{}",
+                if n == 1 { "" } else { "s" }
             ));
         }
         for (k, shape) in scene.shapes.iter().enumerate() {
