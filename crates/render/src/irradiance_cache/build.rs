@@ -2,7 +2,7 @@
 //!
 //! Record positions are decided in a fixed order by a coarse-to-fine pre-pass: the image is
 //! visited on grids of pixel centres with strides 32, 16, ..., 1; each stride is split into
-//! phases whose points are at least two strides apart. A phase is one batch: every point it holds
+//! phases whose points are at least two strides and [`BATCH_SPACING`] pixels apart. A phase is one batch: every point it holds
 //! is checked against the cache as it stood before the batch, the uncovered ones gather their
 //! records in parallel (deeper levels go to private overlays), and then the new records are
 //! inserted one after the other in pixel order, each dropped if a record inserted before it in
@@ -296,17 +296,60 @@ pub fn run_batch(
     cache.update_ambient();
 }
 
-/// The phases of a stride of the coarse-to-fine search: on the coarsest stride one, every
-/// point of the grid (`None`); below it three, as (x/stride mod 2, y/stride mod 2), leaving
-/// out (0, 0), which belongs to the coarser grid, and putting each batch's points at least two
-/// strides apart.
-#[must_use]
-pub fn phases(coarsest: bool) -> &'static [Option<(usize, usize)>] {
-    if coarsest {
-        &[None]
-    } else {
-        &[Some((1, 1)), Some((1, 0)), Some((0, 1))]
+/// Fewest pixels between two points of one batch on the finer strides. A batch's records are
+/// gathered before any of them is in the cache, so two points closer than a record's reach both
+/// get one where Ward's sequential order would make one; at two strides apart (2 px on stride 1)
+/// a quarter of Sponza's records overlapped another of their batch, nearly all on strides 1 and
+/// 2. Eight pixels leave < 1 % overlapping and still give each batch tens of records to gather
+/// in parallel (BENCHMARKS.md, 2026-12-04).
+pub const BATCH_SPACING: usize = 8;
+
+/// One batch of a stride's points: the pixels whose grid coordinates (x/stride, y/stride)
+/// leave `residue` modulo `modulus`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Phase {
+    /// The grid period, in strides (1 on the coarsest stride: every point).
+    pub modulus: usize,
+    /// The grid coordinates' residues.
+    pub residue: (usize, usize),
+}
+
+impl Phase {
+    /// Whether the pixel (x, y) of `stride`'s grid belongs to this phase.
+    #[must_use]
+    pub fn holds(&self, x: usize, y: usize, stride: usize) -> bool {
+        (x / stride) % self.modulus == self.residue.0
+            && (y / stride) % self.modulus == self.residue.1
     }
+}
+
+/// The phases of a stride of the coarse-to-fine search: on the coarsest stride one, every
+/// point of the grid; below it the points not on the coarser grid (grid coordinates not both
+/// even), split so that each batch's points are at least two strides and [`BATCH_SPACING`]
+/// pixels apart: by their coordinates modulo m = max(2, BATCH_SPACING / stride), the odd–odd
+/// residues first, then odd–even, then even–odd (with m = 2 the three phases (1, 1), (1, 0),
+/// (0, 1)).
+#[must_use]
+pub fn phases(stride: usize, coarsest: bool) -> Vec<Phase> {
+    if coarsest {
+        return vec![Phase {
+            modulus: 1,
+            residue: (0, 0),
+        }];
+    }
+    let modulus = (BATCH_SPACING / stride.max(1)).max(2).next_power_of_two();
+    let mut out = Vec::with_capacity(3 * modulus * modulus / 4);
+    for parity in [(1, 1), (1, 0), (0, 1)] {
+        for a in (parity.0..modulus).step_by(2) {
+            for b in (parity.1..modulus).step_by(2) {
+                out.push(Phase {
+                    modulus,
+                    residue: (a, b),
+                });
+            }
+        }
+    }
+    out
 }
 
 /// The pixels of phase `phase` (see [`phases`]) of `stride` on a `width`×`height` image, row by
@@ -315,14 +358,12 @@ pub fn phase_pixels(
     width: usize,
     height: usize,
     stride: usize,
-    phase: Option<(usize, usize)>,
+    phase: Phase,
 ) -> impl Iterator<Item = (usize, usize)> {
     (0..height)
         .step_by(stride)
         .flat_map(move |y| (0..width).step_by(stride).map(move |x| (x, y)))
-        .filter(move |&(x, y)| {
-            phase.is_none_or(|(px, py)| (x / stride) % 2 == px && (y / stride) % 2 == py)
-        })
+        .filter(move |&(x, y)| phase.holds(x, y, stride))
 }
 
 /// Fills `cache` for a `width`×`height` view of `scene` (run inside the caller's thread pool);
@@ -347,7 +388,7 @@ pub fn fill_for_image(
     let finest = cache.params.overture.finest_stride();
     let mut sites = Sites::default();
     while stride >= finest.max(1) && finest > 0 {
-        for &phase in phases(stride == coarsest) {
+        for phase in phases(stride, stride == coarsest) {
             let pixels: Vec<(usize, usize)> = phase_pixels(width, height, stride, phase)
                 .filter(|(_, y)| rows.contains(y))
                 .collect();
@@ -517,5 +558,56 @@ pub fn regather_noisy(
         }
         // Radii changed: index the level anew, in the same order.
         cache.reindex(level, records);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each stride's phases hold every point of its grid not on the coarser grid exactly once
+    /// (every point on the coarsest), and two points of one phase are at least two strides and
+    /// `BATCH_SPACING` pixels apart on some axis.
+    #[test]
+    fn phases_partition_each_stride_and_keep_their_points_apart() {
+        let (w, h) = (203, 157);
+        for (stride, coarsest) in [
+            (32, true),
+            (16, false),
+            (8, false),
+            (4, false),
+            (2, false),
+            (1, false),
+        ] {
+            let mut seen = vec![0u32; w * h];
+            for phase in phases(stride, coarsest) {
+                let pixels: Vec<_> = phase_pixels(w, h, stride, phase).collect();
+                for &(x, y) in &pixels {
+                    seen[y * w + x] += 1;
+                }
+                let apart = (2 * stride).max(if coarsest { stride } else { BATCH_SPACING });
+                for (i, &(xa, ya)) in pixels.iter().enumerate() {
+                    for &(xb, yb) in &pixels[i + 1..] {
+                        let d = xa.abs_diff(xb).max(ya.abs_diff(yb));
+                        assert!(
+                            coarsest || d >= apart,
+                            "stride {stride}: ({xa},{ya}) and ({xb},{yb}) in one phase"
+                        );
+                    }
+                }
+            }
+            for y in 0..h {
+                for x in 0..w {
+                    let on_grid = x % stride == 0 && y % stride == 0;
+                    let on_coarser = !coarsest && x % (2 * stride) == 0 && y % (2 * stride) == 0;
+                    let expected = u32::from(on_grid && !on_coarser);
+                    assert_eq!(
+                        seen[y * w + x],
+                        expected,
+                        "stride {stride}, pixel ({x}, {y})"
+                    );
+                }
+            }
+        }
     }
 }

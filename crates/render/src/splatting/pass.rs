@@ -79,7 +79,7 @@ pub fn fill_misses(
     let before = cache.levels[0].len();
     let mut asked = 0usize;
     for (s, &stride) in STRIDES.iter().enumerate() {
-        for &phase in phases(s == 0) {
+        for phase in phases(stride, s == 0) {
             if asked >= budget {
                 return cache.levels[0].len() - before;
             }
