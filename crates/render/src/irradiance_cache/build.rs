@@ -300,8 +300,8 @@ pub fn run_batch(
 /// gathered before any of them is in the cache, so two points closer than a record's reach both
 /// get one where Ward's sequential order would make one; at two strides apart (2 px on stride 1)
 /// a quarter of Sponza's records overlapped another of their batch, nearly all on strides 1 and
-/// 2. Eight pixels leave < 1 % overlapping and still give each batch tens of records to gather
-/// in parallel (BENCHMARKS.md, 2026-12-04).
+/// 2. Eight pixels leave 5 % and still give each batch tens of records to gather in parallel
+/// (BENCHMARKS.md, 2026-12-04).
 pub const BATCH_SPACING: usize = 8;
 
 /// One batch of a stride's points: the pixels whose grid coordinates (x/stride, y/stride)
