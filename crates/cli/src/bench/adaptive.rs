@@ -28,11 +28,12 @@ fn render_with(
     spp: u32,
     sampling: Sampling,
     scale: usize,
+    seed: u64,
 ) -> Result<(Image, f64, f64)> {
     let mut d = desc.integrator.clone();
     d.kind = integrator.into();
     let integ = Integrator::from_desc(&d).map_err(anyhow::Error::msg)?;
-    let scene_settings = RenderSettings::from_desc(desc, 0, 0).map_err(anyhow::Error::msg)?;
+    let scene_settings = RenderSettings::from_desc(desc, seed, 0).map_err(anyhow::Error::msg)?;
     let settings = RenderSettings {
         width: scene_settings.width / scale,
         height: scene_settings.height / scale,
@@ -174,6 +175,8 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
                     512,
                     uniform(SamplerKind::MultiJitter),
                     scale,
+                    // A seed of its own: the uniform series' 512-spp render would be it.
+                    1 << 20,
                 )?
                 .0
             }
@@ -191,7 +194,7 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
                     ..Sampling::default()
                 };
                 let (image, seconds, spp) =
-                    render_with(&scene, &desc, integrator, pilot, sampling, scale)?;
+                    render_with(&scene, &desc, integrator, pilot, sampling, scale, 0)?;
                 Ok((target, measure_image(&image, seconds, &reference)?, spp))
             })
             .collect::<Result<_>>()?;
@@ -207,7 +210,7 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
             let mut spp = 4;
             loop {
                 let (image, seconds, mean_spp) =
-                    render_with(&scene, &desc, integrator, spp, uniform(kind), scale)?;
+                    render_with(&scene, &desc, integrator, spp, uniform(kind), scale, 0)?;
                 let p = measure_image(&image, seconds, &reference)?;
                 points.push(p);
                 by_samples.push(Point {

@@ -42,13 +42,26 @@ pub(super) fn measure_image(image: &Image, seconds: f64, reference: &Image) -> R
     })
 }
 
-/// Renders `scene` with `integrator` at `spp` (cache parameters `params`).
+/// Renders `scene` with `integrator` at `spp` (cache parameters `params`), seed 0.
 pub(super) fn run(
     scene: &Scene,
     desc: &ircache_scene::SceneDesc,
     integrator: &str,
     spp: u32,
     params: &[(&str, &str)],
+) -> Result<RenderOutput> {
+    run_seeded(scene, desc, integrator, spp, params, 0)
+}
+
+/// [`run`] on seed `seed` (a reference made in the run takes another seed than the series
+/// measured against it, or the series' render at its sample count would reproduce it).
+pub(super) fn run_seeded(
+    scene: &Scene,
+    desc: &ircache_scene::SceneDesc,
+    integrator: &str,
+    spp: u32,
+    params: &[(&str, &str)],
+    seed: u64,
 ) -> Result<RenderOutput> {
     let mut d = desc.integrator.clone();
     d.kind = integrator.into();
@@ -61,7 +74,7 @@ pub(super) fn run(
     let settings = RenderSettings {
         spp,
         sampling: Sampling::default(),
-        ..RenderSettings::from_desc(desc, 0, 0).map_err(anyhow::Error::msg)?
+        ..RenderSettings::from_desc(desc, seed, 0).map_err(anyhow::Error::msg)?
     };
     Ok(render(scene, &integ, &settings, &|_| {})?)
 }

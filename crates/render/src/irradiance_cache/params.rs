@@ -262,7 +262,11 @@ impl Default for IcParams {
             photon_lookup: 100,
             photon_radius: 0.05,
             photon_records: false,
-            media_gradient: crate::media_cache::gradient::MediaGradient::Corrected,
+            // Measured (BENCHMARKS.md, "Media gradients in the image", 2026-12-04): on the fog
+            // box, the same fog four times denser and the smoke plume, the media-aware forms
+            // left the image's error as it was and took 1.6-2.6x the time (their source
+            // gradients difference the light samples); `corrected` stays one flag away.
+            media_gradient: crate::media_cache::gradient::MediaGradient::None,
             media_light_samples: 1,
             media_march: 16,
             media_volume_records: true,
@@ -770,12 +774,13 @@ pub const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "media_gradient",
         aliases: &[],
-        value: "corrected|paper|jdzj08|none",
+        value: "none|corrected|paper|jdzj08",
         help: "in scenes with participating media, the records' translational gradient (002): \
-               corrected (NOTES-002 §2.7's consistent form: absorption, visibility of the \
-               medium's light, the radial and interface terms), paper (002's Algorithm 1 read \
-               literally), jdzj08 (absorption terms only), none (Ward–Heckbert's walls, \
-               media-blind)",
+               none (Ward–Heckbert's walls, media-blind: the default, as fast and as accurate \
+               in the image at the records' radii), corrected (NOTES-002 §2.7's consistent \
+               form: absorption, visibility of the medium's light, the radial and interface \
+               terms; for studying gradients), paper (002's Algorithm 1 read literally), \
+               jdzj08 (absorption terms only)",
         shapes_records: false,
         get: |p| name_of(p.media_gradient, MEDIA_GRADIENTS),
         set: |p, v| {
