@@ -2,13 +2,13 @@
 //!
 //! Record positions are decided in a fixed order by a coarse-to-fine pre-pass: the image is
 //! visited on grids of pixel centres with strides 32, 16, ..., 1; each stride is split into
-//! phases whose points are at least two strides and [`BATCH_SPACING`] pixels apart. A phase is one batch: every point it holds
-//! is checked against the cache as it stood before the batch, the uncovered ones gather their
-//! records in parallel (deeper levels go to private overlays), and then the new records are
-//! inserted one after the other in pixel order, each dropped if a record inserted before it in
-//! the same batch already covers it. Nothing is locked on the hot path (the cache is read-only
-//! during a batch), tiles do not exist here so no border duplicates, and the result depends only
-//! on the seed.
+//! phases whose points are at least two strides and [`BATCH_SPACING`] pixels apart. A phase is
+//! one batch: every point it holds is checked against the cache as it stood before the batch,
+//! the uncovered ones gather their records in parallel (deeper levels go to private overlays),
+//! and then the new records are inserted one after the other in pixel order (one that a record
+//! inserted before it in the same batch already covers is kept, and counted as overlapping).
+//! Nothing is locked on the hot path (the cache is read-only during a batch), tiles do not exist
+//! here so no border duplicates, and the result depends only on the seed.
 
 use super::file::Stored;
 use super::gather::{
