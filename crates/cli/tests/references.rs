@@ -708,7 +708,6 @@ fn radiance_records_hold_a_smooth_sky_and_leave_a_sun_to_the_light_samples() {
 fn plane_estimators_keep_the_thesis_order_on_the_cornell_box() {
     use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
     use ircache_render::irradiance_cache::hemisphere::Stratification;
-    use ircache_render::irradiance_cache::params::Deeper;
     use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
     use ircache_render::irradiance_cache::points::visible_sites;
     use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
@@ -721,16 +720,8 @@ fn plane_estimators_keep_the_thesis_order_on_the_cornell_box() {
     .expect("scene loads");
     let scene = Scene::build(&desc).expect("scene builds");
     let cache = IrradianceCache::new(&scene, &IcParams::default());
-    let light = SceneRadiance {
-        scene: &scene,
-        deeper: Deeper::PathTraced,
-    };
-    let g = Gatherer {
-        light: &light,
-        cache: &cache,
-        seed: 9,
-        next: None,
-    };
+    let light = SceneRadiance::path_traced(&scene);
+    let g = Gatherer::new(&light, &cache, 9);
     let plane = HemispherePlane::new(64, 2.0);
     let estimators = [
         PlaneEstimator::PlaneOnly,

@@ -10,7 +10,6 @@ mod common;
 use ircache_gpu::frame::GpuFrame;
 use ircache_gpu::splat::GpuSplatter;
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
-use ircache_render::irradiance_cache::params::Deeper;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
 use ircache_render::irradiance_cache::points::visible_sites;
 use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
@@ -29,16 +28,8 @@ fn rasterised_records_equal_ray_cast_planes() {
     let points = visible_sites(&scene, 48, 13);
     let records = frame.plane_records(&plane, &points).expect("computed");
     assert_eq!(records.len(), points.len());
-    let light = SceneRadiance {
-        scene: &scene,
-        deeper: Deeper::PathTraced,
-    };
-    let g = Gatherer {
-        light: &light,
-        cache: &cache,
-        seed: 5,
-        next: None,
-    };
+    let light = SceneRadiance::path_traced(&scene);
+    let g = Gatherer::new(&light, &cache, 5);
     let mut st = WorkState::new(cache.levels.len());
     let mut relative = Vec::new();
     let (mut squared, mut lit, mut distance_squared, mut seen) = (0.0f64, 0u32, 0.0f64, 0u32);

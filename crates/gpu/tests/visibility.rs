@@ -8,7 +8,6 @@ mod common;
 
 use ircache_gpu::visibility::{pixels_seeing_the_rays, PlaneVisibility};
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
-use ircache_render::irradiance_cache::params::Deeper;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
 use ircache_render::irradiance_cache::points::visible_sites;
 use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
@@ -22,16 +21,8 @@ fn rasterised_planes_see_what_the_rays_see() {
     let visibility = PlaneVisibility::new(gpu, &scene);
     assert_eq!(visibility.spheres, 0);
     let cache = IrradianceCache::new(&scene, &IcParams::default());
-    let light = SceneRadiance {
-        scene: &scene,
-        deeper: Deeper::PathTraced,
-    };
-    let g = Gatherer {
-        light: &light,
-        cache: &cache,
-        seed: 3,
-        next: None,
-    };
+    let light = SceneRadiance::path_traced(&scene);
+    let g = Gatherer::new(&light, &cache, 3);
     let plane = HemispherePlane::new(64, 2.0);
     let (mut pixels, mut agree, mut points) = (0usize, 0usize, 0usize);
     let mut squared = 0.0f64;

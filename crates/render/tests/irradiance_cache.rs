@@ -467,7 +467,7 @@ fn cache_render_is_deterministic_and_finite() {
 #[test]
 fn hessian_by_reprojection_matches_second_differences() {
     use ircache_render::irradiance_cache::gather::{
-        Deeper, Gatherer, IrradianceCache, SceneRadiance, WorkState,
+        Gatherer, IrradianceCache, SceneRadiance, WorkState,
     };
     use ircache_render::irradiance_cache::hemisphere::Stratification;
     use ircache_render::irradiance_cache::points::query_point;
@@ -492,16 +492,8 @@ fn hessian_by_reprojection_matches_second_differences() {
         let seeds = 8;
         let mut frame = None;
         for seed in 0..seeds {
-            let light = SceneRadiance {
-                scene: &scene,
-                deeper: Deeper::PathTraced,
-            };
-            let g = Gatherer {
-                light: &light,
-                cache: &cache,
-                seed,
-                next: None,
-            };
+            let light = SceneRadiance::path_traced(&scene);
+            let g = Gatherer::new(&light, &cache, seed);
             let mut st = WorkState::new(1);
             let (h, f) = g.gather(
                 &mut st,

@@ -391,7 +391,6 @@ fn plane_records(
 ) -> Result<()> {
     use ircache_gpu::frame::GpuFrame;
     use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
-    use ircache_render::irradiance_cache::params::Deeper;
     use ircache_render::irradiance_cache::plane::PlaneEstimator;
     use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
     use rayon::prelude::*;
@@ -406,16 +405,8 @@ fn plane_records(
     )?;
     let (t, records) = super::splat::best(|| frame.plane_records(plane, points));
     let records = records?;
-    let light = SceneRadiance {
-        scene,
-        deeper: Deeper::PathTraced,
-    };
-    let g = Gatherer {
-        light: &light,
-        cache: &cache,
-        seed: 5,
-        next: None,
-    };
+    let light = SceneRadiance::path_traced(scene);
+    let g = Gatherer::new(&light, &cache, 5);
     let start = Instant::now();
     let traced: Vec<f64> = pool.install(|| {
         points

@@ -16,7 +16,6 @@
 use anyhow::Result;
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingPoint, WorkState};
 use ircache_render::irradiance_cache::hemisphere::Stratification;
-use ircache_render::irradiance_cache::params::Deeper;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
 use ircache_render::irradiance_cache::points::visible_sites;
 use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
@@ -56,16 +55,8 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
     let scene = Scene::build(&desc)?;
     let params = IcParams::default();
     let cache = IrradianceCache::new(&scene, &params);
-    let light = SceneRadiance {
-        scene: &scene,
-        deeper: Deeper::PathTraced,
-    };
-    let g = Gatherer {
-        light: &light,
-        cache: &cache,
-        seed: 7,
-        next: None,
-    };
+    let light = SceneRadiance::path_traced(&scene);
+    let g = Gatherer::new(&light, &cache, 7);
     // The points: first record sites of random camera rays.
     let points = visible_sites(&scene, POINTS, 11);
     let plane = HemispherePlane::new(64, 2.0);

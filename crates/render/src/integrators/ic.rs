@@ -336,12 +336,7 @@ impl PixelLookup<'_> {
             scene,
             deeper: cache.params.deeper,
         };
-        let g = Gatherer {
-            light: &light,
-            cache,
-            seed: self.ic.seed,
-            next: None,
-        };
+        let g = Gatherer::new(&light, cache, self.ic.seed);
         let mut st = WorkState::new(cache.levels.len());
         let key = mix(0x0070_6978_656c, sampler.next_key());
         // It serves this sample alone (thin or newly seen geometry): a quarter of the divisions.

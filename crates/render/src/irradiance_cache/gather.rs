@@ -633,7 +633,18 @@ fn traced_sample(
     }
 }
 
-impl Gatherer<'_> {
+impl<'a> Gatherer<'a> {
+    /// A gatherer of `light` for `cache` on seed `seed`, estimating no next frame.
+    #[must_use]
+    pub fn new(light: &'a dyn IncidentRadiance, cache: &'a IrradianceCache, seed: u64) -> Self {
+        Gatherer {
+            light,
+            cache,
+            seed,
+            next: None,
+        }
+    }
+
     /// Gathers the hemisphere above `sp` with `strata`, shading the hits for `level`; keeps
     /// every ray it traces in `traced` when asked.
     pub fn gather(
@@ -999,7 +1010,16 @@ impl IncidentRadiance for SceneRadiance<'_> {
     }
 }
 
-impl SceneRadiance<'_> {
+impl<'a> SceneRadiance<'a> {
+    /// The light of `scene`, its deeper bounces path traced.
+    #[must_use]
+    pub fn path_traced(scene: &'a Scene) -> Self {
+        SceneRadiance {
+            scene,
+            deeper: Deeper::PathTraced,
+        }
+    }
+
     /// What arrives along the gather ray `ray` from its first hit `hit` (found by the caller:
     /// Embree, or a rasteriser's visibility), for a record at bounce `level`.
     #[allow(clippy::too_many_arguments)]
@@ -1031,12 +1051,7 @@ impl SceneRadiance<'_> {
             arrival: Arrival::Gather,
         };
         let mut rays = RayCounts::default();
-        let gatherer = Gatherer {
-            light: self,
-            cache,
-            seed,
-            next: None,
-        };
+        let gatherer = Gatherer::new(self, cache, seed);
         let radiance = {
             let mut source = GatherSource {
                 gatherer: &gatherer,
@@ -1167,12 +1182,7 @@ mod tests {
             c0: 1.0,
             a: Vec3::new(0.3, -0.2, 0.5),
         };
-        let g = Gatherer {
-            light: &dome,
-            cache: &cache,
-            seed: 4,
-            next: None,
-        };
+        let g = Gatherer::new(&dome, &cache, 4);
         for n in [
             Vec3::Z,
             Vec3::new(0.6, 0.0, 0.8),

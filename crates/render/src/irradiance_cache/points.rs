@@ -5,9 +5,7 @@
 
 use super::build::{fill_for_points, CacheStats};
 use super::environment::HeldEnvironment;
-use super::gather::{
-    mix, Deeper, Gatherer, IrradianceCache, SceneRadiance, ShadingPoint, WorkState,
-};
+use super::gather::{mix, Gatherer, IrradianceCache, SceneRadiance, ShadingPoint, WorkState};
 use super::hemisphere::{to_world, Stratification};
 use super::params::{IcParams, TranslationalFormula};
 use crate::scene::{Interaction, Scene};
@@ -218,16 +216,8 @@ fn brute_force(
     samples: usize,
     key: u64,
 ) -> (Rgb, [Vec3; 3], [Vec3; 3]) {
-    let light = SceneRadiance {
-        scene,
-        deeper: Deeper::PathTraced,
-    };
-    let g = Gatherer {
-        light: &light,
-        cache,
-        seed: key,
-        next: None,
-    };
+    let light = SceneRadiance::path_traced(scene);
+    let g = Gatherer::new(&light, cache, key);
     let mut st = WorkState::new(cache.levels.len());
     let (h, frame) = g.gather(
         &mut st,

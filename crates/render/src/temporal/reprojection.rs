@@ -155,12 +155,7 @@ impl NextFrameEstimator for Reprojection<'_> {
             }
         }
         let h = resolve(strata, &carried);
-        let g = Gatherer {
-            light: &self.light,
-            cache: self.cache,
-            seed,
-            next: None,
-        };
+        let g = Gatherer::new(&self.light, self.cache, seed);
         let record = g.record_from(&mut st, &sp1, level, &h, &frame1);
         let radiance = st.radiance.get(record.radiance as usize).cloned();
         NextEstimate {
@@ -399,12 +394,7 @@ mod tests {
                 Some(&reprojection),
             )
         });
-        let g = Gatherer {
-            light: &light,
-            cache: &next_cache,
-            seed,
-            next: None,
-        };
+        let g = Gatherer::new(&light, &next_cache, seed);
         // Changes relative to the value, floored at a tenth of the mean (black records' relative
         // change is noise).
         let records = cache.levels[0].records();

@@ -674,12 +674,7 @@ impl SequenceCache {
                                 let (rec, radiance, counts) = match estimate {
                                     Some(e) => (e.record, e.radiance, e.counts),
                                     None => {
-                                        let g = Gatherer {
-                                            light: &light,
-                                            cache,
-                                            seed: tr.seed,
-                                            next: None,
-                                        };
+                                        let g = Gatherer::new(&light, cache, tr.seed);
                                         let point = ahead.map_or(tr.site.point, |m| {
                                             move_point(&tr.site.point, &m)
                                         });
@@ -931,12 +926,7 @@ mod tests {
             let shape = tr.site.point.it.shape;
             let ahead = anim.motion(shape, 5, 6);
             let point = ahead.map_or(tr.site.point, |m| move_point(&tr.site.point, &m));
-            let g = Gatherer {
-                light: &light,
-                cache: &later,
-                seed: tr.seed,
-                next: None,
-            };
+            let g = Gatherer::new(&light, &later, tr.seed);
             let mut st = WorkState::new(later.levels.len());
             let site = Site { point, ..tr.site };
             let fresh = gather(&g, &mut st, &site, tr.record.level);
