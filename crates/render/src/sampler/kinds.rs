@@ -14,7 +14,7 @@
 //!   neighbouring pixels' samples are stratified together; each 2-D pair is a (0, 2)-sequence.
 
 use super::permute::{
-    hash32, hash64, owen_scramble, permute, permute_pow2, sobol_0, sobol_1, to_unit,
+    hash32, hash64, owen_scramble, permute, permute_pow2, sobol_0, sobol_1, to_unit, Divisor,
 };
 use super::Sampler;
 use ircache_math::sampling::ONE_MINUS_EPSILON;
@@ -90,16 +90,6 @@ impl SamplerKind {
     }
 }
 
-/// `(p / d, p % d)`, by shifts when `d` is a power of two (the usual grid sides).
-#[inline]
-fn div_rem(p: u32, d: u32) -> (u32, u32) {
-    if d.is_power_of_two() {
-        (p >> d.trailing_zeros(), p & (d - 1))
-    } else {
-        (p / d, p % d)
-    }
-}
-
 fn ceil_sqrt(n: u32) -> u32 {
     let mut r = (f64::from(n)).sqrt() as u32;
     while r * r < n {
@@ -164,6 +154,12 @@ struct Grid {
     log2_spp: u32,
     /// `sobol`: base-4 digits of the Morton-ordered sample index.
     digits: u32,
+    /// Dividing by the sample count.
+    by_spp: Divisor,
+    /// Dividing by `a`.
+    by_a: Divisor,
+    /// Dividing by `b`.
+    by_b: Divisor,
 }
 
 impl SamplerSettings {
@@ -202,6 +198,12 @@ impl SamplerSettings {
                     ..Grid::default()
                 }
             }
+        };
+        let grid = Grid {
+            by_spp: Divisor::new(spp.max(1)),
+            by_a: Divisor::new(grid.a.max(1)),
+            by_b: Divisor::new(grid.b.max(1)),
+            ..grid
         };
         SamplerSettings {
             kind,
@@ -544,12 +546,12 @@ impl PixelSampler<'_> {
         match s.kind {
             SamplerKind::Independent => to_unit(self.random(dim, 1)),
             SamplerKind::Stratified | SamplerKind::MultiJitter => {
-                let p = permute(self.index, n, self.dim_seed(dim, 0));
+                let p = permute(self.index, s.grid.by_spp, self.dim_seed(dim, 0));
                 (p as f32 + self.jitter2(dim).0) / n as f32
             }
             SamplerKind::Orthogonal => self.orthogonal(dim),
             SamplerKind::LowDiscrepancy => {
-                let p = permute(self.index, n, self.dim_seed(dim, 0));
+                let p = permute(self.index, s.grid.by_spp, self.dim_seed(dim, 0));
                 to_unit(sobol_0(p) ^ self.dim_seed(dim, 1))
             }
             SamplerKind::Sobol => {
@@ -564,7 +566,6 @@ impl PixelSampler<'_> {
 
     fn sample_2d(&mut self, dim: u32) -> Vec2 {
         let s = self.s;
-        let n = s.spp;
         match s.kind {
             SamplerKind::Independent => {
                 let h = self.sample_hash(dim);
@@ -572,8 +573,8 @@ impl PixelSampler<'_> {
             }
             SamplerKind::Stratified => {
                 let r = s.grid.a;
-                let p = permute(self.index, n, self.dim_seed(dim, 0));
-                let (y_stratum, x_stratum) = div_rem(p, r);
+                let p = permute(self.index, s.grid.by_spp, self.dim_seed(dim, 0));
+                let (y_stratum, x_stratum) = s.grid.by_a.div_rem(p);
                 let (jx, jy) = self.jitter2(dim);
                 Vec2::new(
                     (x_stratum as f32 + jx) / r as f32,
@@ -585,10 +586,10 @@ impl PixelSampler<'_> {
                 // permuted other coordinate.
                 let (m, k) = (s.grid.a, s.grid.b);
                 let seed = self.dim_seed(dim, 0);
-                let p = permute(self.index, n, seed);
-                let (p_div_m, p_mod_m) = div_rem(p, m);
-                let sx = permute(p_mod_m, m, seed.wrapping_mul(0xa511_e9b3));
-                let sy = permute(p_div_m, k, seed.wrapping_mul(0x63d8_3595));
+                let p = permute(self.index, s.grid.by_spp, seed);
+                let (p_div_m, p_mod_m) = s.grid.by_a.div_rem(p);
+                let sx = permute(p_mod_m, s.grid.by_a, seed.wrapping_mul(0xa511_e9b3));
+                let sy = permute(p_div_m, s.grid.by_b, seed.wrapping_mul(0x63d8_3595));
                 let (jx, jy) = self.jitter2(dim);
                 Vec2::new(
                     (p_mod_m as f32 + (sy as f32 + jx) / k as f32) / m as f32,
@@ -598,7 +599,7 @@ impl PixelSampler<'_> {
             }
             SamplerKind::Orthogonal => Vec2::new(self.orthogonal(dim), self.orthogonal(dim + 1)),
             SamplerKind::LowDiscrepancy => {
-                let p = permute(self.index, n, self.dim_seed(dim, 0));
+                let p = permute(self.index, s.grid.by_spp, self.dim_seed(dim, 0));
                 Vec2::new(
                     to_unit(sobol_0(p) ^ self.dim_seed(dim, 1)),
                     to_unit(sobol_1(p) ^ self.dim_seed(dim, 2)),
@@ -620,15 +621,16 @@ impl PixelSampler<'_> {
     /// the stratum, a₁ the sub-stratum (distinct among the rows sharing a value), both shuffled
     /// per column, so every column is also a Latin hypercube.
     fn orthogonal(&mut self, dim: u32) -> f32 {
-        let n = self.s.spp;
-        let s = self.s.grid.a;
-        let row = permute(self.index, n, self.row_seed);
-        let (a0, a1) = (row % s, row / s);
-        let column = dim % s;
-        let value = (a0 + a1 * column) % s;
-        let stratum = permute(value, s, self.dim_seed(dim, 0));
-        let sub = permute(a1, s, self.dim_seed(dim, 1));
-        (stratum as f32 + (sub as f32 + self.jitter2(dim).0) / s as f32) / s as f32
+        let grid = self.s.grid;
+        let by_s = grid.by_a;
+        let row = permute(self.index, grid.by_spp, self.row_seed);
+        let (a1, a0) = by_s.div_rem(row);
+        let column = by_s.rem(dim);
+        let value = by_s.rem(a0 + a1 * column);
+        let stratum = permute(value, by_s, self.dim_seed(dim, 0));
+        let sub = permute(a1, by_s, self.dim_seed(dim, 1));
+        let s = grid.a as f32;
+        (stratum as f32 + (sub as f32 + self.jitter2(dim).0) / s) / s
     }
 }
 
