@@ -625,8 +625,8 @@ impl PixelSampler<'_> {
         let by_s = grid.by_a;
         let row = permute(self.index, grid.by_spp, self.row_seed);
         let (a1, a0) = by_s.div_rem(row);
-        let column = by_s.rem(dim);
-        let value = by_s.rem(a0 + a1 * column);
+        let column = by_s.remainder(dim);
+        let value = by_s.remainder(a0 + a1 * column);
         let stratum = permute(value, by_s, self.dim_seed(dim, 0));
         let sub = permute(a1, by_s, self.dim_seed(dim, 1));
         let s = grid.a as f32;

@@ -45,7 +45,7 @@ impl Divisor {
     /// `a / d`.
     #[inline]
     #[must_use]
-    pub fn div(self, a: u32) -> u32 {
+    pub fn quotient(self, a: u32) -> u32 {
         if self.d == 1 {
             a
         } else {
@@ -56,7 +56,7 @@ impl Divisor {
     /// `a % d`.
     #[inline]
     #[must_use]
-    pub fn rem(self, a: u32) -> u32 {
+    pub fn remainder(self, a: u32) -> u32 {
         let low = self.m.wrapping_mul(u64::from(a));
         ((u128::from(low) * u128::from(self.d)) >> 64) as u32
     }
@@ -65,7 +65,7 @@ impl Divisor {
     #[inline]
     #[must_use]
     pub fn div_rem(self, a: u32) -> (u32, u32) {
-        (self.div(a), self.rem(a))
+        (self.quotient(a), self.remainder(a))
     }
 }
 
@@ -87,7 +87,7 @@ pub fn permute(mut i: u32, n: Divisor, seed: u32) -> u32 {
             break;
         }
     }
-    n.rem(i.wrapping_add(seed))
+    n.remainder(i.wrapping_add(seed))
 }
 
 /// [`permute`] for a power-of-two `n` given as its mask `w = n − 1` (the value always falls in
