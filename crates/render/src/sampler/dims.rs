@@ -18,8 +18,8 @@ pub const LIGHT: u32 = 1;
 pub const BSDF: u32 = 4;
 /// Offset: Russian roulette (1-D).
 pub const ROULETTE: u32 = 7;
-/// Where the dimensions of extra samples at a vertex start.
-const EXTRA: u32 = 1 << 24;
+/// Where the dimensions of extra samples at a vertex start (vertex 0's first).
+pub const EXTRA: u32 = 1 << 24;
 
 /// Dimension `offset` of the block of path vertex `depth`.
 #[inline]

@@ -302,6 +302,22 @@ pub struct PixelSampler<'a> {
 
 /// Dimensions a batch holds: the film position and the first three path vertices' blocks.
 const BATCH_DIMS: usize = 2 + 3 * super::dims::PER_VERTEX as usize;
+/// Dimensions of the first vertex's extra samples a batch holds after those (the `ic` pixel
+/// pass's light samples beyond the first: four a vertex by default).
+const BATCH_EXTRA_DIMS: usize = 3 * 8;
+/// Slots of a batch: [`BATCH_DIMS`], then [`BATCH_EXTRA_DIMS`].
+const BATCH_SLOTS: usize = BATCH_DIMS + BATCH_EXTRA_DIMS;
+
+/// The batch slot of dimension `dim`, if a batch holds it.
+#[inline]
+fn batch_slot(dim: u32) -> Option<usize> {
+    let d = dim as usize;
+    if d < BATCH_DIMS {
+        return Some(d);
+    }
+    let extra = dim.checked_sub(super::dims::EXTRA)? as usize;
+    (extra < BATCH_EXTRA_DIMS).then_some(BATCH_DIMS + extra)
+}
 /// Samples a batch holds (the pixel pass's packet width).
 pub const BATCH_SAMPLES: usize = 16;
 
@@ -322,8 +338,8 @@ enum Form {
 struct Batch {
     first: u32,
     len: u32,
-    forms: [Form; BATCH_DIMS],
-    values: [[Vec2; BATCH_SAMPLES]; BATCH_DIMS],
+    forms: [Form; BATCH_SLOTS],
+    values: [[Vec2; BATCH_SAMPLES]; BATCH_SLOTS],
 }
 
 impl Default for Batch {
@@ -331,8 +347,8 @@ impl Default for Batch {
         Batch {
             first: 0,
             len: 0,
-            forms: [Form::Empty; BATCH_DIMS],
-            values: [[Vec2::ZERO; BATCH_SAMPLES]; BATCH_DIMS],
+            forms: [Form::Empty; BATCH_SLOTS],
+            values: [[Vec2::ZERO; BATCH_SAMPLES]; BATCH_SLOTS],
         }
     }
 }
@@ -371,7 +387,7 @@ impl PixelSampler<'_> {
         debug_assert!(len as usize <= BATCH_SAMPLES && first + len <= self.s.spp);
         self.batch.first = first;
         self.batch.len = len;
-        self.batch.forms = [Form::Empty; BATCH_DIMS];
+        self.batch.forms = [Form::Empty; BATCH_SLOTS];
     }
 
     /// Where the current sample's value of dimension `dim` in `form` lies in the batch: the
@@ -380,21 +396,21 @@ impl PixelSampler<'_> {
     #[inline]
     fn batched(&mut self, dim: u32, form: Form) -> Option<(usize, usize)> {
         let lane = self.index.wrapping_sub(self.batch.first);
-        let d = dim as usize;
-        if lane >= self.batch.len || d >= BATCH_DIMS {
+        if lane >= self.batch.len {
             return None;
         }
+        let d = batch_slot(dim)?;
         match self.batch.forms[d] {
             f if f == form => {}
-            Form::Empty => self.fill(d, form),
+            Form::Empty => self.fill(d, dim, form),
             _ => return None,
         }
         Some((d, lane as usize))
     }
 
-    /// Computes dimension `d` in `form` for every sample of the batch.
+    /// Computes dimension `dim` in `form` for every sample of the batch, into slot `d`.
     #[cold]
-    fn fill(&mut self, d: usize, form: Form) {
+    fn fill(&mut self, d: usize, dim: u32, form: Form) {
         let s = self.s;
         if form == Form::Two
             && s.kind == SamplerKind::MultiJitter
@@ -402,7 +418,7 @@ impl PixelSampler<'_> {
             && s.grid.a.is_power_of_two()
             && s.jitter
         {
-            self.fill_multijitter_pow2(d);
+            self.fill_multijitter_pow2(d, dim);
             self.batch.forms[d] = form;
             return;
         }
@@ -411,8 +427,8 @@ impl PixelSampler<'_> {
         for lane in 0..len {
             self.index = first + lane;
             self.batch.values[d][lane as usize] = match form {
-                Form::Two => self.sample_2d(d as u32),
-                _ => Vec2::new(self.sample_1d(d as u32), 0.0),
+                Form::Two => self.sample_2d(dim),
+                _ => Vec2::new(self.sample_1d(dim), 0.0),
             };
         }
         self.batch.forms[d] = form;
@@ -423,12 +439,12 @@ impl PixelSampler<'_> {
     /// one loop over the samples without branches or cycle walking, whose independent chains
     /// overlap (an AVX2 build of it measured no faster): the same operations on the same
     /// values, so the same bits (a test compares the two).
-    fn fill_multijitter_pow2(&mut self, d: usize) {
-        let seed = self.dim_seed(d as u32, 0);
+    fn fill_multijitter_pow2(&mut self, d: usize, dim: u32) {
+        let seed = self.dim_seed(dim, 0);
         let (first, pixel_seed, grid, spp) =
             (self.batch.first, self.pixel_seed, self.s.grid, self.s.spp);
         let values = &mut self.batch.values[d];
-        multijitter_pow2(values, first, d as u32, pixel_seed, seed, grid, spp);
+        multijitter_pow2(values, first, dim, pixel_seed, seed, grid, spp);
     }
 
     #[inline]
