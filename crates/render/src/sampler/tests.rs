@@ -300,7 +300,7 @@ fn progressive_sobol_prefixes_of_every_power_of_two_are_nets_and_pairs_independe
 /// A batch (the pixel pass draws 16 samples interleaved) gives every draw the value the sampler
 /// gives one sample at a time, bit for bit: each kind, power-of-two and other counts, batches
 /// cut short, a dimension drawn as 1-D by one sample and 2-D by another, dimensions past the
-/// batch's.
+/// batch's, the first vertex's extra samples' (held in slots of their own) and those past them.
 #[test]
 fn batched_draws_equal_single_draws_bit_for_bit() {
     for (kind, _) in SamplerKind::ALL {
@@ -323,7 +323,8 @@ fn batched_draws_equal_single_draws_bit_for_bit() {
                     let len = (s.spp - first).min(16).min(3 + first % 16);
                     p.begin_batch(first, len);
                     // Interleaved as the pixel pass draws: every sample's dimension d, then d + 1.
-                    for d in (0..40).step_by(3) {
+                    let extra = crate::sampler::dims::EXTRA;
+                    for d in (0..40).step_by(3).chain((extra - 3..extra + 30).step_by(3)) {
                         for i in first..first + len {
                             p.set_sample(i, d);
                             let v = if plan(i, d) {
