@@ -250,7 +250,7 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
         scene.triangles,
         camera.len(),
         hemisphere.len(),
-        k,
+        gather_grid(k).0 * gather_grid(k).1,
         shadow.len()
     );
     println!(
@@ -335,7 +335,9 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
         let mut r = [0.0; 2];
         for (j, t) in [1usize, 2].iter().enumerate() {
             let p = pool(*t)?;
-            r[j] = measure(hits.len() * k, || {
+            // A gather's grid rounds k up to whole 4 × 4 blocks: count the rays it traces.
+            let (polar, azimuthal) = gather_grid(k);
+            r[j] = measure(hits.len() * polar * azimuthal, || {
                 p.install(|| {
                     hits.par_chunks(per_chunk)
                         .enumerate()
@@ -349,8 +351,16 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// The `k` cosine-weighted gather rays of first hit number `index`, on the camera's side of the
-/// surface, always the same for the same index.
+/// The polar × azimuthal cells of [`gather_rays`] for about `k` rays: stratified as a record's
+/// gather, in whole 4 × 4 blocks (at least one: 16 rays).
+fn gather_grid(k: usize) -> (usize, usize) {
+    let polar = ((k as f32 / std::f32::consts::PI).sqrt().round() as usize).max(4) / 4 * 4;
+    let azimuthal = (k / polar).max(4) / 4 * 4;
+    (polar, azimuthal)
+}
+
+/// The cosine-weighted gather rays (about `k`, see [`gather_grid`]) of first hit number
+/// `index`, on the camera's side of the surface, always the same for the same index.
 fn gather_rays(scene: &Scene, it: &Interaction, index: usize, k: usize, mut f: impl FnMut(Ray)) {
     let mut rng = Rng::keyed(1, &[index as u64]);
     let n = if it.ng.dot(scene.camera.origin - it.p) < 0.0 {
@@ -359,10 +369,7 @@ fn gather_rays(scene: &Scene, it: &Interaction, index: usize, k: usize, mut f: i
         it.ng
     };
     let frame = Frame::from_z(n);
-    // Stratified as a record's gather (polar × azimuthal cells), visited in 4 × 4 blocks of
-    // cells so that sixteen consecutive rays point in neighbouring directions.
-    let polar = ((k as f32 / std::f32::consts::PI).sqrt().round() as usize).max(4) / 4 * 4;
-    let azimuthal = (k / polar).max(4) / 4 * 4;
+    let (polar, azimuthal) = gather_grid(k);
     for block in 0..(polar / 4) * (azimuthal / 4) {
         let (bj, bi) = (block / (azimuthal / 4), block % (azimuthal / 4));
         for c in 0..16 {
