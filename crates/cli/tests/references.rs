@@ -745,7 +745,7 @@ fn plane_estimators_keep_the_thesis_order_on_the_cornell_box() {
         );
         let pixels = plane.sample(&g, &mut st, sp, 0, k as u64);
         for (s, e) in squared.iter_mut().zip(estimators) {
-            let x = f64::from(plane.irradiance(&pixels, e).luminance());
+            let x = f64::from(plane.irradiance(&pixels.radiance, e).luminance());
             *s += ((x - reference) / reference).powi(2);
         }
     }

@@ -12,10 +12,10 @@
 
 use crate::Gpu;
 use bytemuck::{Pod, Zeroable};
-use ircache_math::{Frame, Rgb, Vec3};
+use ircache_math::{Frame, Vec3};
 use ircache_render::camera::Camera;
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingPoint, WorkState};
-use ircache_render::irradiance_cache::plane::HemispherePlane;
+use ircache_render::irradiance_cache::plane::{HemispherePlane, PlanePixels};
 use ircache_render::scene::{Scene, ShapeGeometry};
 use std::sync::Arc;
 
@@ -483,8 +483,8 @@ impl PlaneVisibility {
         Ok(out)
     }
 
-    /// The radiance through each pixel's centre of `plane` above `sp`, as
-    /// [`HemispherePlane::sample`] gives it, with each pixel's surface found by rasterising and
+    /// The radiance through each pixel's centre of `plane` above `sp` and the distance to what
+    /// it sees, as [`HemispherePlane::sample`] gives them, with each pixel's surface found by rasterising and
     /// its hit on the rasterised triangle (Embree where the pixel ray misses that triangle by
     /// rounding at its edge, and where it sees a sphere's shell; counted in the second value).
     ///
@@ -501,7 +501,7 @@ impl PlaneVisibility {
         sp: &ShadingPoint,
         level: u32,
         key: u64,
-    ) -> Result<(Vec<Rgb>, usize), crate::GpuError> {
+    ) -> Result<(PlanePixels, usize), crate::GpuError> {
         let seen = self.triangles(plane, sp)?;
         let mut fallbacks = 0;
         let out = plane.sample_with(g.seed, sp, level, key, |k, d, key, rng| {
@@ -520,11 +520,11 @@ impl PlaneVisibility {
             st.counts.gather_rays += 1;
             match hit {
                 Some(hit) => {
-                    light
-                        .incident_at(g.cache, g.seed, st, &ray, hit, level, key, rng)
-                        .radiance
+                    let incident =
+                        light.incident_at(g.cache, g.seed, st, &ray, hit, level, key, rng);
+                    (incident.radiance, incident.distance)
                 }
-                None => g.light.escaped(d),
+                None => (g.light.escaped(d), f32::INFINITY),
             }
         });
         Ok((out, fallbacks))

@@ -35,7 +35,7 @@ fn rasterised_records_equal_ray_cast_planes() {
     let (mut squared, mut lit, mut distance_squared, mut seen) = (0.0f64, 0u32, 0.0f64, 0u32);
     for (k, (sp, rec)) in points.iter().zip(&records).enumerate() {
         let pixels = plane.sample(&g, &mut st, sp, 0, k as u64);
-        let e = plane.irradiance(&pixels, PlaneEstimator::BorderCompensation);
+        let e = plane.irradiance(&pixels.radiance, PlaneEstimator::BorderCompensation);
         let (a, b) = (
             f64::from(rec.irradiance.luminance()),
             f64::from(e.luminance()),

@@ -44,7 +44,7 @@ fn rasterised_planes_see_what_the_rays_see() {
                     .luminance(),
             )
         };
-        let (a, b) = (e(&raster), e(&traced));
+        let (a, b) = (e(&raster.radiance), e(&traced.radiance));
         squared += ((a - b) / b).powi(2);
     }
     let share = agree as f64 / pixels as f64;

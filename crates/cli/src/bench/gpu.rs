@@ -418,7 +418,7 @@ fn plane_records(
                     let pixels = plane.sample(&g, st, sp, 0, k as u64);
                     f64::from(
                         plane
-                            .irradiance(&pixels, PlaneEstimator::BorderCompensation)
+                            .irradiance(&pixels.radiance, PlaneEstimator::BorderCompensation)
                             .luminance(),
                     )
                 },

@@ -14,8 +14,9 @@
 //! the cache's default gather (512 cells) by the same measure.
 
 use anyhow::Result;
+use ircache_math::Vec3;
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, ShadingPoint, WorkState};
-use ircache_render::irradiance_cache::hemisphere::Stratification;
+use ircache_render::irradiance_cache::hemisphere::{to_world, Stratification};
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
 use ircache_render::irradiance_cache::points::visible_sites;
 use ircache_render::irradiance_cache::{IcParams, IrradianceCache};
@@ -67,8 +68,9 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
     ];
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build()?;
     let t = Instant::now();
-    // Per point: the reference, the default gather, and each estimator's irradiance (luminance).
-    let rows: Vec<[f64; 6]> = pool.install(|| {
+    // Per point: the reference, the default gather, and each estimator's irradiance (luminance);
+    // and the gradients' squared errors against the reference gathers' (luminance).
+    let rows: Vec<([f64; 6], Gradients)> = pool.install(|| {
         points
             .par_iter()
             .enumerate()
@@ -76,20 +78,34 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
                 let mut st = WorkState::new(cache.levels.len());
                 let key = k as u64;
                 let fine = Stratification::from_divisions(REFERENCE_CELLS);
-                let a = g.record_with(&mut st, sp, 0, key, fine).e.luminance();
-                let b = g.record_with(&mut st, sp, 0, !key, fine).e.luminance();
+                let ra = g.record_with(&mut st, sp, 0, key, fine);
+                let rb = g.record_with(&mut st, sp, 0, !key, fine);
+                let (a, b) = (ra.e.luminance(), rb.e.luminance());
                 let reference = 0.5 * (a + b);
-                let default = g
-                    .record_with(
-                        &mut st,
-                        sp,
-                        0,
-                        key ^ 0x5555,
-                        Stratification::from_divisions(params.divisions),
-                    )
-                    .e
-                    .luminance();
+                let gathered = g.record_with(
+                    &mut st,
+                    sp,
+                    0,
+                    key ^ 0x5555,
+                    Stratification::from_divisions(params.divisions),
+                );
+                let default = gathered.e.luminance();
                 let pixels = plane.sample(&g, &mut st, sp, 0, key);
+                let frame = ircache_math::Frame::from_z(sp.n);
+                let (t, r) = plane.gradients(&pixels);
+                let world = |g: &[Vec3; 3]| to_world(g, frame.s, frame.t);
+                let gradients = Gradients::of(
+                    [
+                        (luminance(&ra.grad_t) + luminance(&rb.grad_t)) * 0.5,
+                        (luminance(&ra.grad_r) + luminance(&rb.grad_r)) * 0.5,
+                    ],
+                    [luminance(&gathered.grad_t), luminance(&gathered.grad_r)],
+                    [luminance(&world(&t)), luminance(&world(&r))],
+                    [
+                        (luminance(&ra.grad_t) - luminance(&rb.grad_t)) * 0.5,
+                        (luminance(&ra.grad_r) - luminance(&rb.grad_r)) * 0.5,
+                    ],
+                );
                 let mut row = [
                     f64::from(reference),
                     f64::from(default),
@@ -99,13 +115,14 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
                     0.5 * f64::from(a - b),
                 ];
                 for (slot, (_, e)) in row[2..].iter_mut().zip(&estimators) {
-                    *slot = f64::from(plane.irradiance(&pixels, *e).luminance());
+                    *slot = f64::from(plane.irradiance(&pixels.radiance, *e).luminance());
                 }
-                row
+                (row, gradients)
             })
             .collect()
     });
     let seconds = t.elapsed().as_secs_f64();
+    let (rows, gradients): (Vec<[f64; 6]>, Vec<Gradients>) = rows.into_iter().unzip();
     let lit: Vec<&[f64; 6]> = rows.iter().filter(|r| r[0] > 0.0).collect();
     let rms_of = |f: &dyn Fn(&[f64; 6]) -> f64| {
         (lit.iter().map(|r| f(r).powi(2)).sum::<f64>() / lit.len() as f64).sqrt()
@@ -133,9 +150,76 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
         100.0 * rms(1),
         params.divisions
     );
+    let sum = gradients
+        .iter()
+        .fold(Gradients::default(), |a, b| a.plus(b));
+    // The points with the 1 % largest reference gradients left out (beside geometry nearer than
+    // the plane's pixels resolve, a few of them dominate every sum, as a few pixels do relMSE).
+    let kept = |k: usize| {
+        let mut order: Vec<&Gradients> = gradients.iter().collect();
+        order.sort_by(|a, b| a.reference[k].total_cmp(&b.reference[k]));
+        order.truncate(order.len() - order.len() / 100);
+        order
+            .into_iter()
+            .fold(Gradients::default(), |a, b| a.plus(b))
+    };
+    for (kind, k) in [("translational", 0), ("rotational", 1)] {
+        let rel = |e: f64| 100.0 * (e / sum.reference[k]).sqrt();
+        let trim = kept(k);
+        let rel_kept = |e: f64| 100.0 * (e / trim.reference[k]).sqrt();
+        println!(
+            "  {kind} gradient, RMS error over the RMS length of the reference's (two \
+             {REFERENCE_CELLS}-cell gathers, Ward–Heckbert; its own {:.1} %), all points / the \
+             1 % of largest reference gradients left out: border-compensated plane {:.1} / {:.1} \
+             %, the cache's gather {:.1} / {:.1} %",
+            rel(sum.own[k]),
+            rel(sum.plane[k]),
+            rel_kept(trim.plane[k]),
+            rel(sum.gather[k]),
+            rel_kept(trim.gather[k]),
+        );
+    }
     let references: Vec<f64> = rows.iter().map(|r| r[0]).collect();
     on_the_gpu(&scene, &cache, &plane, &points, &references)?;
     rasterised(&scene, &light, &g, &plane, &points[..RASTERISED])
+}
+
+/// A point's gradients against the reference's: squared lengths of the reference (per kind:
+/// translational, rotational), of the plane's and the default gather's differences from it, and
+/// of the reference's own half-difference.
+#[derive(Clone, Copy, Debug, Default)]
+struct Gradients {
+    reference: [f64; 2],
+    plane: [f64; 2],
+    gather: [f64; 2],
+    own: [f64; 2],
+}
+
+impl Gradients {
+    fn of(reference: [Vec3; 2], gather: [Vec3; 2], plane: [Vec3; 2], own: [Vec3; 2]) -> Self {
+        let sq = |v: Vec3| f64::from(v.length_squared());
+        Gradients {
+            reference: [sq(reference[0]), sq(reference[1])],
+            plane: [sq(plane[0] - reference[0]), sq(plane[1] - reference[1])],
+            gather: [sq(gather[0] - reference[0]), sq(gather[1] - reference[1])],
+            own: [sq(own[0]), sq(own[1])],
+        }
+    }
+
+    fn plus(&self, o: &Gradients) -> Gradients {
+        let add = |a: [f64; 2], b: [f64; 2]| [a[0] + b[0], a[1] + b[1]];
+        Gradients {
+            reference: add(self.reference, o.reference),
+            plane: add(self.plane, o.plane),
+            gather: add(self.gather, o.gather),
+            own: add(self.own, o.own),
+        }
+    }
+}
+
+/// The luminance of a gradient per channel.
+fn luminance(g: &[Vec3; 3]) -> Vec3 {
+    g[0] * 0.2126 + g[1] * 0.7152 + g[2] * 0.0722
 }
 
 /// Border compensation with each record computed whole on the GPU (`ircache_gpu::records`:
@@ -249,7 +333,7 @@ fn rasterised(
                     .luminance(),
             )
         };
-        let (a, b) = (e(&pixels), e(&rays));
+        let (a, b) = (e(&pixels.radiance), e(&rays.radiance));
         if b > 0.0 {
             squared += ((a - b) / b).powi(2);
         }

@@ -26,8 +26,26 @@
 //! Here the pixels are sampled by one ray per pixel centre through the gather's
 //! [`IncidentRadiance`], to measure the estimators against the stratified gather (Table 4.1's
 //! protocol, `ircache bench --only plane`); the GPU's rasteriser will fill the same pixels.
+//!
+//! **Gradients** (the thesis only says its records hold them; NOTES-001 §C.4). Rotational:
+//! ∇ᵣE = ∫ L (n × ω) dω for any set of directions, each pixel's ∫ ω dω in closed form,
+//! ∫∫ x dA/(1+x²+y²)² = −atan(y/√(1+x²))/(2√(1+x²)) over its square, the border's by the
+//! azimuthal rule. Translational: Ward and Heckbert's argument (000 eqs. 3.42–3.48) on the
+//! pixel grid instead of polar × azimuthal cells. Moving the point by δx (in the tangent plane)
+//! moves what a direction sees by δω = −δx⊥/d, so every wall between two pixels k and l moves,
+//! at the closer one's distance, and E changes by (L_k − L_l) ∫ cos θ (δω·ν) ds along it (ν the
+//! wall's unit normal on the sphere, from k into l). A wall x = x₀ of the plane is a great
+//! circle with ν = (1, 0, −x₀)/√(1+x₀²), along which ∫ cos θ ds = [y/(√(1+x₀²)·√(1+x₀²+y²))];
+//! so it adds (L_right − L_left)/d · [y/((1+x₀²)√(1+x₀²+y²))] to ∂E/∂x, and a wall y = y₀ the
+//! same with x and y exchanged. That is the gradient of the light the frustum sees: outside it
+//! border compensation gives each direction its border pixel's value through a map fixed in the
+//! record's frame, and letting the border pixels' change (their walls' mean term) hold over
+//! those directions too, which a field linear across a ceiling needs (its outside share is
+//! 1 − F(s), 17 % at s = 2; a vertical edge's 4 %), tripled the errors on real scenes, where the
+//! border pixels see the nearest walls at grazing angles (`ircache bench --only plane`).
 
 use super::gather::{Gatherer, ShadingPoint, WorkState};
+use super::hemisphere::LocalGradient;
 use ircache_math::{Frame, Rgb, Rng, Vec3};
 use std::f64::consts::PI;
 
@@ -54,6 +72,24 @@ pub struct HemispherePlane {
     plane: Vec<f64>,
     /// Per pixel: the cos θ dω of the directions outside the frustum it stands for.
     border: Vec<f64>,
+    /// Per pixel, border compensated: ∫ (ω_x, ω_y) dω over the directions it stands for (the
+    /// rotational gradient's weights).
+    tilt: Vec<[f64; 2]>,
+    /// Per wall x = x₀ between pixels (i − 1, j) and (i, j) (index j·(N − 1) + i − 1): its
+    /// weight [y/((1+x₀²)√(1+x₀²+y²))] over the wall; by symmetry the walls y = y₀ between
+    /// (i, j − 1) and (i, j) (index i·(N − 1) + j − 1) take the same values.
+    wall: Vec<f64>,
+}
+
+/// The pixels of a plane above a record: each pixel centre's radiance and the distance to the
+/// surface it sees (infinite where the ray escapes or lies below the surface, as a gather's
+/// empty cells).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PlanePixels {
+    /// Radiance, row-major.
+    pub radiance: Vec<Rgb>,
+    /// Distance to the surface seen.
+    pub distance: Vec<f32>,
 }
 
 /// F(s): the share of the cosine-weighted hemisphere a plane of half-size `s` at distance 1
@@ -106,12 +142,94 @@ impl HemispherePlane {
         if sum > 0.0 {
             border.iter_mut().for_each(|w| *w *= outside / sum);
         }
+        // ∫ ω_x dω over a square of the plane: ∫∫ x dA/(1+x²+y²)².
+        let hx = |x: f64, y: f64| {
+            let a = (1.0 + x * x).sqrt();
+            -(y / a).atan() / (2.0 * a)
+        };
+        let mut tilt = vec![[0.0; 2]; n * n];
+        for j in 0..n {
+            for i in 0..n {
+                let (x0, x1, y0, y1) = (edge(i), edge(i + 1), edge(j), edge(j + 1));
+                let square =
+                    |f: &dyn Fn(f64, f64) -> f64| f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0);
+                tilt[j * n + i] = [square(&hx), square(&|x, y| hx(y, x))];
+            }
+        }
+        // Outside: at azimuth φ from θₑ to π/2, ∫ sin θ (cos φ, sin φ) sin θ dθ dφ.
+        for k in 0..steps {
+            let phi = (k as f64 + 0.5) * dphi;
+            let (sin, cos) = phi.sin_cos();
+            let m = cos.abs().max(sin.abs());
+            let theta_e = (s / m).atan();
+            let sin2 = 0.25 * PI - 0.5 * theta_e + 0.25 * (2.0 * theta_e).sin();
+            let (u, v) = (s * cos / m, s * sin / m);
+            let pixel = |c: f64| (((c + s) / (2.0 * s) * n as f64) as usize).min(n - 1);
+            let t = &mut tilt[pixel(v) * n + pixel(u)];
+            t[0] += cos * sin2 * dphi;
+            t[1] += sin * sin2 * dphi;
+        }
+        // Walls x = x₀ (and by symmetry y = y₀).
+        let mut wall = vec![0.0; n * n.saturating_sub(1)];
+        for j in 0..n {
+            for i in 1..n {
+                let x0 = edge(i);
+                let c = 1.0 + x0 * x0;
+                let f = |y: f64| y / (c * (c + y * y).sqrt());
+                wall[j * (n - 1) + i - 1] = f(edge(j + 1)) - f(edge(j));
+            }
+        }
         HemispherePlane {
             pixels,
             half_size,
             plane,
             border,
+            tilt,
+            wall,
         }
+    }
+
+    /// The translational and rotational gradients of the border-compensated irradiance (local
+    /// frame, z the normal; the module's comment derives them) from the plane's `pixels`. The
+    /// translational gradient is that of the light the frustum sees.
+    #[must_use]
+    pub fn gradients(&self, pixels: &PlanePixels) -> (LocalGradient, LocalGradient) {
+        let n = self.pixels;
+        let (l, d) = (&pixels.radiance, &pixels.distance);
+        // Each wall once.
+        let mut t = [[0.0f64; 2]; 3];
+        for j in 0..n {
+            for i in 1..n {
+                let w = self.wall[j * (n - 1) + i - 1];
+                // x = edge(i) between (i − 1, j) and (i, j); y = edge(i) between (j, i − 1)
+                // and (j, i).
+                let walls = [
+                    (0, j * n + i - 1, j * n + i),
+                    (1, (i - 1) * n + j, i * n + j),
+                ];
+                for (axis, from, to) in walls {
+                    let closer = f64::from(d[from].min(d[to]));
+                    if !(closer > 0.0 && closer.is_finite()) {
+                        continue;
+                    }
+                    let (a, b) = (l[to], l[from]);
+                    for (c, diff) in [a.r - b.r, a.g - b.g, a.b - b.b].into_iter().enumerate() {
+                        t[c][axis] += f64::from(diff) * w / closer;
+                    }
+                }
+            }
+        }
+        let mut r = [[0.0f64; 2]; 3];
+        // ∇ᵣE = ∫ L (n × ω) dω = ∫ L (−ω_y, ω_x) dω.
+        for (k, w) in self.tilt.iter().enumerate() {
+            let lk = l[k];
+            for (c, v) in [lk.r, lk.g, lk.b].into_iter().enumerate() {
+                r[c][0] -= f64::from(v) * w[1];
+                r[c][1] += f64::from(v) * w[0];
+            }
+        }
+        let vec = |g: [[f64; 2]; 3]| g.map(|c| Vec3::new(c[0] as f32, c[1] as f32, 0.0));
+        (vec(t), vec(r))
     }
 
     /// The local direction (z the normal) through the centre of pixel `(i, j)`.
@@ -154,8 +272,9 @@ impl HemispherePlane {
         Rgb::new(e[0] as f32, e[1] as f32, e[2] as f32)
     }
 
-    /// The radiance through each pixel's centre above `sp`, one ray each through the
-    /// gatherer's light (what a rasteriser would write), for a record at bounce `level`.
+    /// The radiance through each pixel's centre above `sp` and the distance to what it sees,
+    /// one ray each through the gatherer's light (what a rasteriser would write), for a record
+    /// at bounce `level`.
     pub fn sample(
         &self,
         g: &Gatherer,
@@ -163,36 +282,40 @@ impl HemispherePlane {
         sp: &ShadingPoint,
         level: u32,
         key: u64,
-    ) -> Vec<Rgb> {
+    ) -> PlanePixels {
         self.sample_with(g.seed, sp, level, key, |_, d, key, rng| {
             st.counts.gather_rays += 1;
             match g
                 .light
                 .incident(g.cache, g.seed, st, sp, d, level, key, rng)
             {
-                Some(inc) => inc.radiance,
-                None => g.light.escaped(d),
+                Some(inc) => (inc.radiance, inc.distance),
+                None => (g.light.escaped(d), f32::INFINITY),
             }
         })
     }
 
-    /// The radiance `radiance(pixel, d, key, rng)` gives for each pixel above `sp` (row-major;
-    /// black below the geometric surface), `d` the world direction through the pixel's centre,
-    /// `key` the pixel's key in the record's streams and `rng` the record's stream: the one
-    /// pixel loop of [`HemispherePlane::sample`] and of a rasteriser's plane, so both draw the
-    /// same random numbers.
+    /// The radiance and distance `radiance(pixel, d, key, rng)` gives for each pixel above `sp`
+    /// (row-major; black and infinitely far below the geometric surface), `d` the world
+    /// direction through the pixel's centre in the frame [`Frame::from_z`] of `sp.n`, `key` the
+    /// pixel's key in the record's streams and `rng` the record's stream: the one pixel loop of
+    /// [`HemispherePlane::sample`] and of a rasteriser's plane, so both draw the same random
+    /// numbers.
     pub fn sample_with(
         &self,
         seed: u64,
         sp: &ShadingPoint,
         level: u32,
         key: u64,
-        mut radiance: impl FnMut(usize, Vec3, u64, &mut Rng) -> Rgb,
-    ) -> Vec<Rgb> {
+        mut radiance: impl FnMut(usize, Vec3, u64, &mut Rng) -> (Rgb, f32),
+    ) -> PlanePixels {
         let frame = Frame::from_z(sp.n);
         let mut rng = Rng::keyed(seed, &[0x0070_6c61_6e65, key, u64::from(level)]);
         let n = self.pixels;
-        let mut out = vec![Rgb::ZERO; n * n];
+        let mut out = PlanePixels {
+            radiance: vec![Rgb::ZERO; n * n],
+            distance: vec![f32::INFINITY; n * n],
+        };
         for j in 0..n {
             for i in 0..n {
                 let d = frame.from_local(self.direction(i, j));
@@ -200,7 +323,9 @@ impl HemispherePlane {
                     continue; // below the geometric surface
                 }
                 let k = j * n + i;
-                out[k] = radiance(k, d, super::gather::mix(key, k as u64), &mut rng);
+                let (l, t) = radiance(k, d, super::gather::mix(key, k as u64), &mut rng);
+                out.radiance[k] = l;
+                out.distance[k] = t;
             }
         }
         out
@@ -284,5 +409,88 @@ mod tests {
             error(PlaneEstimator::BorderCompensation),
         );
         assert!(bord < 0.5 * cov && cov < only, "{only} {cov} {bord}");
+    }
+
+    /// The pixels a field gives, `field(local direction)` = (radiance, distance).
+    fn pixels_of(plane: &HemispherePlane, field: impl Fn(Vec3) -> (Rgb, f32)) -> PlanePixels {
+        let n = plane.pixels;
+        let mut out = PlanePixels::default();
+        for k in 0..n * n {
+            let (l, d) = field(plane.direction(k % n, k / n));
+            out.radiance.push(l);
+            out.distance.push(d);
+        }
+        out
+    }
+
+    /// ∇ᵣE of L = 1 + ω·b is (2π/3) n × b (∫ ω ωᵀ dω = (2π/3) I in the tangent plane); the
+    /// border's directions take their pixel's value, so the plane comes within a few percent.
+    #[test]
+    fn rotational_gradient_of_a_linear_field_is_two_thirds_pi_n_cross_b() {
+        let plane = HemispherePlane::new(64, 2.0);
+        let b = Vec3::new(0.6, -0.3, 0.4);
+        let pixels = pixels_of(&plane, |w| (Rgb::splat(1.0 + w.dot(b)), 1.0));
+        let (_, r) = plane.gradients(&pixels);
+        let exact = Vec3::Z.cross(b) * (2.0 * std::f32::consts::PI / 3.0);
+        let error = (r[1] - exact).length() / exact.length();
+        assert!(error < 0.05, "{:?} against {exact:?} ({error})", r[1]);
+        // Without a tilt the rotational gradient vanishes by symmetry.
+        let flat = pixels_of(&plane, |w| (Rgb::splat(1.0 + w.z), 1.0));
+        assert!(plane.gradients(&flat).1[0].length() < 1e-5);
+    }
+
+    /// Under a ceiling at height h, the gradient of the light the frustum sees: radiance
+    /// L₀ + cX linear in the ceiling's X gives ∂E/∂x = c·πF(s) (every direction's radiance grows
+    /// by c); a step, L₀ where X > 0 and black beyond, gives the wall x = 0's
+    /// L₀/h ∫ dy/(1+y²)² over [−s, s] = L₀ (s/(1+s²) + atan s)/h (cos θ ds/d = dy/(h(1+y²)²)).
+    /// The plane's gradient meets both within its discretisation, with no component along y.
+    #[test]
+    fn translational_gradient_under_a_ceiling_matches_the_closed_forms() {
+        let plane = HemispherePlane::new(64, 2.0);
+        let (h, l0, c) = (2.0f32, 3.0f32, 0.7f32);
+        // A direction (x, y, 1)/r meets the ceiling at X = h·x, distance h·r.
+        let hit = |w: Vec3| (h * w.x / w.z, h / w.z);
+        let linear = pixels_of(&plane, |w| {
+            let (x, t) = hit(w);
+            (Rgb::new(l0 + c * x, 2.0 * (l0 + c * x), 0.0), t)
+        });
+        let (t, _) = plane.gradients(&linear);
+        let pi = std::f32::consts::PI;
+        for (channel, scale) in [(0, 1.0), (1, 2.0)] {
+            let g = t[channel];
+            let exact = scale * pi * c * coverage(2.0) as f32;
+            assert!(
+                (g.x - exact).abs() < 0.02 * exact,
+                "linear {g:?} against {exact}"
+            );
+            assert!(g.y.abs() < 1e-3 * exact, "linear {g:?}");
+        }
+        let step = pixels_of(&plane, |w| {
+            let (x, t) = hit(w);
+            (Rgb::splat(if x > 0.0 { l0 } else { 0.0 }), t)
+        });
+        let (t, _) = plane.gradients(&step);
+        let exact = l0 * (2.0 / 5.0 + 2.0f32.atan()) / h;
+        assert!(
+            (t[0].x - exact).abs() < 0.04 * exact,
+            "step {:?} against {exact}",
+            t[0]
+        );
+        assert!(t[0].y.abs() < 1e-3 * exact, "step {:?}", t[0]);
+        // Escaped pixels (nothing seen) move nothing.
+        let open = pixels_of(&plane, |w| {
+            let (x, t) = hit(w);
+            if x > 0.0 {
+                (Rgb::splat(l0), t)
+            } else {
+                (Rgb::splat(1.0), f32::INFINITY)
+            }
+        });
+        let (t_open, _) = plane.gradients(&open);
+        assert!(
+            (t_open[0].x - (l0 - 1.0) / l0 * exact).abs() < 0.05 * exact,
+            "{:?}",
+            t_open[0]
+        );
     }
 }
