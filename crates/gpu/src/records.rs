@@ -3,13 +3,14 @@
 //! side into an atlas ([`crate::visibility`]), each pixel shaded on the GPU as a rasteriser
 //! shades it (one bounce: the hit's albedo/π times the directional light through the shadow
 //! map of [`GpuFrame`]), and summed with [`HemispherePlane`]'s border-compensated weights into
-//! each record's irradiance, with the harmonic mean distance of the pixels' hits. For the scenes
-//! [`GpuFrame`] serves, records of the first bounce; gradients are not made here.
+//! each record's irradiance, with the harmonic mean distance of the pixels' hits and the plane's
+//! gradients ([`HemispherePlane::gradients`]). For the scenes [`GpuFrame`] serves, records of
+//! the first bounce.
 
 use crate::frame::{view_of, GpuFrame};
 use crate::GpuError;
 use bytemuck::{Pod, Zeroable};
-use ircache_math::{Frame, Rgb};
+use ircache_math::{Frame, Rgb, Vec3};
 use ircache_render::irradiance_cache::gather::ShadingPoint;
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
 
@@ -44,6 +45,19 @@ pub struct PlaneRecord {
     pub irradiance: Rgb,
     /// Harmonic mean distance of the pixels' hits; `None` where the plane saw nothing.
     pub harmonic_distance: Option<f32>,
+    /// Translational gradient per channel, world space.
+    pub grad_t: [Vec3; 3],
+    /// Rotational gradient per channel, world space.
+    pub grad_r: [Vec3; 3],
+}
+
+/// A record as the shader writes it (`Out`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuOut {
+    irradiance: [f32; 4],
+    /// Translational along s and t, rotational along s and t: rgb each.
+    gradient: [[f32; 4]; 4],
 }
 
 impl GpuFrame {
@@ -69,6 +83,20 @@ impl GpuFrame {
         let weights = self
             .gpu
             .buffer("plane weights", bytemuck::cast_slice(&weights), storage);
+        let tilt: Vec<[f32; 2]> = plane
+            .tilt_weights()
+            .iter()
+            .map(|w| w.map(|v| v as f32))
+            .collect();
+        let tilt = self
+            .gpu
+            .buffer("plane tilt", bytemuck::cast_slice(&tilt), storage);
+        // At least one value: a binding may not be empty.
+        let mut walls: Vec<f32> = plane.wall_weights().iter().map(|&w| w as f32).collect();
+        walls.push(0.0);
+        let walls = self
+            .gpu
+            .buffer("plane walls", bytemuck::cast_slice(&walls), storage);
         let mut out = Vec::with_capacity(points.len());
         for batch in points.chunks((columns * rows) as usize) {
             let count = batch.len() as u32;
@@ -108,7 +136,7 @@ impl GpuFrame {
             );
             let records = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("plane records"),
-                size: 16 * u64::from(count),
+                size: std::mem::size_of::<GpuOut>() as u64 * u64::from(count),
                 usage: storage | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
@@ -143,6 +171,8 @@ impl GpuFrame {
                     (6, resource(&self.light)),
                     (7, wgpu::BindingResource::TextureView(&self.shadow)),
                     (8, resource(&records)),
+                    (9, resource(&tilt)),
+                    (10, resource(&walls)),
                 ]
                 .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource }),
             });
@@ -167,10 +197,19 @@ impl GpuFrame {
             self.gpu.queue.submit([encoder.finish()]);
             let bytes = self.gpu.read_back(&records)?;
             self.gpu.check()?;
-            let values: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
-            out.extend(values.iter().map(|v| PlaneRecord {
-                irradiance: Rgb::new(v[0], v[1], v[2]),
-                harmonic_distance: (v[3] > 0.0).then_some(v[3]),
+            let values: &[GpuOut] = bytemuck::cast_slice(&bytes);
+            out.extend(values.iter().zip(batch).map(|(v, sp)| {
+                let frame = Frame::from_z(sp.n);
+                let [tx, ty, rx, ry] = v.gradient;
+                let world =
+                    |x: [f32; 4], y: [f32; 4]| [0, 1, 2].map(|c| frame.s * x[c] + frame.t * y[c]);
+                let e = v.irradiance;
+                PlaneRecord {
+                    irradiance: Rgb::new(e[0], e[1], e[2]),
+                    harmonic_distance: (e[3] > 0.0).then_some(e[3]),
+                    grad_t: world(tx, ty),
+                    grad_r: world(rx, ry),
+                }
             }));
         }
         Ok(out)

@@ -2,7 +2,8 @@
 //! rasterised, shaded (one bounce of the sun through the shadow map) and summed with the
 //! border-compensated weights on the GPU, against the same plane ray cast and shaded on the CPU
 //! (`HemispherePlane::sample`, one shadow ray per hit) on Sponza under its sun; the harmonic mean
-//! distance against the rays' hits. On lavapipe where there is no GPU; with no device the test
+//! distance against the rays' hits; the gradients against `HemispherePlane::gradients` of the
+//! ray-cast plane. On lavapipe where there is no GPU; with no device the test
 //! fails and says so, unless `IRCACHE_GPU_TESTS=skip`.
 
 mod common;
@@ -33,8 +34,21 @@ fn rasterised_records_equal_ray_cast_planes() {
     let mut st = WorkState::new(cache.levels.len());
     let mut relative = Vec::new();
     let (mut squared, mut lit, mut distance_squared, mut seen) = (0.0f64, 0u32, 0.0f64, 0u32);
+    // The gradients' squared differences and the ray-cast ones' squared lengths (luminance):
+    // translational, rotational.
+    let (mut gradient_error, mut gradient_size) = ([0.0f64; 2], [0.0f64; 2]);
+    let luminance = |g: &[ircache_math::Vec3; 3]| g[0] * 0.2126 + g[1] * 0.7152 + g[2] * 0.0722;
     for (k, (sp, rec)) in points.iter().zip(&records).enumerate() {
         let pixels = plane.sample(&g, &mut st, sp, 0, k as u64);
+        let frame = ircache_math::Frame::from_z(sp.n);
+        let (t, r) = plane.gradients(&pixels);
+        for (kind, (gpu, cpu)) in [(&rec.grad_t, t), (&rec.grad_r, r)].into_iter().enumerate() {
+            let cpu =
+                ircache_render::irradiance_cache::hemisphere::to_world(&cpu, frame.s, frame.t);
+            let (a, b) = (luminance(gpu), luminance(&cpu));
+            gradient_error[kind] += f64::from((a - b).length_squared());
+            gradient_size[kind] += f64::from(b.length_squared());
+        }
         let e = plane.irradiance(&pixels.radiance, PlaneEstimator::BorderCompensation);
         let (a, b) = (
             f64::from(rec.irradiance.luminance()),
@@ -93,4 +107,13 @@ fn rasterised_records_equal_ray_cast_planes() {
         distance_rms < 0.02,
         "harmonic mean distances: RMS {distance_rms}"
     );
+    // The gradients: RMS difference over the ray-cast plane's RMS length.
+    for (kind, name) in ["translational", "rotational"].iter().enumerate() {
+        let relative = (gradient_error[kind] / gradient_size[kind]).sqrt();
+        eprintln!("{name} gradient: relative RMS difference {relative}");
+        assert!(
+            gradient_size[kind] > 0.0 && relative < 0.03,
+            "{name} gradients, rasterised against ray-cast: {relative}"
+        );
+    }
 }

@@ -232,6 +232,21 @@ impl HemispherePlane {
         (vec(t), vec(r))
     }
 
+    /// Per pixel (row-major), ∫ (ω_x, ω_y) dω over the directions it stands for, border
+    /// compensated: the rotational gradient's weights, for a GPU pass.
+    #[must_use]
+    pub fn tilt_weights(&self) -> &[[f64; 2]] {
+        &self.tilt
+    }
+
+    /// Per wall, its weight in the translational gradient: the wall x = edge(i) between pixels
+    /// (i − 1, j) and (i, j) at j·(N − 1) + i − 1, the wall y = edge(j) between (i, j − 1) and
+    /// (i, j) at i·(N − 1) + j − 1; for a GPU pass.
+    #[must_use]
+    pub fn wall_weights(&self) -> &[f64] {
+        &self.wall
+    }
+
     /// The local direction (z the normal) through the centre of pixel `(i, j)`.
     #[must_use]
     pub fn direction(&self, i: usize, j: usize) -> Vec3 {
