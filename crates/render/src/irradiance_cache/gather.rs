@@ -870,13 +870,46 @@ impl<'a> Gatherer<'a> {
             TranslationalFormula::WardHeckbert => h.translational_gradient_ward_heckbert(),
             TranslationalFormula::Krivanek => h.translational_gradient_krivanek(),
         };
-        let mut grad_t = to_world(&grad_t_local, frame.s, frame.t);
+        let grad_t = to_world(&grad_t_local, frame.s, frame.t);
         let grad_r = to_world(&h.rotational_gradient(), frame.s, frame.t);
-        // Radius limits: the resolution's (003 items 3–4), or for Tabellion's metric 1.5 and 10
-        // pixel footprints at a record the camera sees (000 eq. 3.60).
+        let nearest = h.distance.iter().copied().fold(f32::INFINITY, f32::min);
+        let hessian = match params.error_metric {
+            ErrorMetric::Hessian => Some(hessian_reach(h, e, params.accuracy)),
+            // Where the irradiance curves faster than the nearest surface suggests (a peak of
+            // indirect light under a lamp's shade, which the gradient does not see at its top),
+            // no record serves beyond the distance at which the second-order error, which
+            // gradients do not correct, reaches CURVATURE_SHARE · a · E.
+            _ => Some(hessian_reach(h, e, CURVATURE_SHARE * params.accuracy)),
+        };
+        let (ray_variance, radiance) = self.variance_and_radiance(st, sp, h);
+        self.finish_record(
+            sp,
+            level,
+            (e, grad_t, grad_r),
+            (nearest, h.harmonic_mean_distance(), hessian),
+            (ray_variance, radiance),
+        )
+    }
+
+    /// A record at `sp` for bounce `level` from its irradiance and gradients (world space), the
+    /// distances its hemisphere saw (the nearest, the harmonic mean, and where known the
+    /// Hessian's reach: at the accuracy under the Hessian metric, at CURVATURE_SHARE of it
+    /// otherwise) and what else it holds: its radius within the limits (the resolution's, or
+    /// for Tabellion's metric 1.5 and 10 pixel footprints at a record the camera sees, 000 eq.
+    /// 3.60; 003 items 3–4) and Ward's gradient limit. Shared by gathered records and records
+    /// from planes.
+    pub fn finish_record(
+        &self,
+        sp: &ShadingPoint,
+        level: u32,
+        (e, mut grad_t, grad_r): (Rgb, [Vec3; 3], [Vec3; 3]),
+        (nearest, harmonic, hessian): (f32, f32, Option<f32>),
+        (ray_variance, radiance): (f32, u32),
+    ) -> Record {
+        let params = &self.cache.params;
         let limits = (self.cache.r_min, self.cache.r_max);
         let (r, (r_min, r_max)) = match params.error_metric {
-            ErrorMetric::Ward => (h.harmonic_mean_distance(), limits),
+            ErrorMetric::Ward => (harmonic, limits),
             ErrorMetric::Tabellion => {
                 let footprint = (self.cache.pixel_angle > 0.0 && sp.travelled > 0.0).then(|| {
                     super::record::pixel_footprint(
@@ -885,26 +918,16 @@ impl<'a> Gatherer<'a> {
                         sp.cos_view,
                     )
                 });
-                super::record::tabellion_radius(&h.distance, limits, footprint)
+                super::record::tabellion_radius(&[nearest], limits, footprint)
             }
             // ½ λ R² = a E: the second-order error reaches a E at R. The reprojection cannot
             // see visibility change behind nearby occluders: the harmonic mean distance bounds
             // the radius there (Radiance's corral plays this part).
-            ErrorMetric::Hessian => (
-                hessian_reach(h, e, params.accuracy).min(h.harmonic_mean_distance()),
-                limits,
-            ),
+            ErrorMetric::Hessian => (hessian.unwrap_or(harmonic).min(harmonic), limits),
         };
-        // Where the irradiance curves faster than the nearest surface suggests (a peak of
-        // indirect light under a lamp's shade, which the gradient does not see at its top), no
-        // record serves beyond the distance at which the second-order error, which gradients
-        // do not correct, reaches CURVATURE_SHARE · a · E.
-        let r = match params.error_metric {
-            ErrorMetric::Hessian => r,
-            metric => r.min(
-                hessian_reach(h, e, CURVATURE_SHARE * params.accuracy)
-                    / metric.reach_per_radius(params.accuracy),
-            ),
+        let r = match (params.error_metric, hessian) {
+            (ErrorMetric::Hessian, _) | (_, None) => r,
+            (metric, Some(reach)) => r.min(reach / metric.reach_per_radius(params.accuracy)),
         };
         let r = super::record::limit_radius_by_gradient(
             e,
@@ -913,7 +936,6 @@ impl<'a> Gatherer<'a> {
             r_min,
             params.error_metric.gradient_limit_scale(params.accuracy),
         );
-        let (ray_variance, radiance) = self.variance_and_radiance(st, sp, h);
         Record {
             p: sp.it.p,
             n: sp.n,
