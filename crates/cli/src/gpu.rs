@@ -65,6 +65,52 @@ pub fn splatter() -> Result<GpuSplatting> {
     )
 }
 
+/// The GPU's record planes for `--record-source gpu-plane`: the scene on the GPU (the scenes
+/// its whole frame serves: Lambertian, constant albedos, one directional light), each batch's
+/// planes rasterised, shaded and reduced there.
+///
+/// # Errors
+/// Without a device, for a scene the GPU frame does not serve, or built without the `gpu`
+/// feature.
+#[cfg(feature = "gpu")]
+pub fn plane_source(
+    scene: &ircache_render::scene::Scene,
+    params: &ircache_render::irradiance_cache::IcParams,
+) -> Result<Arc<dyn ircache_render::irradiance_cache::plane::PlaneSource>> {
+    use ircache_render::irradiance_cache::gather::{PLANE_HALF_SIZE, PLANE_PIXELS};
+    use ircache_render::irradiance_cache::plane::HemispherePlane;
+    let gpu = Arc::new(ircache_gpu::Gpu::new()?);
+    let splatter = Arc::new(ircache_gpu::splat::GpuSplatter::new(gpu.clone()));
+    let cache = ircache_render::irradiance_cache::IrradianceCache::new(scene, params);
+    let frame = ircache_gpu::frame::GpuFrame::new(
+        gpu,
+        splatter,
+        scene,
+        &cache,
+        ircache_gpu::frame::SHADOW_MAP,
+    )
+    .map_err(|e| anyhow::anyhow!("--record-source gpu-plane: {e}"))?;
+    Ok(Arc::new(ircache_gpu::records::GpuPlaneSource {
+        frame,
+        plane: HemispherePlane::new(PLANE_PIXELS, PLANE_HALF_SIZE),
+    }))
+}
+
+/// The GPU's record planes.
+///
+/// # Errors
+/// Always: this build has no `gpu` feature.
+#[cfg(not(feature = "gpu"))]
+pub fn plane_source(
+    _: &ircache_render::scene::Scene,
+    _: &ircache_render::irradiance_cache::IcParams,
+) -> Result<Arc<dyn ircache_render::irradiance_cache::plane::PlaneSource>> {
+    anyhow::bail!(
+        "--record-source gpu-plane: this ircache was built without the gpu feature (cargo build \
+         --features gpu); --record-source plane makes the same records on the CPU"
+    )
+}
+
 /// `render --integrator splat --gpu` as a whole frame on the GPU (`ircache_gpu::frame`): the
 /// pre-pass on the CPU, then each of the `spp` layers rasterised, splatted, shadow-mapped and
 /// composed on the GPU through points `layer_jitter(k)` from the pixel centres, and averaged

@@ -332,6 +332,13 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         None
     };
     let scene = Scene::build(&desc).context("building the scene")?;
+    if let Integrator::Ic(ic) = &mut integrator {
+        if ic.params.record_source
+            == ircache_render::irradiance_cache::params::RecordSource::GpuPlane
+        {
+            ic.plane_source = Some(crate::gpu::plane_source(&scene, &ic.params)?);
+        }
+    }
     let load_seconds = t0.elapsed().as_secs_f64();
     let settings = settings(args, &desc)?;
     if settings.sampling.adaptive.is_some() && settings.sampling.sampler != SamplerKind::Sobol {

@@ -12,7 +12,9 @@ use crate::GpuError;
 use bytemuck::{Pod, Zeroable};
 use ircache_math::{Frame, Rgb, Vec3};
 use ircache_render::irradiance_cache::gather::ShadingPoint;
-use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
+use ircache_render::irradiance_cache::plane::{
+    HemispherePlane, PlaneEstimator, PlaneMeasure, PlaneSource,
+};
 
 /// A record's plane as the shader reads it (`Plane`).
 #[repr(C)]
@@ -45,6 +47,8 @@ pub struct PlaneRecord {
     pub irradiance: Rgb,
     /// Harmonic mean distance of the pixels' hits; `None` where the plane saw nothing.
     pub harmonic_distance: Option<f32>,
+    /// The nearest of the pixels' hits; `None` where the plane saw nothing.
+    pub nearest_distance: Option<f32>,
     /// Translational gradient per channel, world space.
     pub grad_t: [Vec3; 3],
     /// Rotational gradient per channel, world space.
@@ -207,11 +211,41 @@ impl GpuFrame {
                 PlaneRecord {
                     irradiance: Rgb::new(e[0], e[1], e[2]),
                     harmonic_distance: (e[3] > 0.0).then_some(e[3]),
+                    nearest_distance: (tx[3] < 1e38).then_some(tx[3]),
                     grad_t: world(tx, ty),
                     grad_r: world(rx, ry),
                 }
             }));
         }
         Ok(out)
+    }
+}
+
+/// The GPU's plane records as the cache's source of first-level records
+/// (`--record-source gpu-plane`): each batch's planes rasterised, shaded and reduced at once.
+#[derive(Debug)]
+pub struct GpuPlaneSource {
+    /// The scene on the GPU.
+    pub frame: GpuFrame,
+    /// The plane above each record.
+    pub plane: HemispherePlane,
+}
+
+impl PlaneSource for GpuPlaneSource {
+    fn measure(&self, points: &[ShadingPoint]) -> Result<Vec<PlaneMeasure>, String> {
+        let records = self
+            .frame
+            .plane_records(&self.plane, points)
+            .map_err(|e| e.to_string())?;
+        Ok(records
+            .into_iter()
+            .map(|r| PlaneMeasure {
+                e: r.irradiance,
+                grad_t: r.grad_t,
+                grad_r: r.grad_r,
+                nearest: r.nearest_distance.unwrap_or(f32::INFINITY),
+                harmonic: r.harmonic_distance.unwrap_or(f32::INFINITY),
+            })
+            .collect())
     }
 }

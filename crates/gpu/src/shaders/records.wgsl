@@ -25,7 +25,7 @@ struct Params {
 struct Out {
     irradiance: vec4<f32>, // rgb; w: the harmonic mean distance of the hits (0: none)
     // In the plane's frame (s, t): the translational gradient's two components, then the
-    // rotational one's, each rgb.
+    // rotational one's, each rgb; the first's w: the nearest hit (3e38: none).
     gradient: array<vec4<f32>, 4>,
 }
 
@@ -105,6 +105,7 @@ fn record(
     let tile = vec2<u32>((k % params.columns) * n, (k / params.columns) * n);
     // Irradiance and Σ 1/distance; translational (x, y) and rotational (x, y) gradients.
     var q4: array<vec4<f32>, 5>;
+    q4[1].w = 3.0e38; // the nearest hit
     var found = 0.0;
     for (var q = local; q < n * n; q = q + 256u) {
         let i = q % n;
@@ -112,13 +113,14 @@ fn record(
         let here = pixel(plane, tile, i, j);
         if here.w > 0.0 {
             q4[0] = q4[0] + vec4<f32>(here.xyz * weights[q], 1.0 / max(here.w, 1e-30));
+            q4[1].w = min(q4[1].w, here.w);
             found = found + 1.0;
         }
         // The walls to the right and above: x = edge(i + 1) has weight walls[j (n − 1) + i],
         // y = edge(j + 1) walls[i (n − 1) + j].
         if i + 1u < n {
             let t = wall_term(here, pixel(plane, tile, i + 1u, j), walls[j * (n - 1u) + i]);
-            q4[1] = q4[1] + vec4<f32>(t, 0.0);
+            q4[1] = vec4<f32>(q4[1].xyz + t, q4[1].w);
         }
         if j + 1u < n {
             let t = wall_term(here, pixel(plane, tile, i, j + 1u), walls[i * (n - 1u) + j]);
@@ -136,7 +138,10 @@ fn record(
         for (var stride = 128u; stride > 0u; stride = stride / 2u) {
             workgroupBarrier();
             if local < stride {
-                sums[local] = sums[local] + sums[local + stride];
+                let a = sums[local];
+                let b = sums[local + stride];
+                // The translational x sum carries the nearest hit in w.
+                sums[local] = vec4<f32>(a.xyz + b.xyz, select(a.w + b.w, min(a.w, b.w), v == 1u));
                 if v == 0u {
                     hits[local] = hits[local] + hits[local + stride];
                 }

@@ -46,6 +46,8 @@ pub struct IcIntegrator {
     pub pixel_pass: PixelPass,
     /// Where `splat` splats its records (`None`: on the CPU).
     pub splatter: Option<Arc<dyn crate::splatting::buffer::Splatter>>,
+    /// Where `--record-source gpu-plane` has its planes made (the caller attaches the GPU's).
+    pub plane_source: Option<Arc<dyn crate::irradiance_cache::plane::PlaneSource>>,
 }
 
 /// How the pixel pass finds the records serving a camera path's first vertex.
@@ -171,6 +173,7 @@ impl IcIntegrator {
             exclusions: Exclusions::None,
             pixel_pass: PixelPass::Lookup,
             splatter: None,
+            plane_source: None,
         })
     }
 

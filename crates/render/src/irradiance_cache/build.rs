@@ -15,6 +15,8 @@ use super::gather::{
     mix, GatherCounts, Gatherer, IrradianceCache, NextEstimate, NextFrameEstimator, SceneRadiance,
     ShadingPoint, WorkState,
 };
+use super::params::RecordSource;
+use super::plane::PlaneMeasure;
 use super::record::{Record, NO_RADIANCE};
 use crate::radiance_cache::RadianceCache;
 use crate::scene::Scene;
@@ -232,6 +234,8 @@ pub fn run_batch(
     next: Option<&dyn NextFrameEstimator>,
 ) {
     take_in(cache, hook.before(), stats);
+    // With `--record-source gpu-plane`, the first level's planes of the batch at once.
+    let planes = gpu_planes(cache, points, stats);
     // Per point: the record gathered there (with its point and key) and its work state.
     type Gathered = Option<((Record, ShadingPoint, u64), WorkState)>;
     let results: Vec<Gathered> = {
@@ -250,13 +254,20 @@ pub fn run_batch(
         points
             .par_iter()
             .with_max_len(4)
-            .map(|&(key, level, ref sp)| {
-                let threshold = cache.coverage_threshold(sp);
-                if cache.levels[level as usize].covers_within(sp.it.p, sp.n, threshold) {
-                    return None;
-                }
+            .enumerate()
+            .map(|(i, &(key, level, ref sp))| {
                 let mut st = WorkState::new(cache.levels.len());
-                let rec = g.record_at(&mut st, sp, level, key);
+                let rec = match planes.as_ref().and_then(|p| p[i]) {
+                    Some(Some(m)) => g.record_from_plane(&mut st, sp, level, &m),
+                    Some(None) => return None,
+                    None => {
+                        let threshold = cache.coverage_threshold(sp);
+                        if cache.levels[level as usize].covers_within(sp.it.p, sp.n, threshold) {
+                            return None;
+                        }
+                        g.record_at(&mut st, sp, level, key)
+                    }
+                };
                 Some(((rec, *sp, key), st))
             })
             .collect()
@@ -294,6 +305,58 @@ pub fn run_batch(
     let others = hook.after(&added);
     take_in(cache, others, stats);
     cache.update_ambient();
+}
+
+/// With `--record-source gpu-plane` and a source attached: per point of the batch at the first
+/// level, `Some` of the plane made on the GPU (all in one call) where it needs a record, of
+/// `None` where one covers it; `None` for the deeper levels' points, which gather. `None`
+/// altogether otherwise, or where the GPU failed (a note says so; the points then take records
+/// one at a time, ray cast on the CPU where the GPU fails again).
+#[allow(clippy::option_option)]
+fn gpu_planes(
+    cache: &IrradianceCache,
+    points: &[(u64, u32, ShadingPoint)],
+    stats: &mut CacheStats,
+) -> Option<Vec<Option<Option<PlaneMeasure>>>> {
+    let source = cache.plane_source.as_ref()?;
+    if cache.params.record_source != RecordSource::GpuPlane {
+        return None;
+    }
+    let needed: Vec<bool> = points
+        .par_iter()
+        .map(|&(_, level, ref sp)| {
+            let threshold = cache.coverage_threshold(sp);
+            level == 0 && !cache.levels[0].covers_within(sp.it.p, sp.n, threshold)
+        })
+        .collect();
+    let wanted: Vec<ShadingPoint> = points
+        .iter()
+        .zip(&needed)
+        .filter(|(_, &n)| n)
+        .map(|((_, _, sp), _)| *sp)
+        .collect();
+    match source.measure(&wanted) {
+        Ok(measures) => {
+            let mut m = measures.into_iter();
+            Some(
+                points
+                    .iter()
+                    .zip(&needed)
+                    .map(|(&(_, level, _), &n)| {
+                        (level == 0).then(|| if n { m.next() } else { None })
+                    })
+                    .collect(),
+            )
+        }
+        Err(e) => {
+            if stats.notes.len() < 8 {
+                stats
+                    .notes
+                    .push(format!("the GPU's record planes failed ({e})"));
+            }
+            None
+        }
+    }
 }
 
 /// Fewest pixels between two points of one batch on the finer strides. A batch's records are

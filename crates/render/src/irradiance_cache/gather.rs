@@ -11,7 +11,9 @@
 use super::environment::{held_environment, HeldEnvironment};
 use super::hemisphere::{largest_eigenvalue, to_world, HemisphereSamples, Stratification};
 pub use super::params::Deeper;
+use super::params::RecordSource;
 use super::params::{IcParams, TranslationalFormula};
+use super::plane::{HemispherePlane, PlaneMeasure, PlaneSource};
 use super::record::{ErrorMetric, Record, NO_RADIANCE};
 use super::store::RecordStore;
 use crate::integrators::path_continuation::{
@@ -60,7 +62,16 @@ pub struct IrradianceCache {
     /// The photon maps (`--photons`, `--caustic-photons`): the global map serves the vertices
     /// beyond a record's gather hits, the caustic map adds caustics where records serve.
     pub photons: Option<Arc<PhotonMaps>>,
+    /// The plane above first-level records with `--record-source plane` or `gpu-plane`.
+    pub plane: Option<Arc<HemispherePlane>>,
+    /// Where `--record-source gpu-plane` has its planes made (the caller attaches it).
+    pub plane_source: Option<Arc<dyn PlaneSource>>,
 }
+
+/// Pixels per side of a record's plane (`--record-source plane`): the thesis's 64.
+pub const PLANE_PIXELS: usize = 64;
+/// Half-size of the plane at distance 1: 127° across, NOTES-001's inference from Table 4.1.
+pub const PLANE_HALF_SIZE: f64 = 2.0;
 
 /// A ray shorter than this many photon-disc radii goes on past the photon map (see
 /// [`IrradianceCache::photon_irradiance`]).
@@ -184,6 +195,9 @@ impl IrradianceCache {
             pixel_angle: 0.0,
             environment: HeldEnvironment::None,
             photons: None,
+            plane: (params.record_source != RecordSource::Gather)
+                .then(|| Arc::new(HemispherePlane::new(PLANE_PIXELS, PLANE_HALF_SIZE))),
+            plane_source: None,
         };
         cache.levels = (0..params.bounces.clamp(1, super::params::MAX_STORED_LEVELS))
             .map(|_| cache.empty_store())
@@ -825,6 +839,21 @@ impl<'a> Gatherer<'a> {
 
     /// A record at `sp` for bounce `level`: gather, then limit the radius.
     pub fn record_at(&self, st: &mut WorkState, sp: &ShadingPoint, level: u32, key: u64) -> Record {
+        if let (0, Some(plane)) = (level, self.cache.plane.as_deref()) {
+            // A record from its plane: the GPU's (one point at a time here; the pre-pass asks
+            // for a batch's at once), else ray cast on the CPU, the same estimator.
+            let from_gpu = match (self.cache.params.record_source, &self.cache.plane_source) {
+                (RecordSource::GpuPlane, Some(source)) => source.measure(&[*sp]).ok(),
+                _ => None,
+            };
+            let measure = from_gpu
+                .and_then(|m| m.first().copied())
+                .unwrap_or_else(|| {
+                    let pixels = plane.sample(self, st, sp, level, key);
+                    plane.measure(sp, &pixels)
+                });
+            return self.record_from_plane(st, sp, level, &measure);
+        }
         // A radiance record weighs its cells by the glossy lobe: it needs as many more rays as
         // the lobe is narrower than the cosine.
         let factor = self.glossy_brdf(sp).map_or(1.0, |b| b.ray_factor());
@@ -888,6 +917,25 @@ impl<'a> Gatherer<'a> {
             (e, grad_t, grad_r),
             (nearest, h.harmonic_mean_distance(), hessian),
             (ray_variance, radiance),
+        )
+    }
+
+    /// The record a plane's `measure` gives at `sp` (no radiance coefficients; no curvature
+    /// bound: a plane gives no Hessian).
+    pub fn record_from_plane(
+        &self,
+        st: &mut WorkState,
+        sp: &ShadingPoint,
+        level: u32,
+        m: &PlaneMeasure,
+    ) -> Record {
+        st.counts.records += 1;
+        self.finish_record(
+            sp,
+            level,
+            (m.e, m.grad_t, m.grad_r),
+            (m.nearest, m.harmonic, None),
+            (0.0, NO_RADIANCE),
         )
     }
 

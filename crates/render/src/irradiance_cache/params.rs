@@ -117,6 +117,21 @@ impl GatherPattern {
     }
 }
 
+/// How the first bounce level's records are computed (`--record-source`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum RecordSource {
+    /// The stratified hemisphere gather (000 eqs. 3.4–3.5) with its super-samples.
+    #[default]
+    Gather,
+    /// A 64 × 64 plane at half-size 2 above the record, one ray per pixel centre, border
+    /// compensated, with the plane's gradients (001 §4.4.2; [`super::plane`]): the GPU's
+    /// record on the CPU, to measure it in images.
+    Plane,
+    /// The same planes rasterised and shaded on the GPU (`--gpu`; the scenes the GPU frame
+    /// serves), through the source the caller attaches ([`super::plane::PlaneSource`]).
+    GpuPlane,
+}
+
 /// `bounces` without a bound: paths end by Russian roulette alone.
 pub const UNBOUNDED: u32 = u32::MAX;
 
@@ -152,6 +167,8 @@ pub struct IcParams {
     pub formula: TranslationalFormula,
     /// Where each cell's gather sample lies (`--gather-pattern`).
     pub gather_pattern: GatherPattern,
+    /// How the first level's records are computed (`--record-source`).
+    pub record_source: RecordSource,
     /// Reorder records spatially after the pre-pass (003 item 8, `--record-order spatial`).
     pub spatial_order: bool,
     /// How far the pre-pass fills the cache (`--overture`).
@@ -236,6 +253,7 @@ impl Default for IcParams {
             gradients: GradientMode::Full,
             formula: TranslationalFormula::WardHeckbert,
             gather_pattern: GatherPattern::Multijittered,
+            record_source: RecordSource::Gather,
             direct_samples: 4,
             supersamples: 1536,
             record_error: 0.1,
@@ -369,6 +387,11 @@ const PATTERNS: &[(&str, GatherPattern)] = &[
     ("jittered", GatherPattern::Jittered),
 ];
 const ORDERS: &[(&str, bool)] = &[("insertion", false), ("spatial", true)];
+const SOURCES: &[(&str, RecordSource)] = &[
+    ("gather", RecordSource::Gather),
+    ("plane", RecordSource::Plane),
+    ("gpu-plane", RecordSource::GpuPlane),
+];
 
 /// Every cache parameter, in the order the help lists them.
 pub const PARAMS: &[ParamSpec] = &[
@@ -411,6 +434,21 @@ pub const PARAMS: &[ParamSpec] = &[
         get: |p| name_of(p.gather_pattern, PATTERNS),
         set: |p, v| {
             p.gather_pattern = choice(v, PATTERNS)?;
+            Ok(())
+        },
+    },
+    ParamSpec {
+        name: "record_source",
+        aliases: &[],
+        value: "gather|plane|gpu-plane",
+        help: "how the first bounce's records are computed: the stratified gather, or a 64 × 64 \
+               border-compensated plane above each record with the plane's gradients (001 \
+               §4.4.2), ray cast on the CPU (plane) or rasterised and shaded on the GPU \
+               (gpu-plane, with --gpu, for the scenes the GPU frame serves)",
+        shapes_records: true,
+        get: |p| name_of(p.record_source, SOURCES),
+        set: |p, v| {
+            p.record_source = choice(v, SOURCES)?;
             Ok(())
         },
     },

@@ -81,6 +81,32 @@ pub struct HemispherePlane {
     wall: Vec<f64>,
 }
 
+/// What a record's plane gives: the border-compensated irradiance, its gradients in world space
+/// and the nearest and harmonic mean distances of the pixels' hits (infinite where none).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlaneMeasure {
+    /// Irradiance.
+    pub e: Rgb,
+    /// Translational gradient per channel.
+    pub grad_t: [Vec3; 3],
+    /// Rotational gradient per channel.
+    pub grad_r: [Vec3; 3],
+    /// Nearest hit.
+    pub nearest: f32,
+    /// Harmonic mean distance of the hits.
+    pub harmonic: f32,
+}
+
+/// Planes of first-level records made elsewhere, many at a time (the GPU's rasterised planes,
+/// `ircache_gpu`): `--record-source gpu-plane`.
+pub trait PlaneSource: Send + Sync + std::fmt::Debug {
+    /// The planes above `points`, in their order, or why they could not be made.
+    ///
+    /// # Errors
+    /// When the device fails.
+    fn measure(&self, points: &[ShadingPoint]) -> Result<Vec<PlaneMeasure>, String>;
+}
+
 /// The pixels of a plane above a record: each pixel centre's radiance and the distance to the
 /// surface it sees (infinite where the ray escapes or lies below the surface, as a gather's
 /// empty cells).
@@ -230,6 +256,35 @@ impl HemispherePlane {
         }
         let vec = |g: [[f64; 2]; 3]| g.map(|c| Vec3::new(c[0] as f32, c[1] as f32, 0.0));
         (vec(t), vec(r))
+    }
+
+    /// What `pixels`, sampled above `sp` ([`Self::sample_with`]), give a record.
+    #[must_use]
+    pub fn measure(&self, sp: &ShadingPoint, pixels: &PlanePixels) -> PlaneMeasure {
+        let frame = Frame::from_z(sp.n);
+        let (t, r) = self.gradients(pixels);
+        let (mut nearest, mut inverse, mut hits) = (f32::INFINITY, 0.0f64, 0u32);
+        for &d in pixels
+            .distance
+            .iter()
+            .filter(|d| d.is_finite() && **d > 0.0)
+        {
+            nearest = nearest.min(d);
+            inverse += 1.0 / f64::from(d);
+            hits += 1;
+        }
+        let world = |g: &LocalGradient| super::hemisphere::to_world(g, frame.s, frame.t);
+        PlaneMeasure {
+            e: self.irradiance(&pixels.radiance, PlaneEstimator::BorderCompensation),
+            grad_t: world(&t),
+            grad_r: world(&r),
+            nearest,
+            harmonic: if hits > 0 {
+                (f64::from(hits) / inverse) as f32
+            } else {
+                f32::INFINITY
+            },
+        }
     }
 
     /// Per pixel (row-major), ∫ (ω_x, ω_y) dω over the directions it stands for, border

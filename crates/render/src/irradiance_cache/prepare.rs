@@ -116,6 +116,17 @@ pub fn empty_cache(
     }
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     cache.pixel_angle = 2.0 * scene.camera.tan_half_x / width.max(1) as f32;
+    cache.plane_source = ic.plane_source.clone();
+    if ic.params.record_source == super::params::RecordSource::GpuPlane
+        && cache.plane_source.is_none()
+    {
+        return Err(RenderError::Invalid(
+            "--record-source gpu-plane needs the GPU's planes: `ircache render` attaches them \
+             when built with the gpu feature and a device exists (else use --record-source \
+             plane, the same records ray cast on the CPU)"
+                .into(),
+        ));
+    }
     cache.photons = maps.or_else(|| {
         pool.install(|| photon_maps(scene, &ic.params, seed))
             .map(Arc::new)
