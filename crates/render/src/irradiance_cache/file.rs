@@ -701,6 +701,7 @@ mod tests {
             ("gradients", "rotation"),
             ("gradient_formula", "krivanek"),
             ("gather_pattern", "jittered"),
+            ("record_source", "plane"),
             ("radiance_cache", "on"),
             ("cached_environment", "all"),
             ("radiance_order", "5"),
