@@ -453,7 +453,7 @@ fn plane_records_match_the_exact_irradiance_at_their_positions() {
     let gradient = (gradient_error / gradient_size).sqrt();
     eprintln!("{checked} floor records: RMS {rms}, worst {worst}; gradient {gradient}");
     assert!(checked > 10, "only {checked} floor records");
-    // Measured: RMS 0.6 %, worst 1.7 %, gradients 7 %.
+    // Measured: RMS 0.3 %, worst 0.9 %, gradients 9 % (0.6, 1.7, 7 % with a 127° plane).
     assert!(rms < 0.02 && worst < 0.05, "RMS {rms}, worst {worst}");
     assert!(
         gradient < 0.2,

@@ -70,8 +70,10 @@ pub struct IrradianceCache {
 
 /// Pixels per side of a record's plane (`--record-source plane`): the thesis's 64.
 pub const PLANE_PIXELS: usize = 64;
-/// Half-size of the plane at distance 1: 127° across, NOTES-001's inference from Table 4.1.
-pub const PLANE_HALF_SIZE: f64 = 2.0;
+/// Half-size of the plane at distance 1: 143° across. NOTES-001 infers 2 (127°) from Table
+/// 4.1; by that table's protocol 3 errs less on Sponza, the Cornell box and the lamp room (RMS
+/// 22.8, 5.0, 20.3 % against 26.1, 8.3, 26.5 %; BENCHMARKS.md), 4 no better.
+pub const PLANE_HALF_SIZE: f64 = 3.0;
 
 /// A ray shorter than this many photon-disc radii goes on past the photon map (see
 /// [`IrradianceCache::photon_irradiance`]).
