@@ -123,7 +123,7 @@ pub enum RecordSource {
     /// The stratified hemisphere gather (000 eqs. 3.4–3.5) with its super-samples.
     #[default]
     Gather,
-    /// A 64 × 64 plane at half-size 2 above the record, one ray per pixel centre, border
+    /// A 64 × 64 plane at half-size 3 (143°) above the record, one ray per pixel centre, border
     /// compensated, with the plane's gradients (001 §4.4.2; [`super::plane`]): the GPU's
     /// record on the CPU, to measure it in images.
     Plane,
