@@ -92,6 +92,14 @@ fn box_scene(rho: f32, open: bool, scale: f32, ic: IntegratorDesc, size: u32) ->
     )
 }
 
+/// The open box (white, scale 1) under a uniform sky of radiance 1, one bounce, with `params`
+/// more, seen at `size` pixels.
+fn open_box_under_sky(params: &[(&str, &str)], size: u32) -> SceneDesc {
+    let mut all = vec![("ambient_value", "1"), ("bounces", "1")];
+    all.extend_from_slice(params);
+    box_scene(1.0, true, 1.0, ic_desc(&all), size)
+}
+
 fn ic_desc(params: &[(&str, &str)]) -> IntegratorDesc {
     IntegratorDesc {
         kind: "ic".into(),
@@ -361,17 +369,7 @@ fn interpolated_values_and_gradients_between_records_match_the_closed_form() {
 
 #[test]
 fn records_match_the_exact_irradiance_at_their_positions() {
-    let desc = box_scene(
-        1.0,
-        true,
-        1.0,
-        ic_desc(&[
-            ("ambient_value", "1"),
-            ("bounces", "1"),
-            ("accuracy", "0.2"),
-        ]),
-        48,
-    );
+    let desc = open_box_under_sky(&[("accuracy", "0.2")], 48);
     let scene = Scene::build(&desc).unwrap();
     let integrator = Integrator::from_desc(&desc.integrator).unwrap();
     let out = ircache_render::render::render(
@@ -410,23 +408,12 @@ fn records_match_the_exact_irradiance_at_their_positions() {
 
 /// `--record-source plane`: first-level records from a border-compensated 64 × 64 plane with
 /// its gradients, against the open box's exact irradiance at their positions: the plane's own
-/// estimator error (001 Table 4.1: the directions outside its 127° take the border's radiance),
+/// estimator error (001 Table 4.1: the directions outside its 143° take the border's radiance),
 /// within a few percent; the translational gradients along the floor against central
 /// differences of the exact irradiance.
 #[test]
 fn plane_records_match_the_exact_irradiance_at_their_positions() {
-    let desc = box_scene(
-        1.0,
-        true,
-        1.0,
-        ic_desc(&[
-            ("ambient_value", "1"),
-            ("bounces", "1"),
-            ("accuracy", "0.3"),
-            ("record_source", "plane"),
-        ]),
-        32,
-    );
+    let desc = open_box_under_sky(&[("accuracy", "0.3"), ("record_source", "plane")], 32);
     let out = render_desc(&desc, 2, 5);
     let cache = out.cache.unwrap().cache;
     let (mut squared, mut worst, mut checked) = (0.0f64, 0.0f32, 0);
