@@ -65,6 +65,22 @@ pub fn splatter() -> Result<GpuSplatting> {
     )
 }
 
+/// With `--record-source gpu-plane`, attaches the GPU's record planes to `ic` (see
+/// [`plane_source`]); nothing otherwise.
+///
+/// # Errors
+/// As [`plane_source`].
+pub fn attach_plane_source(
+    ic: &mut ircache_render::integrators::ic::IcIntegrator,
+    scene: &ircache_render::scene::Scene,
+) -> Result<()> {
+    use ircache_render::irradiance_cache::params::RecordSource;
+    if ic.params.record_source == RecordSource::GpuPlane {
+        ic.plane_source = Some(plane_source(scene, &ic.params)?);
+    }
+    Ok(())
+}
+
 /// The GPU's record planes for `--record-source gpu-plane`: the scene on the GPU (the scenes
 /// its whole frame serves: Lambertian, constant albedos, one directional light), each batch's
 /// planes rasterised, shaded and reduced there.

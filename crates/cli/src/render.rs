@@ -333,11 +333,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     };
     let scene = Scene::build(&desc).context("building the scene")?;
     if let Integrator::Ic(ic) = &mut integrator {
-        if ic.params.record_source
-            == ircache_render::irradiance_cache::params::RecordSource::GpuPlane
-        {
-            ic.plane_source = Some(crate::gpu::plane_source(&scene, &ic.params)?);
-        }
+        crate::gpu::attach_plane_source(ic, &scene)?;
     }
     let load_seconds = t0.elapsed().as_secs_f64();
     let settings = settings(args, &desc)?;

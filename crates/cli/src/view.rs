@@ -319,6 +319,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     }
     let scene = Scene::build(&desc).context("building the scene")?;
     scene.require_no_media("the walkthrough viewer")?;
+    crate::gpu::attach_plane_source(ic, &scene)?;
     let (w, h) = (
         desc.sensor.film.width as usize,
         desc.sensor.film.height as usize,
