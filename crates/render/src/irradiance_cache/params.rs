@@ -127,8 +127,8 @@ pub enum RecordSource {
     /// compensated, with the plane's gradients (001 §4.4.2; [`super::plane`]): the GPU's
     /// record on the CPU, to measure it in images.
     Plane,
-    /// The same planes rasterised and shaded on the GPU (`--gpu`; the scenes the GPU frame
-    /// serves), through the source the caller attaches ([`super::plane::PlaneSource`]).
+    /// The same planes rasterised and shaded on the GPU (the scenes the GPU frame serves),
+    /// through the source the caller attaches ([`super::plane::PlaneSource`]).
     GpuPlane,
 }
 
@@ -444,7 +444,8 @@ pub const PARAMS: &[ParamSpec] = &[
         help: "how the first bounce's records are computed: the stratified gather, or a 64 × 64 \
                border-compensated plane above each record with the plane's gradients (001 \
                §4.4.2), ray cast on the CPU (plane) or rasterised and shaded on the GPU \
-               (gpu-plane, with --gpu, for the scenes the GPU frame serves)",
+               (gpu-plane, for the scenes the GPU frame serves; --gpu is not needed); plane \
+               records hold irradiance only (radiance-cached lobes are traced)",
         shapes_records: true,
         get: |p| name_of(p.record_source, SOURCES),
         set: |p, v| {
