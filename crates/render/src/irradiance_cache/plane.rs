@@ -143,13 +143,26 @@ impl HemispherePlane {
             let (rx, ry) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
             x / (2.0 * rx) * (y / rx).atan() + y / (2.0 * ry) * (x / ry).atan()
         };
+        // ∫ ω_x dω over a square of the plane: ∫∫ x dA/(1+x²+y²)².
+        let hx = |x: f64, y: f64| {
+            let a = (1.0 + x * x).sqrt();
+            -(y / a).atan() / (2.0 * a)
+        };
+        // Each pixel's square: its cos θ dω (G) and its ∫ (ω_x, ω_y) dω.
         let mut plane = vec![0.0; n * n];
+        let mut tilt = vec![[0.0; 2]; n * n];
         for j in 0..n {
             for i in 0..n {
                 let (x0, x1, y0, y1) = (edge(i), edge(i + 1), edge(j), edge(j + 1));
-                plane[j * n + i] = g(x1, y1) - g(x0, y1) - g(x1, y0) + g(x0, y0);
+                let square =
+                    |f: &dyn Fn(f64, f64) -> f64| f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0);
+                plane[j * n + i] = square(&g);
+                tilt[j * n + i] = [square(&hx), square(&|x, y| hx(y, x))];
             }
         }
+        // The directions outside the frustum at azimuth φ (from θₑ to π/2) take the border
+        // pixel the radial map sends φ to: their cos θ dω = cos²θₑ/2 dφ, and for the tilt
+        // ∫ sin θ (cos φ, sin φ) sin θ dθ dφ.
         let mut border = vec![0.0; n * n];
         let steps = 4 * n * BORDER_STEPS;
         let dphi = 2.0 * PI / steps as f64;
@@ -160,40 +173,18 @@ impl HemispherePlane {
             let cos2 = m * m / (m * m + s * s);
             let (u, v) = (s * cos / m, s * sin / m);
             let pixel = |c: f64| (((c + s) / (2.0 * s) * n as f64) as usize).min(n - 1);
-            border[pixel(v) * n + pixel(u)] += 0.5 * cos2 * dphi;
+            let at = pixel(v) * n + pixel(u);
+            border[at] += 0.5 * cos2 * dphi;
+            let theta_e = (s / m).atan();
+            let sin2 = 0.25 * PI - 0.5 * theta_e + 0.25 * (2.0 * theta_e).sin();
+            tilt[at][0] += cos * sin2 * dphi;
+            tilt[at][1] += sin * sin2 * dphi;
         }
         // The exact total outside the frustum.
         let outside = PI * (1.0 - coverage(s));
         let sum: f64 = border.iter().sum();
         if sum > 0.0 {
             border.iter_mut().for_each(|w| *w *= outside / sum);
-        }
-        // ∫ ω_x dω over a square of the plane: ∫∫ x dA/(1+x²+y²)².
-        let hx = |x: f64, y: f64| {
-            let a = (1.0 + x * x).sqrt();
-            -(y / a).atan() / (2.0 * a)
-        };
-        let mut tilt = vec![[0.0; 2]; n * n];
-        for j in 0..n {
-            for i in 0..n {
-                let (x0, x1, y0, y1) = (edge(i), edge(i + 1), edge(j), edge(j + 1));
-                let square =
-                    |f: &dyn Fn(f64, f64) -> f64| f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0);
-                tilt[j * n + i] = [square(&hx), square(&|x, y| hx(y, x))];
-            }
-        }
-        // Outside: at azimuth φ from θₑ to π/2, ∫ sin θ (cos φ, sin φ) sin θ dθ dφ.
-        for k in 0..steps {
-            let phi = (k as f64 + 0.5) * dphi;
-            let (sin, cos) = phi.sin_cos();
-            let m = cos.abs().max(sin.abs());
-            let theta_e = (s / m).atan();
-            let sin2 = 0.25 * PI - 0.5 * theta_e + 0.25 * (2.0 * theta_e).sin();
-            let (u, v) = (s * cos / m, s * sin / m);
-            let pixel = |c: f64| (((c + s) / (2.0 * s) * n as f64) as usize).min(n - 1);
-            let t = &mut tilt[pixel(v) * n + pixel(u)];
-            t[0] += cos * sin2 * dphi;
-            t[1] += sin * sin2 * dphi;
         }
         // Walls x = x₀ (and by symmetry y = y₀).
         let mut wall = vec![0.0; n * n.saturating_sub(1)];
