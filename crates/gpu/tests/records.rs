@@ -10,6 +10,7 @@ mod common;
 
 use ircache_gpu::frame::GpuFrame;
 use ircache_gpu::splat::GpuSplatter;
+use ircache_math::rgb::luminance_of;
 use ircache_render::irradiance_cache::gather::{Gatherer, SceneRadiance, WorkState};
 use ircache_render::irradiance_cache::plane::{HemispherePlane, PlaneEstimator};
 use ircache_render::irradiance_cache::points::visible_sites;
@@ -37,7 +38,6 @@ fn rasterised_records_equal_ray_cast_planes() {
     // The gradients' squared differences and the ray-cast ones' squared lengths (luminance):
     // translational, rotational.
     let (mut gradient_error, mut gradient_size) = ([0.0f64; 2], [0.0f64; 2]);
-    let luminance = |g: &[ircache_math::Vec3; 3]| g[0] * 0.2126 + g[1] * 0.7152 + g[2] * 0.0722;
     for (k, (sp, rec)) in points.iter().zip(&records).enumerate() {
         let pixels = plane.sample(&g, &mut st, sp, 0, k as u64);
         let frame = ircache_math::Frame::from_z(sp.n);
@@ -45,7 +45,7 @@ fn rasterised_records_equal_ray_cast_planes() {
         for (kind, (gpu, cpu)) in [(&rec.grad_t, t), (&rec.grad_r, r)].into_iter().enumerate() {
             let cpu =
                 ircache_render::irradiance_cache::hemisphere::to_world(&cpu, frame.s, frame.t);
-            let (a, b) = (luminance(gpu), luminance(&cpu));
+            let (a, b) = (luminance_of(gpu), luminance_of(&cpu));
             gradient_error[kind] += f64::from((a - b).length_squared());
             gradient_size[kind] += f64::from(b.length_squared());
         }

@@ -3,6 +3,17 @@
 
 use std::ops::{Add, AddAssign, Div, DivAssign, Index, Mul, MulAssign, Sub};
 
+use crate::Vec3;
+
+/// Rec. 709 luminance weights of R, G and B (the weights Mitsuba and the reference tools use).
+pub const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
+/// The luminance of a vector given per channel (R, G, B), such as a gradient of each channel.
+#[must_use]
+pub fn luminance_of(channels: &[Vec3; 3]) -> Vec3 {
+    channels[0] * LUMINANCE[0] + channels[1] * LUMINANCE[1] + channels[2] * LUMINANCE[2]
+}
+
 /// A linear RGB triple.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Rgb {
@@ -55,7 +66,7 @@ impl Rgb {
     /// Rec. 709 luminance (the weights Mitsuba and the reference tools use).
     #[must_use]
     pub fn luminance(self) -> f32 {
-        0.2126 * self.r + 0.7152 * self.g + 0.0722 * self.b
+        LUMINANCE[0] * self.r + LUMINANCE[1] * self.g + LUMINANCE[2] * self.b
     }
     /// Largest channel.
     #[must_use]

@@ -15,6 +15,7 @@
 //! the cache's default gather (512 cells) by the same measure.
 
 use anyhow::Result;
+use ircache_math::rgb::luminance_of;
 use ircache_math::Vec3;
 use ircache_render::irradiance_cache::gather::{
     Gatherer, SceneRadiance, ShadingPoint, WorkState, PLANE_HALF_SIZE, PLANE_PIXELS,
@@ -99,14 +100,17 @@ fn scene_table(name: &str, path: &Path) -> Result<()> {
                 let world = |g: &[Vec3; 3]| to_world(g, frame.s, frame.t);
                 let gradients = Gradients::of(
                     [
-                        (luminance(&ra.grad_t) + luminance(&rb.grad_t)) * 0.5,
-                        (luminance(&ra.grad_r) + luminance(&rb.grad_r)) * 0.5,
+                        (luminance_of(&ra.grad_t) + luminance_of(&rb.grad_t)) * 0.5,
+                        (luminance_of(&ra.grad_r) + luminance_of(&rb.grad_r)) * 0.5,
                     ],
-                    [luminance(&gathered.grad_t), luminance(&gathered.grad_r)],
-                    [luminance(&world(&t)), luminance(&world(&r))],
                     [
-                        (luminance(&ra.grad_t) - luminance(&rb.grad_t)) * 0.5,
-                        (luminance(&ra.grad_r) - luminance(&rb.grad_r)) * 0.5,
+                        luminance_of(&gathered.grad_t),
+                        luminance_of(&gathered.grad_r),
+                    ],
+                    [luminance_of(&world(&t)), luminance_of(&world(&r))],
+                    [
+                        (luminance_of(&ra.grad_t) - luminance_of(&rb.grad_t)) * 0.5,
+                        (luminance_of(&ra.grad_r) - luminance_of(&rb.grad_r)) * 0.5,
                     ],
                 );
                 let mut row = [
@@ -220,11 +224,6 @@ impl Gradients {
             own: add(self.own, o.own),
         }
     }
-}
-
-/// The luminance of a gradient per channel.
-fn luminance(g: &[Vec3; 3]) -> Vec3 {
-    g[0] * 0.2126 + g[1] * 0.7152 + g[2] * 0.0722
 }
 
 /// Border compensation with each record computed whole on the GPU (`ircache_gpu::records`:
