@@ -12,6 +12,7 @@ use crate::GpuError;
 use bytemuck::{Pod, Zeroable};
 use ircache_math::{Frame, Rgb, Vec3};
 use ircache_render::irradiance_cache::gather::ShadingPoint;
+use ircache_render::irradiance_cache::hemisphere::to_world;
 use ircache_render::irradiance_cache::plane::{
     HemispherePlane, PlaneEstimator, PlaneMeasure, PlaneSource,
 };
@@ -205,8 +206,11 @@ impl GpuFrame {
             out.extend(values.iter().zip(batch).map(|(v, sp)| {
                 let frame = Frame::from_z(sp.n);
                 let [tx, ty, rx, ry] = v.gradient;
-                let world =
-                    |x: [f32; 4], y: [f32; 4]| [0, 1, 2].map(|c| frame.s * x[c] + frame.t * y[c]);
+                // The shader's (s, t) components per channel, as a local gradient.
+                let world = |x: [f32; 4], y: [f32; 4]| {
+                    let local = [0, 1, 2].map(|c| Vec3::new(x[c], y[c], 0.0));
+                    to_world(&local, frame.s, frame.t)
+                };
                 let e = v.irradiance;
                 PlaneRecord {
                     irradiance: Rgb::new(e[0], e[1], e[2]),
