@@ -106,10 +106,10 @@ pub fn plane_source(
         ircache_gpu::frame::SHADOW_MAP,
     )
     .map_err(|e| anyhow::anyhow!("--record-source gpu-plane: {e}"))?;
-    Ok(Arc::new(ircache_gpu::records::GpuPlaneSource {
+    Ok(Arc::new(ircache_gpu::records::GpuPlaneSource::new(
         frame,
-        plane: HemispherePlane::new(PLANE_PIXELS, PLANE_HALF_SIZE),
-    }))
+        &HemispherePlane::new(PLANE_PIXELS, PLANE_HALF_SIZE),
+    )))
 }
 
 /// The GPU's record planes.

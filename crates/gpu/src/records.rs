@@ -65,43 +65,65 @@ struct GpuOut {
     gradient: [[f32; 4]; 4],
 }
 
+/// A plane's weight tables on the GPU (border-compensated weights, tilt for the rotational
+/// gradient, walls for the translational one), uploaded once and read by every batch.
+#[derive(Debug)]
+pub struct PlaneTables {
+    /// The plane they belong to.
+    pub plane: HemispherePlane,
+    weights: wgpu::Buffer,
+    tilt: wgpu::Buffer,
+    walls: wgpu::Buffer,
+}
+
 impl GpuFrame {
-    /// The records at `points`, each from `plane` rasterised above it and shaded on the GPU, in
-    /// as few passes as the device's largest texture allows.
-    ///
-    /// # Errors
-    /// When the GPU fails.
-    pub fn plane_records(
-        &self,
-        plane: &HemispherePlane,
-        points: &[ShadingPoint],
-    ) -> Result<Vec<PlaneRecord>, GpuError> {
-        let device = &self.gpu.device;
-        let n = plane.pixels as u32;
-        let (columns, rows) = self.visibility.atlas_grid(n, n)?;
+    /// `plane`'s weight tables, uploaded to the GPU.
+    #[must_use]
+    pub fn plane_tables(&self, plane: &HemispherePlane) -> PlaneTables {
+        let storage = wgpu::BufferUsages::STORAGE;
         let weights: Vec<f32> = plane
             .weights(PlaneEstimator::BorderCompensation)
             .iter()
             .map(|&w| w as f32)
             .collect();
-        let storage = wgpu::BufferUsages::STORAGE;
-        let weights = self
-            .gpu
-            .buffer("plane weights", bytemuck::cast_slice(&weights), storage);
         let tilt: Vec<[f32; 2]> = plane
             .tilt_weights()
             .iter()
             .map(|w| w.map(|v| v as f32))
             .collect();
-        let tilt = self
-            .gpu
-            .buffer("plane tilt", bytemuck::cast_slice(&tilt), storage);
         // At least one value: a binding may not be empty.
         let mut walls: Vec<f32> = plane.wall_weights().iter().map(|&w| w as f32).collect();
         walls.push(0.0);
-        let walls = self
-            .gpu
-            .buffer("plane walls", bytemuck::cast_slice(&walls), storage);
+        PlaneTables {
+            plane: plane.clone(),
+            weights: self
+                .gpu
+                .buffer("plane weights", bytemuck::cast_slice(&weights), storage),
+            tilt: self
+                .gpu
+                .buffer("plane tilt", bytemuck::cast_slice(&tilt), storage),
+            walls: self
+                .gpu
+                .buffer("plane walls", bytemuck::cast_slice(&walls), storage),
+        }
+    }
+
+    /// The records at `points`, each from the plane of `tables` rasterised above it and shaded
+    /// on the GPU, in as few passes as the device's largest texture allows.
+    ///
+    /// # Errors
+    /// When the GPU fails.
+    pub fn plane_records(
+        &self,
+        tables: &PlaneTables,
+        points: &[ShadingPoint],
+    ) -> Result<Vec<PlaneRecord>, GpuError> {
+        let device = &self.gpu.device;
+        let plane = &tables.plane;
+        let n = plane.pixels as u32;
+        let (columns, rows) = self.visibility.atlas_grid(n, n)?;
+        let storage = wgpu::BufferUsages::STORAGE;
+        let (weights, tilt, walls) = (&tables.weights, &tables.tilt, &tables.walls);
         let mut out = Vec::with_capacity(points.len());
         for batch in points.chunks((columns * rows) as usize) {
             let count = batch.len() as u32;
@@ -172,12 +194,12 @@ impl GpuFrame {
                     (2, resource(&self.triangles)),
                     (3, resource(&self.shapes)),
                     (4, resource(&planes)),
-                    (5, resource(&weights)),
+                    (5, resource(weights)),
                     (6, resource(&self.light)),
                     (7, wgpu::BindingResource::TextureView(&self.shadow)),
                     (8, resource(&records)),
-                    (9, resource(&tilt)),
-                    (10, resource(&walls)),
+                    (9, resource(tilt)),
+                    (10, resource(walls)),
                 ]
                 .map(|(binding, resource)| wgpu::BindGroupEntry { binding, resource }),
             });
@@ -231,15 +253,24 @@ impl GpuFrame {
 pub struct GpuPlaneSource {
     /// The scene on the GPU.
     pub frame: GpuFrame,
-    /// The plane above each record.
-    pub plane: HemispherePlane,
+    /// The plane above each record, its tables on the GPU.
+    pub tables: PlaneTables,
+}
+
+impl GpuPlaneSource {
+    /// Records from `plane` rasterised in `frame`'s scene.
+    #[must_use]
+    pub fn new(frame: GpuFrame, plane: &HemispherePlane) -> Self {
+        let tables = frame.plane_tables(plane);
+        GpuPlaneSource { frame, tables }
+    }
 }
 
 impl PlaneSource for GpuPlaneSource {
     fn measure(&self, points: &[ShadingPoint]) -> Result<Vec<PlaneMeasure>, String> {
         let records = self
             .frame
-            .plane_records(&self.plane, points)
+            .plane_records(&self.tables, points)
             .map_err(|e| e.to_string())?;
         Ok(records
             .into_iter()

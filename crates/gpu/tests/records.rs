@@ -28,7 +28,9 @@ fn rasterised_records_equal_ray_cast_planes() {
     let frame = GpuFrame::new(gpu, splatter, &scene, &cache, 4096).expect("served");
     let plane = HemispherePlane::new(32, 2.0);
     let points = visible_sites(&scene, 48, 13);
-    let records = frame.plane_records(&plane, &points).expect("computed");
+    let records = frame
+        .plane_records(&frame.plane_tables(&plane), &points)
+        .expect("computed");
     assert_eq!(records.len(), points.len());
     let light = SceneRadiance::path_traced(&scene);
     let g = Gatherer::new(&light, &cache, 5);
@@ -145,10 +147,10 @@ fn the_cache_takes_its_records_from_the_gpus_planes() {
             let splatter = Arc::new(GpuSplatter::new(gpu.clone()));
             let cache = IrradianceCache::new(&scene, &ic.params);
             let frame = GpuFrame::new(gpu.clone(), splatter, &scene, &cache, 4096).expect("served");
-            ic.plane_source = Some(Arc::new(GpuPlaneSource {
+            ic.plane_source = Some(Arc::new(GpuPlaneSource::new(
                 frame,
-                plane: HemispherePlane::new(PLANE_PIXELS, PLANE_HALF_SIZE),
-            }));
+                &HemispherePlane::new(PLANE_PIXELS, PLANE_HALF_SIZE),
+            )));
         }
         let settings = RenderSettings {
             width: 96,

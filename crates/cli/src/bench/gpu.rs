@@ -349,8 +349,10 @@ pub fn run_all(shared: &Path, images: Option<&Path>, case: Option<&str>) -> Resu
         ]
     };
     for (name, path) in walks {
-        super::splat::walkthrough(name, &path, threads, None)?;
-        super::splat::walkthrough(name, &path, threads, Some(splatter.clone()))?;
+        super::splat::walkthrough(name, &path, threads, None, false)?;
+        super::splat::walkthrough(name, &path, threads, Some(splatter.clone()), false)?;
+        // Records by rasterisation too, where the GPU's frame serves the scene (Sponza's sun).
+        super::splat::walkthrough(name, &path, threads, Some(splatter.clone()), true)?;
     }
 
     // A warm-cache frame with the GPU splatting.
@@ -403,7 +405,8 @@ fn plane_records(
         &cache,
         ircache_gpu::frame::SHADOW_MAP,
     )?;
-    let (t, records) = super::splat::best(|| frame.plane_records(plane, points));
+    let tables = frame.plane_tables(plane);
+    let (t, records) = super::splat::best(|| frame.plane_records(&tables, points));
     let records = records?;
     let light = SceneRadiance::path_traced(scene);
     let g = Gatherer::new(&light, &cache, 5);

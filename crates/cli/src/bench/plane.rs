@@ -257,7 +257,7 @@ fn on_the_gpu(
         ircache_gpu::frame::SHADOW_MAP,
     )?;
     let t = Instant::now();
-    let records = frame.plane_records(plane, points)?;
+    let records = frame.plane_records(&frame.plane_tables(plane), points)?;
     let seconds = t.elapsed().as_secs_f64();
     let (mut squared, mut lit) = (0.0f64, 0usize);
     for (r, &reference) in records.iter().zip(references) {

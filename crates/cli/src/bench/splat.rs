@@ -163,12 +163,14 @@ fn frame(
 }
 
 /// Frames per second of the walkthrough on `scene` at 512×512 on `threads` threads, its
-/// records splatted by `splatter` (`None`: the CPU's): while filling, and full.
+/// records splatted by `splatter` (`None`: the CPU's) and, with `gpu_planes`, made by
+/// rasterising their planes on the GPU (`--record-source gpu-plane`): while filling, and full.
 pub(super) fn walkthrough(
     name: &str,
     path: &Path,
     threads: usize,
     splatter: Option<std::sync::Arc<dyn ircache_render::splatting::buffer::Splatter>>,
+    gpu_planes: bool,
 ) -> Result<()> {
     use ircache_render::integrators::RayCounts;
     use ircache_render::splatting::walkthrough::Walkthrough;
@@ -187,6 +189,22 @@ pub(super) fn walkthrough(
     ic.params.direct_samples = ircache_render::splatting::walkthrough::WALKTHROUGH_LIGHT_SAMPLES;
     let on = if splatter.is_some() { "GPU" } else { "CPU" };
     ic.splatter = splatter;
+    if gpu_planes {
+        ic.params
+            .set("record_source", "gpu-plane")
+            .map_err(anyhow::Error::msg)?;
+        if let Err(e) = crate::gpu::attach_plane_source(&mut ic, &scene) {
+            println!(
+                "  walkthrough {name:<12} records rasterised on the GPU: not measured ({e:#})"
+            );
+            return Ok(());
+        }
+    }
+    let made = if gpu_planes {
+        ", records rasterised on the GPU"
+    } else {
+        ""
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()?;
@@ -214,7 +232,7 @@ pub(super) fn walkthrough(
     let png = ircache_image::png::encode(&walk.image(false), 0.0).map_err(anyhow::Error::msg)?;
     let encode = t.elapsed().as_secs_f64();
     println!(
-        "  walkthrough {name:<12} 512×512, {threads} threads, splatting on the {on}: filling {:.1} fps ({filling} frames to {} records), \
+        "  walkthrough {name:<12} 512×512, {threads} threads, splatting on the {on}{made}: filling {:.1} fps ({filling} frames to {} records), \
          full {:.1} fps; PNG encoding {:.1} ms ({} kB) [thesis: 5 and 32 fps]",
         f64::from(filling) / filling_time.max(1e-9),
         walk.cache().levels.first().map_or(0, |s| s.len()),
@@ -232,12 +250,14 @@ pub fn run_all(shared: &Path) -> Result<()> {
         &shared.join("scenes/cornell-box/scene.xml"),
         2,
         None,
+        false,
     )?;
     walkthrough(
         "sponza-sun",
         &shared.join("scenes/sponza-sun/scene.xml"),
         2,
         None,
+        false,
     )?;
     let path = shared.join("scenes/sponza-sun/scene.xml");
     let defines = vec![("max_depth".to_string(), "3".to_string())];
