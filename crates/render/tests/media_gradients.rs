@@ -634,7 +634,7 @@ mod in_scenes {
     ) -> ircache_render::media_cache::gradient::MediaGather {
         let medium = medium_at(scene, x.as_vec3(), Vec3::Z);
         assert_eq!(medium, Some(0), "the receiver is in the fog");
-        let view = SceneMedium::new(scene, medium, true, 1);
+        let view = SceneMedium::new(scene, medium, true, 1).with_gradients(gradients);
         let march = March {
             gradients,
             ..March::default()

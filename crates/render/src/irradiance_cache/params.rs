@@ -832,8 +832,8 @@ pub const PARAMS: &[ParamSpec] = &[
         aliases: &[],
         value: "N",
         help: "in scenes with participating media, light samples per surface hit and per march \
-               step of a record's gather (its single scattering, and the differences of it that \
-               the gradient's source term takes): more cost more, and steady the gradients near \
+               step of a record's gather (its single scattering, whose samples the gradient's \
+               source term differentiates): more cost more, and steady the gradients near \
                lights",
         // Media records are never saved in cache files (refused in media scenes).
         shapes_records: false,

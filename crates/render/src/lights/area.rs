@@ -200,12 +200,13 @@ impl MeshLight {
         (d.dot(s.ns) > 0.0).then(|| (s.p, n, d, self.radiance * (PI * self.area)))
     }
 
-    /// Samples a direction from `p_ref` towards the mesh: `(wi, distance, radiance, solid-angle pdf)`,
+    /// Samples a direction from `p_ref` towards the mesh: `(wi, distance, radiance, solid-angle
+    /// pdf, geometric normal at the point)`,
     /// or `None` when the sampled point does not emit towards `p_ref` (back side) or the density is
     /// degenerate (reference point in the emitter's plane).
     #[inline]
     #[must_use]
-    pub fn sample(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb, f32)> {
+    pub fn sample(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb, f32, Vec3)> {
         if let Some((sph, n)) = self.spherical(p_ref) {
             let d = sph.sample(p_ref, u) - p_ref;
             let dist = d.length();
@@ -213,7 +214,7 @@ impl MeshLight {
             if !is_positive_finite(dist) || n.dot(-wi) <= 0.0 {
                 return None;
             }
-            return Some((wi, dist, self.radiance, 1.0 / sph.solid_angle));
+            return Some((wi, dist, self.radiance, 1.0 / sph.solid_angle, n));
         }
         let sp = self.sample_position(u);
         let d = sp.p - p_ref;
@@ -231,7 +232,7 @@ impl MeshLight {
         if !is_positive_finite(pdf) {
             return None;
         }
-        Some((wi, dist, self.radiance, pdf))
+        Some((wi, dist, self.radiance, pdf, sp.ng))
     }
 
     /// Solid-angle density (without light selection) with which [`MeshLight::sample`] from `p_ref`

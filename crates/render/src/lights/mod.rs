@@ -77,6 +77,10 @@ pub struct LightSample {
     pub is_delta: bool,
     /// Index of the light in the set.
     pub light: u32,
+    /// The emitter's unit geometric normal at the sampled point, on either side; zero for
+    /// point, spot and distant lights (what differentiating the sample with its point held
+    /// needs: `media_cache::scene_medium`).
+    pub normal: Vec3,
 }
 
 /// One emitter.
@@ -299,6 +303,13 @@ impl LightSet {
         self.lights.len()
     }
 
+    /// True when a spot light is among the emitters (an intensity that varies with direction,
+    /// which [`LightSample::normal`] does not describe).
+    #[must_use]
+    pub fn has_spot_lights(&self) -> bool {
+        self.lights.iter().any(|l| matches!(l, Light::Spot(_)))
+    }
+
     /// When the scene's only emitter is a directional light: the unit direction towards it and
     /// its irradiance (the light a rasteriser's shadow map serves).
     #[must_use]
@@ -326,14 +337,16 @@ impl LightSet {
         }
         let (idx, sel) = self.select(p, u_select);
         let light = idx as u32;
-        let area = |(wi, distance, radiance, pdf): (Vec3, f32, Rgb, f32)| LightSample {
-            wi,
-            distance,
-            radiance,
-            pdf: pdf * sel,
-            is_delta: false,
-            light,
-        };
+        let area =
+            |(wi, distance, radiance, pdf, normal): (Vec3, f32, Rgb, f32, Vec3)| LightSample {
+                wi,
+                distance,
+                radiance,
+                pdf: pdf * sel,
+                is_delta: false,
+                light,
+                normal,
+            };
         let delta = |(wi, distance, radiance): (Vec3, f32, Rgb)| LightSample {
             wi,
             distance,
@@ -341,6 +354,7 @@ impl LightSet {
             pdf: sel,
             is_delta: true,
             light,
+            normal: Vec3::ZERO,
         };
         match &self.lights[idx] {
             Light::Mesh(m) => m.sample(p, u).map(area),
@@ -540,6 +554,7 @@ impl LightSet {
             pdf,
             is_delta: false,
             light,
+            normal: Vec3::ZERO,
         })
     }
 

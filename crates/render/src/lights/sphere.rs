@@ -110,10 +110,10 @@ impl SphereLight {
     }
 
     /// Samples a direction from `p_ref` towards the sphere: `(wi, distance, radiance, solid-angle
-    /// pdf)`, or `None` when the sampled point does not emit towards `p_ref`.
+    /// pdf, outward normal at the point)`, or `None` when the sampled point does not emit towards `p_ref`.
     #[inline]
     #[must_use]
-    pub fn sample(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb, f32)> {
+    pub fn sample(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb, f32, Vec3)> {
         let to_c = self.center - p_ref;
         let dc2 = to_c.length_squared();
         let (wi, dist, outward, pdf) = if self.is_outside(dc2) {
@@ -153,7 +153,7 @@ impl SphereLight {
         if self.shading_normal(outward).dot(-wi) <= 0.0 || !is_positive_finite(pdf) {
             return None;
         }
-        Some((wi, dist, self.radiance, pdf))
+        Some((wi, dist, self.radiance, pdf, outward))
     }
 
     /// Solid-angle density (without light selection) with which [`SphereLight::sample`] from

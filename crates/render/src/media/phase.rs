@@ -43,6 +43,20 @@ impl Phase {
         }
     }
 
+    /// The derivative of [`Phase::eval`] with respect to cos θ = `d`·`w`:
+    /// 3g p(θ) / (1 + g² − 2g cos θ) for Henyey–Greenstein.
+    #[inline]
+    #[must_use]
+    pub fn eval_derivative(&self, d: Vec3, w: Vec3) -> f32 {
+        match *self {
+            Phase::Isotropic => 0.0,
+            Phase::HenyeyGreenstein { g } => {
+                let cos_theta = d.dot(w);
+                3.0 * g * henyey_greenstein(g, cos_theta) / (1.0 + g * g - 2.0 * g * cos_theta)
+            }
+        }
+    }
+
     /// A direction drawn with density [`Phase::eval`], and that density.
     #[inline]
     #[must_use]
@@ -146,5 +160,27 @@ mod tests {
             // 39 degrees of freedom: the 99.9 % quantile is about 72.
             assert!(chi2 < 72.0, "{phase:?}: χ² = {chi2}");
         }
+    }
+
+    /// The derivative in cos θ against central differences of the density.
+    #[test]
+    fn derivative_matches_differences() {
+        let d = Vec3::Z;
+        for g in [0.0f32, 0.3, -0.6, 0.85] {
+            let phase = Phase::HenyeyGreenstein { g };
+            for mu in [-0.9f32, -0.2, 0.4, 0.95] {
+                let at = |m: f32| Vec3::new((1.0 - m * m).sqrt(), 0.0, m);
+                let h = 1e-3;
+                let fd = (f64::from(phase.eval(d, at(mu + h)))
+                    - f64::from(phase.eval(d, at(mu - h))))
+                    / (2.0 * f64::from(h));
+                let got = f64::from(phase.eval_derivative(d, at(mu)));
+                assert!(
+                    (got - fd).abs() <= 1e-3 * fd.abs().max(1e-3),
+                    "g {g}, cos {mu}: {got} against {fd}"
+                );
+            }
+        }
+        assert_eq!(Phase::Isotropic.eval_derivative(d, Vec3::X), 0.0);
     }
 }

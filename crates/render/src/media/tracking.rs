@@ -201,13 +201,51 @@ pub fn first_opaque(
 /// null boundaries; zero when an opaque surface is in the way.
 pub fn transmittance_along(
     scene: &Scene,
+    ray: Ray,
+    medium: Option<usize>,
+    rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> Rgb {
+    transmittance_crossing(scene, ray, medium, rng, rays, |_| {})
+}
+
+/// What a shadow ray met, told as it goes.
+#[derive(Clone, Copy, Debug)]
+enum Passage {
+    /// A piece `[0, length]` along `o + t d` in `medium`, `start` from the ray's origin, with
+    /// the geometric normals of the null boundaries it began and ended at, if any.
+    Segment {
+        medium: usize,
+        o: Vec3,
+        d: Vec3,
+        length: f32,
+        start: f32,
+        from_boundary: Option<Vec3>,
+        to_boundary: Option<Vec3>,
+    },
+    /// A null boundary, `t` from the ray's origin, with its geometric normal, the ray's
+    /// direction there and the media before and after.
+    Boundary {
+        t: f32,
+        ng: Vec3,
+        d: Vec3,
+        media: (Option<usize>, Option<usize>),
+    },
+}
+
+/// [`transmittance_along`], telling `visit` of each medium segment and null boundary passed.
+fn transmittance_crossing(
+    scene: &Scene,
     mut ray: Ray,
     mut medium: Option<usize>,
     rng: &mut Rng,
     rays: &mut RayCounts,
+    mut visit: impl FnMut(Passage),
 ) -> Rgb {
     let mut tr = Rgb::ONE;
+    let start = ray.o;
     let end = ray.t_max.is_finite().then(|| ray.at(ray.t_max));
+    let mut from_boundary = None;
     for _ in 0..MAX_CROSSINGS {
         rays.shadow += 1;
         let hit = scene.accel.intersect(&ray);
@@ -217,6 +255,15 @@ pub fn transmittance_along(
             if tr.is_black() {
                 return Rgb::ZERO;
             }
+            visit(Passage::Segment {
+                medium: m,
+                o: ray.o,
+                d: ray.d,
+                length: segment,
+                start: (ray.o - start).length(),
+                from_boundary,
+                to_boundary: hit.as_ref().map(|h| h.ng),
+            });
         }
         let Some(hit) = hit else {
             return tr;
@@ -225,8 +272,16 @@ pub fn transmittance_along(
         if !shape.null {
             return Rgb::ZERO;
         }
+        let before = medium;
         medium = medium_after(shape.media, hit.ng, ray.d, medium);
         let p = ray.at(hit.t);
+        visit(Passage::Boundary {
+            t: (p - start).length(),
+            ng: hit.ng,
+            d: ray.d,
+            media: (before, medium),
+        });
+        from_boundary = Some(hit.ng);
         let o = offset_ray_origin(p, hit.ng.normalize_or(ray.d), ray.d, scene.scale);
         // Aimed from the offset origin at the same end point (as `Scene::shadow_ray`): a ray
         // kept parallel would pass the end at the offset's distance and, after a grazing
@@ -249,4 +304,183 @@ pub fn transmittance_along(
         }
     }
     Rgb::ZERO
+}
+
+/// Strata of a grid piece's depth integrals in [`grid_depth_gradient`], one jittered point each.
+const DEPTH_STRATA: u32 = 2;
+
+/// In heterogeneous `medium` along `o + t d`, t ∈ [0, `length`] (`start` from the shadow ray's
+/// origin, `r` its length): the optical depth inside the medium's box and the pivot integral
+/// ∫ (1 − t/r) ∇σ_t dt, each estimated without bias from [`DEPTH_STRATA`] jittered points
+/// (`rng`; a march fine enough for a dense grid cost twice the render), ∇σ_t by central
+/// differences at a hundredth of a stratum,
+/// plus the jumps of σ_t where the piece enters and leaves the medium: at the box's faces
+/// inside the piece, else at the null boundaries it began or ended on (normals `from_boundary`,
+/// `to_boundary`; [`transmittance_with_depth_gradient`] then counts the grid as empty there).
+#[allow(clippy::too_many_arguments)]
+fn grid_depth_gradient(
+    medium: &Medium,
+    o: Vec3,
+    d: Vec3,
+    length: f32,
+    start: f32,
+    r: f32,
+    from_boundary: Option<Vec3>,
+    to_boundary: Option<Vec3>,
+    rng: &mut Rng,
+) -> (Rgb, [Vec3; 3]) {
+    let mut tau = Rgb::ZERO;
+    let mut g = [Vec3::ZERO; 3];
+    let Some((t0, t1)) = medium.clip(o, d, length) else {
+        return (tau, g);
+    };
+    let lever = |t: f32| {
+        if r.is_finite() {
+            1.0 - (start + t) / r
+        } else {
+            1.0
+        }
+    };
+    let add = |g: &mut [Vec3; 3], v: Vec3, s: Rgb| {
+        g[0] += v * s.r;
+        g[1] += v * s.g;
+        g[2] += v * s.b;
+    };
+    let dt = (t1 - t0) / DEPTH_STRATA as f32;
+    let h = 0.01 * dt;
+    for k in 0..DEPTH_STRATA {
+        let t = t0 + (k as f32 + rng.next_f32()) * dt;
+        let x = o + d * t;
+        tau += medium.at(x).sigma_t * dt;
+        for e in [Vec3::X, Vec3::Y, Vec3::Z] {
+            let ds = (medium.at(x + e * h).sigma_t - medium.at(x - e * h).sigma_t) / (2.0 * h);
+            add(&mut g, e * (lever(t) * dt), ds);
+        }
+    }
+    // The jumps where the piece enters (σ from 0 to σ(t0)) and leaves (σ(t1) to 0) the box:
+    // (σ₂ − σ₁)(1 − t/r) n/(n·d).
+    let face = |x: Vec3| -> Vec3 {
+        let Some((lo, hi)) = medium.bounds else {
+            return Vec3::ZERO;
+        };
+        let (a, b) = ((x - lo).abs(), (x - hi).abs());
+        let axis = (0..3)
+            .min_by(|&i, &j| a[i].min(b[i]).total_cmp(&a[j].min(b[j])))
+            .unwrap_or(0);
+        let mut n = Vec3::ZERO;
+        n[axis] = 1.0;
+        n
+    };
+    let mut jump = |t: f32, n: Vec3, into: bool| {
+        let x = o + d * t;
+        let cos = n.dot(d);
+        if cos == 0.0 {
+            return;
+        }
+        let sigma = medium.at(x).sigma_t;
+        let sign = if into { 1.0 } else { -1.0 };
+        add(&mut g, n * (sign * lever(t) / cos), sigma);
+    };
+    let entry = if t0 > 0.0 {
+        Some(face(o + d * t0))
+    } else {
+        from_boundary
+    };
+    if let Some(n) = entry {
+        jump(t0, n, true);
+    }
+    let exit = if t1 < length {
+        Some(face(o + d * t1))
+    } else {
+        to_boundary
+    };
+    if let Some(n) = exit {
+        jump(t1, n, false);
+    }
+    (tau, g)
+}
+
+/// [`transmittance_along`] and the gradient per channel of the optical depth τ with respect to
+/// the ray's origin, its far end held (the pivot form of NOTES-002 §2.4 with §2.7's interface
+/// terms): ∇τ = −d τ/r + ∫ (1 − t/r) ∇σ_t dt + Σ_b (σ₂ − σ₁)(1 − t_b/r) n_b/(n_b·d) over the
+/// boundaries b crossed from σ₁ to σ₂, the integral zero in homogeneous media and marched in
+/// grids ([`grid_depth_gradient`], which also takes τ there); a ray to infinity (a distant
+/// light) moves with its origin: no first term, and 1 − t/r = 1. The gradient is zero where
+/// the ray is blocked. `depth_rng` places the grids' depth estimates, apart from `rng`'s
+/// transmittance (the two multiply: independent, their product keeps its mean).
+pub fn transmittance_with_depth_gradient(
+    scene: &Scene,
+    ray: Ray,
+    medium: Option<usize>,
+    rng: &mut Rng,
+    depth_rng: &mut Rng,
+    rays: &mut RayCounts,
+) -> (Rgb, [Vec3; 3]) {
+    // σ_t on a boundary's side: a grid counts as empty there (its segment adds its own jumps).
+    let sigma = |m: Option<usize>, p: Vec3| -> Rgb {
+        match m.map(|m| &scene.media[m]) {
+            Some(m) if m.homogeneous => m.at(p).sigma_t,
+            _ => Rgb::ZERO,
+        }
+    };
+    let r = ray.t_max;
+    let (o, d) = (ray.o, ray.d);
+    let lever = |t: f32| if r.is_finite() { 1.0 - t / r } else { 1.0 };
+    let mut tau = Rgb::ZERO;
+    let mut sum = [Vec3::ZERO; 3];
+    let add = |sum: &mut [Vec3; 3], v: Vec3, s: Rgb| {
+        sum[0] += v * s.r;
+        sum[1] += v * s.g;
+        sum[2] += v * s.b;
+    };
+    let tr = transmittance_crossing(scene, ray, medium, rng, rays, |passage| match passage {
+        Passage::Segment {
+            medium,
+            o,
+            d,
+            length,
+            start,
+            from_boundary,
+            to_boundary,
+        } => {
+            let m = &scene.media[medium];
+            if m.homogeneous {
+                tau += m.at(o).sigma_t * length;
+            } else {
+                let (t, g) = grid_depth_gradient(
+                    m,
+                    o,
+                    d,
+                    length,
+                    start,
+                    r,
+                    from_boundary,
+                    to_boundary,
+                    depth_rng,
+                );
+                tau += t;
+                for c in 0..3 {
+                    sum[c] += g[c];
+                }
+            }
+        }
+        Passage::Boundary { t, ng, d, media } => {
+            let p = o + d * t;
+            let cos = ng.dot(d);
+            if cos != 0.0 {
+                add(
+                    &mut sum,
+                    ng * (lever(t) / cos),
+                    sigma(media.1, p) - sigma(media.0, p),
+                );
+            }
+        }
+    });
+    if tr.is_black() {
+        return (tr, [Vec3::ZERO; 3]);
+    }
+    if r.is_finite() {
+        add(&mut sum, -d / r, tau);
+    }
+    (tr, sum)
 }

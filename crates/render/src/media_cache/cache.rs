@@ -104,8 +104,11 @@ pub fn make_record(
     let strata = Stratification::from_divisions(params.media_divisions);
     let frame = Frame::from_z(site.n);
     let origin = offset_ray_origin(site.p, site.ng, site.n, scene.scale);
+    // Ward–Heckbert's walls need no per-cell gradients.
+    let gradients = params.media_gradient != MediaGradient::None;
     let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
-        .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()]);
+        .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()])
+        .with_gradients(gradients);
     let d = |v: Vec3| v.as_dvec3();
     let n = strata.azimuthal;
     let layout = params
@@ -116,9 +119,8 @@ pub fn make_record(
         d(origin),
         [d(frame.s), d(frame.t), d(frame.n)],
         strata,
-        // Ward–Heckbert's walls need no per-cell gradients.
         &March {
-            gradients: params.media_gradient != MediaGradient::None,
+            gradients,
             ..March::default()
         },
         |j, k| layout.jitter(j, k, Rng::keyed(key, &[(j * n + k) as u64]).next_2d()),

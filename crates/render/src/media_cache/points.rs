@@ -111,7 +111,7 @@ fn brute_force(
     let origin = offset_ray_origin(site.p, site.ng, site.n, scene.scale).as_dvec3();
     let n = strata.azimuthal;
     let at = |x| {
-        let view = SceneMedium::new(scene, site.medium, false, light_samples);
+        let view = SceneMedium::new(scene, site.medium, false, light_samples).with_gradients(false);
         let march = March {
             gradients: false,
             ..March::default()

@@ -8,11 +8,19 @@
 //! over, but not between two receivers gathering along the same direction), and transmittance
 //! uses a fixed stream, so that central differences with common random numbers (§3.3) compare
 //! like with like.
+//!
+//! The source's gradient comes from the same light samples in closed form, each sample's point
+//! on the light held and its visibility too (§2.7): the phase function's and the geometry's
+//! derivatives, and the optical depth's by the pivot form through homogeneous media, boundaries
+//! and grids ([`transmittance_with_depth_gradient`]); no extra shadow rays. Spot lights alone
+//! fall back to differences of the whole source.
 
 use super::gradient::{DVec3, GatherMedium};
 use crate::integrators::RayCounts;
+use crate::lights::LightSample;
 use crate::media::tracking::{
-    first_opaque, medium_after, transmittance_along, OpaqueHit, MAX_CROSSINGS,
+    first_opaque, medium_after, transmittance_along, transmittance_with_depth_gradient, OpaqueHit,
+    MAX_CROSSINGS,
 };
 use crate::scene::Scene;
 use ircache_math::{offset_ray_origin, Ray, Rgb, Rng, Vec2, Vec3};
@@ -31,6 +39,16 @@ struct Traced {
     media: Vec<Option<usize>>,
 }
 
+/// A source evaluated at a point towards a direction: its value and, where the light samples
+/// could be differentiated in closed form, its gradient.
+#[derive(Clone, Copy, Debug)]
+struct Source {
+    p: DVec3,
+    w: DVec3,
+    q: [f64; 3],
+    gradient: Option<[DVec3; 3]>,
+}
+
 /// A scene seen by a gather from one receiver.
 pub struct SceneMedium<'a> {
     scene: &'a Scene,
@@ -45,8 +63,11 @@ pub struct SceneMedium<'a> {
     tangents: Option<[DVec3; 2]>,
     /// The light samples' rotation for the last gather direction asked.
     rotation: std::cell::Cell<Option<(DVec3, Vec2, f32)>>,
-    /// The last source evaluated: point, direction, value (the forward differences' base).
-    last_source: RefCell<Option<(DVec3, DVec3, [f64; 3])>>,
+    /// Sources are evaluated with their gradients (off: values alone, their gradients asked for
+    /// computed anew).
+    gradients: bool,
+    /// The last source evaluated: point, direction, value and gradient.
+    last_source: RefCell<Option<Source>>,
     last: RefCell<Option<Traced>>,
     rays: RefCell<RayCounts>,
 }
@@ -93,6 +114,7 @@ impl<'a> SceneMedium<'a> {
             include_emitters,
             light_samples: light_samples.max(1),
             tangents: None,
+            gradients: true,
             rotation: std::cell::Cell::new(None),
             last_source: RefCell::new(None),
             last: RefCell::new(None),
@@ -106,6 +128,14 @@ impl<'a> SceneMedium<'a> {
     #[must_use]
     pub fn with_tangents(mut self, tangents: [DVec3; 2]) -> Self {
         self.tangents = Some(tangents);
+        self
+    }
+
+    /// Evaluates the source's gradient with its value (the default) or not (a gather that asks
+    /// for no per-cell gradients).
+    #[must_use]
+    pub fn with_gradients(mut self, gradients: bool) -> Self {
+        self.gradients = gradients;
         self
     }
 
@@ -142,6 +172,27 @@ impl<'a> SceneMedium<'a> {
         (wrap((i as f32 + select) / n as f32), u)
     }
 
+    /// Calls `f(i, sample)` for each of the light samples of gather direction `w` at `p` that
+    /// can contribute (the stream both [`Self::direct`] and [`Self::scattered_with_gradient`]
+    /// walk, so the two agree sample by sample).
+    fn for_each_light_sample(&self, p: Vec3, w: DVec3, mut f: impl FnMut(u32, LightSample)) {
+        let lights = &self.scene.lights;
+        if lights.is_empty() {
+            return;
+        }
+        for i in 0..self.light_samples {
+            let (u_sel, u) = self.light_sample(w, i);
+            if let Some(ls) = lights.sample(p, u_sel, u).filter(|ls| ls.pdf > 0.0) {
+                f(i, ls);
+            }
+        }
+    }
+
+    /// The transmittance stream of light sample `i` (fixed: common random numbers).
+    fn transmittance_stream(i: u32) -> Rng {
+        Rng::new(0x006d_6564_6961, u64::from(i))
+    }
+
     /// Light arriving at `p` (in `medium`) along the light samples of gather direction `w`, with
     /// transmittance: `f(direction towards the light)` weighs each; the mean over the samples.
     fn direct(
@@ -152,31 +203,20 @@ impl<'a> SceneMedium<'a> {
         medium: Option<usize>,
         f: impl Fn(Vec3) -> Rgb,
     ) -> Rgb {
-        let lights = &self.scene.lights;
-        if lights.is_empty() {
-            return Rgb::ZERO;
-        }
         let mut sum = Rgb::ZERO;
         let mut rays = self.rays.borrow_mut();
-        for i in 0..self.light_samples {
-            let (u_sel, u) = self.light_sample(w, i);
-            let Some(ls) = lights.sample(p, u_sel, u) else {
-                continue;
-            };
-            if ls.pdf <= 0.0 {
-                continue;
-            }
+        self.for_each_light_sample(p, w, |i, ls| {
             let weight = f(ls.wi);
             if weight.is_black() {
-                continue;
+                return;
             }
             let ray = self
                 .scene
                 .shadow_ray_at(p, offset_normal, ls.wi, ls.distance);
-            let mut rng = Rng::new(0x006d_6564_6961, u64::from(i));
+            let mut rng = Self::transmittance_stream(i);
             let tr = transmittance_along(self.scene, ray, medium, &mut rng, &mut rays);
             sum += weight * tr * ls.radiance / ls.pdf;
-        }
+        });
         sum / self.light_samples as f32
     }
 
@@ -294,6 +334,127 @@ impl<'a> SceneMedium<'a> {
         [q.r, q.g, q.b].map(f64::from)
     }
 
+    /// The source q at `p` towards `-w` in `medium` and its spatial gradient (`w` fixed), from
+    /// the same light samples: q = σ_a L_e + σ_s L_s with the coefficients' gradients by
+    /// central differences (no rays) and L_s's in closed form per light sample, its point on the
+    /// light held (NOTES-002 §2.7: "for an area light with its sample points frozen"; visibility
+    /// held). A sample's integrand in area measure, f = L_e p(−ωᵢ·ω) T cos θ_y / r², moves with
+    /// p as ∇ln f = ∇ln p − ∇τ + 2ωᵢ/r + (n_y/cos θ_y + ωᵢ)/r (the last two for points at a
+    /// distance; a distant light's direction is held, leaving −∇τ). `None` for the gradient
+    /// with spot lights, whose falloff is not differentiated here.
+    fn q_with_gradient(&self, medium: Option<usize>, p: DVec3, w: DVec3) -> Source {
+        let mut out = Source {
+            p,
+            w,
+            q: [0.0; 3],
+            gradient: Some([DVec3::ZERO; 3]),
+        };
+        let Some(c) = self.coefficients(medium, p) else {
+            return out;
+        };
+        let m = &self.scene.media[medium.unwrap_or(0)];
+        let emitted = c.sigma_a() * c.emission;
+        let mut q = emitted;
+        let mut gradient = [DVec3::ZERO; 3];
+        let h = self.step(medium, p, 0.0);
+        let rgb = |v: Rgb| [v.r, v.g, v.b].map(f64::from);
+        if !m.homogeneous && !emitted.is_black() {
+            gradient = self.central(h, p, |x| {
+                rgb(self
+                    .coefficients(medium, x)
+                    .map_or(Rgb::ZERO, |c| c.sigma_a() * c.emission))
+            });
+        }
+        if !c.sigma_s.is_black() {
+            if self.scene.lights.has_spot_lights() {
+                out.q = self.q(medium, p, w);
+                out.gradient = None;
+                return out;
+            }
+            let (li, li_gradient) = self.scattered_with_gradient(p, w, medium, m.phase);
+            q += c.sigma_s * li;
+            let sigma_s = rgb(c.sigma_s);
+            let li = rgb(li);
+            let sigma_s_gradient = if m.homogeneous {
+                [DVec3::ZERO; 3]
+            } else {
+                self.central(h, p, |x| {
+                    rgb(self
+                        .coefficients(medium, x)
+                        .map_or(Rgb::ZERO, |c| c.sigma_s))
+                })
+            };
+            for k in 0..3 {
+                gradient[k] += sigma_s_gradient[k] * li[k] + li_gradient[k] * sigma_s[k];
+            }
+        }
+        out.q = rgb(q);
+        out.gradient = Some(gradient);
+        out
+    }
+
+    /// Light single-scattered at `p` towards `-w` per unit σ_s (the phase function times the
+    /// light arriving with transmittance, over the light samples of `w`, as [`Self::direct`])
+    /// and its gradient with each sample's point on the light held (see [`Self::q_with_gradient`];
+    /// the optical depth's gradient from [`transmittance_with_depth_gradient`]).
+    fn scattered_with_gradient(
+        &self,
+        p: DVec3,
+        w: DVec3,
+        medium: Option<usize>,
+        phase: crate::media::Phase,
+    ) -> (Rgb, [DVec3; 3]) {
+        let (mut sum, mut gradient) = (Rgb::ZERO, [DVec3::ZERO; 3]);
+        let x = p.as_vec3();
+        let towards = (-w).as_vec3();
+        let mut rays = self.rays.borrow_mut();
+        self.for_each_light_sample(x, w, |i, ls| {
+            let weight = phase.eval(-ls.wi, towards);
+            if weight <= 0.0 {
+                return;
+            }
+            let ray = self.scene.shadow_ray_at(x, None, ls.wi, ls.distance);
+            let mut rng = Self::transmittance_stream(i);
+            let mut depth_rng = Rng::new(0x0064_6570_7468, u64::from(i));
+            let (tr, depth_gradient) = transmittance_with_depth_gradient(
+                self.scene,
+                ray,
+                medium,
+                &mut rng,
+                &mut depth_rng,
+                &mut rays,
+            );
+            if tr.is_black() {
+                return;
+            }
+            let value = ls.radiance * tr * (weight / ls.pdf);
+            sum += value;
+            // ∇ln of the sample's integrand, less −∇τ (per channel, below).
+            let wi = ls.wi.as_dvec3();
+            let mut log = DVec3::ZERO;
+            let r = f64::from(ls.distance);
+            if r.is_finite() {
+                // ∇(−ωᵢ·ω) = (ω − (ωᵢ·ω) ωᵢ)/r with ω = `towards`.
+                let t = towards.as_dvec3();
+                let d_cos = (t - wi * wi.dot(t)) / r;
+                log += d_cos * f64::from(phase.eval_derivative(-ls.wi, towards) / weight);
+                log += wi * (2.0 / r);
+                let n = ls.normal.as_dvec3();
+                let cos_y = -n.dot(wi);
+                if cos_y != 0.0 {
+                    log += (n / cos_y + wi) / r;
+                }
+            }
+            let depth = depth_gradient.map(|v| v.as_dvec3());
+            let value = [value.r, value.g, value.b].map(f64::from);
+            for c in 0..3 {
+                gradient[c] += (log - depth[c]) * value[c];
+            }
+        });
+        let n = f64::from(self.light_samples);
+        (sum / self.light_samples as f32, gradient.map(|g| g / n))
+    }
+
     /// Central differences of `f` at `p` with step `h`, along the world axes or the
     /// receiver's tangents.
     fn central(&self, h: f64, p: DVec3, f: impl Fn(DVec3) -> [f64; 3]) -> [DVec3; 3] {
@@ -406,29 +567,35 @@ impl GatherMedium for SceneMedium<'_> {
 
     fn source(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3] {
         let medium = self.medium_along(o, w, t);
-        let p = o + w * t;
-        let q = self.q(medium, p, w);
-        *self.last_source.borrow_mut() = Some((p, w, q));
-        q
+        if !self.gradients {
+            return self.q(medium, o + w * t, w);
+        }
+        let source = self.q_with_gradient(medium, o + w * t, w);
+        *self.last_source.borrow_mut() = Some(source);
+        source.q
     }
 
     fn source_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3] {
         let medium = self.medium_along(o, w, t);
         let p = o + w * t;
+        let known = *self.last_source.borrow();
+        let source = match known {
+            Some(s) if s.p == p && s.w == w => s,
+            _ => self.q_with_gradient(medium, p, w),
+        };
+        if let Some(g) = source.gradient {
+            return g;
+        }
+        // Spot lights: differences of the whole source, its light samples drawn anew.
         let h = self.step(medium, p, t);
         let Some(tangents) = self.tangents else {
             return self.central(h, p, |q| self.q(medium, q, w));
-        };
-        let known = *self.last_source.borrow();
-        let base = match known {
-            Some((lp, lw, q)) if lp == p && lw == w => q,
-            _ => self.q(medium, p, w),
         };
         let mut g = [DVec3::ZERO; 3];
         for e in tangents {
             let a = self.q(medium, p + e * h, w);
             for c in 0..3 {
-                g[c] += e * ((a[c] - base[c]) / h);
+                g[c] += e * ((a[c] - source.q[c]) / h);
             }
         }
         g
