@@ -1,6 +1,6 @@
 //! `ircache bench --only media`: participating media (issue 15) by rendering, in the same run.
 //!
-//! On `scenes/cornell-fog` at 128 pixels across: (1) the irradiance cache in the fog (one
+//! On `scenes/cornell-fog` at 128 pixels across (`--case N`: N): (1) the irradiance cache in the fog (one
 //! bounce, `max_depth` 3) at 16 spp — camera rays tracked (stage 1), marched without
 //! volumetric records, 512 gather rays a record, the consistent media gradient, the defaults —
 //! against `volpath` at 16, 64, 256, … spp until it reaches the defaults' error (unblurred and
@@ -27,9 +27,14 @@ fn show(label: &str, p: &Point) {
 }
 
 /// Runs the comparison.
-pub fn run_all(with_mitsuba: bool) -> Result<()> {
+pub fn run_all(with_mitsuba: bool, case: Option<&str>) -> Result<()> {
     let scene_path = own_scenes().join("cornell-fog").join("scene.xml");
-    let size = "128";
+    let size = case.unwrap_or("128");
+    if !size.parse::<u32>().is_ok_and(|s| (8..=4096).contains(&s)) {
+        anyhow::bail!(
+            "bench --only media --case {size}: expected the image's side, 8 to 4096 pixels"
+        );
+    }
     let load = |depth: u32| -> Result<(ircache_scene::SceneDesc, Scene)> {
         let defines = vec![
             ("max_depth".to_string(), depth.to_string()),

@@ -75,7 +75,7 @@ pub struct BenchArgs {
     /// (e.g. "cornell-glossy d5 ic"); cache: only the scenes whose name begins with it
     /// (e.g. "sponza-sun d3"); peers: only the scenes whose name begins with it
     /// ("cornell-glossy"); gpu: splat, views (the camera's view, planes, records from planes), frame or
-    /// walkthrough alone.
+    /// walkthrough alone; media: the fog box's side in pixels (128 unless given).
     #[arg(long)]
     pub case: Option<String>,
 }
@@ -189,7 +189,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         photons::run_all(!args.no_mitsuba)?;
     }
     if args.only == "all" || args.only == "media" {
-        media::run_all(!args.no_mitsuba)?;
+        media::run_all(!args.no_mitsuba, args.case.as_deref())?;
     }
     if args.only == "all" || args.only == "adaptive" {
         adaptive::run_all(&shared, args.case.as_deref())?;
