@@ -764,6 +764,15 @@ fn fog_cornell_gradients_against_finite_differences() {
         desc.shapes
             .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
     }
+    if let Some(albedo) = std::env::var("FOG_ALBEDO")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        desc.media[0].albedo = VolumeDesc::constant(Rgb::splat(albedo));
+    }
+    if let Some(scale) = std::env::var("FOG_SCALE").ok().and_then(|v| v.parse().ok()) {
+        desc.media[0].scale = scale;
+    }
     let scene = Scene::build(&desc).expect("scene");
     let points = [
         (Vec3::new(-0.5, 0.001, 0.5), Vec3::Y),
@@ -783,6 +792,7 @@ fn fog_cornell_gradients_against_finite_differences() {
         let params = IcParams {
             bounces: 1,
             divisions: 20_000,
+            media_divisions: 20_000,
             media_gradient: form,
             media_light_samples: 4,
             ..IcParams::default()
@@ -792,6 +802,12 @@ fn fog_cornell_gradients_against_finite_differences() {
         for seed in 0..8 {
             let c =
                 media_irradiance_at_points(&scene, &params, &points, PointMethod::Cache, 0, seed);
+            if std::env::var("FOG_SEEDS").is_ok() {
+                eprintln!(
+                    "{name} seed {seed}: {:?}",
+                    c.iter().map(|r| r.grad_t[1]).collect::<Vec<_>>()
+                );
+            }
             for (acc, r) in cache.iter_mut().zip(&c) {
                 *acc += r.grad_t[1] / 8.0;
             }
