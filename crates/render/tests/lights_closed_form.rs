@@ -144,6 +144,40 @@ fn rectangular_emitter_irradiance_matches_the_form_factor() {
     }
 }
 
+/// A point a thousandth of the light's size below a rectangle's middle, where it covers all but
+/// 1 % of the hemisphere and is sampled over it (`lights::rectangle`'s `Seen::Nearly`): the four
+/// quarters' form factors, and a bounded sample weight (area sampling's would reach A/h² = 10⁶).
+#[test]
+fn rectangle_just_above_the_receiver() {
+    let (p, f) = receiver();
+    let (w, h) = (1.0f32, 1e-3f32);
+    let corner = p + h * f.n - 0.5 * w * (f.s + f.t);
+    let mesh = rectangle(corner, f.s, f.t, w, w, p);
+    let lights = LightSet::new(
+        &light_scene(
+            vec![emitting_shape(Geometry::Mesh(mesh), Rgb::splat(2.0))],
+            vec![],
+        ),
+        p,
+        5.0,
+    );
+    let mut rng = Rng::new(3, 9);
+    for _ in 0..10_000 {
+        if let Some(ls) = lights.sample(p, rng.next_f32(), rng.next_2d()) {
+            let weight = ls.radiance.g * ls.wi.dot(f.n) / ls.pdf;
+            assert!(
+                weight <= 2.0 * 2.0 * std::f32::consts::PI,
+                "weight {weight}"
+            );
+        }
+    }
+    let est = irradiance(&lights, p, f.n, 2_000_000, 2);
+    let half = f64::from(0.5 * w);
+    let expect = 4.0 * rectangle_irradiance(2.0, half, half, f64::from(h));
+    assert_estimate("rectangle 1×1 at 0.001 over its middle", est, expect);
+    assert_pdf_consistent("rectangle just above", &lights, p, |_| 0);
+}
+
 /// Mitsuba's `lookat` to_world: +z from `origin` towards `target`.
 fn lookat(origin: Vec3, target: Vec3) -> Mat4 {
     let dir = (target - origin).normalize();

@@ -15,10 +15,11 @@
 //! A mesh that is one flat rectangle (Mitsuba's `rectangle` shape) is sampled uniformly by solid
 //! angle instead, where its solid angle allows ([`super::rectangle`]); the density is then `1/Ω`.
 
-use super::rectangle::{Rectangle, SphericalRectangle};
+use super::rectangle::{Rectangle, Seen};
 use super::{is_positive_finite, solid_angle_pdf};
 use ircache_math::sampling::{
-    square_to_cosine_hemisphere, square_to_uniform_triangle, Distribution1D,
+    square_to_cosine_hemisphere, square_to_uniform_hemisphere, square_to_uniform_triangle,
+    Distribution1D,
 };
 use ircache_math::{Frame, Rgb, Vec2, Vec3, PI};
 use ircache_scene::TriangleMesh;
@@ -126,12 +127,12 @@ impl MeshLight {
         })
     }
 
-    /// The spherical rectangle the light subtends at `p_ref` and its emitting normal, where it
-    /// is sampled by solid angle.
+    /// How `p_ref` samples the light when it is one rectangle (with its normal); `None` for
+    /// other meshes (sampled by area).
     #[inline]
-    fn spherical(&self, p_ref: Vec3) -> Option<(SphericalRectangle, Vec3)> {
+    fn seen_from(&self, p_ref: Vec3) -> Option<(Seen, &Rectangle, Vec3)> {
         let (rect, n) = self.rectangle.as_ref()?;
-        Some((rect.spherical(p_ref)?, *n))
+        Some((rect.seen_from(p_ref), rect, *n))
     }
 
     /// True when the light is one flat rectangle (sampled by solid angle where it is near).
@@ -207,14 +208,25 @@ impl MeshLight {
     #[inline]
     #[must_use]
     pub fn sample(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb, f32, Vec3)> {
-        if let Some((sph, n)) = self.spherical(p_ref) {
-            let d = sph.sample(p_ref, u) - p_ref;
-            let dist = d.length();
-            let wi = d / dist;
-            if !is_positive_finite(dist) || n.dot(-wi) <= 0.0 {
-                return None;
+        match self.seen_from(p_ref) {
+            Some((Seen::Spherical(sph), _, n)) => {
+                let d = sph.sample(p_ref, u) - p_ref;
+                let dist = d.length();
+                let wi = d / dist;
+                if !is_positive_finite(dist) || n.dot(-wi) <= 0.0 {
+                    return None;
+                }
+                return Some((wi, dist, self.radiance, 1.0 / sph.solid_angle, n));
             }
-            return Some((wi, dist, self.radiance, 1.0 / sph.solid_angle, n));
+            Some((Seen::Nearly(axis), rect, n)) => {
+                let wi = Frame::from_z(axis).from_local(square_to_uniform_hemisphere(u));
+                let dist = rect.hit(p_ref, wi)?;
+                if n.dot(-wi) <= 0.0 {
+                    return None;
+                }
+                return Some((wi, dist, self.radiance, 0.5 / PI, n));
+            }
+            _ => {}
         }
         let sp = self.sample_position(u);
         let d = sp.p - p_ref;
@@ -240,8 +252,10 @@ impl MeshLight {
     #[inline]
     #[must_use]
     pub fn pdf(&self, prim: u32, p_ref: Vec3, p_light: Vec3, n_fallback: Vec3) -> f32 {
-        if let Some((sph, _)) = self.spherical(p_ref) {
-            return 1.0 / sph.solid_angle;
+        match self.seen_from(p_ref) {
+            Some((Seen::Spherical(sph), _, _)) => return 1.0 / sph.solid_angle,
+            Some((Seen::Nearly(_), _, _)) => return 0.5 / PI,
+            _ => {}
         }
         let ng = self.geometric_normal(prim).unwrap_or(n_fallback);
         let d = p_light - p_ref;

@@ -8,7 +8,11 @@
 //! angle; Mitsuba's `rectangle` shape) without bent vertex normals, and only where the solid
 //! angle lies in `[MIN_SOLID_ANGLE, MAX_SOLID_ANGLE]`: below, the rectangle is small enough that
 //! area sampling is as good and the parametrisation loses precision; above (a point almost on
-//! the light), the angles it is built from do. The density follows the same rule at the same
+//! the light), the angles it is built from do, and there directions are drawn uniformly over
+//! the hemisphere facing the light ([`Seen::Nearly`]: the rectangle covers all but 1 % of it;
+//! directions past its edge carry nothing), where pbrt-v4 samples by area, whose weight
+//! `A cos θ/d²` grows without bound as the point nears the light (a medium's march point a
+//! millimetre below a ceiling lamp weighed 10⁵). The density follows the same rule at the same
 //! point, so sampling and MIS agree. The bounds are pbrt-v4's.
 
 use ircache_math::{Vec2, Vec3, PI};
@@ -52,6 +56,18 @@ pub struct SphericalRectangle {
     k: f32,
     /// The solid angle.
     pub solid_angle: f32,
+}
+
+/// How a reference point samples a rectangle ([`Rectangle::seen_from`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Seen {
+    /// By area: small, or the point in its plane.
+    Area,
+    /// By solid angle.
+    Spherical(SphericalRectangle),
+    /// Uniformly over the hemisphere towards it (unit axis from the point to its plane): it
+    /// subtends more than [`MAX_SOLID_ANGLE`].
+    Nearly(Vec3),
 }
 
 /// The angle between unit vectors, accurate near 0 and π.
@@ -139,6 +155,32 @@ impl Rectangle {
     /// samples by solid angle (`None` otherwise, and for a point in its plane).
     #[must_use]
     pub fn spherical(&self, p: Vec3) -> Option<SphericalRectangle> {
+        match self.seen_from(p) {
+            Seen::Spherical(s) => Some(s),
+            _ => None,
+        }
+    }
+
+    /// How `p` is to sample the rectangle: by area, by solid angle, or over the hemisphere.
+    #[must_use]
+    pub fn seen_from(&self, p: Vec3) -> Seen {
+        self.classify(p).unwrap_or(Seen::Area)
+    }
+
+    /// Where `p + t d` (unit `d`, t > 0) meets the rectangle, if it does: `t`.
+    #[must_use]
+    pub fn hit(&self, p: Vec3, d: Vec3) -> Option<f32> {
+        let n = self.normal();
+        let t = (self.corner - p).dot(n) / d.dot(n);
+        if !(t > 0.0 && t.is_finite()) {
+            return None;
+        }
+        let q = p + d * t - self.corner;
+        let (a, b) = (q.dot(self.ex), q.dot(self.ey));
+        ((0.0..=self.width).contains(&a) && (0.0..=self.height).contains(&b)).then_some(t)
+    }
+
+    fn classify(&self, p: Vec3) -> Option<Seen> {
         // A cheap first guess of the solid angle (the rectangle as a point at its centre): where
         // it is small, area sampling is as good and costs less.
         let to_centre = self.corner + 0.5 * (self.ex * self.width + self.ey * self.height) - p;
@@ -146,7 +188,7 @@ impl Rectangle {
         let guess =
             self.width * self.height * self.normal().dot(to_centre).abs() / (d2 * d2.sqrt());
         if guess.is_nan() || guess < SOLID_ANGLE_FROM {
-            return None;
+            return Some(Seen::Area);
         }
         let d = self.corner - p;
         let mut z = self.normal();
@@ -173,10 +215,13 @@ impl Rectangle {
         let g2 = angle_between(-n2, n3);
         let g3 = angle_between(-n3, n0);
         let solid_angle = g0 + g1 + g2 + g3 - 2.0 * PI;
-        if !(MIN_SOLID_ANGLE..=MAX_SOLID_ANGLE).contains(&solid_angle) {
-            return None;
+        if solid_angle > MAX_SOLID_ANGLE {
+            return Some(Seen::Nearly(-z));
         }
-        Some(SphericalRectangle {
+        if solid_angle < MIN_SOLID_ANGLE {
+            return Some(Seen::Area);
+        }
+        Some(Seen::Spherical(SphericalRectangle {
             x: self.ex,
             y: self.ey,
             z,
@@ -189,7 +234,7 @@ impl Rectangle {
             b1: n2.z,
             k: g2 + g3,
             solid_angle,
-        })
+        }))
     }
 }
 
