@@ -162,6 +162,7 @@ impl Rectangle {
     }
 
     /// How `p` is to sample the rectangle: by area, by solid angle, or over the hemisphere.
+    #[inline]
     #[must_use]
     pub fn seen_from(&self, p: Vec3) -> Seen {
         self.classify(p).unwrap_or(Seen::Area)
@@ -180,6 +181,7 @@ impl Rectangle {
         ((0.0..=self.width).contains(&a) && (0.0..=self.height).contains(&b)).then_some(t)
     }
 
+    #[inline]
     fn classify(&self, p: Vec3) -> Option<Seen> {
         // A cheap first guess of the solid angle (the rectangle as a point at its centre): where
         // it is small, area sampling is as good and costs less.
