@@ -464,10 +464,7 @@ impl PixelSampler<'_> {
         let s = self.s;
         let grid = s.grid;
         let seed = self.dim_seed(dim, 0);
-        let (seed_x, seed_y) = (
-            seed.wrapping_mul(0xa511_e9b3),
-            seed.wrapping_mul(0x63d8_3595),
-        );
+        let (seed_x, seed_y) = sub_stratum_seeds(seed);
         let mut sx = [0u32; BATCH_SAMPLES];
         let mut sy = [0u32; BATCH_SAMPLES];
         for (v, sx) in (0..grid.a).zip(&mut sx) {
@@ -649,8 +646,9 @@ impl PixelSampler<'_> {
                 let seed = self.dim_seed(dim, 0);
                 let p = permute(self.index, s.grid.by_spp, seed);
                 let (p_div_m, p_mod_m) = s.grid.by_a.div_rem(p);
-                let sx = permute(p_mod_m, s.grid.by_a, seed.wrapping_mul(0xa511_e9b3));
-                let sy = permute(p_div_m, s.grid.by_b, seed.wrapping_mul(0x63d8_3595));
+                let (seed_x, seed_y) = sub_stratum_seeds(seed);
+                let sx = permute(p_mod_m, s.grid.by_a, seed_x);
+                let sy = permute(p_div_m, s.grid.by_b, seed_y);
                 multijitter_point(s.grid, (p_mod_m, p_div_m), (sx, sy), self.jitter2(dim))
             }
             SamplerKind::Orthogonal => Vec2::new(self.orthogonal(dim), self.orthogonal(dim + 1)),
@@ -690,6 +688,16 @@ impl PixelSampler<'_> {
     }
 }
 
+/// The seeds of a multi-jittered dimension's column and row shuffles (Kensler's `sx`, `sy`) from
+/// the dimension's seed.
+#[inline]
+fn sub_stratum_seeds(seed: u32) -> (u32, u32) {
+    (
+        seed.wrapping_mul(0xa511_e9b3),
+        seed.wrapping_mul(0x63d8_3595),
+    )
+}
+
 /// Kensler's multi-jittered point (2013, listing 5): stratum (p mod m, p div m), the sub-strata
 /// `(sx, sy)` of the permuted other coordinate, jittered within.
 #[inline]
@@ -720,29 +728,18 @@ fn multijitter_pow2(
     grid: Grid,
     spp: u32,
 ) {
-    let (m, k) = (grid.a, grid.b);
-    let (seed_x, seed_y) = (
-        seed.wrapping_mul(0xa511_e9b3),
-        seed.wrapping_mul(0x63d8_3595),
-    );
-    let (wn, wm, wk) = (spp - 1, m - 1, k - 1);
-    let log2_m = m.trailing_zeros();
-    let (m_f, k_f) = (m as f32, k as f32);
-    let mut xs = [0.0f32; BATCH_SAMPLES];
-    let mut ys = [0.0f32; BATCH_SAMPLES];
-    for (lane, (x, y)) in xs.iter_mut().zip(&mut ys).enumerate() {
+    let (seed_x, seed_y) = sub_stratum_seeds(seed);
+    let (wn, wm, wk) = (spp - 1, grid.a - 1, grid.b - 1);
+    let log2_m = grid.a.trailing_zeros();
+    for (lane, v) in values.iter_mut().enumerate() {
         let index = first.wrapping_add(lane as u32);
         let p = permute_pow2(index & wn, wn, seed);
         let (p_div_m, p_mod_m) = (p >> log2_m, p & wm);
         let sx = permute_pow2(p_mod_m, wm, seed_x);
         let sy = permute_pow2(p_div_m, wk, seed_y);
         let h = hash64(pixel_seed, u64::from(index) << 32 | u64::from(dim));
-        let (jx, jy) = (to_unit(h as u32), to_unit((h >> 32) as u32));
-        *x = ((p_mod_m as f32 + (sy as f32 + jx) / k_f) / m_f).min(ONE_MINUS_EPSILON);
-        *y = ((p_div_m as f32 + (sx as f32 + jy) / m_f) / k_f).min(ONE_MINUS_EPSILON);
-    }
-    for ((v, x), y) in values.iter_mut().zip(xs).zip(ys) {
-        *v = Vec2::new(x, y);
+        let jitter = (to_unit(h as u32), to_unit((h >> 32) as u32));
+        *v = multijitter_point(grid, (p_mod_m, p_div_m), (sx, sy), jitter);
     }
 }
 
