@@ -135,6 +135,22 @@ impl Medium {
         }
     }
 
+    /// The normal (an axis) of the face of the medium's box nearest `p`, where a ray crossing
+    /// the box there enters or leaves it; zero for a medium without a box.
+    #[must_use]
+    pub fn box_face_normal(&self, p: Vec3) -> Vec3 {
+        let Some((lo, hi)) = self.bounds else {
+            return Vec3::ZERO;
+        };
+        let (a, b) = ((p - lo).abs(), (p - hi).abs());
+        let axis = (0..3)
+            .min_by(|&i, &j| a[i].min(b[i]).total_cmp(&a[j].min(b[j])))
+            .unwrap_or(0);
+        let mut n = Vec3::ZERO;
+        n[axis] = 1.0;
+        n
+    }
+
     /// True when the medium emits.
     #[must_use]
     pub fn emits(&self) -> bool {

@@ -306,6 +306,23 @@ fn transmittance_crossing(
     Rgb::ZERO
 }
 
+/// `g[c] += v · s_c` for each channel c.
+fn add_per_channel(g: &mut [Vec3; 3], v: Vec3, s: Rgb) {
+    g[0] += v * s.r;
+    g[1] += v * s.g;
+    g[2] += v * s.b;
+}
+
+/// The pivot form's weight 1 − t/r of a point `t` along a ray of length `r` as its origin moves
+/// with the far end held (1 for a ray to infinity, which moves whole).
+fn lever(t: f32, r: f32) -> f32 {
+    if r.is_finite() {
+        1.0 - t / r
+    } else {
+        1.0
+    }
+}
+
 /// Strata of a grid piece's depth integrals in [`grid_depth_gradient`], one jittered point each.
 const DEPTH_STRATA: u32 = 2;
 
@@ -334,18 +351,6 @@ fn grid_depth_gradient(
     let Some((t0, t1)) = medium.clip(o, d, length) else {
         return (tau, g);
     };
-    let lever = |t: f32| {
-        if r.is_finite() {
-            1.0 - (start + t) / r
-        } else {
-            1.0
-        }
-    };
-    let add = |g: &mut [Vec3; 3], v: Vec3, s: Rgb| {
-        g[0] += v * s.r;
-        g[1] += v * s.g;
-        g[2] += v * s.b;
-    };
     let dt = (t1 - t0) / DEPTH_STRATA as f32;
     let h = 0.01 * dt;
     for k in 0..DEPTH_STRATA {
@@ -354,23 +359,11 @@ fn grid_depth_gradient(
         tau += medium.at(x).sigma_t * dt;
         for e in [Vec3::X, Vec3::Y, Vec3::Z] {
             let ds = (medium.at(x + e * h).sigma_t - medium.at(x - e * h).sigma_t) / (2.0 * h);
-            add(&mut g, e * (lever(t) * dt), ds);
+            add_per_channel(&mut g, e * (lever(start + t, r) * dt), ds);
         }
     }
     // The jumps where the piece enters (σ from 0 to σ(t0)) and leaves (σ(t1) to 0) the box:
     // (σ₂ − σ₁)(1 − t/r) n/(n·d).
-    let face = |x: Vec3| -> Vec3 {
-        let Some((lo, hi)) = medium.bounds else {
-            return Vec3::ZERO;
-        };
-        let (a, b) = ((x - lo).abs(), (x - hi).abs());
-        let axis = (0..3)
-            .min_by(|&i, &j| a[i].min(b[i]).total_cmp(&a[j].min(b[j])))
-            .unwrap_or(0);
-        let mut n = Vec3::ZERO;
-        n[axis] = 1.0;
-        n
-    };
     let mut jump = |t: f32, n: Vec3, into: bool| {
         let x = o + d * t;
         let cos = n.dot(d);
@@ -379,10 +372,10 @@ fn grid_depth_gradient(
         }
         let sigma = medium.at(x).sigma_t;
         let sign = if into { 1.0 } else { -1.0 };
-        add(&mut g, n * (sign * lever(t) / cos), sigma);
+        add_per_channel(&mut g, n * (sign * lever(start + t, r) / cos), sigma);
     };
     let entry = if t0 > 0.0 {
-        Some(face(o + d * t0))
+        Some(medium.box_face_normal(o + d * t0))
     } else {
         from_boundary
     };
@@ -390,7 +383,7 @@ fn grid_depth_gradient(
         jump(t0, n, true);
     }
     let exit = if t1 < length {
-        Some(face(o + d * t1))
+        Some(medium.box_face_normal(o + d * t1))
     } else {
         to_boundary
     };
@@ -425,14 +418,8 @@ pub fn transmittance_with_depth_gradient(
     };
     let r = ray.t_max;
     let (o, d) = (ray.o, ray.d);
-    let lever = |t: f32| if r.is_finite() { 1.0 - t / r } else { 1.0 };
     let mut tau = Rgb::ZERO;
     let mut sum = [Vec3::ZERO; 3];
-    let add = |sum: &mut [Vec3; 3], v: Vec3, s: Rgb| {
-        sum[0] += v * s.r;
-        sum[1] += v * s.g;
-        sum[2] += v * s.b;
-    };
     let tr = transmittance_crossing(scene, ray, medium, rng, rays, |passage| match passage {
         Passage::Segment {
             medium,
@@ -468,9 +455,9 @@ pub fn transmittance_with_depth_gradient(
             let p = o + d * t;
             let cos = ng.dot(d);
             if cos != 0.0 {
-                add(
+                add_per_channel(
                     &mut sum,
-                    ng * (lever(t) / cos),
+                    ng * (lever(t, r) / cos),
                     sigma(media.1, p) - sigma(media.0, p),
                 );
             }
@@ -480,7 +467,7 @@ pub fn transmittance_with_depth_gradient(
         return (tr, [Vec3::ZERO; 3]);
     }
     if r.is_finite() {
-        add(&mut sum, -d / r, tau);
+        add_per_channel(&mut sum, -d / r, tau);
     }
     (tr, sum)
 }

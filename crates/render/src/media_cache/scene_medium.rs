@@ -506,9 +506,9 @@ impl GatherMedium for SceneMedium<'_> {
             let Some(m) = m.map(|m| &self.scene.media[m]) else {
                 continue;
             };
-            let Some((lo, hi)) = m.bounds else {
+            if m.bounds.is_none() {
                 continue;
-            };
+            }
             let t0 = if i == 0 {
                 0.0
             } else {
@@ -524,19 +524,9 @@ impl GatherMedium for SceneMedium<'_> {
             };
             for (t, inside) in [(f64::from(a), true), (f64::from(b), false)] {
                 let t = t0 + t;
-                let on_face = |p: DVec3| {
-                    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
-                    let d = [(p - lo).abs(), (p - hi).abs()];
-                    let axis = (0..3)
-                        .min_by(|&x, &y| d[0][x].min(d[1][x]).total_cmp(&d[0][y].min(d[1][y])))
-                        .unwrap_or(0);
-                    let mut n = DVec3::ZERO;
-                    n[axis] = 1.0;
-                    n
-                };
                 let is_end = (inside && t <= t0) || (!inside && t >= t1);
                 if !is_end {
-                    out.push((t, on_face(o + w * t)));
+                    out.push((t, m.box_face_normal((o + w * t).as_vec3()).as_dvec3()));
                 }
             }
         }
