@@ -66,6 +66,8 @@ pub struct SceneMedium<'a> {
     /// Sources are evaluated with their gradients (off: values alone, their gradients asked for
     /// computed anew).
     gradients: bool,
+    /// The scene has spot lights, whose falloff the closed-form source gradient leaves out.
+    spot_lights: bool,
     /// The last source evaluated: point, direction, value and gradient.
     last_source: RefCell<Option<Source>>,
     last: RefCell<Option<Traced>>,
@@ -115,6 +117,7 @@ impl<'a> SceneMedium<'a> {
             light_samples: light_samples.max(1),
             tangents: None,
             gradients: true,
+            spot_lights: scene.lights.has_spot_lights(),
             rotation: std::cell::Cell::new(None),
             last_source: RefCell::new(None),
             last: RefCell::new(None),
@@ -352,6 +355,11 @@ impl<'a> SceneMedium<'a> {
         let Some(c) = self.coefficients(medium, p) else {
             return out;
         };
+        if self.spot_lights && !c.sigma_s.is_black() {
+            out.q = self.q(medium, p, w);
+            out.gradient = None;
+            return out;
+        }
         let m = &self.scene.media[medium.unwrap_or(0)];
         let emitted = c.sigma_a() * c.emission;
         let mut q = emitted;
@@ -366,11 +374,6 @@ impl<'a> SceneMedium<'a> {
             });
         }
         if !c.sigma_s.is_black() {
-            if self.scene.lights.has_spot_lights() {
-                out.q = self.q(medium, p, w);
-                out.gradient = None;
-                return out;
-            }
             let (li, li_gradient) = self.scattered_with_gradient(p, w, medium, m.phase);
             q += c.sigma_s * li;
             let sigma_s = rgb(c.sigma_s);
