@@ -152,9 +152,11 @@ impl Rectangle {
     }
 
     /// The rectangle seen from `p` when its solid angle there is within the bounds this module
-    /// samples by solid angle (`None` otherwise, and for a point in its plane).
+    /// samples by solid angle (`None` otherwise, and for a point in its plane); the tests'
+    /// view of [`Rectangle::seen_from`].
+    #[cfg(test)]
     #[must_use]
-    pub fn spherical(&self, p: Vec3) -> Option<SphericalRectangle> {
+    fn spherical(&self, p: Vec3) -> Option<SphericalRectangle> {
         match self.seen_from(p) {
             Seen::Spherical(s) => Some(s),
             _ => None,
