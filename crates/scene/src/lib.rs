@@ -34,7 +34,22 @@ pub fn load_scene(
         .as_deref()
     {
         Some("xml") => mitsuba::load(path, defines),
-        Some("obj") => obj_scene::load(path, obj_camera),
+        Some("obj") => match defines.first() {
+            // An OBJ file has no parameters: a -D would be dropped without a word.
+            Some((name, value)) => Err(SceneError::at(
+                error::SourceLocation {
+                    file: std::sync::Arc::new(path.to_path_buf()),
+                    line: 1,
+                    column: 1,
+                },
+                format!(
+                    "-D {name}={value}: an OBJ scene has no parameters (-D sets a Mitsuba XML \
+                     scene's $parameters; for OBJ use --width, --height, --spp, --max-depth, --eye, \
+                     --target, --fov)"
+                ),
+            )),
+            None => obj_scene::load(path, obj_camera),
+        },
         _ => Err(SceneError::UnknownFormat {
             path: path.to_path_buf(),
         }),

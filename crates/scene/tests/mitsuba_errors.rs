@@ -139,6 +139,53 @@ fn undefined_variable() {
     assert_eq!(radius(&[("r".into(), "3".into())]), 3.0);
 }
 
+/// A `-D` value the scene never uses is an error naming it and the scene's parameters (as
+/// Mitsuba 3 refuses unused parameters), in XML, in a file it includes, and for OBJ models,
+/// which have none; a used one, in the scene or in an included file, is taken.
+#[test]
+fn unused_defines_are_errors() {
+    let dir = scratch("unused-define");
+    write(
+        &dir,
+        "part.xml",
+        "<scene version=\"3.0.0\">\n  <shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/></shape>\n</scene>\n",
+    );
+    let body = "  <default name=\"r\" value=\"2\"/>\n  <default name=\"spp\" value=\"4\"/>\n  <include filename=\"part.xml\"/>";
+    let path = write(&dir, "scene.xml", &scene(body));
+    let d = |pairs: &[(&str, &str)]| -> Vec<(String, String)> {
+        pairs
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect()
+    };
+    // $r is used inside the included file.
+    assert!(mitsuba::load(&path, &d(&[("r", "3")])).is_ok());
+    let err = mitsuba::load(&path, &d(&[("r", "3"), ("max_detph", "7")]))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("-D max_detph=7") && err.contains("$r") && err.contains("$spp"),
+        "{err}"
+    );
+    assert!(!err.contains("-D r=3"), "{err}");
+    // Declared by a <default> but named by no attribute: unused too (Mitsuba's rule).
+    let err = mitsuba::load(&path, &d(&[("spp", "16")]))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("-D spp=16"), "{err}");
+    // OBJ models take no -D at all.
+    let obj = write(&dir, "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let camera = ircache_scene::obj_scene::ObjCamera::default();
+    assert!(ircache_scene::load_scene(&obj, &[], &camera).is_ok());
+    let err = ircache_scene::load_scene(&obj, &d(&[("resx", "16")]), &camera)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("m.obj:1:1") && err.contains("-D resx=16"),
+        "{err}"
+    );
+}
+
 #[test]
 fn missing_mesh_file() {
     let body = "  <shape type=\"obj\">\n    <string name=\"filename\" value=\"meshes/nope.obj\"/>\n  </shape>";

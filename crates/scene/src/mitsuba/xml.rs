@@ -113,6 +113,7 @@ impl Source<'_> {
 pub(crate) fn read_scene(path: &Path, defines: &[(String, String)]) -> Result<Element, SceneError> {
     let mut reader = Reader {
         params: defines.to_vec(),
+        used: vec![false; defines.len()],
         stack: Vec::new(),
     };
     let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
@@ -163,6 +164,7 @@ pub(crate) fn read_scene(path: &Path, defines: &[(String, String)]) -> Result<El
     }
     let mut children = Vec::new();
     reader.convert_children(&src, root, &mut children)?;
+    reader.check_all_used(root_loc.clone())?;
     Ok(Element {
         tag: "scene".into(),
         attrs,
@@ -324,13 +326,15 @@ fn upgrade_name(name: &str) -> String {
 struct Reader {
     /// Substitution parameters: `-D` values first, then `<default>`s in document order.
     params: Vec<(String, String)>,
+    /// Per `-D` value (the first entries of `params`): whether some attribute used it.
+    used: Vec<bool>,
     /// Canonical paths of the files being read, outermost first (include-cycle detection).
     stack: Vec<PathBuf>,
 }
 
 impl Reader {
     fn substitute(
-        &self,
+        &mut self,
         src: &Source<'_>,
         attr: &roxmltree::Attribute<'_, '_>,
     ) -> Result<String, SceneError> {
@@ -338,11 +342,19 @@ impl Reader {
         if !value.contains('$') {
             return Ok(value.to_string());
         }
-        let mut params: Vec<&(String, String)> = self.params.iter().collect();
-        params.sort_by_key(|p| std::cmp::Reverse(p.0.len()));
+        // Longest names first, so that $resx is not read as $res followed by "x".
+        let mut order: Vec<usize> = (0..self.params.len()).collect();
+        order.sort_by_key(|&i| std::cmp::Reverse(self.params[i].0.len()));
         let mut out = value.to_string();
-        for (k, v) in params {
-            out = out.replace(&format!("${k}"), v);
+        for i in order {
+            let (k, v) = &self.params[i];
+            let pattern = format!("${k}");
+            if out.contains(&pattern) {
+                out = out.replace(&pattern, v);
+                if let Some(used) = self.used.get_mut(i) {
+                    *used = true;
+                }
+            }
         }
         if let Some(i) = out.find('$') {
             let name: String = out[i + 1..]
@@ -372,6 +384,51 @@ impl Reader {
             return Err(SceneError::at(src.loc(byte), message));
         }
         Ok(out)
+    }
+
+    /// Every `-D` value must have been used, as Mitsuba 3 requires: a parameter the scene never
+    /// names (a misspelt `-D max_detph=7`) is an error, not a value silently dropped.
+    fn check_all_used(&self, root: SourceLocation) -> Result<(), SceneError> {
+        let unused: Vec<String> = self
+            .params
+            .iter()
+            .zip(&self.used)
+            .filter(|(_, used)| !**used)
+            .map(|((k, v), _)| format!("-D {k}={v}"))
+            .collect();
+        if unused.is_empty() {
+            return Ok(());
+        }
+        let mut known: Vec<&str> = self.params[self.used.len()..]
+            .iter()
+            .map(|(k, _)| k.as_str())
+            .chain(
+                self.params
+                    .iter()
+                    .zip(&self.used)
+                    .filter(|(_, used)| **used)
+                    .map(|((k, _), _)| k.as_str()),
+            )
+            .collect();
+        known.sort_unstable();
+        known.dedup();
+        Err(SceneError::at(
+            root,
+            format!(
+                "{}: the scene names no such parameter (its parameters: {}; the command line's \
+                 --width, --height, --spp, --max-depth, --sampler set any scene's)",
+                unused.join(", "),
+                if known.is_empty() {
+                    "none".to_string()
+                } else {
+                    known
+                        .iter()
+                        .map(|k| format!("${k}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                }
+            ),
+        ))
     }
 
     fn convert_children(
