@@ -219,7 +219,10 @@ fn load_builtin(defines: &[(String, String)]) -> Result<SceneDesc> {
         .with_context(|| format!("writing {}", path.display()))?;
     let result = ircache_scene::mitsuba::load(&path, defines);
     let _ = std::fs::remove_dir_all(&dir);
-    Ok(result?)
+    let mut desc = result?;
+    // Named as what it is, not by the temporary file it was read from.
+    desc.source = PathBuf::from("built-in Cornell box");
+    Ok(desc)
 }
 
 pub fn default_output(args: &RenderArgs) -> PathBuf {
