@@ -275,15 +275,19 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
             .count()
     };
     let raw_occluded = |rs: &[Ray]| rs.iter().filter(|r| scene.accel.occluded(r)).count();
-    let packets = |rs: &[Ray]| {
-        let mut hits = [None; 16];
-        let mut n = 0;
-        for p in rs.chunks(16) {
-            scene.accel.intersect16(p, &mut hits[..p.len()]);
-            n += hits[..p.len()].iter().filter(|h| h.is_some()).count();
+    let accel = &scene.accel;
+    let packets_with = |coherence: ircache_embree::Coherence| {
+        move |rs: &[Ray]| {
+            let mut hits = [None; 16];
+            let mut n = 0;
+            for p in rs.chunks(16) {
+                accel.intersect16_with(p, &mut hits[..p.len()], coherence);
+                n += hits[..p.len()].iter().filter(|h| h.is_some()).count();
+            }
+            n
         }
-        n
     };
+    let packets = packets_with(ircache_embree::Coherence::Coherent);
     row("camera rays, Embree rtcIntersect1", &raw_intersect, &camera)?;
     row(
         "camera rays, Embree rtcIntersect16 packets",
@@ -298,6 +302,13 @@ fn rays(shared: &Path, args: &BenchArgs) -> Result<()> {
     row(
         "hemisphere rays, Embree rtcIntersect16 packets",
         &packets,
+        &hemisphere,
+    )?;
+    // Embree told the packet is incoherent (it then traces its rays one by one, in one call).
+    let incoherent = packets_with(ircache_embree::Coherence::Incoherent);
+    row(
+        "hemisphere rays, rtcIntersect16, incoherent",
+        &incoherent,
         &hemisphere,
     )?;
     row("shadow rays, Embree rtcOccluded1", &raw_occluded, &shadow)?;
