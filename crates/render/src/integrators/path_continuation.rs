@@ -226,7 +226,9 @@ pub fn trace_path_deferring(
             Some(h) => h,
             None => scene.intersect(&ray),
         };
-        let Some(it) = hit else {
+        // Borrowed, not moved out: a copy of the whole interaction right after `intersect`
+        // wrote it field by field stalled on store forwarding (a tenth of this loop's time).
+        let Some(it) = &hit else {
             if scene.lights.has_environment() && !caustic_chain {
                 let w = arrival.emission_weight(|p| scene.lights.pdf_environment(p, ray.d));
                 if w > 0.0 {
@@ -265,7 +267,7 @@ pub fn trace_path_deferring(
             let k = bsdf.lambertian_albedo(wo_local);
             let indirect = depth + 2 < max_depth;
             let sp = indirect.then(|| {
-                let mut sp = ShadingPoint::facing(it, wo);
+                let mut sp = ShadingPoint::facing(*it, wo);
                 sp.travelled = if from_camera { travelled } else { 0.0 };
                 sp
             });
@@ -312,7 +314,7 @@ pub fn trace_path_deferring(
         l += beta
             * sample_lights(
                 scene,
-                &it,
+                it,
                 &bsdf,
                 wo_local,
                 ne,
@@ -328,7 +330,7 @@ pub fn trace_path_deferring(
         }
 
         // The BSDF sample that continues the path.
-        let Some((bs, wi)) = sample_continuation(&it, &bsdf, wo_local, strategy, depth, sampler)
+        let Some((bs, wi)) = sample_continuation(it, &bsdf, wo_local, strategy, depth, sampler)
         else {
             break;
         };
@@ -341,7 +343,7 @@ pub fn trace_path_deferring(
             delta: bs.delta,
             light_samples: ne,
         };
-        ray = scene.spawn_ray(&it, wi);
+        ray = scene.spawn_ray(it, wi);
         rays.bounce += 1;
         if !count_and_roulette(&mut depth, &mut beta, eta, settings.rr_depth, sampler) {
             break;
@@ -352,7 +354,9 @@ pub fn trace_path_deferring(
 
 /// The sample of `strategy`'s part of the BSDF that continues a path at vertex `depth` (its
 /// dimensions of the sampler), with its world direction; `None` where there is none or where
-/// the geometric and shading hemispheres disagree (light leaks).
+/// the geometric and shading hemispheres disagree (light leaks). Inlined: its sample returned
+/// through memory stalled the caller on store forwarding.
+#[inline(always)]
 pub(crate) fn sample_continuation(
     it: &Interaction,
     bsdf: &crate::bsdf::Bsdf,

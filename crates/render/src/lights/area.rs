@@ -164,17 +164,24 @@ impl MeshLight {
 
     /// A point uniformly distributed by area over the mesh (density `1 / area()`): on a
     /// rectangle directly, else a triangle chosen by area and a point in it.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn sample_position(&self, u: Vec2) -> SurfacePoint {
-        if let Some((rect, n)) = &self.rectangle {
+        // The rectangle's few operations inline, so that the point stays in registers (returned
+        // through memory it stalled its caller on store forwarding); triangles apart.
+        match &self.rectangle {
             // Its triangles are wound alike and its vertex normals (if any) lie along n.
-            return SurfacePoint {
+            Some((rect, n)) => SurfacePoint {
                 p: rect.point(u),
                 ng: *n,
                 ns: *n,
-            };
+            },
+            None => self.sample_triangle_position(u),
         }
+    }
+
+    /// [`Self::sample_position`] on a mesh of triangles: one chosen by area, a point in it.
+    fn sample_triangle_position(&self, u: Vec2) -> SurfacePoint {
         let (tri, _, ux) = self.tri_dist.sample(u.x);
         let b = square_to_uniform_triangle(Vec2::new(ux, u.y));
         let [i0, i1, i2] = self.indices[tri].map(|i| i as usize);
