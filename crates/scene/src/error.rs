@@ -15,6 +15,18 @@ pub struct SourceLocation {
     pub column: u32,
 }
 
+impl SourceLocation {
+    /// The start of file `path` (for what concerns the file as a whole).
+    #[must_use]
+    pub fn start_of(path: &std::path::Path) -> SourceLocation {
+        SourceLocation {
+            file: Arc::new(path.to_path_buf()),
+            line: 1,
+            column: 1,
+        }
+    }
+}
+
 impl fmt::Display for SourceLocation {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}:{}:{}", self.file.display(), self.line, self.column)

@@ -37,11 +37,7 @@ pub fn load_scene(
         Some("obj") => match defines.first() {
             // An OBJ file has no parameters: a -D would be dropped without a word.
             Some((name, value)) => Err(SceneError::at(
-                error::SourceLocation {
-                    file: std::sync::Arc::new(path.to_path_buf()),
-                    line: 1,
-                    column: 1,
-                },
+                SourceLocation::start_of(path),
                 format!(
                     "-D {name}={value}: an OBJ scene has no parameters (-D sets a Mitsuba XML \
                      scene's $parameters; for OBJ use --width, --height, --spp, --max-depth, --eye, \

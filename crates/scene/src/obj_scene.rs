@@ -118,11 +118,7 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
     }
     if shapes.is_empty() {
         return Err(SceneError::at(
-            SourceLocation {
-                file: Arc::new(path.to_path_buf()),
-                line: 1,
-                column: 1,
-            },
+            SourceLocation::start_of(path),
             "the OBJ file has no faces",
         ));
     }

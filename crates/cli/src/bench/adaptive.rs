@@ -157,22 +157,14 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
             println!("  {file}: not found, skipped");
             continue;
         }
-        // An OBJ model has no $parameters: its depth is set on the description.
-        let obj = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("obj"));
         let mut defines = Vec::new();
-        if !obj {
-            defines.push(("max_depth".to_string(), depth.to_string()));
-        }
         if file.starts_with("bitterli") {
             // Its default integrator is Tungsten's path guider.
             defines.push(("integrator".into(), "path".into()));
         }
         let mut desc = ircache_scene::load_scene(&path, &defines, &ObjCamera::default())?;
-        if obj {
-            desc.integrator.max_depth = depth as i32;
-        }
+        // On the description, as `--max-depth` sets it: OBJ models have no $max_depth.
+        desc.integrator.max_depth = depth as i32;
         let scene = Scene::build(&desc)?;
         let reference = match mitsuba {
             Some(r) => ircache_image::read_image(&shared.join(format!("references/{r}.exr")))

@@ -215,25 +215,28 @@ impl MeshLight {
     #[inline]
     #[must_use]
     pub fn sample(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb, f32, Vec3)> {
-        match self.seen_from(p_ref) {
-            Some((Seen::Spherical(sph), _, n)) => {
-                let d = sph.sample(p_ref, u) - p_ref;
-                let dist = d.length();
-                let wi = d / dist;
-                if !is_positive_finite(dist) || n.dot(-wi) <= 0.0 {
-                    return None;
+        if let Some((seen, rect, n)) = self.seen_from(p_ref) {
+            let pdf = seen.solid_angle_pdf();
+            match seen {
+                Seen::Spherical(sph) => {
+                    let d = sph.sample(p_ref, u) - p_ref;
+                    let dist = d.length();
+                    let wi = d / dist;
+                    if !is_positive_finite(dist) || n.dot(-wi) <= 0.0 {
+                        return None;
+                    }
+                    return Some((wi, dist, self.radiance, pdf?, n));
                 }
-                return Some((wi, dist, self.radiance, 1.0 / sph.solid_angle, n));
-            }
-            Some((Seen::Nearly(axis), rect, n)) => {
-                let wi = Frame::from_z(axis).from_local(square_to_uniform_hemisphere(u));
-                let dist = rect.hit(p_ref, wi)?;
-                if n.dot(-wi) <= 0.0 {
-                    return None;
+                Seen::Nearly(axis) => {
+                    let wi = Frame::from_z(axis).from_local(square_to_uniform_hemisphere(u));
+                    let dist = rect.hit(p_ref, wi)?;
+                    if n.dot(-wi) <= 0.0 {
+                        return None;
+                    }
+                    return Some((wi, dist, self.radiance, pdf?, n));
                 }
-                return Some((wi, dist, self.radiance, 0.5 / PI, n));
+                Seen::Area => {}
             }
-            _ => {}
         }
         let sp = self.sample_position(u);
         let d = sp.p - p_ref;
@@ -259,10 +262,11 @@ impl MeshLight {
     #[inline]
     #[must_use]
     pub fn pdf(&self, prim: u32, p_ref: Vec3, p_light: Vec3, n_fallback: Vec3) -> f32 {
-        match self.seen_from(p_ref) {
-            Some((Seen::Spherical(sph), _, _)) => return 1.0 / sph.solid_angle,
-            Some((Seen::Nearly(_), _, _)) => return 0.5 / PI,
-            _ => {}
+        if let Some(pdf) = self
+            .seen_from(p_ref)
+            .and_then(|(seen, _, _)| seen.solid_angle_pdf())
+        {
+            return pdf;
         }
         let ng = self.geometric_normal(prim).unwrap_or(n_fallback);
         let d = p_light - p_ref;

@@ -70,6 +70,20 @@ pub enum Seen {
     Nearly(Vec3),
 }
 
+impl Seen {
+    /// The solid-angle density of the directions this way of sampling draws, where it draws
+    /// directions (by area it draws points: `None`).
+    #[inline]
+    #[must_use]
+    pub fn solid_angle_pdf(&self) -> Option<f32> {
+        match self {
+            Seen::Area => None,
+            Seen::Spherical(sph) => Some(1.0 / sph.solid_angle),
+            Seen::Nearly(_) => Some(0.5 / PI),
+        }
+    }
+}
+
 /// The angle between unit vectors, accurate near 0 and π.
 #[inline]
 fn angle_between(a: Vec3, b: Vec3) -> f32 {

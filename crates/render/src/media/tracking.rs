@@ -313,6 +313,15 @@ fn add_per_channel(g: &mut [Vec3; 3], v: Vec3, s: Rgb) {
     g[2] += v * s.b;
 }
 
+/// An interface's term of the optical depth's gradient, `jump · weight · n/(n·d)` (the jump
+/// σ₂ − σ₁ in σ_t, the pivot weight at the interface), added to `g`; none for a ray along it.
+fn add_interface(g: &mut [Vec3; 3], n: Vec3, d: Vec3, weight: f32, jump: Rgb) {
+    let cos = n.dot(d);
+    if cos != 0.0 {
+        add_per_channel(g, n * (weight / cos), jump);
+    }
+}
+
 /// The pivot form's weight 1 − t/r of a point `t` along a ray of length `r` as its origin moves
 /// with the far end held (1 for a ray to infinity, which moves whole).
 fn lever(t: f32, r: f32) -> f32 {
@@ -365,14 +374,9 @@ fn grid_depth_gradient(
     // The jumps where the piece enters (σ from 0 to σ(t0)) and leaves (σ(t1) to 0) the box:
     // (σ₂ − σ₁)(1 − t/r) n/(n·d).
     let mut jump = |t: f32, n: Vec3, into: bool| {
-        let x = o + d * t;
-        let cos = n.dot(d);
-        if cos == 0.0 {
-            return;
-        }
-        let sigma = medium.at(x).sigma_t;
-        let sign = if into { 1.0 } else { -1.0 };
-        add_per_channel(&mut g, n * (sign * lever(start + t, r) / cos), sigma);
+        let sigma = medium.at(o + d * t).sigma_t;
+        let jump = if into { sigma } else { sigma * -1.0 };
+        add_interface(&mut g, n, d, lever(start + t, r), jump);
     };
     let entry = if t0 > 0.0 {
         Some(medium.box_face_normal(o + d * t0))
@@ -453,14 +457,8 @@ pub fn transmittance_with_depth_gradient(
         }
         Passage::Boundary { t, ng, d, media } => {
             let p = o + d * t;
-            let cos = ng.dot(d);
-            if cos != 0.0 {
-                add_per_channel(
-                    &mut sum,
-                    ng * (lever(t, r) / cos),
-                    sigma(media.1, p) - sigma(media.0, p),
-                );
-            }
+            let jump = sigma(media.1, p) - sigma(media.0, p);
+            add_interface(&mut sum, ng, d, lever(t, r), jump);
         }
     });
     if tr.is_black() {

@@ -196,6 +196,12 @@ impl<'a> SceneMedium<'a> {
         Rng::new(0x006d_6564_6961, u64::from(i))
     }
 
+    /// The stream of light sample `i`'s optical-depth estimates in grids, apart from its
+    /// transmittance's (fixed too).
+    fn depth_stream(i: u32) -> Rng {
+        Rng::new(0x0064_6570_7468, u64::from(i))
+    }
+
     /// Light arriving at `p` (in `medium`) along the light samples of gather direction `w`, with
     /// transmittance: `f(direction towards the light)` weighs each; the mean over the samples.
     fn direct(
@@ -418,7 +424,7 @@ impl<'a> SceneMedium<'a> {
             }
             let ray = self.scene.shadow_ray_at(x, None, ls.wi, ls.distance);
             let mut rng = Self::transmittance_stream(i);
-            let mut depth_rng = Rng::new(0x0064_6570_7468, u64::from(i));
+            let mut depth_rng = Self::depth_stream(i);
             let (tr, depth_gradient) = transmittance_with_depth_gradient(
                 self.scene,
                 ray,
