@@ -494,6 +494,23 @@ pub enum BsdfDesc {
         /// Transmission scale.
         specular_transmittance: Rgb,
     },
+    /// Rough dielectric interface (Walter et al. 2007): microfacet reflection and refraction.
+    RoughDielectric {
+        /// Distribution (default Beckmann).
+        distribution: MicrofacetDistribution,
+        /// Roughness along u.
+        alpha_u: f32,
+        /// Roughness along v.
+        alpha_v: f32,
+        /// Interior IOR (default BK7 1.5046).
+        int_ior: f32,
+        /// Exterior IOR (default air).
+        ext_ior: f32,
+        /// Reflection scale.
+        specular_reflectance: Rgb,
+        /// Transmission scale.
+        specular_transmittance: Rgb,
+    },
     /// Thin dielectric sheet (no refraction offset).
     ThinDielectric {
         /// Interior IOR.

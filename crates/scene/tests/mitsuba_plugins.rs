@@ -134,7 +134,11 @@ fn bsdf_defaults() {
          <shape type=\"cube\"><bsdf type=\"thindielectric\"><float name=\"int_ior\" value=\"1.6\"/>\
            <string name=\"ext_ior\" value=\"acrylic glass\"/></bsdf></shape>\
          <shape type=\"cube\"><bsdf type=\"twosided\"><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\">\
-           <float name=\"reflectance\" value=\"0.25\"/></bsdf></bsdf></shape>",
+           <float name=\"reflectance\" value=\"0.25\"/></bsdf></bsdf></shape>\
+         <shape type=\"cube\"><bsdf type=\"roughdielectric\"/></shape>\
+         <shape type=\"cube\"><bsdf type=\"roughdielectric\"><string name=\"distribution\" value=\"ggx\"/>\
+           <float name=\"alpha_u\" value=\"0.05\"/><float name=\"alpha_v\" value=\"0.4\"/>\
+           <string name=\"int_ior\" value=\"water\"/></bsdf></shape>",
     );
     let b: Vec<&BsdfDesc> = s.shapes.iter().map(|sh| &*sh.bsdf).collect();
     assert!(
@@ -180,6 +184,16 @@ fn bsdf_defaults() {
     };
     assert!(
         matches!(&**back, BsdfDesc::Diffuse { reflectance: TextureDesc::Constant(c) } if *c == Rgb::splat(0.25))
+    );
+    assert!(
+        matches!(b[8], BsdfDesc::RoughDielectric { distribution: MicrofacetDistribution::Beckmann,
+            alpha_u, alpha_v, int_ior, ext_ior, .. }
+        if *alpha_u == 0.1 && *alpha_v == 0.1 && *int_ior == 1.5046 && *ext_ior == 1.000277)
+    );
+    assert!(
+        matches!(b[9], BsdfDesc::RoughDielectric { distribution: MicrofacetDistribution::Ggx,
+            alpha_u, alpha_v, int_ior, .. }
+        if *alpha_u == 0.05 && *alpha_v == 0.4 && *int_ior == 1.333)
     );
 }
 

@@ -17,7 +17,7 @@
 //! - transmission through a dielectric scales radiance by `(η_i/η_t)²` (radiance transport).
 //!
 //! Models, one file each: [`diffuse`], [`plastic`], [`roughplastic`], [`conductor`],
-//! [`roughconductor`], [`dielectric`], [`thindielectric`], [`phong`]; shared: [`microfacet`]
+//! [`roughconductor`], [`dielectric`], [`roughdielectric`], [`thindielectric`], [`phong`]; shared: [`microfacet`]
 //! (Beckmann and GGX, Walter et al. 2007; visible normals, Heitz 2018) and [`fresnel`].
 
 pub mod conductor;
@@ -28,6 +28,7 @@ pub mod microfacet;
 pub mod phong;
 pub mod plastic;
 pub mod roughconductor;
+pub mod roughdielectric;
 pub mod roughplastic;
 pub mod thindielectric;
 
@@ -42,6 +43,7 @@ pub use microfacet::Microfacet;
 pub use phong::Phong;
 pub use plastic::Plastic;
 pub use roughconductor::RoughConductor;
+pub use roughdielectric::RoughDielectric;
 pub use roughplastic::{RoughPlastic, RoughPlasticTables};
 pub use thindielectric::ThinDielectric;
 
@@ -95,6 +97,8 @@ pub enum Lobe {
     RoughConductor(RoughConductor),
     /// Smooth dielectric.
     Dielectric(Dielectric),
+    /// Rough dielectric.
+    RoughDielectric(RoughDielectric),
     /// Thin dielectric.
     ThinDielectric(ThinDielectric),
     /// OBJ diffuse + normalised Phong.
@@ -108,6 +112,7 @@ impl Lobe {
             Lobe::Plastic(b) => b.eval(wo, wi),
             Lobe::RoughPlastic(b) => b.eval(wo, wi),
             Lobe::RoughConductor(b) => b.eval(wo, wi),
+            Lobe::RoughDielectric(b) => b.eval(wo, wi),
             Lobe::Phong(b) => b.eval(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => Rgb::ZERO,
         }
@@ -119,6 +124,7 @@ impl Lobe {
             Lobe::Plastic(b) => b.pdf(wo, wi),
             Lobe::RoughPlastic(b) => b.pdf(wo, wi),
             Lobe::RoughConductor(b) => b.pdf(wo, wi),
+            Lobe::RoughDielectric(b) => b.pdf(wo, wi),
             Lobe::Phong(b) => b.pdf(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => 0.0,
         }
@@ -132,6 +138,7 @@ impl Lobe {
             Lobe::Conductor(b) => b.sample(wo),
             Lobe::RoughConductor(b) => b.sample(wo, u),
             Lobe::Dielectric(b) => b.sample(wo, u_lobe),
+            Lobe::RoughDielectric(b) => b.sample(wo, u_lobe, u),
             Lobe::ThinDielectric(b) => b.sample(wo, u_lobe),
             Lobe::Phong(b) => b.sample(wo, u_lobe, u),
         }
@@ -309,6 +316,21 @@ impl Bsdf {
         match self {
             Bsdf::Single(l) => delta(l),
             Bsdf::TwoSided { front, back } => delta(front) || delta(back),
+        }
+    }
+
+    /// True when the BSDF sends light through the surface (smooth, rough or thin dielectrics).
+    #[must_use]
+    pub fn transmits(&self) -> bool {
+        let transmits = |l: &Lobe| {
+            matches!(
+                l,
+                Lobe::Dielectric(_) | Lobe::RoughDielectric(_) | Lobe::ThinDielectric(_)
+            )
+        };
+        match self {
+            Bsdf::Single(l) => transmits(l),
+            Bsdf::TwoSided { front, back } => transmits(front) || transmits(back),
         }
     }
 
@@ -502,6 +524,20 @@ impl Compiled {
                 specular_reflectance,
                 specular_transmittance,
             } => Compiled::Fixed(Lobe::Dielectric(Dielectric {
+                eta: int_ior / ext_ior,
+                specular_reflectance: *specular_reflectance,
+                specular_transmittance: *specular_transmittance,
+            })),
+            BsdfDesc::RoughDielectric {
+                distribution,
+                alpha_u,
+                alpha_v,
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Compiled::Fixed(Lobe::RoughDielectric(RoughDielectric {
+                distr: Microfacet::new(*distribution, *alpha_u, *alpha_v),
                 eta: int_ior / ext_ior,
                 specular_reflectance: *specular_reflectance,
                 specular_transmittance: *specular_transmittance,

@@ -271,7 +271,8 @@ fn energy_kept_with(
 /// traced) or the BSDF has no glossy part.
 #[must_use]
 pub fn order_for(bsdf: &Bsdf, max_order: usize, threshold: f64) -> Option<usize> {
-    if !bsdf.has_glossy() {
+    // Light through the surface is outside the hemisphere the harmonics cover: traced.
+    if !bsdf.has_glossy() || bsdf.transmits() {
         return None;
     }
     let steps = (ORDER_MAX_THETA_DEGREES / 5.0) as usize;

@@ -3,8 +3,8 @@
 //! Defaults (Mitsuba 3): `diffuse` reflectance 0.5; `plastic`/`roughplastic` diffuse 0.5,
 //! specular 1, int_ior polypropylene (1.49), ext_ior air (1.000277); `roughplastic` and
 //! `roughconductor` Beckmann with α = 0.1; `conductor`/`roughconductor` material "none"
-//! (η = 0, k = 1: a perfect mirror); `dielectric`/`thindielectric` int_ior BK7 (1.5046),
-//! ext_ior air. A bitmap's `to_uv` 4×4 transform acts on (u, v) through its x/y rows and columns
+//! (η = 0, k = 1: a perfect mirror); `dielectric`/`roughdielectric`/`thindielectric` int_ior BK7
+//! (1.5046), ext_ior air; `roughdielectric` Beckmann with α = 0.1. A bitmap's `to_uv` 4×4 transform acts on (u, v) through its x/y rows and columns
 //! and its translation column.
 
 use super::props::{Plugin, Prop, Value};
@@ -26,6 +26,7 @@ const BSDFS: &[&str] = &[
     "conductor",
     "roughconductor",
     "dielectric",
+    "roughdielectric",
     "thindielectric",
     "normalmap",
     "bumpmap",
@@ -166,26 +167,7 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
             } else {
                 let distribution = distribution(p)?;
                 let _ = p.boolean("sample_visible", true)?;
-                let (alpha_u, alpha_v) = if p.has("alpha") {
-                    if p.has("alpha_u") || p.has("alpha_v") {
-                        return Err(p.error(
-                            "specify either \"alpha\" or \"alpha_u\"/\"alpha_v\", not both",
-                        ));
-                    }
-                    let a = alpha_param(p, "alpha")?.unwrap_or(0.1);
-                    (a, a)
-                } else if p.has("alpha_u") || p.has("alpha_v") {
-                    match (alpha_param(p, "alpha_u")?, alpha_param(p, "alpha_v")?) {
-                        (Some(u), Some(v)) => (u, v),
-                        _ => {
-                            return Err(
-                                p.error("both \"alpha_u\" and \"alpha_v\" must be specified")
-                            )
-                        }
-                    }
-                } else {
-                    (0.1, 0.1)
-                };
+                let (alpha_u, alpha_v) = anisotropic_alpha(p)?;
                 BsdfDesc::RoughConductor {
                     distribution,
                     alpha_u,
@@ -197,11 +179,24 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
             }
         }
         _ => {
-            // dielectric, thindielectric
+            // dielectric, roughdielectric, thindielectric
             let (int_ior, ext_ior) = iors(p, "bk7")?;
             let specular_reflectance = nonnegative_rgb(p, "specular_reflectance", 1.0)?;
             let specular_transmittance = nonnegative_rgb(p, "specular_transmittance", 1.0)?;
-            if p.ty == "dielectric" {
+            if p.ty == "roughdielectric" {
+                let distribution = distribution(p)?;
+                let _ = p.boolean("sample_visible", true)?;
+                let (alpha_u, alpha_v) = anisotropic_alpha(p)?;
+                BsdfDesc::RoughDielectric {
+                    distribution,
+                    alpha_u,
+                    alpha_v,
+                    int_ior,
+                    ext_ior,
+                    specular_reflectance,
+                    specular_transmittance,
+                }
+            } else if p.ty == "dielectric" {
                 BsdfDesc::Dielectric {
                     int_ior,
                     ext_ior,
@@ -263,6 +258,24 @@ fn distribution(p: &Plugin) -> Result<MicrofacetDistribution, SceneError> {
                 format!("invalid distribution \"{s}\" (must be \"beckmann\" or \"ggx\")"),
             )),
         },
+    }
+}
+
+/// `alpha`, or `alpha_u` and `alpha_v` together (default 0.1), as Mitsuba 3's rough models.
+fn anisotropic_alpha(p: &Plugin) -> Result<(f32, f32), SceneError> {
+    if p.has("alpha") {
+        if p.has("alpha_u") || p.has("alpha_v") {
+            return Err(p.error("specify either \"alpha\" or \"alpha_u\"/\"alpha_v\", not both"));
+        }
+        let a = alpha_param(p, "alpha")?.unwrap_or(0.1);
+        Ok((a, a))
+    } else if p.has("alpha_u") || p.has("alpha_v") {
+        match (alpha_param(p, "alpha_u")?, alpha_param(p, "alpha_v")?) {
+            (Some(u), Some(v)) => Ok((u, v)),
+            _ => Err(p.error("both \"alpha_u\" and \"alpha_v\" must be specified")),
+        }
+    } else {
+        Ok((0.1, 0.1))
     }
 }
 

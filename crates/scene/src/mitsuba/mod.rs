@@ -11,7 +11,7 @@
 //! samplers `independent`, `stratified`, `multijitter`, `ldsampler`, `orthogonal`; integrators
 //! `path`, `direct`, `irrcache`; shapes `obj`, `ply`, `rectangle`, `cube`, `disk` (tessellated),
 //! `sphere`; BSDFs `diffuse`, `twosided`, `plastic`, `roughplastic`, `conductor`,
-//! `roughconductor`, `dielectric`, `thindielectric`, `null`; texture `bitmap`; emitters `area`,
+//! `roughconductor`, `dielectric`, `roughdielectric`, `thindielectric`, `null`; texture `bitmap`; emitters `area`,
 //! `point`, `spot`, `directional`, `constant`, `envmap`; media `homogeneous`, `heterogeneous`
 //! with volumes `constvolume`, `gridvolume` and phase functions `isotropic`, `hg`.
 
