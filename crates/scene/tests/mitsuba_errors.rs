@@ -494,3 +494,45 @@ fn never_panics_on_garbage() {
         assert!(err.contains("scene.xml:"), "{err}");
     }
 }
+
+#[test]
+fn serialized_mesh_errors_name_the_reference() {
+    use ircache_math::Vec3;
+    use ircache_scene::mesh::write_serialized;
+    use ircache_scene::TriangleMesh;
+    let dir = scratch("serialized");
+    let mesh = TriangleMesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        normals: None,
+        uvs: None,
+        indices: vec![[0, 1, 2]],
+    };
+    std::fs::write(
+        dir.join("one.serialized"),
+        write_serialized(&[("t", &mesh, false)]),
+    )
+    .unwrap();
+    std::fs::write(dir.join("bad.serialized"), b"not a mesh").unwrap();
+    for (file, index, message) in [
+        (
+            "one.serialized",
+            1,
+            "shape_index 1 is out of range: the file holds 1 mesh",
+        ),
+        ("bad.serialized", 0, "not a Mitsuba serialized mesh"),
+    ] {
+        let path = write(
+            &dir,
+            "scene.xml",
+            &scene(&format!(
+                "  <shape type=\"serialized\">\n    <string name=\"filename\" value=\"{file}\"/>\n    <integer name=\"shape_index\" value=\"{index}\"/>\n  </shape>"
+            )),
+        );
+        let err = mitsuba::load(&path, &[])
+            .expect_err("must not load")
+            .to_string();
+        // The error sits at the filename's line and names the mesh file.
+        assert_error(&err, &path, 4, 5, message);
+        assert!(err.contains(file), "{err}");
+    }
+}

@@ -392,3 +392,63 @@ fn normalmap_and_bumpmap_wrap_a_bsdf_with_a_texture() {
         .to_string();
     assert!(e.contains("BSDF is required"), "{e}");
 }
+
+#[test]
+fn serialized_meshes_by_index_with_normals_as_mitsuba() {
+    use ircache_scene::mesh::write_serialized;
+    use ircache_scene::TriangleMesh;
+    // A tetrahedron-like fan without normals as mesh 1 of 2: the loader picks it by index and,
+    // unless face_normals, gives it angle-weighted vertex normals (as Mitsuba recomputes them).
+    let fan = TriangleMesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+        normals: None,
+        uvs: None,
+        indices: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2]],
+    };
+    let single = TriangleMesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        normals: None,
+        uvs: None,
+        indices: vec![[0, 1, 2]],
+    };
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let dir = std::env::temp_dir().join(format!("ircache-serialized-{}-{n}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("m.serialized"),
+        write_serialized(&[("one", &single, false), ("fan", &fan, false)]),
+    )
+    .unwrap();
+    let path = dir.join("scene.xml");
+    let shape = |face_normals: bool| {
+        format!(
+            "<shape type=\"serialized\"><string name=\"filename\" value=\"m.serialized\"/>\
+             <integer name=\"shape_index\" value=\"1\"/><boolean name=\"face_normals\" value=\"{face_normals}\"/>\
+             <transform name=\"to_world\"><translate x=\"2\"/></transform></shape>"
+        )
+    };
+    std::fs::write(
+        &path,
+        format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"/>{}{}</scene>",
+            shape(false),
+            shape(true)
+        ),
+    )
+    .unwrap();
+    let s = mitsuba::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let Geometry::Mesh(smooth) = &s.shapes[0].geometry else {
+        panic!("a mesh")
+    };
+    let Geometry::Mesh(flat) = &s.shapes[1].geometry else {
+        panic!("a mesh")
+    };
+    assert_eq!(smooth.indices.len(), 3);
+    assert_eq!(smooth.positions[1], Vec3::new(3.0, 0.0, 0.0));
+    assert!(flat.normals.is_none());
+    // The apex at the origin: three faces at right angles, normals −x, −y, −z, each weighted
+    // by a right angle.
+    let n = smooth.normals.as_ref().expect("recomputed normals")[0];
+    let expected = Vec3::splat(-1.0).normalize();
+    assert!((n - expected).length() < 1e-5, "{n}");
+}

@@ -1,5 +1,5 @@
 //! Triangle-mesh file formats: Wavefront OBJ ([`obj`]) with its MTL material libraries ([`mtl`]),
-//! and Stanford PLY ([`ply`]), plus the geometry helpers they share (polygon triangulation,
+//! Stanford PLY ([`ply`]) and Mitsuba's serialized meshes ([`serialized`]), plus the geometry helpers they share (polygon triangulation,
 //! degenerate-triangle tests, vertex-normal estimation).
 //!
 //! Every reader is hand-written so that each error names its place: `file:line:column` for the
@@ -20,10 +20,12 @@
 pub mod mtl;
 pub mod obj;
 pub mod ply;
+pub mod serialized;
 
 pub use mtl::{parse_mtl, read_mtl, MtlMaterial, MtlTexture};
 pub use obj::{obj_to_mesh, parse_obj, read_obj, ObjData, ObjGroup};
 pub use ply::{parse_ply, read_ply};
+pub use serialized::{parse_serialized, read_serialized, write_serialized, SerializedMesh};
 
 use crate::desc::TriangleMesh;
 use ircache_math::{Vec2, Vec3};

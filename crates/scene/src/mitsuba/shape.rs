@@ -1,11 +1,12 @@
-//! Shapes: `obj`, `ply`, `rectangle`, `cube`, `disk`, `sphere`, brought to world space.
+//! Shapes: `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk`, `sphere`, brought to world space.
 //!
 //! Conventions (Mitsuba 3): positions are transformed by `to_world`, normals by its inverse
 //! transpose. Mitsuba's `rectangle` and `disk` are analytic with normal `to_world · n`; their
 //! tessellations here wind around that normal even under a mirroring `to_world`. The `cube`, `obj`
 //! and `ply` are meshes in Mitsuba too and keep their winding (and per-vertex normals) as given.
 //! `flip_normals` reverses the winding and negates the normals; `face_normals` drops per-vertex
-//! normals. The OBJ `flip_tex_coords` default (true) flips v as Mitsuba does. A shape has one BSDF
+//! normals, and a mesh file without them gets angle-weighted vertex normals otherwise (Mitsuba's
+//! `recompute_vertex_normals`, in its `obj`, `ply` and `serialized` alike). The OBJ `flip_tex_coords` default (true) flips v as Mitsuba does. A shape has one BSDF
 //! (default: diffuse 0.5) and at most one `area` emitter.
 
 use super::bsdf::build_bsdf;
@@ -19,7 +20,15 @@ use ircache_math::{Mat3, Mat4, Vec2, Vec3};
 use std::path::Path;
 use std::rc::Rc;
 
-const SHAPES: &[&str] = &["obj", "ply", "rectangle", "cube", "disk", "sphere"];
+const SHAPES: &[&str] = &[
+    "obj",
+    "ply",
+    "serialized",
+    "rectangle",
+    "cube",
+    "disk",
+    "sphere",
+];
 
 /// Builds a shape with its BSDF and optional area emitter.
 pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneError> {
@@ -55,7 +64,7 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
             finish_analytic(p, mesh, flip)?
         }
         _ => {
-            // obj, ply
+            // obj, ply, serialized
             let (name, prop) = p
                 .string_opt("filename")?
                 .ok_or_else(|| p.error("missing \"filename\""))?;
@@ -75,8 +84,30 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
                     }
                 }
                 m
-            } else {
+            } else if p.ty == "ply" {
                 read_ply_mesh(&path).map_err(|e| attach_location(e, &loc, &path))?
+            } else {
+                let index = match p.integer_opt("shape_index")? {
+                    None => 0,
+                    Some((i, _)) if i >= 0 => i as usize,
+                    Some((_, prop)) => {
+                        return Err(SceneError::at(
+                            prop.loc.clone(),
+                            "shape_index must be non-negative",
+                        ))
+                    }
+                };
+                let m = crate::mesh::serialized::read_serialized(&path, index)
+                    .map_err(|e| attach_location(e, &loc, &path))?;
+                if m.degenerate_dropped > 0 {
+                    ctx.notes.borrow_mut().push(format!(
+                        "{}: mesh {index}: {} degenerate (zero-area) triangle{} dropped",
+                        path.display(),
+                        m.degenerate_dropped,
+                        if m.degenerate_dropped == 1 { "" } else { "s" }
+                    ));
+                }
+                m.mesh
             };
             if mesh.indices.is_empty() {
                 return Err(SceneError::Referenced {
@@ -90,6 +121,8 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
             }
             if face_normals {
                 mesh.normals = None;
+            } else if mesh.normals.is_none() {
+                mesh.normals = Some(crate::mesh::compute_vertex_normals(&mesh));
             }
             if flip {
                 shapes::flip_mesh(&mut mesh);
