@@ -8,7 +8,7 @@
 use crate::bsdf::Material;
 use crate::camera::Camera;
 use crate::lights::LightSet;
-use ircache_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use ircache_math::{offset_ray_origin, Frame, Ray, Rgb, Vec2, Vec3};
 use ircache_scene::{Geometry, SceneDesc, TriangleMesh};
 
 /// Errors building a scene for rendering.
@@ -47,6 +47,9 @@ pub enum ShapeGeometry {
     },
 }
 
+/// Most thin sheets a ray or a path meets before it is taken as blocked (double glazing is two).
+pub const MAX_SHEET_CROSSINGS: u32 = 64;
+
 /// One shape at render time.
 #[derive(Clone, Debug)]
 pub struct Shape {
@@ -63,6 +66,9 @@ pub struct Shape {
     pub flat: bool,
     /// A `null` BSDF: the invisible boundary of a medium, passed through by rays.
     pub null: bool,
+    /// A thin dielectric sheet (a window pane, [`Material::thin_sheet`]): paths cross it
+    /// without a bounce and shadow rays through it carry its transmittance.
+    pub thin_sheet: bool,
     /// The media on its two sides (indices into [`Scene::media`]).
     pub media: ircache_scene::MediumInterface,
 }
@@ -111,6 +117,8 @@ pub struct Scene {
     /// Some emitter can be found by a ray (an area light or an environment); when false, a path's
     /// last segment, which could only pick up emission, need not be traced.
     pub has_hittable_emitters: bool,
+    /// Some shape is a thin sheet ([`Shape::thin_sheet`]): shadow rays look for them.
+    pub has_thin_sheets: bool,
     /// Content hash of what light transport depends on (geometry, materials, emitters; not the
     /// camera, not where the files are): a cache file records it.
     pub content_hash: u64,
@@ -252,6 +260,7 @@ impl Scene {
                 area_light: None,
                 flat,
                 null: matches!(*s.bsdf, ircache_scene::BsdfDesc::Null),
+                thin_sheet: materials[i].thin_sheet().is_some(),
                 media: s.media,
             });
         }
@@ -290,6 +299,7 @@ impl Scene {
             media_location,
             content_hash: content_hash(desc),
             has_hittable_emitters,
+            has_thin_sheets: shapes.iter().any(|s| s.thin_sheet),
             accel,
             shapes,
             materials,
@@ -332,6 +342,90 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
         let hit = self.accel.intersect(ray)?;
         Some(self.interaction(ray, &hit))
+    }
+
+    /// The sheet of shape `shape` when it is a thin sheet ([`Shape::thin_sheet`]).
+    #[inline]
+    #[must_use]
+    pub fn thin_sheet(&self, shape: u32) -> Option<crate::bsdf::ThinDielectric> {
+        let shape = &self.shapes[shape as usize];
+        if shape.thin_sheet {
+            self.materials[shape.material].thin_sheet()
+        } else {
+            None
+        }
+    }
+
+    /// What reaches the end of a shadow ray: nothing where a surface blocks it, all where none
+    /// does, and where it only crosses thin sheets (window panes) their transmittance at the
+    /// angle it crosses them, `τ (1 − R')` each (Radiance's glass passes source rays the same
+    /// way; Mitsuba 3 blocks them, so a sun behind a window never lights a room there).
+    #[inline]
+    #[must_use]
+    pub fn shadow_transmittance(&self, ray: &Ray) -> Rgb {
+        if !self.has_thin_sheets {
+            return if self.accel.occluded(ray) {
+                Rgb::ZERO
+            } else {
+                Rgb::ONE
+            };
+        }
+        self.transmittance_through_sheets(ray)
+    }
+
+    #[inline(never)]
+    fn transmittance_through_sheets(&self, ray: &Ray) -> Rgb {
+        match self.intersect_beyond_sheets(ray) {
+            (None, tr) => tr,
+            (Some(_), _) => Rgb::ZERO,
+        }
+    }
+
+    /// The first surface along `ray` that is not a thin sheet, with the transmittance of the
+    /// sheets crossed before it, `τ (1 − R')` each at the angle crossed: what a BSDF sample
+    /// that sees through window panes finds (as light samples do). Past
+    /// [`MAX_SHEET_CROSSINGS`] sheets, nothing with zero transmittance.
+    #[must_use]
+    pub fn intersect_beyond_sheets(&self, ray: &Ray) -> (Option<Interaction>, Rgb) {
+        if !self.has_thin_sheets {
+            return (self.intersect(ray), Rgb::ONE);
+        }
+        let end = ray.t_max.is_finite().then(|| ray.o + ray.d * ray.t_max);
+        let mut ray = *ray;
+        let mut tr = Rgb::ONE;
+        for _ in 0..MAX_SHEET_CROSSINGS {
+            let Some(it) = self.intersect(&ray) else {
+                return (None, tr);
+            };
+            let Some(sheet) = self.thin_sheet(it.shape) else {
+                return (Some(it), tr);
+            };
+            tr *= sheet.transmittance(it.frame.n.dot(ray.d));
+            // On from just beyond the sheet, to the same end.
+            let o = offset_ray_origin(it.p, it.ng, ray.d, self.scale);
+            ray = match end {
+                Some(end) => {
+                    let to_end = end - o;
+                    let length = to_end.length();
+                    if length.is_nan() || length <= 0.0 || to_end.dot(ray.d) <= 0.0 {
+                        return (None, tr);
+                    }
+                    Ray {
+                        o,
+                        d: to_end / length,
+                        t_min: 0.0,
+                        t_max: length,
+                    }
+                }
+                None => Ray {
+                    o,
+                    d: ray.d,
+                    t_min: 0.0,
+                    t_max: f32::INFINITY,
+                },
+            };
+        }
+        (None, Rgb::ZERO)
     }
 
     /// The interaction where `ray` meets triangle `prim` of mesh shape `shape` (Möller and

@@ -670,6 +670,16 @@ impl Perturbation {
 }
 
 impl Material {
+    /// The sheet when this material is an untextured, unperturbed thin dielectric (a window
+    /// pane): rays and shadow rays pass through it (see [`crate::scene::Scene::shadow_transmittance`]).
+    #[must_use]
+    pub fn thin_sheet(&self) -> Option<ThinDielectric> {
+        match (&self.front, &self.back, &self.perturbation) {
+            (Compiled::Fixed(Lobe::ThinDielectric(t)), None, None) => Some(*t),
+            _ => None,
+        }
+    }
+
     /// Compiles a description.
     #[must_use]
     pub fn from_desc(desc: &BsdfDesc) -> Material {

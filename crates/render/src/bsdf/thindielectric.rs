@@ -30,6 +30,13 @@ impl ThinDielectric {
         }
     }
 
+    /// What passes straight through at incidence cosine `cos_theta` (either side):
+    /// `specular_transmittance · (1 − R')`, the light a shadow ray carries across the sheet.
+    #[must_use]
+    pub fn transmittance(&self, cos_theta: f32) -> Rgb {
+        self.specular_transmittance * (1.0 - self.reflectance(cos_theta))
+    }
+
     /// Chooses reflection with probability `R'`, otherwise straight transmission.
     #[must_use]
     pub fn sample(&self, wo: Vec3, u_lobe: f32) -> Option<BsdfSample> {

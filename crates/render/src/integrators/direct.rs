@@ -112,10 +112,15 @@ pub fn estimate_direct(
         let wi = it.frame.from_local(bs.wi);
         let next = scene.spawn_ray(it, wi);
         rays.bounce += 1;
-        match scene.accel.intersect(&next) {
+        // Through window panes, as the light samples see (`Scene::shadow_transmittance`).
+        let (found, through) = scene.intersect_beyond_sheets(&next);
+        if through.is_black() {
+            continue;
+        }
+        match found {
             None => {
                 if scene.lights.has_environment() {
-                    let le = scene.lights.environment_radiance(wi);
+                    let le = scene.lights.environment_radiance(wi) * through;
                     let w = if bs.delta {
                         1.0 / fb
                     } else {
@@ -124,10 +129,9 @@ pub fn estimate_direct(
                     l += bs.weight * le * w;
                 }
             }
-            Some(hit) => {
-                let hit_it = scene.interaction(&next, &hit);
+            Some(hit_it) => {
                 if let Some(light) = scene.shapes[hit_it.shape as usize].area_light {
-                    let le = scene.lights.area_radiance(light, hit_it.frame.n, -wi);
+                    let le = scene.lights.area_radiance(light, hit_it.frame.n, -wi) * through;
                     if le.is_black() {
                         continue;
                     }

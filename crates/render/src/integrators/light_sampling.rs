@@ -33,6 +33,14 @@ impl DeferredShadows {
     /// Traces the shadow rays in packets of 16 and adds what each unoccluded one brings to its
     /// path's radiance in `l` (indexed by owner), in the order the samples were taken.
     pub fn resolve(&mut self, scene: &Scene, l: &mut [Rgb]) {
+        if scene.has_thin_sheets {
+            // Rays that cross window panes carry their transmittance: one at a time.
+            for (ray, &(value, owner)) in self.rays.iter().zip(&self.light) {
+                l[owner as usize] += value * scene.shadow_transmittance(ray);
+            }
+            self.clear();
+            return;
+        }
         let mut occluded = [false; 16];
         for (rays, light) in self.rays.chunks(16).zip(self.light.chunks(16)) {
             let occluded = &mut occluded[..rays.len()];
@@ -205,8 +213,18 @@ pub fn sample_lights(
         }
         rays.shadow += 1;
         let shadow_ray = scene.shadow_ray(it, ls.wi, ls.distance);
-        if matches!(shadows, Shadows::Traced) && scene.accel.occluded(&shadow_ray) {
-            continue;
+        // Window panes on the way pass what they transmit (`Scene::shadow_transmittance`).
+        let mut through_sheets = None;
+        if matches!(shadows, Shadows::Traced) {
+            if scene.has_thin_sheets {
+                let tr = scene.shadow_transmittance(&shadow_ray);
+                if tr.is_black() {
+                    continue;
+                }
+                through_sheets = Some(tr);
+            } else if scene.accel.occluded(&shadow_ray) {
+                continue;
+            }
         }
         // With the served parts off (`rest`), the traced glossy part is weighed against its BSDF
         // sample as ever; only a remainder of the environment may be negative.
@@ -227,7 +245,10 @@ pub fn sample_lights(
                 }
             }
         };
-        let value = weighted * ls.radiance / (fe * ls.pdf);
+        let mut value = weighted * ls.radiance / (fe * ls.pdf);
+        if let Some(tr) = through_sheets {
+            value *= tr;
+        }
         match &mut shadows {
             Shadows::Traced => l += value,
             Shadows::Deferred(deferred, beta) => {

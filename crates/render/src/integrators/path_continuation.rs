@@ -218,6 +218,8 @@ pub fn trace_path_deferring(
     // A gather's path while it has left only through delta lobes: the emission it finds is a
     // caustic, which a caustic map serves instead where the source says so.
     let mut caustic_chain = matches!(arrival, Arrival::Gather) && source.caustics_served();
+    // Thin sheets met along the path (each crossing draws a dimension of its own).
+    let mut crossings = 0u32;
     loop {
         if depth >= max_depth {
             break;
@@ -248,6 +250,32 @@ pub fn trace_path_deferring(
                 if w > 0.0 {
                     l += beta * le * w;
                 }
+            }
+        }
+        if scene.has_thin_sheets && shape.thin_sheet {
+            // A window pane: passed through without a bounce (light samples see through it,
+            // `Scene::shadow_transmittance`, so the emission beyond keeps the weight of the
+            // vertex before), or a mirror bounce with probability R'.
+            let mut state = PathState {
+                beta,
+                arrival,
+                depth,
+                crossings,
+            };
+            travelled += it.t;
+            let next = cross_sheet(scene, it, wo, &mut state, eta, settings, sampler, rays);
+            PathState {
+                beta,
+                arrival,
+                depth,
+                crossings,
+            } = state;
+            match next {
+                Some(next) => {
+                    ray = next;
+                    continue;
+                }
+                None => break,
             }
         }
         if depth + 1 >= max_depth {
@@ -350,6 +378,69 @@ pub fn trace_path_deferring(
         }
     }
     l
+}
+
+/// What a path carries from vertex to vertex.
+pub(crate) struct PathState {
+    /// Throughput.
+    pub beta: Rgb,
+    /// How it arrives at the next vertex.
+    pub arrival: Arrival,
+    /// Depth of the next vertex.
+    pub depth: u32,
+    /// Thin sheets met along the path.
+    pub crossings: u32,
+}
+
+/// At the thin sheet `it`, met by a path arriving from `wo`: the choice drawn from the sampler's
+/// dimension of this crossing, on through the sheet (no bounce) or mirrored (a delta bounce,
+/// counted, with Russian roulette); the ray beyond, or `None` where the path ends. Out of line:
+/// scenes without sheets run the loop as before (cold: laid out away from the loop, which ran
+/// 3 % slower on the Cornell box with this branch inline).
+#[allow(clippy::too_many_arguments)]
+#[cold]
+#[inline(never)]
+pub(crate) fn cross_sheet(
+    scene: &Scene,
+    it: &Interaction,
+    wo: Vec3,
+    state: &mut PathState,
+    eta: f32,
+    settings: &PathSettings,
+    sampler: &mut dyn Sampler,
+    rays: &mut RayCounts,
+) -> Option<Ray> {
+    let sheet = scene.thin_sheet(it.shape)?;
+    state.crossings += 1;
+    if state.crossings > crate::scene::MAX_SHEET_CROSSINGS {
+        return None;
+    }
+    sampler.set_dimension(dims::sheet(state.depth, state.crossings));
+    let cos = it.frame.n.dot(wo);
+    let r = sheet.reflectance(cos);
+    if sampler.next_1d() >= r {
+        state.beta *= sheet.specular_transmittance;
+        return Some(scene.spawn_ray(it, -wo));
+    }
+    if state.depth + 1 >= settings.max_depth {
+        return None;
+    }
+    state.beta *= sheet.specular_reflectance;
+    state.arrival = Arrival::Bsdf {
+        p: it.p,
+        pdf: r,
+        delta: true,
+        light_samples: 0,
+    };
+    rays.bounce += 1;
+    count_and_roulette(
+        &mut state.depth,
+        &mut state.beta,
+        eta,
+        settings.rr_depth,
+        sampler,
+    )
+    .then(|| scene.spawn_ray(it, 2.0 * cos * it.frame.n - wo))
 }
 
 /// The sample of `strategy`'s part of the BSDF that continues a path at vertex `depth` (its

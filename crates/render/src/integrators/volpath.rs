@@ -201,6 +201,40 @@ impl VolPathIntegrator {
                 ray = scene.spawn_ray(&it, ray.d);
                 continue;
             }
+            if let Some(sheet) = scene.thin_sheet(it.shape) {
+                // A window pane, as in `path` (`path_continuation`): passed through without a
+                // bounce (light samples see through it), or a mirror bounce with probability R'.
+                crossings += 1;
+                if crossings > MAX_CROSSINGS {
+                    break;
+                }
+                sampler.set_dimension(dims::sheet(depth, crossings));
+                let wo = -ray.d;
+                let cos = it.frame.n.dot(wo);
+                let r = sheet.reflectance(cos);
+                let d = if sampler.next_1d() >= r {
+                    beta *= sheet.specular_transmittance;
+                    ray.d
+                } else {
+                    if depth + 1 >= max_depth {
+                        break;
+                    }
+                    beta *= sheet.specular_reflectance;
+                    arrival = Arrival::Bsdf {
+                        p: it.p,
+                        pdf: r,
+                        delta: true,
+                        light_samples: 0,
+                    };
+                    if !count_and_roulette(&mut depth, &mut beta, eta, self.rr_depth, sampler) {
+                        break;
+                    }
+                    2.0 * cos * it.frame.n - wo
+                };
+                medium = medium_after(shape.media, it.ng, d, medium);
+                ray = scene.spawn_ray(&it, d);
+                continue;
+            }
             let wo = -ray.d;
             if let Some(light) = shape.area_light {
                 let le = scene.lights.area_radiance(light, it.frame.n, wo);

@@ -269,7 +269,13 @@ fn transmittance_crossing(
             return tr;
         };
         let shape = &scene.shapes[hit.geom_id as usize];
-        if !shape.null {
+        if let Some(sheet) = scene.thin_sheet(hit.geom_id) {
+            // A window pane: crossed with its transmittance (`Scene::shadow_transmittance`).
+            tr *= sheet.transmittance(hit.ng.normalize_or(ray.d).dot(ray.d));
+            if tr.is_black() {
+                return Rgb::ZERO;
+            }
+        } else if !shape.null {
             return Rgb::ZERO;
         }
         let before = medium;

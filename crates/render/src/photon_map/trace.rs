@@ -130,7 +130,7 @@ pub fn caustic_targets(scene: &Scene) -> Targets {
         .shapes
         .iter()
         .filter(|s| s.area_light.is_none())
-        .filter(|s| scene.materials[s.material].at(Vec2::ZERO).has_delta())
+        .filter(|s| !s.thin_sheet && scene.materials[s.material].at(Vec2::ZERO).has_delta())
         .filter_map(|s| match &s.geometry {
             ShapeGeometry::Sphere { center, radius, .. } => Some((*center, *radius)),
             ShapeGeometry::Mesh(m) => {
@@ -181,6 +181,8 @@ fn trace_one(
     let mut rays = 0u64;
     let mut bounces: u16 = 0;
     let mut delta_only = true;
+    // Thin sheets met so far (a bound against a ray caught at one).
+    let mut crossings = 0u32;
     loop {
         rays += 1;
         let Some(it) = scene.intersect(&ray) else {
@@ -188,6 +190,34 @@ fn trace_one(
         };
         let incoming = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
+        if let Some(sheet) = scene.thin_sheet(it.shape) {
+            crossings += 1;
+            if crossings > crate::scene::MAX_SHEET_CROSSINGS {
+                break;
+            }
+            // A window pane: crossed without a bounce, as light samples cross it (the light
+            // beyond it stays direct light, which the photons must not hold twice).
+            // Reflected (a delta bounce) with probability R'.
+            let cos = it.frame.n.dot(incoming);
+            let reflected = rng.next_f32() < sheet.reflectance(cos);
+            if reflected && bounces + 1 > max_bounces {
+                break;
+            }
+            let (scale, d) = if reflected {
+                let d = 2.0 * cos * it.frame.n - incoming;
+                (sheet.specular_reflectance, d)
+            } else {
+                (sheet.specular_transmittance, ray.d)
+            };
+            let q = scale.max_channel().min(1.0);
+            if !is_positive_finite(q) || rng.next_f32() >= q {
+                break;
+            }
+            flux = flux * scale / q;
+            bounces += u16::from(reflected);
+            ray = scene.spawn_ray(&it, d);
+            continue;
+        }
         let bsdf = scene.materials[shape.material].at(it.uv);
         let wo_local = it.frame.to_local(incoming);
         if (bounces >= 1 || kind == MapKind::All) && !bsdf.lambertian_albedo(wo_local).is_black() {

@@ -41,3 +41,14 @@ pub fn extra(depth: u32, i: u32) -> u32 {
 
 /// Index of extra BSDF sample `i` in [`extra`].
 pub const EXTRA_BSDF: u32 = 2048;
+
+/// Index in [`extra`] of the choice at the `i`-th thin sheet a path crosses after vertex
+/// `depth` (reflect or pass), which takes no vertex block of its own.
+pub const EXTRA_SHEET: u32 = 3072;
+
+/// The dimension of the choice at the `crossing`-th thin sheet (from 1) met after vertex `depth`.
+#[inline]
+#[must_use]
+pub fn sheet(depth: u32, crossing: u32) -> u32 {
+    extra(depth, EXTRA_SHEET + crossing)
+}
