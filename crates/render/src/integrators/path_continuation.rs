@@ -256,7 +256,7 @@ pub fn trace_path_deferring(
             // A window pane: passed through without a bounce (light samples see through it,
             // `Scene::shadow_transmittance`, so the emission beyond keeps the weight of the
             // vertex before), or a mirror bounce with probability R'.
-            let mut state = PathState {
+            let mut state = PathProgress {
                 beta,
                 arrival,
                 depth,
@@ -264,7 +264,7 @@ pub fn trace_path_deferring(
             };
             travelled += it.t;
             let next = cross_sheet(scene, it, wo, &mut state, eta, settings, sampler, rays);
-            PathState {
+            PathProgress {
                 beta,
                 arrival,
                 depth,
@@ -381,7 +381,7 @@ pub fn trace_path_deferring(
 }
 
 /// What a path carries from vertex to vertex.
-pub(crate) struct PathState {
+pub(crate) struct PathProgress {
     /// Throughput.
     pub beta: Rgb,
     /// How it arrives at the next vertex.
@@ -404,7 +404,7 @@ pub(crate) fn cross_sheet(
     scene: &Scene,
     it: &Interaction,
     wo: Vec3,
-    state: &mut PathState,
+    state: &mut PathProgress,
     eta: f32,
     settings: &PathSettings,
     sampler: &mut dyn Sampler,

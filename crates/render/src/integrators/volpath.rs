@@ -6,7 +6,9 @@
 //! surfaces alike (1: emitters seen directly, 2: direct light); crossing a `null` boundary does
 //! not count. Medium emission (an ircache extension) is gathered along every segment.
 
-use super::path_continuation::{count_and_roulette, Arrival};
+use super::path_continuation::{
+    count_and_roulette, cross_sheet, Arrival, PathProgress, PathSettings,
+};
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::gather::ShadingPoint;
 use crate::media::tracking::{
@@ -201,38 +203,33 @@ impl VolPathIntegrator {
                 ray = scene.spawn_ray(&it, ray.d);
                 continue;
             }
-            if let Some(sheet) = scene.thin_sheet(it.shape) {
-                // A window pane, as in `path` (`path_continuation`): passed through without a
-                // bounce (light samples see through it), or a mirror bounce with probability R'.
-                crossings += 1;
-                if crossings > MAX_CROSSINGS {
-                    break;
-                }
-                sampler.set_dimension(dims::sheet(depth, crossings));
-                let wo = -ray.d;
-                let cos = it.frame.n.dot(wo);
-                let r = sheet.reflectance(cos);
-                let d = if sampler.next_1d() >= r {
-                    beta *= sheet.specular_transmittance;
-                    ray.d
-                } else {
-                    if depth + 1 >= max_depth {
-                        break;
-                    }
-                    beta *= sheet.specular_reflectance;
-                    arrival = Arrival::Bsdf {
-                        p: it.p,
-                        pdf: r,
-                        delta: true,
-                        light_samples: 0,
-                    };
-                    if !count_and_roulette(&mut depth, &mut beta, eta, self.rr_depth, sampler) {
-                        break;
-                    }
-                    2.0 * cos * it.frame.n - wo
+            if scene.has_thin_sheets && shape.thin_sheet {
+                // A window pane, as in `path`: crossed without a bounce, or mirrored.
+                let mut state = PathProgress {
+                    beta,
+                    arrival,
+                    depth,
+                    crossings,
                 };
-                medium = medium_after(shape.media, it.ng, d, medium);
-                ray = scene.spawn_ray(&it, d);
+                let settings = PathSettings {
+                    max_depth,
+                    rr_depth: self.rr_depth,
+                    first_light_samples: 1,
+                };
+                let next = cross_sheet(
+                    scene, &it, -ray.d, &mut state, eta, &settings, sampler, rays,
+                );
+                PathProgress {
+                    beta,
+                    arrival,
+                    depth,
+                    crossings,
+                } = state;
+                let Some(next) = next else {
+                    break;
+                };
+                medium = medium_after(shape.media, it.ng, next.d, medium);
+                ray = next;
                 continue;
             }
             let wo = -ray.d;
