@@ -256,20 +256,17 @@ pub fn trace_path_deferring(
             // A window pane: passed through without a bounce (light samples see through it,
             // `Scene::shadow_transmittance`, so the emission beyond keeps the weight of the
             // vertex before), or a mirror bounce with probability R'.
-            let mut state = PathProgress {
-                beta,
-                arrival,
-                depth,
-                crossings,
-            };
             travelled += it.t;
-            let next = cross_sheet(scene, it, wo, &mut state, eta, settings, sampler, rays);
-            PathProgress {
-                beta,
-                arrival,
-                depth,
-                crossings,
-            } = state;
+            let next = cross_sheet(
+                scene,
+                it,
+                wo,
+                (&mut beta, &mut arrival, &mut depth, &mut crossings),
+                eta,
+                settings,
+                sampler,
+                rays,
+            );
             match next {
                 Some(next) => {
                     ray = next;
@@ -380,18 +377,6 @@ pub fn trace_path_deferring(
     l
 }
 
-/// What a path carries from vertex to vertex.
-pub(crate) struct PathProgress {
-    /// Throughput.
-    pub beta: Rgb,
-    /// How it arrives at the next vertex.
-    pub arrival: Arrival,
-    /// Depth of the next vertex.
-    pub depth: u32,
-    /// Thin sheets met along the path.
-    pub crossings: u32,
-}
-
 /// At the thin sheet `it`, met by a path arriving from `wo`: the choice drawn from the sampler's
 /// dimension of this crossing, on through the sheet (no bounce) or mirrored (a delta bounce,
 /// counted, with Russian roulette); the ray beyond, or `None` where the path ends. Out of line:
@@ -404,43 +389,37 @@ pub(crate) fn cross_sheet(
     scene: &Scene,
     it: &Interaction,
     wo: Vec3,
-    state: &mut PathProgress,
+    (beta, arrival, depth, crossings): (&mut Rgb, &mut Arrival, &mut u32, &mut u32),
     eta: f32,
     settings: &PathSettings,
     sampler: &mut dyn Sampler,
     rays: &mut RayCounts,
 ) -> Option<Ray> {
     let sheet = scene.thin_sheet(it.shape)?;
-    state.crossings += 1;
-    if state.crossings > crate::scene::MAX_SHEET_CROSSINGS {
+    *crossings += 1;
+    if *crossings > crate::scene::MAX_SHEET_CROSSINGS {
         return None;
     }
-    sampler.set_dimension(dims::sheet(state.depth, state.crossings));
+    sampler.set_dimension(dims::sheet(*depth, *crossings));
     let cos = it.frame.n.dot(wo);
     let r = sheet.reflectance(cos);
     if sampler.next_1d() >= r {
-        state.beta *= sheet.specular_transmittance;
+        *beta *= sheet.specular_transmittance;
         return Some(scene.spawn_ray(it, -wo));
     }
-    if state.depth + 1 >= settings.max_depth {
+    if *depth + 1 >= settings.max_depth {
         return None;
     }
-    state.beta *= sheet.specular_reflectance;
-    state.arrival = Arrival::Bsdf {
+    *beta *= sheet.specular_reflectance;
+    *arrival = Arrival::Bsdf {
         p: it.p,
         pdf: r,
         delta: true,
         light_samples: 0,
     };
     rays.bounce += 1;
-    count_and_roulette(
-        &mut state.depth,
-        &mut state.beta,
-        eta,
-        settings.rr_depth,
-        sampler,
-    )
-    .then(|| scene.spawn_ray(it, 2.0 * cos * it.frame.n - wo))
+    count_and_roulette(depth, beta, eta, settings.rr_depth, sampler)
+        .then(|| scene.spawn_ray(it, 2.0 * cos * it.frame.n - wo))
 }
 
 /// The sample of `strategy`'s part of the BSDF that continues a path at vertex `depth` (its

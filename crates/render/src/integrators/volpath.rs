@@ -6,9 +6,7 @@
 //! surfaces alike (1: emitters seen directly, 2: direct light); crossing a `null` boundary does
 //! not count. Medium emission (an ircache extension) is gathered along every segment.
 
-use super::path_continuation::{
-    count_and_roulette, cross_sheet, Arrival, PathProgress, PathSettings,
-};
+use super::path_continuation::{count_and_roulette, cross_sheet, Arrival, PathSettings};
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::gather::ShadingPoint;
 use crate::media::tracking::{
@@ -205,26 +203,21 @@ impl VolPathIntegrator {
             }
             if scene.has_thin_sheets && shape.thin_sheet {
                 // A window pane, as in `path`: crossed without a bounce, or mirrored.
-                let mut state = PathProgress {
-                    beta,
-                    arrival,
-                    depth,
-                    crossings,
-                };
                 let settings = PathSettings {
                     max_depth,
                     rr_depth: self.rr_depth,
                     first_light_samples: 1,
                 };
                 let next = cross_sheet(
-                    scene, &it, -ray.d, &mut state, eta, &settings, sampler, rays,
+                    scene,
+                    &it,
+                    -ray.d,
+                    (&mut beta, &mut arrival, &mut depth, &mut crossings),
+                    eta,
+                    &settings,
+                    sampler,
+                    rays,
                 );
-                PathProgress {
-                    beta,
-                    arrival,
-                    depth,
-                    crossings,
-                } = state;
                 let Some(next) = next else {
                     break;
                 };
