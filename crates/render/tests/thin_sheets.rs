@@ -171,3 +171,34 @@ fn an_area_light_behind_a_pane_matches_its_quadrature() {
         );
     }
 }
+
+#[test]
+fn a_sky_behind_a_pane_is_left_to_the_light_samples() {
+    use ircache_render::irradiance_cache::environment::{glazing_note, held_environment};
+    use ircache_render::irradiance_cache::params::CachedEnvironment;
+    // A floor under a pane and a constant sky: records cannot hold the sky seen through the
+    // pane, so every mode leaves it to the light samples (an explicit one says so).
+    let desc = scene(
+        sensor(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, 40.0, 4, 1),
+        common::path(3),
+        vec![floor(), pane(1.0)],
+        vec![EmitterDesc::Constant {
+            radiance: Rgb::new(0.3, 0.4, 0.6),
+        }],
+    );
+    let built = Scene::build(&desc).expect("scene builds");
+    for mode in [
+        CachedEnvironment::Auto,
+        CachedEnvironment::Glossy,
+        CachedEnvironment::All,
+    ] {
+        assert_eq!(
+            held_environment(&built, mode),
+            ircache_render::irradiance_cache::environment::HeldEnvironment::None
+        );
+        assert_eq!(
+            glazing_note(&built, mode).is_some(),
+            mode != CachedEnvironment::Auto
+        );
+    }
+}

@@ -25,7 +25,10 @@ pub fn prepare_cache(
     let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
     let header = header(scene, ic, settings.width);
     let mut loaded = 0u64;
-    let mut notes = Vec::new();
+    let mut notes: Vec<String> =
+        super::environment::glazing_note(scene, ic.params.cached_environment)
+            .into_iter()
+            .collect();
     let mut shared = match &ic.cache_file {
         None => None,
         Some(path) => {
