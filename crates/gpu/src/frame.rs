@@ -182,7 +182,11 @@ impl GpuFrame {
                 return unsupported(format!("shape {k} ({name}) is a sphere"));
             }
             let bsdf = material.at(ircache_math::Vec2::ZERO);
-            if material.is_textured() || !bsdf.is_diffuse_only() || shape.area_light.is_some() {
+            if material.is_textured()
+                || material.is_masked()
+                || !bsdf.is_diffuse_only()
+                || shape.area_light.is_some()
+            {
                 return unsupported(format!(
                     "shape {k} ({name}) is not a Lambertian surface of constant albedo"
                 ));

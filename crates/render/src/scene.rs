@@ -69,6 +69,9 @@ pub struct Shape {
     /// A thin dielectric sheet (a window pane, [`Material::thin_sheet`]): paths cross it
     /// without a bounce and shadow rays through it carry its transmittance.
     pub thin_sheet: bool,
+    /// A `mask` around its material: paths pass through it where it is not opaque
+    /// ([`Material::opacity`]), shadow rays carry 1 − opacity.
+    pub masked: bool,
     /// The media on its two sides (indices into [`Scene::media`]).
     pub media: ircache_scene::MediumInterface,
 }
@@ -117,8 +120,9 @@ pub struct Scene {
     /// Some emitter can be found by a ray (an area light or an environment); when false, a path's
     /// last segment, which could only pick up emission, need not be traced.
     pub has_hittable_emitters: bool,
-    /// Some shape is a thin sheet ([`Shape::thin_sheet`]): shadow rays look for them.
-    pub has_thin_sheets: bool,
+    /// Some shape is a thin sheet or masked ([`Shape::thin_sheet`], [`Shape::masked`]): rays
+    /// and shadow rays pass through them.
+    pub has_see_through: bool,
     /// Content hash of what light transport depends on (geometry, materials, emitters; not the
     /// camera, not where the files are): a cache file records it.
     pub content_hash: u64,
@@ -261,6 +265,7 @@ impl Scene {
                 flat,
                 null: matches!(*s.bsdf, ircache_scene::BsdfDesc::Null),
                 thin_sheet: materials[i].thin_sheet().is_some(),
+                masked: materials[i].is_masked(),
                 media: s.media,
             });
         }
@@ -299,7 +304,7 @@ impl Scene {
             media_location,
             content_hash: content_hash(desc),
             has_hittable_emitters,
-            has_thin_sheets: shapes.iter().any(|s| s.thin_sheet),
+            has_see_through: shapes.iter().any(|s| s.thin_sheet || s.masked),
             accel,
             shapes,
             materials,
@@ -359,35 +364,36 @@ impl Scene {
     /// What reaches the end of a shadow ray: nothing where a surface blocks it, all where none
     /// does, and where it only crosses thin sheets (window panes) their transmittance at the
     /// angle it crosses them, `τ (1 − R')` each (Radiance's glass passes source rays the same
-    /// way; Mitsuba 3 blocks them, so a sun behind a window never lights a room there).
+    /// way; Mitsuba 3 blocks them, so a sun behind a window never lights a room there), and
+    /// masks what their opacity leaves.
     #[inline]
     #[must_use]
     pub fn shadow_transmittance(&self, ray: &Ray) -> Rgb {
-        if !self.has_thin_sheets {
+        if !self.has_see_through {
             return if self.accel.occluded(ray) {
                 Rgb::ZERO
             } else {
                 Rgb::ONE
             };
         }
-        self.transmittance_through_sheets(ray)
+        self.transmittance_through(ray)
     }
 
     #[inline(never)]
-    fn transmittance_through_sheets(&self, ray: &Ray) -> Rgb {
-        match self.intersect_beyond_sheets(ray) {
+    fn transmittance_through(&self, ray: &Ray) -> Rgb {
+        match self.intersect_opaque(ray) {
             (None, tr) => tr,
             (Some(_), _) => Rgb::ZERO,
         }
     }
 
-    /// The first surface along `ray` that is not a thin sheet, with the transmittance of the
-    /// sheets crossed before it, `τ (1 − R')` each at the angle crossed: what a BSDF sample
-    /// that sees through window panes finds (as light samples do). Past
-    /// [`MAX_SHEET_CROSSINGS`] sheets, nothing with zero transmittance.
+    /// The first opaque surface along `ray`, with the transmittance of what it crossed before:
+    /// thin sheets, `τ (1 − R')` each at the angle crossed, and masks, 1 − their opacity there.
+    /// What a BSDF sample that sees through panes and cut-outs finds (as light samples do).
+    /// Past [`MAX_SHEET_CROSSINGS`] crossings, nothing with zero transmittance.
     #[must_use]
-    pub fn intersect_beyond_sheets(&self, ray: &Ray) -> (Option<Interaction>, Rgb) {
-        if !self.has_thin_sheets {
+    pub fn intersect_opaque(&self, ray: &Ray) -> (Option<Interaction>, Rgb) {
+        if !self.has_see_through {
             return (self.intersect(ray), Rgb::ONE);
         }
         let end = ray.t_max.is_finite().then(|| ray.o + ray.d * ray.t_max);
@@ -397,10 +403,20 @@ impl Scene {
             let Some(it) = self.intersect(&ray) else {
                 return (None, tr);
             };
-            let Some(sheet) = self.thin_sheet(it.shape) else {
-                return (Some(it), tr);
-            };
-            tr *= sheet.transmittance(it.frame.n.dot(ray.d));
+            let shape = &self.shapes[it.shape as usize];
+            if shape.masked {
+                // A cut-out: what its opacity leaves.
+                let open = 1.0 - self.materials[shape.material].opacity(it.uv);
+                if open <= 0.0 {
+                    return (Some(it), tr);
+                }
+                tr *= open;
+            } else {
+                let Some(sheet) = self.thin_sheet(it.shape) else {
+                    return (Some(it), tr);
+                };
+                tr *= sheet.transmittance(it.frame.n.dot(ray.d));
+            }
             // On from just beyond the sheet, to the same end.
             let o = offset_ray_origin(it.p, it.ng, ray.d, self.scale);
             ray = match end {

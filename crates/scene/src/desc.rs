@@ -494,6 +494,14 @@ pub enum BsdfDesc {
         /// Transmission scale.
         specular_transmittance: Rgb,
     },
+    /// Mitsuba's `mask`: the nested BSDF where the surface is, with probability `opacity`;
+    /// elsewhere light passes straight through (cut-outs: leaves, fences).
+    Mask {
+        /// Opacity in [0, 1] (a texture's luminance).
+        opacity: TextureDesc,
+        /// The BSDF of the opaque part.
+        nested: Arc<BsdfDesc>,
+    },
     /// Rough dielectric interface (Walter et al. 2007): microfacet reflection and refraction.
     RoughDielectric {
         /// Distribution (default Beckmann).
@@ -606,6 +614,10 @@ impl BsdfDesc {
                 if let Some(b) = back {
                     b.for_each_bitmap(f);
                 }
+            }
+            BsdfDesc::Mask { opacity, nested } => {
+                tex(opacity, f);
+                nested.for_each_bitmap(f);
             }
             BsdfDesc::NormalMap {
                 normals: b, nested, ..

@@ -536,3 +536,19 @@ fn serialized_mesh_errors_name_the_reference() {
         assert!(err.contains(file), "{err}");
     }
 }
+
+#[test]
+fn a_mask_needs_a_bsdf_and_an_opacity_in_range() {
+    let (err, path) = load_err(
+        "mask-empty",
+        &scene("  <shape type=\"cube\">\n    <bsdf type=\"mask\"/>\n  </shape>"),
+    );
+    assert_error(&err, &path, 4, 5, "a nested BSDF is required");
+    let (err, path) = load_err(
+        "mask-range",
+        &scene(
+            "  <shape type=\"cube\">\n    <bsdf type=\"mask\">\n      <float name=\"opacity\" value=\"1.5\"/>\n      <bsdf type=\"diffuse\"/>\n    </bsdf>\n  </shape>",
+        ),
+    );
+    assert_error(&err, &path, 5, 7, "opacity");
+}

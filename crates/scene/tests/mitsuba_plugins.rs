@@ -452,3 +452,20 @@ fn serialized_meshes_by_index_with_normals_as_mitsuba() {
     let expected = Vec3::splat(-1.0).normalize();
     assert!((n - expected).length() < 1e-5, "{n}");
 }
+
+#[test]
+fn masks_wrap_a_bsdf_with_an_opacity() {
+    let s = load(
+        "<shape type=\"cube\"><bsdf type=\"mask\"><float name=\"opacity\" value=\"0.25\"/>\
+           <bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf></bsdf></shape>\
+         <shape type=\"cube\"><bsdf type=\"mask\"><bsdf type=\"diffuse\"/></bsdf></shape>",
+    );
+    let BsdfDesc::Mask { opacity, nested } = &*s.shapes[0].bsdf else {
+        panic!("a mask")
+    };
+    assert!(matches!(opacity, TextureDesc::Constant(c) if *c == Rgb::splat(0.25)));
+    assert!(matches!(&**nested, BsdfDesc::TwoSided { .. }));
+    // Mitsuba's default opacity.
+    assert!(matches!(&*s.shapes[1].bsdf,
+        BsdfDesc::Mask { opacity: TextureDesc::Constant(c), .. } if *c == Rgb::splat(0.5)));
+}

@@ -444,10 +444,11 @@ impl Compiled {
             },
             // Nested twosided: the inner front model (Mitsuba does not nest them either).
             BsdfDesc::TwoSided { front, .. } => Compiled::new(front),
-            // Normal and bump maps act on the shading frame (`Material::perturb`).
-            BsdfDesc::NormalMap { nested, .. } | BsdfDesc::BumpMap { nested, .. } => {
-                Compiled::new(nested)
-            }
+            // Normal and bump maps act on the shading frame (`Material::perturb`); a mask's
+            // opacity on the path (`Material::opacity`), where it wraps the material.
+            BsdfDesc::NormalMap { nested, .. }
+            | BsdfDesc::BumpMap { nested, .. }
+            | BsdfDesc::Mask { nested, .. } => Compiled::new(nested),
             BsdfDesc::Plastic {
                 diffuse_reflectance,
                 specular_reflectance,
@@ -617,6 +618,9 @@ pub struct Material {
     back: Option<Compiled>,
     /// A normal or bump map.
     perturbation: Option<Perturbation>,
+    /// A mask's opacity (Mitsuba's `mask` around the material, or around both sides of a
+    /// `twosided`): the share of paths that meet the surface, the rest passing through.
+    opacity: Option<Texture>,
 }
 
 /// A perturbation of the shading normal by a texture (normal or bump map).
@@ -675,7 +679,9 @@ impl Material {
     #[must_use]
     pub fn thin_sheet(&self) -> Option<ThinDielectric> {
         match (&self.front, &self.back, &self.perturbation) {
-            (Compiled::Fixed(Lobe::ThinDielectric(t)), None, None) => Some(*t),
+            (Compiled::Fixed(Lobe::ThinDielectric(t)), None, None) if self.opacity.is_none() => {
+                Some(*t)
+            }
             _ => None,
         }
     }
@@ -683,6 +689,41 @@ impl Material {
     /// Compiles a description.
     #[must_use]
     pub fn from_desc(desc: &BsdfDesc) -> Material {
+        let (mut m, opacity) = match desc {
+            BsdfDesc::Mask { opacity, nested } => (Material::from_unmasked(nested), Some(opacity)),
+            // A mask inside `twosided` masks both sides.
+            BsdfDesc::TwoSided { front, back: None } => match front.as_ref() {
+                BsdfDesc::Mask { opacity, nested } => {
+                    let unmasked = BsdfDesc::TwoSided {
+                        front: nested.clone(),
+                        back: None,
+                    };
+                    (Material::from_unmasked(&unmasked), Some(opacity))
+                }
+                _ => (Material::from_unmasked(desc), None),
+            },
+            d => (Material::from_unmasked(d), None),
+        };
+        m.opacity = opacity.map(Texture::from_desc);
+        m
+    }
+
+    /// The share of paths that meet the surface at `uv` (its mask's opacity, a texture's
+    /// luminance clamped to [0, 1]); 1 without a mask.
+    #[must_use]
+    pub fn opacity(&self, uv: Vec2) -> f32 {
+        self.opacity
+            .as_ref()
+            .map_or(1.0, |t| t.eval(uv).luminance().clamp(0.0, 1.0))
+    }
+
+    /// True when the material has a mask.
+    #[must_use]
+    pub fn is_masked(&self) -> bool {
+        self.opacity.is_some()
+    }
+
+    fn from_unmasked(desc: &BsdfDesc) -> Material {
         let (desc, perturbation) = match desc {
             BsdfDesc::NormalMap { normals, nested } => (
                 nested.as_ref(),
@@ -714,12 +755,14 @@ impl Material {
                     front: f,
                     back: Some(b),
                     perturbation: None,
+                    opacity: None,
                 }
             }
             d => Material {
                 front: Compiled::new(d),
                 back: None,
                 perturbation: None,
+                opacity: None,
             },
         };
         // A normal or bump map inside twosided applies to both sides.
@@ -783,6 +826,10 @@ impl Material {
         textured(&self.front)
             || self.back.as_ref().is_some_and(textured)
             || self.perturbation.is_some()
+            || self
+                .opacity
+                .as_ref()
+                .is_some_and(|t| !matches!(t, Texture::Constant(_)))
     }
 
     /// True for Mitsuba's `twosided` wrapper.

@@ -113,7 +113,7 @@ pub fn estimate_direct(
         let next = scene.spawn_ray(it, wi);
         rays.bounce += 1;
         // Through window panes, as the light samples see (`Scene::shadow_transmittance`).
-        let (found, through) = scene.intersect_beyond_sheets(&next);
+        let (found, through) = scene.intersect_opaque(&next);
         if through.is_black() {
             continue;
         }

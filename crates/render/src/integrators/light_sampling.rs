@@ -33,7 +33,7 @@ impl DeferredShadows {
     /// Traces the shadow rays in packets of 16 and adds what each unoccluded one brings to its
     /// path's radiance in `l` (indexed by owner), in the order the samples were taken.
     pub fn resolve(&mut self, scene: &Scene, l: &mut [Rgb]) {
-        if scene.has_thin_sheets {
+        if scene.has_see_through {
             // Rays that cross window panes carry their transmittance: one at a time.
             for (ray, &(value, owner)) in self.rays.iter().zip(&self.light) {
                 l[owner as usize] += value * scene.shadow_transmittance(ray);
@@ -216,7 +216,7 @@ pub fn sample_lights(
         // Window panes on the way pass what they transmit (`Scene::shadow_transmittance`).
         let mut through_sheets = None;
         if matches!(shadows, Shadows::Traced) {
-            if scene.has_thin_sheets {
+            if scene.has_see_through {
                 let tr = scene.shadow_transmittance(&shadow_ray);
                 if tr.is_black() {
                     continue;

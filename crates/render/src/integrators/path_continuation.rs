@@ -252,12 +252,11 @@ pub fn trace_path_deferring(
                 }
             }
         }
-        if scene.has_thin_sheets && shape.thin_sheet {
-            // A window pane: passed through without a bounce (light samples see through it,
-            // `Scene::shadow_transmittance`, so the emission beyond keeps the weight of the
-            // vertex before), or a mirror bounce with probability R'.
-            travelled += it.t;
-            let next = cross_sheet(
+        if scene.has_see_through && (shape.thin_sheet || shape.masked) {
+            // A window pane or a mask: passed through without a bounce (light samples see
+            // through it, `Scene::shadow_transmittance`, so the emission beyond keeps the weight
+            // of the vertex before), mirrored by a pane, or a mask's surface met.
+            match cross_see_through(
                 scene,
                 it,
                 wo,
@@ -266,13 +265,14 @@ pub fn trace_path_deferring(
                 settings,
                 sampler,
                 rays,
-            );
-            match next {
-                Some(next) => {
+            ) {
+                Crossing::On(next) => {
+                    travelled += it.t;
                     ray = next;
                     continue;
                 }
-                None => break,
+                Crossing::Stay => {}
+                Crossing::End => break,
             }
         }
         if depth + 1 >= max_depth {
@@ -377,15 +377,26 @@ pub fn trace_path_deferring(
     l
 }
 
-/// At the thin sheet `it`, met by a path arriving from `wo`: the choice drawn from the sampler's
-/// dimension of this crossing, on through the sheet (no bounce) or mirrored (a delta bounce,
-/// counted, with Russian roulette); the ray beyond, or `None` where the path ends. Out of line:
-/// scenes without sheets run the loop as before (cold: laid out away from the loop, which ran
-/// 3 % slower on the Cornell box with this branch inline).
+/// What a path does at a surface it may pass through ([`cross_see_through`]).
+pub(crate) enum Crossing {
+    /// On beyond it (through a pane or a mask's open part, or mirrored by a pane).
+    On(Ray),
+    /// The surface is met: the vertex is shaded with the mask's nested BSDF.
+    Stay,
+    /// The path ends here.
+    End,
+}
+
+/// At the thin sheet or masked surface `it`, met by a path arriving from `wo`: the choice drawn
+/// from the sampler's dimension of this crossing. A pane is crossed (no bounce) or mirrors the
+/// path (a delta bounce, counted, with Russian roulette) with probability R'; a mask is met
+/// with probability its opacity there, else crossed. Out of line: scenes without either run
+/// the loop as before (cold: laid out away from the loop, which ran 3 % slower on the Cornell
+/// box with this branch inline).
 #[allow(clippy::too_many_arguments)]
 #[cold]
 #[inline(never)]
-pub(crate) fn cross_sheet(
+pub(crate) fn cross_see_through(
     scene: &Scene,
     it: &Interaction,
     wo: Vec3,
@@ -394,21 +405,32 @@ pub(crate) fn cross_sheet(
     settings: &PathSettings,
     sampler: &mut dyn Sampler,
     rays: &mut RayCounts,
-) -> Option<Ray> {
-    let sheet = scene.thin_sheet(it.shape)?;
+) -> Crossing {
     *crossings += 1;
     if *crossings > crate::scene::MAX_SHEET_CROSSINGS {
-        return None;
+        return Crossing::End;
     }
     sampler.set_dimension(dims::sheet(*depth, *crossings));
+    let u = sampler.next_1d();
+    let shape = &scene.shapes[it.shape as usize];
+    if shape.masked {
+        return if u < scene.materials[shape.material].opacity(it.uv) {
+            Crossing::Stay
+        } else {
+            Crossing::On(scene.spawn_ray(it, -wo))
+        };
+    }
+    let Some(sheet) = scene.thin_sheet(it.shape) else {
+        return Crossing::Stay;
+    };
     let cos = it.frame.n.dot(wo);
     let r = sheet.reflectance(cos);
-    if sampler.next_1d() >= r {
+    if u >= r {
         *beta *= sheet.specular_transmittance;
-        return Some(scene.spawn_ray(it, -wo));
+        return Crossing::On(scene.spawn_ray(it, -wo));
     }
     if *depth + 1 >= settings.max_depth {
-        return None;
+        return Crossing::End;
     }
     *beta *= sheet.specular_reflectance;
     *arrival = Arrival::Bsdf {
@@ -418,8 +440,11 @@ pub(crate) fn cross_sheet(
         light_samples: 0,
     };
     rays.bounce += 1;
-    count_and_roulette(depth, beta, eta, settings.rr_depth, sampler)
-        .then(|| scene.spawn_ray(it, 2.0 * cos * it.frame.n - wo))
+    if count_and_roulette(depth, beta, eta, settings.rr_depth, sampler) {
+        Crossing::On(scene.spawn_ray(it, 2.0 * cos * it.frame.n - wo))
+    } else {
+        Crossing::End
+    }
 }
 
 /// The sample of `strategy`'s part of the BSDF that continues a path at vertex `depth` (its

@@ -6,7 +6,9 @@
 //! surfaces alike (1: emitters seen directly, 2: direct light); crossing a `null` boundary does
 //! not count. Medium emission (an ircache extension) is gathered along every segment.
 
-use super::path_continuation::{count_and_roulette, cross_sheet, Arrival, PathSettings};
+use super::path_continuation::{
+    count_and_roulette, cross_see_through, Arrival, Crossing, PathSettings,
+};
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::gather::ShadingPoint;
 use crate::media::tracking::{
@@ -201,14 +203,14 @@ impl VolPathIntegrator {
                 ray = scene.spawn_ray(&it, ray.d);
                 continue;
             }
-            if scene.has_thin_sheets && shape.thin_sheet {
-                // A window pane, as in `path`: crossed without a bounce, or mirrored.
+            if scene.has_see_through && (shape.thin_sheet || shape.masked) {
+                // A window pane or a mask, as in `path`.
                 let settings = PathSettings {
                     max_depth,
                     rr_depth: self.rr_depth,
                     first_light_samples: 1,
                 };
-                let next = cross_sheet(
+                match cross_see_through(
                     scene,
                     &it,
                     -ray.d,
@@ -217,13 +219,15 @@ impl VolPathIntegrator {
                     &settings,
                     sampler,
                     rays,
-                );
-                let Some(next) = next else {
-                    break;
-                };
-                medium = medium_after(shape.media, it.ng, next.d, medium);
-                ray = next;
-                continue;
+                ) {
+                    Crossing::On(next) => {
+                        medium = medium_after(shape.media, it.ng, next.d, medium);
+                        ray = next;
+                        continue;
+                    }
+                    Crossing::Stay => {}
+                    Crossing::End => break,
+                }
             }
             let wo = -ray.d;
             if let Some(light) = shape.area_light {

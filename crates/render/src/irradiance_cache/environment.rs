@@ -51,7 +51,7 @@ pub fn held_environment(scene: &Scene, mode: CachedEnvironment) -> HeldEnvironme
     // A gather ray that leaves through a window pane ends in the path it continues, which
     // holds no environment: the sky beyond glazing is left to the light samples, which see
     // through panes (`Scene::shadow_transmittance`).
-    if !scene.lights.has_environment() || scene.has_thin_sheets {
+    if !scene.lights.has_environment() || scene.has_see_through {
         return HeldEnvironment::None;
     }
     match mode {
@@ -71,7 +71,7 @@ pub fn held_environment(scene: &Scene, mode: CachedEnvironment) -> HeldEnvironme
 /// where they cannot (the light samples estimate it all instead).
 #[must_use]
 pub fn glazing_note(scene: &Scene, mode: CachedEnvironment) -> Option<String> {
-    (scene.has_thin_sheets
+    (scene.has_see_through
         && scene.lights.has_environment()
         && matches!(mode, CachedEnvironment::Glossy | CachedEnvironment::All))
     .then(|| {

@@ -275,6 +275,14 @@ fn transmittance_crossing(
             if tr.is_black() {
                 return Rgb::ZERO;
             }
+        } else if shape.masked {
+            // A mask: what its opacity leaves open there.
+            let it = scene.interaction(&ray, &hit);
+            let open = 1.0 - scene.materials[shape.material].opacity(it.uv);
+            if open <= 0.0 {
+                return Rgb::ZERO;
+            }
+            tr *= open;
         } else if !shape.null {
             return Rgb::ZERO;
         }

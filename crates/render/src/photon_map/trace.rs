@@ -190,6 +190,15 @@ fn trace_one(
         };
         let incoming = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
+        if shape.masked && rng.next_f32() >= scene.materials[shape.material].opacity(it.uv) {
+            // A mask's open part: crossed, as light samples cross it.
+            crossings += 1;
+            if crossings > crate::scene::MAX_SHEET_CROSSINGS {
+                break;
+            }
+            ray = scene.spawn_ray(&it, ray.d);
+            continue;
+        }
         if let Some(sheet) = scene.thin_sheet(it.shape) {
             crossings += 1;
             if crossings > crate::scene::MAX_SHEET_CROSSINGS {

@@ -30,6 +30,7 @@ const BSDFS: &[&str] = &[
     "thindielectric",
     "normalmap",
     "bumpmap",
+    "mask",
     "null",
 ];
 const TEXTURES: &[&str] = &["bitmap"];
@@ -84,6 +85,22 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
                     nested,
                 }
             }
+        }
+        "mask" => {
+            let opacity = texture_param(ctx, p, "opacity", 0.5)?;
+            if let (TextureDesc::Constant(c), Some(prop)) = (&opacity, p.get("opacity")) {
+                check_unit_range(*c, "opacity", prop)?;
+            }
+            let mut nested = None;
+            for (obj, prop) in p.objects(&ctx.ids)? {
+                match obj.tag.as_str() {
+                    "bsdf" if nested.is_none() => nested = Some(build_bsdf(ctx, &obj)?),
+                    "texture" if prop.name == "opacity" => {}
+                    _ => expect_tag(&obj, prop, "one nested bsdf and an opacity texture")?,
+                }
+            }
+            let nested = nested.ok_or_else(|| p.error("a nested BSDF is required"))?;
+            BsdfDesc::Mask { opacity, nested }
         }
         "twosided" => {
             let nested = p.objects(&ctx.ids)?;

@@ -1,9 +1,11 @@
-//! Window panes (`thindielectric` sheets): light samples see through them with their
-//! transmittance τ(1 − R'), R' = 2R/(1 + R) of the Fresnel reflectance R at the angle crossed,
-//! and paths cross them without a bounce. A sun behind a pane lights a floor by exactly that
-//! factor (against the open floor and the closed form), two panes by its square, in every
-//! integrator; an area light behind a pane, found by light samples and by BSDF samples through
-//! the pane together (MIS), matches a quadrature of its irradiance.
+//! Surfaces that let light through without a bounce. Window panes (`thindielectric` sheets):
+//! light samples see through them with their transmittance τ(1 − R'), R' = 2R/(1 + R) of the
+//! Fresnel reflectance R at the angle crossed, and paths cross them without a bounce. A sun
+//! behind a pane lights a floor by exactly that factor (against the open floor and the closed
+//! form), two panes by its square, in every integrator; an area light behind a pane, found by
+//! light samples and by BSDF samples through the pane together (MIS), matches a quadrature of its
+//! irradiance. Masks (Mitsuba's `mask`): a sun behind one lights the floor by 1 − opacity, and
+//! a camera sees the mask's surface in that share of its samples.
 
 mod common;
 use common::{diffuse, quad, scene, sensor};
@@ -201,4 +203,83 @@ fn a_sky_behind_a_pane_is_left_to_the_light_samples() {
             mode != CachedEnvironment::Auto
         );
     }
+}
+
+fn masked_quad(y: f32, opacity: f32, albedo: f32) -> ShapeDesc {
+    let bsdf = Arc::new(BsdfDesc::Mask {
+        opacity: TextureDesc::Constant(Rgb::splat(opacity)),
+        nested: Arc::new(BsdfDesc::TwoSided {
+            front: diffuse(Rgb::splat(albedo)),
+            back: None,
+        }),
+    });
+    quad(
+        [
+            Vec3::new(-50.0, y, -50.0),
+            Vec3::new(50.0, y, -50.0),
+            Vec3::new(50.0, y, 50.0),
+            Vec3::new(-50.0, y, 50.0),
+        ],
+        bsdf,
+        None,
+    )
+}
+
+#[test]
+fn a_sun_behind_a_mask_lights_the_floor_by_what_it_leaves_open() {
+    let theta = 30f32.to_radians();
+    let irradiance = 2.0;
+    let sun = || EmitterDesc::Directional {
+        direction: Vec3::new(0.0, -theta.cos(), theta.sin()),
+        irradiance: Rgb::splat(irradiance),
+    };
+    let open = f64::from(RHO / PI * irradiance * theta.cos());
+    for integrator in ["path", "direct", "volpath", "ic"] {
+        let got = floor_radiance(
+            vec![floor(), masked_quad(1.0, 0.3, 0.8)],
+            vec![sun()],
+            (integrator, 2),
+            20.0,
+            4,
+        );
+        assert!(
+            (got / (0.7 * open) - 1.0).abs() < 1e-5,
+            "{integrator}: {got} against {}",
+            0.7 * open
+        );
+    }
+}
+
+#[test]
+fn a_camera_sees_a_mask_in_the_share_of_its_opacity() {
+    // Looking up from the lit floor's height at a masked ceiling under a bright sky: the sky is
+    // seen through the open part, the ceiling (black, lit by nothing above) in the rest.
+    let sky = EmitterDesc::Constant {
+        radiance: Rgb::splat(2.0),
+    };
+    let mut desc = scene(
+        sensor(
+            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::new(0.0, 2.0, 0.0),
+            10.0,
+            8,
+            4096,
+        ),
+        common::path(2),
+        vec![masked_quad(1.0, 0.25, 0.0)],
+        vec![sky],
+    );
+    desc.integrator.kind = "path".into();
+    let built = Scene::build(&desc).expect("scene builds");
+    let integ = Integrator::from_desc(&desc.integrator).expect("integrator");
+    let settings = RenderSettings::from_desc(&desc, 3, 2).expect("sampler");
+    let out = render(&built, &integ, &settings, &|_| {}).expect("render");
+    let (mean, error) = common::mean_and_error(&out.image);
+    let expected = 0.75 * 2.0;
+    assert!(
+        (mean.g - expected).abs() < 4.0 * error.g.max(1e-4) + 5e-3,
+        "{} ± {} against {expected}",
+        mean.g,
+        error.g
+    );
 }
