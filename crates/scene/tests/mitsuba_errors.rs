@@ -552,3 +552,15 @@ fn a_mask_needs_a_bsdf_and_an_opacity_in_range() {
     );
     assert_error(&err, &path, 5, 7, "opacity");
 }
+
+#[test]
+fn a_mask_on_one_side_of_a_twosided_is_refused() {
+    // The renderer masks a shape as a whole: a mask on the back alone would be dropped.
+    let (err, path) = load_err(
+        "mask-deep",
+        &scene(
+            "  <shape type=\"cube\">\n    <bsdf type=\"twosided\">\n      <bsdf type=\"diffuse\"/>\n      <bsdf type=\"mask\"><bsdf type=\"diffuse\"/></bsdf>\n    </bsdf>\n  </shape>",
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "a mask must wrap the shape's whole BSDF");
+}

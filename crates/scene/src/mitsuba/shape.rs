@@ -156,7 +156,16 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
                         "a shape can have only one BSDF",
                     ));
                 }
-                bsdf = Some(build_bsdf(ctx, &obj)?);
+                let built = build_bsdf(ctx, &obj)?;
+                if !mask_placed_where_served(&built) {
+                    return Err(SceneError::at(
+                        prop.loc.clone(),
+                        "a mask must wrap the shape's whole BSDF (or sit directly inside a \
+                         one-sided twosided): deeper inside normal maps, bump maps or one side \
+                         of a twosided it is not rendered",
+                    ));
+                }
+                bsdf = Some(built);
             }
             "emitter" => {
                 if emitter.is_some() {
@@ -266,4 +275,30 @@ fn read_obj_mesh(ctx: &Ctx, path: &Path) -> Result<TriangleMesh, SceneError> {
 /// Reads a PLY file.
 fn read_ply_mesh(path: &Path) -> Result<TriangleMesh, SceneError> {
     crate::mesh::ply::read_ply(path)
+}
+
+/// True when every `mask` in `bsdf` is where the renderer applies it: around the whole BSDF, or
+/// as the single model of a `twosided` (both sides then masked).
+fn mask_placed_where_served(bsdf: &crate::desc::BsdfDesc) -> bool {
+    use crate::desc::BsdfDesc;
+    fn has_mask(b: &BsdfDesc) -> bool {
+        match b {
+            BsdfDesc::Mask { .. } => true,
+            BsdfDesc::TwoSided { front, back } => {
+                has_mask(front) || back.as_deref().is_some_and(has_mask)
+            }
+            BsdfDesc::NormalMap { nested, .. } | BsdfDesc::BumpMap { nested, .. } => {
+                has_mask(nested)
+            }
+            _ => false,
+        }
+    }
+    match bsdf {
+        BsdfDesc::Mask { nested, .. } => !has_mask(nested),
+        BsdfDesc::TwoSided { front, back: None } => match front.as_ref() {
+            BsdfDesc::Mask { nested, .. } => !has_mask(nested),
+            other => !has_mask(other),
+        },
+        other => !has_mask(other),
+    }
 }
