@@ -31,13 +31,8 @@ fn sheet_transmittance(c: f64) -> f64 {
     1.0 - 2.0 * r / (1.0 + r)
 }
 
-fn pane(y: f32) -> ShapeDesc {
-    let bsdf = Arc::new(BsdfDesc::ThinDielectric {
-        int_ior: ETA,
-        ext_ior: 1.0,
-        specular_reflectance: Rgb::ONE,
-        specular_transmittance: Rgb::ONE,
-    });
+/// A horizontal square at height `y`, wider than every view here.
+fn horizontal(y: f32, bsdf: Arc<BsdfDesc>) -> ShapeDesc {
     quad(
         [
             Vec3::new(-50.0, y, -50.0),
@@ -48,6 +43,16 @@ fn pane(y: f32) -> ShapeDesc {
         bsdf,
         None,
     )
+}
+
+fn pane(y: f32) -> ShapeDesc {
+    let bsdf = Arc::new(BsdfDesc::ThinDielectric {
+        int_ior: ETA,
+        ext_ior: 1.0,
+        specular_reflectance: Rgb::ONE,
+        specular_transmittance: Rgb::ONE,
+    });
+    horizontal(y, bsdf)
 }
 
 fn floor() -> ShapeDesc {
@@ -213,16 +218,7 @@ fn masked_quad(y: f32, opacity: f32, albedo: f32) -> ShapeDesc {
             back: None,
         }),
     });
-    quad(
-        [
-            Vec3::new(-50.0, y, -50.0),
-            Vec3::new(50.0, y, -50.0),
-            Vec3::new(50.0, y, 50.0),
-            Vec3::new(-50.0, y, 50.0),
-        ],
-        bsdf,
-        None,
-    )
+    horizontal(y, bsdf)
 }
 
 #[test]
