@@ -128,6 +128,41 @@ pub fn disk(segments: u32) -> TriangleMesh {
     }
 }
 
+/// Mitsuba's `cylinder` (radius 1, from z = 0 to z = 1, open at both ends, normals outward)
+/// tessellated into `segments` (≥ 3) strips whose polygon has the circle's perimeter, so the
+/// lateral area is 2π; smooth normals (the circle's), uv = (φ/2π, z) as Mitsuba's.
+#[must_use]
+pub fn cylinder(segments: u32) -> TriangleMesh {
+    let n = segments.max(3);
+    let nf = f64::from(n);
+    let r = (std::f64::consts::PI / (nf * (std::f64::consts::PI / nf).sin())) as f32;
+    let mut positions = Vec::with_capacity(2 * (n as usize + 1));
+    let mut normals = Vec::with_capacity(2 * (n as usize + 1));
+    let mut uvs = Vec::with_capacity(2 * (n as usize + 1));
+    for i in 0..=n {
+        let a = i as f32 / n as f32;
+        let phi = a * std::f32::consts::TAU;
+        let (s, c) = if i == n { (0.0, 1.0) } else { phi.sin_cos() };
+        for z in [0.0, 1.0] {
+            positions.push(Vec3::new(r * c, r * s, z));
+            normals.push(Vec3::new(c, s, 0.0));
+            uvs.push(Vec2::new(a, z));
+        }
+    }
+    let indices = (0..n)
+        .flat_map(|i| {
+            let (a, d, b, c) = (2 * i, 2 * i + 1, 2 * i + 2, 2 * i + 3);
+            [[a, b, c], [a, c, d]]
+        })
+        .collect();
+    TriangleMesh {
+        positions,
+        normals: Some(normals),
+        uvs: Some(uvs),
+        indices,
+    }
+}
+
 /// Transforms a mesh in place: positions by `m` (affine part), normals by the inverse transpose
 /// of its linear part, renormalised. Returns `false` when the linear part is singular (the mesh
 /// is then left unchanged).

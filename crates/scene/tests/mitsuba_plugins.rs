@@ -469,3 +469,35 @@ fn masks_wrap_a_bsdf_with_an_opacity() {
     assert!(matches!(&*s.shapes[1].bsdf,
         BsdfDesc::Mask { opacity: TextureDesc::Constant(c), .. } if *c == Rgb::splat(0.5)));
 }
+
+#[test]
+fn cylinders_have_the_area_and_outward_normals_of_mitsubas() {
+    // Axis from (1, 2, 3) to (3, 4, 3), radius 0.5, under a mirroring to_world: lateral area
+    // 2π r h, normals outward and across the axis, winding agreeing with them.
+    let s = load(
+        "<shape type=\"cylinder\"><point name=\"p0\" x=\"1\" y=\"2\" z=\"3\"/>\
+           <point name=\"p1\" x=\"3\" y=\"4\" z=\"3\"/><float name=\"radius\" value=\"0.5\"/>\
+           <transform name=\"to_world\"><scale x=\"-1\"/></transform></shape>",
+    );
+    let Geometry::Mesh(m) = &s.shapes[0].geometry else {
+        panic!("a mesh")
+    };
+    let (p0, p1) = (Vec3::new(-1.0, 2.0, 3.0), Vec3::new(-3.0, 4.0, 3.0));
+    let axis = (p1 - p0).normalize();
+    let h = (p1 - p0).length();
+    let area = mesh_area(m);
+    let expected = 2.0 * std::f64::consts::PI * 0.5 * f64::from(h);
+    assert!(
+        (area / expected - 1.0).abs() < 1e-4,
+        "{area} against {expected}"
+    );
+    let normals = m.normals.as_ref().expect("smooth normals");
+    for (p, n) in m.positions.iter().zip(normals) {
+        let radial = (*p - p0) - axis * (*p - p0).dot(axis);
+        assert!((n.length() - 1.0).abs() < 1e-5 && n.dot(axis).abs() < 1e-4);
+        assert!(n.dot(radial.normalize()) > 0.999, "{n} at {p}");
+    }
+    for (k, t) in m.indices.iter().enumerate() {
+        assert!(triangle_normal(m, k).dot(normals[t[0] as usize]) > 0.9);
+    }
+}

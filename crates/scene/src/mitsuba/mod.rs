@@ -9,11 +9,12 @@
 //!
 //! Supported plugins: sensor `perspective`; film `hdrfilm`; rfilter `box`, `tent`, `gaussian`;
 //! samplers `independent`, `stratified`, `multijitter`, `ldsampler`, `orthogonal`; integrators
-//! `path`, `direct`, `irrcache`; shapes `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk`
-//! (tessellated), `sphere`; BSDFs `diffuse`, `twosided`, `plastic`, `roughplastic`, `conductor`,
-//! `roughconductor`, `dielectric`, `roughdielectric`, `thindielectric`, `null`; texture `bitmap`;
-//! emitters `area`, `point`, `spot`, `directional`, `constant`, `envmap`; media `homogeneous`,
-//! `heterogeneous` with volumes `constvolume`, `gridvolume` and phase functions `isotropic`, `hg`.
+//! `path`, `direct`, `irrcache`; shapes `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk` and
+//! `cylinder` (tessellated), `sphere`; BSDFs `diffuse`, `twosided`, `plastic`, `roughplastic`,
+//! `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `thindielectric`, `mask`,
+//! `null`; texture `bitmap`; emitters `area`, `point`, `spot`, `directional`, `constant`, `envmap`;
+//! media `homogeneous`, `heterogeneous` with volumes `constvolume`, `gridvolume` and phase
+//! functions `isotropic`, `hg`.
 
 mod bsdf;
 mod emitter;

@@ -1,4 +1,5 @@
-//! Shapes: `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk`, `sphere`, brought to world space.
+//! Shapes: `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk`, `cylinder`, `sphere`, brought
+//! to world space.
 //!
 //! Conventions (Mitsuba 3): positions are transformed by `to_world`, normals by its inverse
 //! transpose. Mitsuba's `rectangle` and `disk` are analytic with normal `to_world · n`; their
@@ -27,6 +28,7 @@ const SHAPES: &[&str] = &[
     "rectangle",
     "cube",
     "disk",
+    "cylinder",
     "sphere",
 ];
 
@@ -50,6 +52,45 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
             }
             if Mat3::from_mat4(to_world).determinant() < 0.0 {
                 shapes::reverse_winding(&mut mesh);
+            }
+            finish_analytic(p, mesh, flip)?
+        }
+        "cylinder" => {
+            // The unit cylinder placed on its axis p0 → p1 with its radius, then to_world.
+            let p0 = p.vector_opt("p0")?.map_or(Vec3::ZERO, |(v, _)| v);
+            let p1 = p.vector_opt("p1")?.map_or(Vec3::Z, |(v, _)| v);
+            let radius = match p.float_opt("radius")? {
+                None => 1.0,
+                Some((r, _)) if r > 0.0 && r.is_finite() => r,
+                Some((r, prop)) => {
+                    return Err(SceneError::at(
+                        prop.loc.clone(),
+                        format!("radius {r} must be positive"),
+                    ))
+                }
+            };
+            let axis = p1 - p0;
+            let length = axis.length();
+            if !(length > 0.0 && length.is_finite()) {
+                return Err(p.error("p0 and p1 must be distinct finite points"));
+            }
+            let frame = ircache_math::Frame::from_z(axis / length);
+            let place = Mat4::from_cols(
+                (frame.s * radius).extend(0.0),
+                (frame.t * radius).extend(0.0),
+                axis.extend(0.0),
+                p0.extend(1.0),
+            );
+            let mut mesh = shapes::cylinder(shapes::DISK_SEGMENTS);
+            if !shapes::transform_mesh(&mut mesh, &(to_world * place)) {
+                return Err(p.error("to_world is singular (it collapses the shape to zero area)"));
+            }
+            // The tessellation keeps winding about the outward normal under a mirroring map.
+            if Mat3::from_mat4(to_world * place).determinant() < 0.0 {
+                shapes::reverse_winding(&mut mesh);
+            }
+            if p.boolean("face_normals", false)? {
+                mesh.normals = None;
             }
             finish_analytic(p, mesh, flip)?
         }
