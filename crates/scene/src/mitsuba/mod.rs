@@ -11,10 +11,10 @@
 //! samplers `independent`, `stratified`, `multijitter`, `ldsampler`, `orthogonal`; integrators
 //! `path`, `direct`, `irrcache`; shapes `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk` and
 //! `cylinder` (tessellated), `sphere`; BSDFs `diffuse`, `twosided`, `plastic`, `roughplastic`,
-//! `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `thindielectric`, `mask`,
-//! `null`; texture `bitmap`; emitters `area`, `point`, `spot`, `directional`, `constant`, `envmap`;
-//! media `homogeneous`, `heterogeneous` with volumes `constvolume`, `gridvolume` and phase
-//! functions `isotropic`, `hg`.
+//! `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `thindielectric`, `bumpmap`,
+//! `normalmap`, `mask`, `null`; texture `bitmap`; emitters `area`, `point`, `spot`, `directional`,
+//! `constant`, `envmap`; media `homogeneous`, `heterogeneous` with volumes `constvolume`,
+//! `gridvolume` and phase functions `isotropic`, `hg`.
 
 mod bsdf;
 mod emitter;
