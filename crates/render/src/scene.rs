@@ -47,6 +47,28 @@ pub enum ShapeGeometry {
     },
 }
 
+/// The rest of a ray along `d` from `o` (just beyond a surface it crossed) to the same `end`
+/// (none: to infinity), aimed from `o` at the end itself: a ray kept parallel would pass the end
+/// at the offset's distance and, after a grazing crossing, reach a light's own surface before
+/// it. `None` where nothing is left of it.
+#[must_use]
+pub fn ray_on_to(o: Vec3, d: Vec3, end: Option<Vec3>) -> Option<Ray> {
+    let Some(end) = end else {
+        return Some(Ray::new(o, d));
+    };
+    let to_end = end - o;
+    let length = to_end.length();
+    if length.is_nan() || length <= 0.0 || to_end.dot(d) <= 0.0 {
+        return None;
+    }
+    Some(Ray {
+        o,
+        d: to_end / length,
+        t_min: 0.0,
+        t_max: length,
+    })
+}
+
 /// Most thin sheets a ray or a path meets before it is taken as blocked (double glazing is two).
 pub const MAX_SHEET_CROSSINGS: u32 = 64;
 
@@ -403,45 +425,32 @@ impl Scene {
             let Some(it) = self.intersect(&ray) else {
                 return (None, tr);
             };
-            let shape = &self.shapes[it.shape as usize];
-            if shape.masked {
-                // A cut-out: what its opacity leaves.
-                let open = 1.0 - self.materials[shape.material].opacity(it.uv);
-                if open <= 0.0 {
-                    return (Some(it), tr);
-                }
-                tr *= open;
-            } else {
-                let Some(sheet) = self.thin_sheet(it.shape) else {
-                    return (Some(it), tr);
-                };
-                tr *= sheet.transmittance(it.frame.n.dot(ray.d));
-            }
+            let Some(passed) = self.passed_by(&it, ray.d) else {
+                return (Some(it), tr);
+            };
+            tr *= passed;
             // On from just beyond the sheet, to the same end.
             let o = offset_ray_origin(it.p, it.ng, ray.d, self.scale);
-            ray = match end {
-                Some(end) => {
-                    let to_end = end - o;
-                    let length = to_end.length();
-                    if length.is_nan() || length <= 0.0 || to_end.dot(ray.d) <= 0.0 {
-                        return (None, tr);
-                    }
-                    Ray {
-                        o,
-                        d: to_end / length,
-                        t_min: 0.0,
-                        t_max: length,
-                    }
-                }
-                None => Ray {
-                    o,
-                    d: ray.d,
-                    t_min: 0.0,
-                    t_max: f32::INFINITY,
-                },
+            let Some(next) = ray_on_to(o, ray.d, end) else {
+                return (None, tr);
             };
+            ray = next;
         }
         (None, Rgb::ZERO)
+    }
+
+    /// What a shadow ray along `d` keeps crossing the surface at `it`: a thin sheet's
+    /// transmittance at that angle, what a mask's opacity leaves open there; `None` where the
+    /// surface is opaque.
+    #[must_use]
+    pub fn passed_by(&self, it: &Interaction, d: Vec3) -> Option<Rgb> {
+        let shape = &self.shapes[it.shape as usize];
+        if shape.masked {
+            let open = 1.0 - self.materials[shape.material].opacity(it.uv);
+            return (open > 0.0).then(|| Rgb::splat(open));
+        }
+        self.thin_sheet(it.shape)
+            .map(|sheet| sheet.transmittance(it.frame.n.dot(d)))
     }
 
     /// The interaction where `ray` meets triangle `prim` of mesh shape `shape` (Möller and

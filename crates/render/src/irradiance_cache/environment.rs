@@ -45,12 +45,13 @@ pub const MAX_RELATIVE_VARIANCE: f64 = 4.0;
 
 /// Which records hold the environment's light under `mode`: for `auto`, radiance records where
 /// the environment's relative variance over the sphere is at most [`MAX_RELATIVE_VARIANCE`].
-/// None without an environment, and none in a scene with window panes (see [`glazing_note`]).
+/// None without an environment, and none in a scene with window panes or masks (see
+/// [`glazing_note`]).
 #[must_use]
 pub fn held_environment(scene: &Scene, mode: CachedEnvironment) -> HeldEnvironment {
-    // A gather ray that leaves through a window pane ends in the path it continues, which
-    // holds no environment: the sky beyond glazing is left to the light samples, which see
-    // through panes (`Scene::shadow_transmittance`).
+    // A gather ray that leaves through a window pane or a mask's open part ends in the path it
+    // continues, which holds no environment: the sky beyond is left to the light samples, which
+    // see through them (`Scene::shadow_transmittance`).
     if !scene.lights.has_environment() || scene.has_see_through {
         return HeldEnvironment::None;
     }
@@ -67,16 +68,16 @@ pub fn held_environment(scene: &Scene, mode: CachedEnvironment) -> HeldEnvironme
     }
 }
 
-/// What to tell a user who asked records to hold the environment in a scene with window panes,
-/// where they cannot (the light samples estimate it all instead).
+/// What to tell a user who asked records to hold the environment in a scene with window panes
+/// or masks, where they cannot (the light samples estimate it all instead).
 #[must_use]
 pub fn glazing_note(scene: &Scene, mode: CachedEnvironment) -> Option<String> {
     (scene.has_see_through
         && scene.lights.has_environment()
         && matches!(mode, CachedEnvironment::Glossy | CachedEnvironment::All))
     .then(|| {
-        "--cached-environment: the scene has window panes (thindielectric), through which \
-         records cannot hold the sky; light samples estimate all of the environment's light"
+        "--cached-environment: the scene has window panes (thindielectric) or masks, through \
+         which records cannot hold the sky; light samples estimate all of the environment's light"
             .to_string()
     })
 }

@@ -7,7 +7,7 @@
 
 use super::{Coefficients, Medium};
 use crate::integrators::RayCounts;
-use crate::scene::{Interaction, Scene};
+use crate::scene::{ray_on_to, Interaction, Scene};
 use ircache_math::{offset_ray_origin, Ray, Rgb, Rng, Vec3};
 use ircache_scene::MediumInterface;
 
@@ -269,20 +269,15 @@ fn transmittance_crossing(
             return tr;
         };
         let shape = &scene.shapes[hit.geom_id as usize];
-        if let Some(sheet) = scene.thin_sheet(hit.geom_id) {
-            // A window pane: crossed with its transmittance (`Scene::shadow_transmittance`).
-            tr *= sheet.transmittance(hit.ng.normalize_or(ray.d).dot(ray.d));
+        if shape.thin_sheet || shape.masked {
+            // A window pane or a mask: what it lets pass (`Scene::shadow_transmittance`).
+            let Some(passed) = scene.passed_by(&scene.interaction(&ray, &hit), ray.d) else {
+                return Rgb::ZERO;
+            };
+            tr *= passed;
             if tr.is_black() {
                 return Rgb::ZERO;
             }
-        } else if shape.masked {
-            // A mask: what its opacity leaves open there.
-            let it = scene.interaction(&ray, &hit);
-            let open = 1.0 - scene.materials[shape.material].opacity(it.uv);
-            if open <= 0.0 {
-                return Rgb::ZERO;
-            }
-            tr *= open;
         } else if !shape.null {
             return Rgb::ZERO;
         }
@@ -297,25 +292,10 @@ fn transmittance_crossing(
         });
         from_boundary = Some(hit.ng);
         let o = offset_ray_origin(p, hit.ng.normalize_or(ray.d), ray.d, scene.scale);
-        // Aimed from the offset origin at the same end point (as `Scene::shadow_ray`): a ray
-        // kept parallel would pass the end at the offset's distance and, after a grazing
-        // crossing, reach the light's own surface before it.
-        match end {
-            Some(end) => {
-                let to_end = end - o;
-                let left = to_end.length();
-                if left <= 0.0 || to_end.dot(ray.d) <= 0.0 {
-                    return tr;
-                }
-                ray = Ray {
-                    o,
-                    d: to_end / left,
-                    t_min: 0.0,
-                    t_max: left,
-                };
-            }
-            None => ray = Ray::new(o, ray.d),
-        }
+        let Some(next) = ray_on_to(o, ray.d, end) else {
+            return tr;
+        };
+        ray = next;
     }
     Rgb::ZERO
 }

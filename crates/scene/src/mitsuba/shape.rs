@@ -47,28 +47,14 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
             } else {
                 shapes::disk(shapes::DISK_SEGMENTS)
             };
-            if !shapes::transform_mesh(&mut mesh, &to_world) {
-                return Err(p.error("to_world is singular (it collapses the shape to zero area)"));
-            }
-            if Mat3::from_mat4(to_world).determinant() < 0.0 {
-                shapes::reverse_winding(&mut mesh);
-            }
+            place_tessellated(p, &mut mesh, &to_world)?;
             finish_analytic(p, mesh, flip)?
         }
         "cylinder" => {
             // The unit cylinder placed on its axis p0 → p1 with its radius, then to_world.
             let p0 = p.vector_opt("p0")?.map_or(Vec3::ZERO, |(v, _)| v);
             let p1 = p.vector_opt("p1")?.map_or(Vec3::Z, |(v, _)| v);
-            let radius = match p.float_opt("radius")? {
-                None => 1.0,
-                Some((r, _)) if r > 0.0 && r.is_finite() => r,
-                Some((r, prop)) => {
-                    return Err(SceneError::at(
-                        prop.loc.clone(),
-                        format!("radius {r} must be positive"),
-                    ))
-                }
-            };
+            let radius = radius(p)?;
             let axis = p1 - p0;
             let length = axis.length();
             if !(length > 0.0 && length.is_finite()) {
@@ -82,13 +68,7 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
                 p0.extend(1.0),
             );
             let mut mesh = shapes::cylinder(shapes::DISK_SEGMENTS);
-            if !shapes::transform_mesh(&mut mesh, &(to_world * place)) {
-                return Err(p.error("to_world is singular (it collapses the shape to zero area)"));
-            }
-            // The tessellation keeps winding about the outward normal under a mirroring map.
-            if Mat3::from_mat4(to_world * place).determinant() < 0.0 {
-                shapes::reverse_winding(&mut mesh);
-            }
+            place_tessellated(p, &mut mesh, &(to_world * place))?;
             if p.boolean("face_normals", false)? {
                 mesh.normals = None;
             }
@@ -243,9 +223,21 @@ fn finish_analytic(p: &Plugin, mut mesh: TriangleMesh, flip: bool) -> Result<Geo
     Ok(Geometry::Mesh(mesh))
 }
 
-fn sphere(p: &Plugin, to_world: Mat4, flip: bool) -> Result<Geometry, SceneError> {
-    let center = p.vector_opt("center")?.map_or(Vec3::ZERO, |(v, _)| v);
-    let radius = match p.float_opt("radius")? {
+/// A tessellated analytic shape (`rectangle`, `disk`, `cylinder`) brought to world space by
+/// `m`, winding kept about the analytic shape's normal under a mirroring map.
+fn place_tessellated(p: &Plugin, mesh: &mut TriangleMesh, m: &Mat4) -> Result<(), SceneError> {
+    if !shapes::transform_mesh(mesh, m) {
+        return Err(p.error("to_world is singular (it collapses the shape to zero area)"));
+    }
+    if Mat3::from_mat4(*m).determinant() < 0.0 {
+        shapes::reverse_winding(mesh);
+    }
+    Ok(())
+}
+
+/// A `sphere`'s or `cylinder`'s `radius` (default 1), positive and finite.
+fn radius(p: &Plugin) -> Result<f32, SceneError> {
+    Ok(match p.float_opt("radius")? {
         None => 1.0,
         Some((r, _)) if r > 0.0 && r.is_finite() => r,
         Some((r, prop)) => {
@@ -254,7 +246,12 @@ fn sphere(p: &Plugin, to_world: Mat4, flip: bool) -> Result<Geometry, SceneError
                 format!("radius {r} must be positive"),
             ))
         }
-    };
+    })
+}
+
+fn sphere(p: &Plugin, to_world: Mat4, flip: bool) -> Result<Geometry, SceneError> {
+    let center = p.vector_opt("center")?.map_or(Vec3::ZERO, |(v, _)| v);
+    let radius = radius(p)?;
     let lin = Mat3::from_mat4(to_world);
     let (cx, cy, cz) = (
         lin.x_axis.length(),
