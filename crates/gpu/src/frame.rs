@@ -167,6 +167,12 @@ impl GpuFrame {
     /// [`GpuError::Unsupported`] naming what the scene holds that this pipeline does not serve.
     pub fn serves(scene: &Scene) -> Result<(), GpuError> {
         let unsupported = |what: String| Err(GpuError::Unsupported(what));
+        if !scene.camera.is_pinhole() {
+            return unsupported(format!(
+                "the GPU frame projects through a pinhole, not the scene's {:?} camera",
+                scene.camera.projection
+            ));
+        }
         if scene.lights.only_directional().is_none() {
             let n = scene.lights.len();
             return unsupported(format!(

@@ -259,13 +259,19 @@ impl PlaneVisibility {
     /// film order (row 0 at the top): the geometry of a G-buffer by rasterisation (001 §4.5).
     ///
     /// # Errors
-    /// When the GPU fails.
+    /// When the GPU fails, or the camera is not a pinhole (rasterisation projects through one).
     pub fn camera_view(
         &self,
         camera: &Camera,
         width: u32,
         height: u32,
     ) -> Result<Seen, crate::GpuError> {
+        if !camera.is_pinhole() {
+            return Err(crate::GpuError::Unsupported(format!(
+                "rasterising the camera's view needs a pinhole, not a {:?} camera",
+                camera.projection
+            )));
+        }
         let view = camera_clip(camera);
         let ids = self.rasterise(&[view], width, height)?;
         Ok(ids

@@ -427,6 +427,12 @@ pub fn camera_ray(
     let offset = settings.filter.sample(sampler.next_2d());
     let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
     let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
+    if scene.camera.needs_lens_sample() {
+        sampler.set_dimension(dims::LENS);
+        let lens = sampler.next_2d();
+        sampler.set_dimension(dims::FILM + 2);
+        return scene.camera.generate_ray_through_lens(film, lens);
+    }
     scene.camera.generate_ray(film)
 }
 

@@ -33,6 +33,7 @@ pub fn sensor(eye: Vec3, target: Vec3, fov: f32, size: u32, spp: u32) -> SensorD
     );
     SensorDesc {
         medium: None,
+        projection: ircache_scene::Projection::Pinhole,
         to_world,
         fov_degrees: fov,
         fov_axis: FovAxis::X,
@@ -137,6 +138,7 @@ pub fn light_scene(shapes: Vec<ShapeDesc>, emitters: Vec<EmitterDesc>) -> SceneD
         source: PathBuf::from("<test>"),
         sensor: SensorDesc {
             medium: None,
+            projection: ircache_scene::Projection::Pinhole,
             to_world: Mat4::IDENTITY,
             fov_degrees: 45.0,
             fov_axis: FovAxis::X,

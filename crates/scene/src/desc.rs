@@ -57,6 +57,28 @@ pub struct SensorDesc {
     pub jitter: bool,
     /// The medium the camera sits in (index into [`SceneDesc::media`]).
     pub medium: Option<usize>,
+    /// How film positions become rays: Mitsuba's `perspective`, `thinlens` or `orthographic`.
+    pub projection: Projection,
+}
+
+/// A sensor's projection (Mitsuba 3's `src/sensors/*.cpp`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Projection {
+    /// `perspective`: a pinhole at the camera's origin.
+    #[default]
+    Pinhole,
+    /// `thinlens`: rays from a disc of radius `aperture_radius` (camera-space units) at the
+    /// origin, through the point the pinhole ray meets at depth `focus_distance`.
+    ThinLens {
+        /// Radius of the aperture disc.
+        aperture_radius: f32,
+        /// Depth (along the optical axis) of the plane in focus.
+        focus_distance: f32,
+    },
+    /// `orthographic`: rays along the optical axis from the film rectangle [−1, 1] ×
+    /// [−1/aspect, 1/aspect] of camera space (its size set by the `to_world` scale); the field
+    /// of view is unused.
+    Orthographic,
 }
 
 /// Mitsuba's `fov_axis`.

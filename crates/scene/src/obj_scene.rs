@@ -324,6 +324,7 @@ fn sensor(shapes: &[ShapeDesc], camera: &ObjCamera) -> SensorDesc {
     let distance = (eye - centre).length() + radius;
     SensorDesc {
         medium: None,
+        projection: crate::desc::Projection::Pinhole,
         to_world: look_at(eye, target, up),
         fov_degrees: fov,
         fov_axis: FovAxis::Y,

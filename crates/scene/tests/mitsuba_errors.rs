@@ -564,3 +564,44 @@ fn a_mask_on_one_side_of_a_twosided_is_refused() {
     );
     assert_error(&err, &path, 4, 5, "a mask must wrap the shape's whole BSDF");
 }
+
+#[test]
+fn lens_sensor_errors() {
+    let wrap = |sensor: &str| format!("<scene version=\"3.0.0\">\n{sensor}\n</scene>\n");
+    // Mitsuba has no default aperture.
+    let (err, path) = load_err(
+        "no-aperture",
+        &wrap(r#"  <sensor type="thinlens"><float name="fov" value="45"/></sensor>"#),
+    );
+    assert_error(&err, &path, 2, 3, "aperture_radius");
+    let (err, path) = load_err(
+        "negative-aperture",
+        &wrap(
+            r#"  <sensor type="thinlens">
+    <float name="aperture_radius" value="-1"/></sensor>"#,
+        ),
+    );
+    assert_error(&err, &path, 3, 5, "must be finite and not negative");
+    let (err, path) = load_err(
+        "focus-zero",
+        &wrap(
+            r#"  <sensor type="thinlens"><float name="aperture_radius" value="0.1"/>
+    <float name="focus_distance" value="0"/></sensor>"#,
+        ),
+    );
+    assert_error(&err, &path, 3, 5, "focus_distance 0");
+    let (err, path) = load_err(
+        "lens-scale",
+        &wrap(
+            r#"  <sensor type="thinlens"><float name="aperture_radius" value="0.1"/>
+    <transform name="to_world"><scale value="2"/></transform></sensor>"#,
+        ),
+    );
+    assert_error(&err, &path, 2, 3, "must not scale");
+    // An orthographic camera has no field of view: a `fov` is not silently ignored.
+    let (err, path) = load_err(
+        "ortho-fov",
+        &wrap(r#"  <sensor type="orthographic"><float name="fov" value="45"/></sensor>"#),
+    );
+    assert_error(&err, &path, 2, 31, "unreferenced property \"fov\"");
+}

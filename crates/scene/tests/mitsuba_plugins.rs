@@ -501,3 +501,43 @@ fn cylinders_have_the_area_and_outward_normals_of_mitsubas() {
         assert!(triangle_normal(m, k).dot(normals[t[0] as usize]) > 0.9);
     }
 }
+
+/// `thinlens` and `orthographic` (Mitsuba's `src/sensors/`): their parameters, Mitsuba's
+/// defaults (focus at the far clip distance), and the fov of a thin lens read as a pinhole's.
+#[test]
+fn lens_and_orthographic_sensors() {
+    let s = load_full(
+        "<scene version=\"3.0.0\"><sensor type=\"thinlens\"><float name=\"fov\" value=\"30\"/>\
+         <float name=\"aperture_radius\" value=\"0.05\"/><float name=\"focus_distance\" value=\"3\"/>\
+         </sensor><shape type=\"cube\"/></scene>",
+    );
+    assert_eq!(
+        s.sensor.projection,
+        ircache_scene::Projection::ThinLens {
+            aperture_radius: 0.05,
+            focus_distance: 3.0
+        }
+    );
+    assert_eq!(
+        (s.sensor.fov_degrees, s.sensor.fov_axis),
+        (30.0, FovAxis::X)
+    );
+    let s = load_full(
+        "<scene version=\"3.0.0\"><sensor type=\"thinlens\">\
+         <float name=\"aperture_radius\" value=\"0.1\"/><float name=\"far_clip\" value=\"50\"/>\
+         </sensor><shape type=\"cube\"/></scene>",
+    );
+    assert_eq!(
+        s.sensor.projection,
+        ircache_scene::Projection::ThinLens {
+            aperture_radius: 0.1,
+            focus_distance: 50.0
+        }
+    );
+    let s = load_full(
+        "<scene version=\"3.0.0\"><sensor type=\"orthographic\"><transform name=\"to_world\">\
+         <scale value=\"2\"/></transform></sensor><shape type=\"cube\"/></scene>",
+    );
+    assert_eq!(s.sensor.projection, ircache_scene::Projection::Orthographic);
+    assert!(close(s.sensor.to_world, Mat4::from_scale(Vec3::splat(2.0))));
+}

@@ -122,6 +122,15 @@ impl Integrator {
                 let volpath = media_cache_integrator(scene, ic, settings, pool)?;
                 return Ok((Integrator::VolPath(volpath), None));
             }
+            Integrator::Ic(ic)
+                if ic.pixel_pass != ic::PixelPass::Lookup && !scene.camera.is_pinhole() =>
+            {
+                return Err(crate::scene::RenderError::Invalid(format!(
+                    "splatting projects records onto the film through a pinhole; the scene's \
+                     camera is {:?} (render it with --integrator ic)",
+                    scene.camera.projection
+                )));
+            }
             Integrator::Ic(_) => {}
         }
         match self {

@@ -112,9 +112,7 @@ pub fn record_overlay(scene: &Scene, cache: &IrradianceCache, image: &Image) -> 
             continue;
         };
         // Only records on the surface the camera sees.
-        let to = rec.p - scene.camera.origin;
-        let dist = to.length();
-        let ray = ircache_math::Ray::new(scene.camera.origin, to / dist);
+        let (ray, dist) = scene.camera.ray_to(rec.p);
         let visible = scene
             .accel
             .intersect(&ray)

@@ -47,9 +47,9 @@ pub struct IrradianceCache {
     pub ambient: Rgb,
     /// Area-weighted mean diffuse albedo (luminance) of the scene's surfaces.
     pub mean_albedo: f32,
-    /// Angle one pixel subtends at the camera (2 tan(fov/2) / width): Tabellion's radius
-    /// limits are 1.5 and 10 pixel footprints at a level-0 record; 0 without a camera view.
-    pub pixel_angle: f32,
+    /// How a pixel's footprint grows from the camera: Tabellion's radius limits are 1.5 and 10
+    /// pixel footprints at a level-0 record; none without a camera view.
+    pub pixel_spread: crate::camera::PixelSpread,
     /// Shapes excluded from the cache (003 item 6), by shape index: they get the ambient value
     /// as their indirect light instead of records.
     pub excluded: Vec<bool>,
@@ -194,7 +194,7 @@ impl IrradianceCache {
             excluded: Vec::new(),
             radiance: None,
             radiance_records: Vec::new(),
-            pixel_angle: 0.0,
+            pixel_spread: crate::camera::PixelSpread::default(),
             environment: HeldEnvironment::None,
             photons: None,
             plane: (params.record_source != RecordSource::Gather)
@@ -961,13 +961,14 @@ impl<'a> Gatherer<'a> {
         let (r, (r_min, r_max)) = match params.error_metric {
             ErrorMetric::Ward => (harmonic, limits),
             ErrorMetric::Tabellion => {
-                let footprint = (self.cache.pixel_angle > 0.0 && sp.travelled > 0.0).then(|| {
-                    super::record::pixel_footprint(
-                        self.cache.pixel_angle,
-                        sp.travelled,
-                        sp.cos_view,
-                    )
-                });
+                let footprint =
+                    (self.cache.pixel_spread.is_known() && sp.travelled > 0.0).then(|| {
+                        super::record::pixel_footprint(
+                            self.cache.pixel_spread,
+                            sp.travelled,
+                            sp.cos_view,
+                        )
+                    });
                 super::record::tabellion_radius(&[nearest], limits, footprint)
             }
             // ½ λ R² = a E: the second-order error reaches a E at R. The reprojection cannot

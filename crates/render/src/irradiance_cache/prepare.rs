@@ -118,7 +118,7 @@ pub fn empty_cache(
         });
     }
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
-    cache.pixel_angle = 2.0 * scene.camera.tan_half_x / width.max(1) as f32;
+    cache.pixel_spread = scene.camera.pixel_spread(width);
     cache.plane_source = ic.plane_source.clone();
     if ic.params.record_source == super::params::RecordSource::GpuPlane
         && cache.plane_source.is_none()
@@ -245,6 +245,9 @@ fn view_hash(scene: &Scene, params: &super::IcParams, width: usize) -> u64 {
     let mut h = file::Fnv::default();
     let c = &scene.camera;
     let _ = write!(h, "{:?} {} {width}", c.to_world, c.tan_half_x);
+    if !c.is_pinhole() {
+        let _ = write!(h, " {:?}", c.projection);
+    }
     h.0
 }
 

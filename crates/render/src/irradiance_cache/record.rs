@@ -32,11 +32,11 @@ pub struct Record {
 }
 
 /// The pixel's footprint at the end of a camera path (000 eq. 3.60): the square root of the
-/// pixel's area (`pixel_angle` across) projected onto the surface `travelled` along the path, seen
-/// at `cos_view` (floored at 0.05 for grazing views).
+/// pixel's area (`spread.at(travelled)` across) projected onto the surface `travelled` along the
+/// path, seen at `cos_view` (floored at 0.05 for grazing views).
 #[must_use]
-pub fn pixel_footprint(pixel_angle: f32, travelled: f32, cos_view: f32) -> f32 {
-    pixel_angle * travelled / cos_view.max(0.05).sqrt()
+pub fn pixel_footprint(spread: crate::camera::PixelSpread, travelled: f32, cos_view: f32) -> f32 {
+    spread.at(travelled) / cos_view.max(0.05).sqrt()
 }
 
 /// Tabellion–Lamorlette's radius (000 eqs. 3.59–3.60): half the nearest of the gather's hit

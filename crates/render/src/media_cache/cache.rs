@@ -222,7 +222,7 @@ impl MediaCache {
     ) -> MediaCache {
         let start = Instant::now();
         let mut cache = MediaCache::new(scene, params);
-        let pixel_angle = 2.0 * scene.camera.tan_half_x / width.max(1) as f32;
+        let pixel_spread = scene.camera.pixel_spread(width);
         // Sites of one row closer than this (and facing alike) share a record.
         let spacing = params
             .radius_limits(2.0 * scene.radius)
@@ -245,7 +245,7 @@ impl MediaCache {
                 // The pixel's footprint at the site (000 eq. 3.60): the camera ray is straight
                 // through null boundaries and media.
                 site.footprint = pixel_footprint(
-                    pixel_angle,
+                    pixel_spread,
                     (site.p - ray.o).length(),
                     site.n.dot(ray.d).abs(),
                 );

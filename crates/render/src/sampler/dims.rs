@@ -6,6 +6,9 @@
 
 /// The film position (2-D).
 pub const FILM: u32 = 0;
+/// The position on a thin lens (2-D), among the extra dimensions so that a lens leaves the
+/// vertex blocks (and a pinhole's images) as they are.
+pub const LENS: u32 = EXTRA + EXTRA_LENS * 3;
 /// First dimension of vertex 0's block.
 const FIRST_VERTEX: u32 = 2;
 /// Dimensions per vertex.
@@ -38,6 +41,9 @@ pub fn vertex(depth: u32, offset: u32) -> u32 {
 pub fn extra(depth: u32, i: u32) -> u32 {
     EXTRA + (depth.min(1023) * 4096 + i.min(4095)) * 3
 }
+
+/// Index in [`extra`] at vertex 0 that holds the lens position (beyond the sheets' choices).
+const EXTRA_LENS: u32 = 4095;
 
 /// Index of extra BSDF sample `i` in [`extra`].
 pub const EXTRA_BSDF: u32 = 2048;

@@ -7,7 +7,7 @@
 //! into the [`SceneDesc`], and every property a builder did not read is an error, as Mitsuba's
 //! "unreferenced property". Every error names file:line:column.
 //!
-//! Supported plugins: sensor `perspective`; film `hdrfilm`; rfilter `box`, `tent`, `gaussian`;
+//! Supported plugins: sensors `perspective`, `thinlens`, `orthographic`; film `hdrfilm`; rfilter `box`, `tent`, `gaussian`;
 //! samplers `independent`, `stratified`, `multijitter`, `ldsampler`, `orthogonal`; integrators
 //! `path`, `direct`, `irrcache`; shapes `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk` and
 //! `cylinder` (tessellated), `sphere`; BSDFs `diffuse`, `twosided`, `plastic`, `roughplastic`,

@@ -1,13 +1,15 @@
-//! Sensor (`perspective`), film (`hdrfilm`), reconstruction filters, samplers and integrators,
+//! Sensors (`perspective`, `thinlens`, `orthographic`), film (`hdrfilm`), reconstruction filters, samplers and integrators,
 //! with Mitsuba 3's defaults.
 
 use super::props::{Plugin, Value};
 use super::{expect_tag, Ctx};
-use crate::desc::{FilmDesc, FilterDesc, FovAxis, IntegratorDesc, ParamValue, SensorDesc};
+use crate::desc::{
+    FilmDesc, FilterDesc, FovAxis, IntegratorDesc, ParamValue, Projection, SensorDesc,
+};
 use crate::error::SceneError;
 use ircache_math::{Mat4, Rgb};
 
-const SENSORS: &[&str] = &["perspective"];
+const SENSORS: &[&str] = &["perspective", "thinlens", "orthographic"];
 const FILMS: &[&str] = &["hdrfilm"];
 const FILTERS: &[&str] = &["box", "tent", "gaussian"];
 const SAMPLERS: &[&str] = &[
@@ -20,7 +22,7 @@ const SAMPLERS: &[&str] = &[
 ];
 const INTEGRATORS: &[&str] = &["path", "volpath", "direct", "irrcache"];
 
-/// The `perspective` sensor with its film and sampler.
+/// A projective sensor (`perspective`, `thinlens` or `orthographic`) with its film and sampler.
 pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneError> {
     p.expect_type(SENSORS)?;
     let to_world = p
@@ -70,7 +72,10 @@ pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneErr
         }
     }
 
-    let (fov_degrees, fov_axis) = if p.has("fov") && p.has("focal_length") {
+    let (fov_degrees, fov_axis) = if p.ty == "orthographic" {
+        // Unused: the to_world scale sets an orthographic camera's extent.
+        (90.0, FovAxis::X)
+    } else if p.has("fov") && p.has("focal_length") {
         let loc = p
             .get("focal_length")
             .map(|q| q.loc.clone())
@@ -134,8 +139,42 @@ pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneErr
             "near_clip {near_clip} must be smaller than far_clip {far_clip}"
         )));
     }
-    // Read by Mitsuba's projective cameras but without effect on a pinhole camera.
-    let _ = p.float("focus_distance", far_clip)?;
+    // Read by all of Mitsuba's projective cameras, used by the thin lens alone.
+    let (focus_distance, focus_prop) = match p.float_opt("focus_distance")? {
+        Some((f, prop)) => (f, Some(prop.loc.clone())),
+        None => (far_clip, None),
+    };
+    let projection = match p.ty.as_str() {
+        "thinlens" => {
+            let (aperture_radius, prop) = p.float_opt("aperture_radius")?.ok_or_else(|| {
+                p.error("a thinlens sensor needs an \"aperture_radius\" (Mitsuba has no default)")
+            })?;
+            if !(aperture_radius.is_finite() && aperture_radius >= 0.0) {
+                return Err(SceneError::at(
+                    prop.loc.clone(),
+                    format!("aperture_radius {aperture_radius} must be finite and not negative"),
+                ));
+            }
+            if !(focus_distance.is_finite() && focus_distance > 0.0) {
+                return Err(SceneError::at(
+                    focus_prop.unwrap_or(p.loc.clone()),
+                    format!("focus_distance {focus_distance} must be finite and greater than zero"),
+                ));
+            }
+            // As Mitsuba: a scale would change the aperture and the focus with the frame.
+            if has_scale(&to_world) {
+                return Err(p.error(
+                    "a thinlens sensor's to_world must not scale (Mitsuba refuses it too)",
+                ));
+            }
+            Projection::ThinLens {
+                aperture_radius,
+                focus_distance,
+            }
+        }
+        "orthographic" => Projection::Orthographic,
+        _ => Projection::Pinhole,
+    };
     p.check_unused()?;
     Ok(SensorDesc {
         to_world,
@@ -149,7 +188,15 @@ pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneErr
         sampler_seed: sampler.seed,
         jitter: sampler.jitter,
         medium,
+        projection,
     })
+}
+
+/// Whether the linear part of `m` changes lengths (a column's length off 1 by more than 10⁻³).
+fn has_scale(m: &Mat4) -> bool {
+    [m.x_axis, m.y_axis, m.z_axis]
+        .iter()
+        .any(|c| (c.truncate().length() - 1.0).abs() > 1e-3)
 }
 
 fn build_film(ctx: &Ctx, p: &Plugin) -> Result<FilmDesc, SceneError> {
