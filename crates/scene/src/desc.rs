@@ -426,6 +426,18 @@ pub enum BsdfDesc {
         /// Albedo.
         reflectance: TextureDesc,
     },
+    /// Mitsuba's `blendbsdf`: `(1 − weight) · first + weight · second`, the weight a texture's
+    /// luminance clamped to [0, 1]. The loader keeps both models plain (no nested blend, mask or
+    /// normal map) and of one kind of sidedness: a blend of two `twosided` models becomes the
+    /// `twosided` of the blend.
+    Blend {
+        /// The weight of `second`.
+        weight: TextureDesc,
+        /// The model weighted by `1 − weight`.
+        first: Arc<BsdfDesc>,
+        /// The model weighted by `weight`.
+        second: Arc<BsdfDesc>,
+    },
     /// The nested BSDF on both sides (Mitsuba: the back side sees the front's BSDF mirrored).
     TwoSided {
         /// The front BSDF.
@@ -640,6 +652,15 @@ impl BsdfDesc {
             BsdfDesc::Mask { opacity, nested } => {
                 tex(opacity, f);
                 nested.for_each_bitmap(f);
+            }
+            BsdfDesc::Blend {
+                weight,
+                first,
+                second,
+            } => {
+                tex(weight, f);
+                first.for_each_bitmap(f);
+                second.for_each_bitmap(f);
             }
             BsdfDesc::NormalMap {
                 normals: b, nested, ..

@@ -605,3 +605,99 @@ fn lens_sensor_errors() {
     );
     assert_error(&err, &path, 2, 31, "unreferenced property \"fov\"");
 }
+
+#[test]
+fn blend_bsdf_errors() {
+    let (err, path) = load_err(
+        "blend-no-weight",
+        &scene(
+            r#"  <bsdf type="blendbsdf" id="b"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 3, 3, "needs a \"weight\"");
+    let (err, path) = load_err(
+        "blend-one",
+        &scene(
+            r#"  <bsdf type="blendbsdf" id="b"><float name="weight" value="0.5"/><bsdf type="diffuse"/></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 3, 3, "two nested BSDFs must be given");
+    let (err, path) = load_err(
+        "blend-weight-range",
+        &scene(
+            r#"  <bsdf type="blendbsdf" id="b">
+    <float name="weight" value="1.5"/><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "weight");
+    // One side twosided, the other not: the back would be half a blend.
+    let (err, path) = load_err(
+        "blend-sides",
+        &scene(
+            r#"  <bsdf type="blendbsdf" id="b"><float name="weight" value="0.5"/>
+    <bsdf type="twosided"><bsdf type="diffuse"/></bsdf>
+    <bsdf type="diffuse"/></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "plain model");
+    let (err, path) = load_err(
+        "blend-nested",
+        &scene(
+            r#"  <bsdf type="blendbsdf" id="b"><float name="weight" value="0.5"/>
+    <bsdf type="diffuse"/>
+    <bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 5, 5, "plain model");
+    // Mitsuba's twosided refuses models that transmit, inside a blend too.
+    let (err, path) = load_err(
+        "twosided-blend-glass",
+        &scene(
+            r#"  <bsdf type="twosided" id="b">
+    <bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/><bsdf type="roughdielectric"/></bsdf></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "without transmission");
+}
+
+#[test]
+fn instancing_errors() {
+    // As in Mitsuba: no emitters in a group, no nested groups or instances, one group per
+    // instance; and an analytic sphere cannot be stretched.
+    let (err, path) = load_err(
+        "group-emitter",
+        &scene(
+            r#"  <shape type="shapegroup" id="g">
+    <shape type="cube"><emitter type="area"/></shape></shape>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "cannot be an emitter");
+    let (err, path) = load_err(
+        "group-nested",
+        &scene(
+            r#"  <shape type="shapegroup" id="g">
+    <shape type="shapegroup"><shape type="cube"/></shape></shape>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "no nested groups");
+    let (err, path) = load_err("instance-empty", &scene(r#"  <shape type="instance"/>"#));
+    assert_error(&err, &path, 3, 3, "needs a reference to a shapegroup");
+    let (err, path) = load_err(
+        "instance-bsdf",
+        &scene(
+            r#"  <shape type="shapegroup" id="g"><shape type="cube"/></shape>
+  <shape type="instance"><ref id="g"/>
+    <bsdf type="diffuse"/></shape>"#,
+        ),
+    );
+    assert_error(&err, &path, 5, 5, "only a shapegroup");
+    let (err, path) = load_err(
+        "instance-stretched-sphere",
+        &scene(
+            r#"  <shape type="shapegroup" id="g"><shape type="sphere"/></shape>
+  <shape type="instance"><ref id="g"/>
+    <transform name="to_world"><scale x="2"/></transform></shape>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 3, "alike along every axis");
+}

@@ -541,3 +541,93 @@ fn lens_and_orthographic_sensors() {
     assert_eq!(s.sensor.projection, ircache_scene::Projection::Orthographic);
     assert!(close(s.sensor.to_world, Mat4::from_scale(Vec3::splat(2.0))));
 }
+
+/// `blendbsdf`: its weight and two models in order; a blend of two `twosided` models is read as
+/// the `twosided` of the blend (the same BSDF on each side).
+#[test]
+fn blend_bsdf() {
+    let s = load(
+        "<shape type=\"cube\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.25\"/>\
+           <bsdf type=\"diffuse\"/><bsdf type=\"conductor\"/></bsdf></shape>\
+         <shape type=\"cube\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.5\"/>\
+           <bsdf type=\"twosided\"><bsdf type=\"diffuse\"/></bsdf>\
+           <bsdf type=\"twosided\"><bsdf type=\"roughplastic\"/></bsdf></bsdf></shape>",
+    );
+    match &*s.shapes[0].bsdf {
+        BsdfDesc::Blend {
+            weight: TextureDesc::Constant(w),
+            first,
+            second,
+        } => {
+            assert_eq!(*w, Rgb::splat(0.25));
+            assert!(matches!(**first, BsdfDesc::Diffuse { .. }));
+            assert!(matches!(**second, BsdfDesc::Conductor { .. }));
+        }
+        other => panic!("{other:?}"),
+    }
+    match &*s.shapes[1].bsdf {
+        BsdfDesc::TwoSided { front, back: None } => match &**front {
+            BsdfDesc::Blend { first, second, .. } => {
+                assert!(matches!(**first, BsdfDesc::Diffuse { .. }));
+                assert!(matches!(**second, BsdfDesc::RoughPlastic { .. }));
+            }
+            other => panic!("{other:?}"),
+        },
+        other => panic!("{other:?}"),
+    }
+}
+
+/// `shapegroup` and `instance`: each instance holds the group's shapes placed by its
+/// `to_world`, the same geometry as the shapes written out with the composed transforms; the
+/// group alone draws nothing.
+#[test]
+fn instances_of_a_shape_group() {
+    let group = "<shape type=\"shapegroup\" id=\"g\">\
+           <shape type=\"cube\"><transform name=\"to_world\"><rotate y=\"1\" angle=\"30\"/>\
+             <translate x=\"1\"/></transform></shape>\
+           <shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"2\" z=\"0\"/>\
+             <float name=\"radius\" value=\"0.5\"/></shape>\
+         </shape>";
+    let instanced = load(&format!(
+        "{group}\
+         <shape type=\"instance\"><ref id=\"g\"/><transform name=\"to_world\">\
+           <translate x=\"5\" y=\"-1\"/></transform></shape>\
+         <shape type=\"instance\"><ref id=\"g\"/><transform name=\"to_world\"><scale value=\"2\"/>\
+           <rotate z=\"1\" angle=\"90\"/></transform></shape>"
+    ));
+    let written = load(
+        "<shape type=\"cube\"><transform name=\"to_world\"><rotate y=\"1\" angle=\"30\"/>\
+           <translate x=\"1\"/><translate x=\"5\" y=\"-1\"/></transform></shape>\
+         <shape type=\"sphere\"><point name=\"center\" x=\"5\" y=\"1\" z=\"0\"/>\
+           <float name=\"radius\" value=\"0.5\"/></shape>\
+         <shape type=\"cube\"><transform name=\"to_world\"><rotate y=\"1\" angle=\"30\"/>\
+           <translate x=\"1\"/><scale value=\"2\"/><rotate z=\"1\" angle=\"90\"/></transform></shape>\
+         <shape type=\"sphere\"><point name=\"center\" x=\"-4\" y=\"0\" z=\"0\"/>\
+           <float name=\"radius\" value=\"1\"/></shape>",
+    );
+    assert_eq!(instanced.shapes.len(), 4);
+    for (a, b) in instanced.shapes.iter().zip(&written.shapes) {
+        match (&a.geometry, &b.geometry) {
+            (Geometry::Mesh(a), Geometry::Mesh(b)) => {
+                assert_eq!(a.indices, b.indices);
+                for (p, q) in a.positions.iter().zip(&b.positions) {
+                    assert!((*p - *q).length() < 1e-5, "{p} against {q}");
+                }
+            }
+            (
+                Geometry::Sphere { center, radius, .. },
+                Geometry::Sphere {
+                    center: c,
+                    radius: r,
+                    ..
+                },
+            ) => {
+                assert!(
+                    (*center - *c).length() < 1e-5 && (radius - r).abs() < 1e-6,
+                    "{center} {radius}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+}

@@ -16,6 +16,9 @@
 //!   delta's weight with `pdf` the probability of having chosen that lobe;
 //! - transmission through a dielectric scales radiance by `(η_i/η_t)²` (radiance transport).
 //!
+//! - `blendbsdf` ([`Bsdf::Blend`]) mixes two models by a weight; a sample from a delta lobe
+//!   keeps its model's weight (Mitsuba 3.9.1 divides it by a mixed density and loses light).
+//!
 //! Models, one file each: [`diffuse`], [`plastic`], [`roughplastic`], [`conductor`],
 //! [`roughconductor`], [`dielectric`], [`roughdielectric`], [`thindielectric`], [`phong`]; shared: [`microfacet`]
 //! (Beckmann and GGX, Walter et al. 2007; visible normals, Heitz 2018) and [`fresnel`].
@@ -225,7 +228,135 @@ pub enum Bsdf {
         /// Model seen from the back (the front one when only one was given).
         back: Lobe,
     },
+    /// Mitsuba's `blendbsdf`: `(1 − weight) · first + weight · second`, one-sided models black
+    /// from below unless `two_sided` (then both mirrored as `twosided` does). Sampling picks
+    /// `second` with probability `weight` and weighs the sample by the mixture's own
+    /// eval / pdf (a delta sample by its model's weight).
+    Blend {
+        /// The model weighted by `1 − weight`.
+        first: Lobe,
+        /// The model weighted by `weight`.
+        second: Lobe,
+        /// The weight of `second`, in [0, 1].
+        weight: f32,
+        /// Whether the blend is wrapped in `twosided`.
+        two_sided: bool,
+    },
 }
+
+/// A blend's two models as seen from `wo` (see [`Bsdf::Blend`]).
+#[derive(Clone, Copy)]
+struct Mixture<'a> {
+    first: &'a Lobe,
+    second: &'a Lobe,
+    weight: f32,
+}
+
+impl Mixture<'_> {
+    /// `(1 − w) · a + w · b`.
+    #[inline]
+    fn mix<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>>(&self, a: T, b: T) -> T {
+        a * (1.0 - self.weight) + b * self.weight
+    }
+
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        self.mix(self.first.eval(wo, wi), self.second.eval(wo, wi))
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.mix(self.first.pdf(wo, wi), self.second.pdf(wo, wi))
+    }
+
+    fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let w = self.weight;
+        let (model, u_lobe) = if u_lobe < w {
+            (self.second, u_lobe / w)
+        } else {
+            (self.first, (u_lobe - w) / (1.0 - w))
+        };
+        let s = model.sample(wo, u_lobe.min(ONE_MINUS_EPSILON), u)?;
+        if s.delta {
+            // Chosen with the probability of its weight: the weights cancel.
+            let chosen = if std::ptr::eq(model, self.second) {
+                w
+            } else {
+                1.0 - w
+            };
+            return Some(BsdfSample {
+                pdf: chosen * s.pdf,
+                ..s
+            });
+        }
+        let pdf = self.pdf(wo, s.wi);
+        (pdf > 0.0).then(|| BsdfSample {
+            pdf,
+            weight: self.eval(wo, s.wi) / pdf,
+            ..s
+        })
+    }
+
+    /// The probability of sampling the second model's glossy part among the glossy parts.
+    fn glossy_second(&self) -> f32 {
+        let a = if self.first.has_glossy() {
+            1.0 - self.weight
+        } else {
+            0.0
+        };
+        let b = if self.second.has_glossy() {
+            self.weight
+        } else {
+            0.0
+        };
+        if a + b > 0.0 {
+            b / (a + b)
+        } else {
+            0.0
+        }
+    }
+
+    fn eval_glossy(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        self.mix(
+            self.first.eval_glossy(wo, wi),
+            self.second.eval_glossy(wo, wi),
+        )
+    }
+
+    fn pdf_glossy(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let q = self.glossy_second();
+        self.first.pdf_glossy(wo, wi) * (1.0 - q) + self.second.pdf_glossy(wo, wi) * q
+    }
+
+    fn sample_glossy(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let q = self.glossy_second();
+        let (model, chosen, share, u_lobe) = if u_lobe < q {
+            (self.second, q, self.weight, u_lobe / q)
+        } else {
+            (
+                self.first,
+                1.0 - q,
+                1.0 - self.weight,
+                (u_lobe - q) / (1.0 - q),
+            )
+        };
+        let s = model.sample_glossy(wo, u_lobe.min(ONE_MINUS_EPSILON), u)?;
+        if s.delta {
+            return Some(BsdfSample {
+                pdf: chosen * s.pdf,
+                weight: s.weight * (share / chosen),
+                ..s
+            });
+        }
+        let pdf = self.pdf_glossy(wo, s.wi);
+        (pdf > 0.0).then(|| BsdfSample {
+            pdf,
+            weight: self.eval_glossy(wo, s.wi) / pdf,
+            ..s
+        })
+    }
+}
+
+/// The largest `f32` below 1 (a remapped sample stays in [0, 1)).
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 fn flip(w: Vec3) -> Vec3 {
     Vec3::new(w.x, w.y, -w.z)
@@ -246,23 +377,105 @@ impl Side {
     }
 }
 
+/// What a BSDF shows towards `wo`: one model, or a blend's two.
+#[derive(Clone, Copy)]
+enum Facing<'a> {
+    One(&'a Lobe),
+    Two(Mixture<'a>),
+}
+
+impl Facing<'_> {
+    fn eval(self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self {
+            Facing::One(l) => l.eval(wo, wi),
+            Facing::Two(m) => m.eval(wo, wi),
+        }
+    }
+
+    fn pdf(self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Facing::One(l) => l.pdf(wo, wi),
+            Facing::Two(m) => m.pdf(wo, wi),
+        }
+    }
+
+    fn sample(self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            Facing::One(l) => l.sample(wo, u_lobe, u),
+            Facing::Two(m) => m.sample(wo, u_lobe, u),
+        }
+    }
+
+    fn eval_glossy(self, wo: Vec3, wi: Vec3) -> Rgb {
+        match self {
+            Facing::One(l) => l.eval_glossy(wo, wi),
+            Facing::Two(m) => m.eval_glossy(wo, wi),
+        }
+    }
+
+    fn pdf_glossy(self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Facing::One(l) => l.pdf_glossy(wo, wi),
+            Facing::Two(m) => m.pdf_glossy(wo, wi),
+        }
+    }
+
+    fn sample_glossy(self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            Facing::One(l) => l.sample_glossy(wo, u_lobe, u),
+            Facing::Two(m) => m.sample_glossy(wo, u_lobe, u),
+        }
+    }
+
+    fn lambertian_albedo(self, wo: Vec3) -> Rgb {
+        match self {
+            Facing::One(l) => l.lambertian_albedo(wo),
+            Facing::Two(m) => m.mix(
+                m.first.lambertian_albedo(wo),
+                m.second.lambertian_albedo(wo),
+            ),
+        }
+    }
+}
+
 impl Bsdf {
     /// The model seen from `wo`: one-sided models as they are (they are black from below on
     /// their own); `twosided` the front above, the back (directions mirrored) below, none on the
     /// surface itself.
     #[inline]
-    fn facing(&self, wo: Vec3) -> Option<(&Lobe, Side)> {
+    fn facing(&self, wo: Vec3) -> Option<(Facing<'_>, Side)> {
+        let below = match self {
+            Bsdf::Single(_)
+            | Bsdf::Blend {
+                two_sided: false, ..
+            } => false,
+            _ if wo.z > 0.0 => false,
+            _ if wo.z < 0.0 => true,
+            _ => return None,
+        };
+        let facing = match self {
+            Bsdf::Single(l) => Facing::One(l),
+            Bsdf::TwoSided { front, back } => Facing::One(if below { back } else { front }),
+            Bsdf::Blend {
+                first,
+                second,
+                weight,
+                ..
+            } => Facing::Two(Mixture {
+                first,
+                second,
+                weight: *weight,
+            }),
+        };
+        Some((facing, Side(below)))
+    }
+
+    /// The models of the BSDF (both sides, both parts of a blend).
+    fn lobes(&self) -> [&Lobe; 2] {
         match self {
-            Bsdf::Single(l) => Some((l, Side(false))),
-            Bsdf::TwoSided { front, back } => {
-                if wo.z > 0.0 {
-                    Some((front, Side(false)))
-                } else if wo.z < 0.0 {
-                    Some((back, Side(true)))
-                } else {
-                    None
-                }
-            }
+            Bsdf::Single(l) => [l, l],
+            Bsdf::TwoSided { front, back } => [front, back],
+            Bsdf::Blend { first, second, .. } => [first, second],
         }
     }
 
@@ -294,17 +507,14 @@ impl Bsdf {
     /// True when the BSDF has a non-delta component (next-event estimation is worthwhile).
     #[must_use]
     pub fn has_smooth(&self) -> bool {
-        match self {
-            Bsdf::Single(l) => l.has_smooth(),
-            Bsdf::TwoSided { front, back } => front.has_smooth() || back.has_smooth(),
-        }
+        self.lobes().iter().any(|l| l.has_smooth())
     }
 
     /// True when the BSDF has a Dirac delta lobe (smooth glass, mirrors, a smooth coating):
     /// light through it makes caustics.
     #[must_use]
     pub fn has_delta(&self) -> bool {
-        let delta = |l: &Lobe| {
+        self.lobes().iter().any(|l| {
             matches!(
                 l,
                 Lobe::Conductor(_)
@@ -312,58 +522,41 @@ impl Bsdf {
                     | Lobe::ThinDielectric(_)
                     | Lobe::Plastic(_)
             )
-        };
-        match self {
-            Bsdf::Single(l) => delta(l),
-            Bsdf::TwoSided { front, back } => delta(front) || delta(back),
-        }
+        })
     }
 
     /// True when the BSDF sends light through the surface (smooth, rough or thin dielectrics).
     #[must_use]
     pub fn transmits(&self) -> bool {
-        let transmits = |l: &Lobe| {
+        self.lobes().iter().any(|l| {
             matches!(
                 l,
                 Lobe::Dielectric(_) | Lobe::RoughDielectric(_) | Lobe::ThinDielectric(_)
             )
-        };
-        match self {
-            Bsdf::Single(l) => transmits(l),
-            Bsdf::TwoSided { front, back } => transmits(front) || transmits(back),
-        }
+        })
     }
 
-    /// True when the BSDF is purely Lambertian (on both sides, for `twosided`).
+    /// True when the BSDF is purely Lambertian (on both sides, for `twosided`; both models of
+    /// a blend).
     #[must_use]
     pub fn is_diffuse_only(&self) -> bool {
-        match self {
-            Bsdf::Single(l) => matches!(l, Lobe::Diffuse(_)),
-            Bsdf::TwoSided { front, back } => {
-                matches!(front, Lobe::Diffuse(_)) && matches!(back, Lobe::Diffuse(_))
-            }
-        }
+        self.lobes().iter().all(|l| matches!(l, Lobe::Diffuse(_)))
     }
 
     /// The BSDF split for caching: `f = k(wo)/π + f_glossy`, where the Lambertian part `k/π`
     /// times the irradiance is what an irradiance cache serves and the glossy part (every
     /// non-Lambertian lobe: specular and rough reflection, refraction, plastic coatings) is
     /// traced. This is `k(wo)` (local frame): the back model's for `twosided` seen from below,
-    /// zero for one-sided models seen from below. For plastics the coating's transmittance
-    /// towards the light is replaced by its cosine-weighted mean (exact under uniform incident
-    /// light); see [`plastic`] and [`roughplastic`].
+    /// zero for one-sided models seen from below, a blend's weighted sum. For plastics the
+    /// coating's transmittance towards the light is replaced by its cosine-weighted mean (exact
+    /// under uniform incident light); see [`plastic`] and [`roughplastic`].
     #[must_use]
     pub fn lambertian_albedo(&self, wo: Vec3) -> Rgb {
-        match self {
-            Bsdf::Single(l) => l.lambertian_albedo(wo),
-            Bsdf::TwoSided { front, back } => {
-                if wo.z >= 0.0 {
-                    front.lambertian_albedo(wo)
-                } else {
-                    back.lambertian_albedo(flip(wo))
-                }
-            }
-        }
+        // On the surface itself (wo.z = 0) every model's is zero.
+        let Some((l, f)) = self.facing(wo) else {
+            return Rgb::ZERO;
+        };
+        l.lambertian_albedo(f.apply(wo))
     }
 
     /// The glossy part alone, `f_glossy(wo, wi) · |cos θ_i|` (zero for delta lobes).
@@ -394,18 +587,24 @@ impl Bsdf {
     /// True when the BSDF has a glossy (non-Lambertian) part.
     #[must_use]
     pub fn has_glossy(&self) -> bool {
-        match self {
-            Bsdf::Single(l) => l.has_glossy(),
-            Bsdf::TwoSided { front, back } => front.has_glossy() || back.has_glossy(),
-        }
+        self.lobes().iter().any(|l| l.has_glossy())
     }
 
     /// Albedo of the Lambertian part (the base of plastics, `K_d` of OBJ materials, zero for
-    /// purely specular models; the front model's for `twosided`).
+    /// purely specular models; the front model's for `twosided`, a blend's weighted sum).
     #[must_use]
     pub fn diffuse_reflectance(&self) -> Rgb {
         match self {
             Bsdf::Single(l) | Bsdf::TwoSided { front: l, .. } => l.diffuse_reflectance(),
+            Bsdf::Blend {
+                first,
+                second,
+                weight,
+                ..
+            } => {
+                first.diffuse_reflectance() * (1.0 - weight)
+                    + second.diffuse_reflectance() * *weight
+            }
         }
     }
 }
@@ -444,6 +643,9 @@ impl Compiled {
             },
             // Nested twosided: the inner front model (Mitsuba does not nest them either).
             BsdfDesc::TwoSided { front, .. } => Compiled::new(front),
+            // A blend's second model and weight are the material's (`Material::blend`); the
+            // loader puts blends nowhere else.
+            BsdfDesc::Blend { first, .. } => Compiled::new(first),
             // Normal and bump maps act on the shading frame (`Material::perturb`); a mask's
             // opacity on the path (`Material::opacity`), where it wraps the material.
             BsdfDesc::NormalMap { nested, .. }
@@ -621,6 +823,9 @@ pub struct Material {
     /// A mask's opacity (Mitsuba's `mask` around the material, or around both sides of a
     /// `twosided`): the share of paths that meet the surface, the rest passing through.
     opacity: Option<Texture>,
+    /// A `blendbsdf`'s second model and its weight (`front` then is the first model, and
+    /// `back`, for a `twosided` blend, a copy of it).
+    blend: Option<(Compiled, Texture)>,
 }
 
 /// A perturbation of the shading normal by a texture (normal or bump map).
@@ -679,7 +884,9 @@ impl Material {
     #[must_use]
     pub fn thin_sheet(&self) -> Option<ThinDielectric> {
         match (&self.front, &self.back, &self.perturbation) {
-            (Compiled::Fixed(Lobe::ThinDielectric(t)), None, None) if self.opacity.is_none() => {
+            (Compiled::Fixed(Lobe::ThinDielectric(t)), None, None)
+                if self.opacity.is_none() && self.blend.is_none() =>
+            {
                 Some(*t)
             }
             _ => None,
@@ -744,6 +951,15 @@ impl Material {
             ),
             d => (d, None),
         };
+        // A blend, or the single model of a twosided.
+        let blend = match desc {
+            BsdfDesc::Blend { weight, second, .. } => Some((weight, second)),
+            BsdfDesc::TwoSided { front, back: None } => match front.as_ref() {
+                BsdfDesc::Blend { weight, second, .. } => Some((weight, second)),
+                _ => None,
+            },
+            _ => None,
+        };
         let mut m = match desc {
             BsdfDesc::TwoSided { front, back } => {
                 let f = Compiled::new(front);
@@ -756,6 +972,7 @@ impl Material {
                     back: Some(b),
                     perturbation: None,
                     opacity: None,
+                    blend: None,
                 }
             }
             d => Material {
@@ -763,8 +980,10 @@ impl Material {
                 back: None,
                 perturbation: None,
                 opacity: None,
+                blend: None,
             },
         };
+        m.blend = blend.map(|(w, second)| (Compiled::new(second), Texture::from_desc(w)));
         // A normal or bump map inside twosided applies to both sides.
         m.perturbation = perturbation.or_else(|| match desc {
             BsdfDesc::TwoSided { front, .. } => match front.as_ref() {
@@ -787,6 +1006,14 @@ impl Material {
     /// The BSDF at texture coordinates `uv`.
     #[must_use]
     pub fn at(&self, uv: Vec2) -> Bsdf {
+        if let Some((second, weight)) = &self.blend {
+            return Bsdf::Blend {
+                first: self.front.at(uv),
+                second: second.at(uv),
+                weight: weight.eval(uv).luminance().clamp(0.0, 1.0),
+                two_sided: self.back.is_some(),
+            };
+        }
         match &self.back {
             None => Bsdf::Single(self.front.at(uv)),
             Some(b) => Bsdf::TwoSided {
@@ -809,7 +1036,10 @@ impl Material {
                     | Compiled::Phong { .. }
             )
         };
-        free(&self.front) && self.back.as_ref().is_none_or(free) && self.perturbation.is_none()
+        free(&self.front)
+            && self.back.as_ref().is_none_or(free)
+            && self.blend.as_ref().is_none_or(|(b, _)| free(b))
+            && self.perturbation.is_none()
     }
 
     /// True when some model of the material reads an image texture (it needs texture
@@ -825,6 +1055,10 @@ impl Material {
         };
         textured(&self.front)
             || self.back.as_ref().is_some_and(textured)
+            || self
+                .blend
+                .as_ref()
+                .is_some_and(|(b, w)| textured(b) || !matches!(w, Texture::Constant(_)))
             || self.perturbation.is_some()
             || self
                 .opacity
@@ -842,7 +1076,13 @@ impl Material {
     /// caches that need a texture-independent estimate.
     #[must_use]
     pub fn mean_diffuse_reflectance(&self) -> Rgb {
-        self.front.mean_diffuse()
+        match &self.blend {
+            None => self.front.mean_diffuse(),
+            Some((second, weight)) => {
+                let w = weight.mean().luminance().clamp(0.0, 1.0);
+                self.front.mean_diffuse() * (1.0 - w) + second.mean_diffuse() * w
+            }
+        }
     }
 }
 

@@ -143,6 +143,30 @@ const KINDS: [MicrofacetDistribution; 2] = [
 ];
 
 /// Every model, with a label, for the generic checks.
+fn blend(weight: f32, first: BsdfDesc, second: BsdfDesc) -> BsdfDesc {
+    BsdfDesc::Blend {
+        weight: c(weight),
+        first: Arc::new(first),
+        second: Arc::new(second),
+    }
+}
+
+fn twosided(front: BsdfDesc) -> BsdfDesc {
+    BsdfDesc::TwoSided {
+        front: Arc::new(front),
+        back: None,
+    }
+}
+
+/// Mitsuba's `blendbsdf` of a white-ish diffuse and rough gold (GGX α 0.2).
+fn blend_gold(weight: f32) -> BsdfDesc {
+    blend(
+        weight,
+        diffuse(0.8),
+        rough_conductor(MicrofacetDistribution::Ggx, 0.2, 0.2),
+    )
+}
+
 fn all_models() -> Vec<(String, BsdfDesc)> {
     let mut v = vec![
         ("diffuse".to_string(), diffuse(0.8)),
@@ -184,6 +208,31 @@ fn all_models() -> Vec<(String, BsdfDesc)> {
             rough_conductor(kind, 0.05, 0.5),
         ));
     }
+    v.push(("blend diffuse/roughconductor".into(), blend_gold(0.3)));
+    v.push((
+        "twosided blend diffuse/roughconductor".into(),
+        twosided(blend_gold(0.3)),
+    ));
+    v.push((
+        "blend roughplastic/conductor".into(),
+        blend(
+            0.6,
+            rough_plastic(MicrofacetDistribution::Beckmann, 0.3, 0.5, false),
+            conductor(0.2, 3.0),
+        ),
+    ));
+    v.push((
+        "blend dielectric/roughconductor".into(),
+        blend(
+            0.5,
+            dielectric(1.5),
+            mirror_rough_conductor(MicrofacetDistribution::Ggx, 0.3),
+        ),
+    ));
+    v.push((
+        "blend phong/plastic".into(),
+        blend(0.8, phong(0.3, 0.7, 20.0), plastic(0.5, false)),
+    ));
     v.push((
         "twosided diffuse/roughconductor".into(),
         BsdfDesc::TwoSided {
@@ -956,4 +1005,95 @@ fn the_environment_left_to_light_samples_integrates_to_zero_where_the_cache_serv
             }
         }
     }
+}
+
+/// `blendbsdf` against Mitsuba 3.9.1's own (`scalar_rgb`, `eval` with the cosine, red and blue,
+/// and `pdf`): a `twosided` blend of diffuse and rough gold (weight 0.3, seen from both sides)
+/// and a one-sided blend of Beckmann rough plastic and GGX rough gold (weight 0.6).
+#[test]
+fn blend_matches_mitsuba() {
+    // (θo, φo, θi, φi, f·cos red, blue, pdf).
+    type Values = [(f32, f32, f32, f32, f32, f32, f32); 6];
+    let twosided_gold: Values = [
+        (30.0, 0.0, 40.0, 180.0, 0.6080251, 0.296593, 0.6620703),
+        (10.0, 0.0, 70.0, 90.0, 0.06743071, 0.06316119, 0.08337031),
+        (60.0, 10.0, 55.0, 200.0, 0.5990704, 0.2883642, 0.654039),
+        (80.0, 0.0, 75.0, 180.0, 2.184749, 1.244286, 2.560232),
+        (150.0, 0.0, 160.0, 180.0, 0.6418278, 0.3269917, 0.7007622),
+        (0.0, 0.0, 30.0, 45.0, 0.2389343, 0.1827284, 0.2807334),
+    ];
+    let plastic_gold: Values = [
+        (30.0, 0.0, 40.0, 180.0, 0.3536289, 0.1582527, 0.4352318),
+        (10.0, 0.0, 70.0, 90.0, 0.04704339, 0.02712676, 0.07925812),
+        (60.0, 10.0, 55.0, 200.0, 0.4669589, 0.2205195, 0.6039704),
+        (80.0, 0.0, 75.0, 180.0, 1.198763, 0.9062548, 1.642565),
+        (150.0, 0.0, 160.0, 180.0, 0.0, 0.0, 0.0),
+        (0.0, 0.0, 30.0, 45.0, 0.2109003, 0.1073198, 0.279042),
+    ];
+    let plastic = BsdfDesc::RoughPlastic {
+        distribution: MicrofacetDistribution::Beckmann,
+        alpha: 0.3,
+        diffuse_reflectance: c(0.5),
+        specular_reflectance: Rgb::ONE,
+        int_ior: 1.49,
+        ext_ior: 1.000_277,
+        nonlinear: false,
+    };
+    let cases = [
+        (
+            "twosided blend",
+            mat(twosided(blend_gold(0.3))),
+            twosided_gold,
+        ),
+        (
+            "blend",
+            mat(blend(
+                0.6,
+                plastic,
+                rough_conductor(MicrofacetDistribution::Ggx, 0.4, 0.4),
+            )),
+            plastic_gold,
+        ),
+    ];
+    for (label, b, values) in cases {
+        for (to, po, ti, pi, red, blue, pdf) in values {
+            let (wo, wi) = (dir(to, po), dir(ti, pi));
+            let close = |ours: f32, theirs: f32| {
+                if theirs == 0.0 {
+                    ours == 0.0
+                } else {
+                    (ours / theirs - 1.0).abs() < 2e-3
+                }
+            };
+            let (f, p) = (b.eval(wo, wi), b.pdf(wo, wi));
+            assert!(
+                close(f.r, red) && close(f.b, blue) && close(p, pdf),
+                "{label}, ({to}, {po}) → ({ti}, {pi}): f {f:?} pdf {p} against Mitsuba's {red} {blue} {pdf}"
+            );
+        }
+    }
+}
+
+/// A blend's sampled directions follow its mixture density (both sides of a `twosided` one),
+/// and its delta samples carry their model's weight: a blend of a mirror with a black diffuse
+/// reflects the mirror's share of the light on average.
+#[test]
+fn chi2_blend() {
+    let b = mat(twosided(blend_gold(0.3)));
+    for &(t, p) in &WO_ANGLES {
+        run_chi2(&b, dir(t, p), Domain::Hemisphere, &format!("blend θo={t}"));
+        run_chi2(
+            &b,
+            dir(180.0 - t, p),
+            Domain::Sphere,
+            &format!("blend below θo={t}"),
+        );
+    }
+    let w = 0.35;
+    let b = mat(blend(w, diffuse(0.0), conductor(0.0, 1.0)));
+    let (mean, sigma) = albedo(&b, dir(30.0, 10.0), 20_000, 5);
+    assert!(
+        (mean - f64::from(w)).abs() < 4.0 * sigma + 1e-6,
+        "{mean} ± {sigma}"
+    );
 }

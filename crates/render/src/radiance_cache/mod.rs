@@ -82,7 +82,14 @@ impl RadianceCache {
             .map(|m| {
                 // Glossy parts are untextured in every model; the texture coordinate is moot.
                 let bsdf = m.at(Vec2::splat(0.5));
-                let both_sides = matches!(bsdf, Bsdf::TwoSided { front, back } if front == back);
+                let both_sides = matches!(bsdf, Bsdf::TwoSided { front, back } if front == back)
+                    || matches!(
+                        bsdf,
+                        Bsdf::Blend {
+                            two_sided: true,
+                            ..
+                        }
+                    );
                 let order = brdf::order_for(&bsdf, max_order, ENERGY_KEPT)?;
                 let table = brdf::BrdfCoefficients::new(&bsdf, order, ENERGY_SERVED);
                 Some((Arc::new(table), both_sides))

@@ -32,6 +32,7 @@ const BSDFS: &[&str] = &[
     "bumpmap",
     "mask",
     "null",
+    "blendbsdf",
 ];
 const TEXTURES: &[&str] = &["bitmap"];
 
@@ -102,6 +103,7 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
             let nested = nested.ok_or_else(|| p.error("a nested BSDF is required"))?;
             BsdfDesc::Mask { opacity, nested }
         }
+        "blendbsdf" => build_blend(ctx, p)?,
         "twosided" => {
             let nested = p.objects(&ctx.ids)?;
             let mut bsdfs = Vec::new();
@@ -114,12 +116,17 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
                     ));
                 }
                 let b = build_bsdf(ctx, obj)?;
-                if matches!(
-                    *b,
-                    BsdfDesc::Dielectric { .. }
-                        | BsdfDesc::ThinDielectric { .. }
-                        | BsdfDesc::TwoSided { .. }
-                ) {
+                let transmits = |b: &BsdfDesc| {
+                    matches!(
+                        b,
+                        BsdfDesc::Dielectric { .. }
+                            | BsdfDesc::RoughDielectric { .. }
+                            | BsdfDesc::ThinDielectric { .. }
+                    )
+                };
+                let blend_transmits = matches!(&*b, BsdfDesc::Blend { first, second, .. }
+                    if transmits(first) || transmits(second));
+                if transmits(&b) || blend_transmits || matches!(*b, BsdfDesc::TwoSided { .. }) {
                     return Err(SceneError::at(
                         prop.loc.clone(),
                         format!(
@@ -232,6 +239,75 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
     };
     p.check_unused()?;
     Ok(b)
+}
+
+/// Mitsuba's `blendbsdf`: a weight (float or texture, required) and two nested BSDFs. Both
+/// must be plain models, or both `twosided` with one model each (made the `twosided` of the
+/// blend); anything else is an error naming the nested BSDF's line.
+fn build_blend(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
+    if !p.has("weight") {
+        return Err(p.error("blendbsdf needs a \"weight\" (a float or a texture in [0, 1])"));
+    }
+    let weight = texture_param(ctx, p, "weight", 0.5)?;
+    if let (TextureDesc::Constant(c), Some(prop)) = (&weight, p.get("weight")) {
+        check_unit_range(*c, "weight", prop)?;
+    }
+    let mut nested = Vec::new();
+    for (obj, prop) in p.objects(&ctx.ids)? {
+        match obj.tag.as_str() {
+            "texture" if prop.name == "weight" => {}
+            "bsdf" if nested.len() < 2 => nested.push((build_bsdf(ctx, &obj)?, prop.loc.clone())),
+            "bsdf" => {
+                return Err(SceneError::at(
+                    prop.loc.clone(),
+                    "blendbsdf: cannot have more than two nested BSDFs",
+                ))
+            }
+            _ => expect_tag(&obj, prop, "two nested bsdfs and a weight texture")?,
+        }
+    }
+    let [(first, first_loc), (second, second_loc)]: [_; 2] = nested
+        .try_into()
+        .map_err(|_| p.error("blendbsdf: two nested BSDFs must be given"))?;
+    let plain = |b: &BsdfDesc| {
+        !matches!(
+            b,
+            BsdfDesc::Blend { .. }
+                | BsdfDesc::TwoSided { .. }
+                | BsdfDesc::Mask { .. }
+                | BsdfDesc::NormalMap { .. }
+                | BsdfDesc::BumpMap { .. }
+                | BsdfDesc::Null
+        )
+    };
+    let one_model = |b: &Arc<BsdfDesc>| match b.as_ref() {
+        BsdfDesc::TwoSided { front, back: None } if plain(front) => Some(front.clone()),
+        _ => None,
+    };
+    let unsupported = |loc: &crate::error::SourceLocation| {
+        SceneError::at(
+            loc.clone(),
+            "blendbsdf: each nested BSDF must be a plain model (not a blend, mask, normal or \
+             bump map, or null), or both twosided around one such model",
+        )
+    };
+    match (one_model(&first), one_model(&second)) {
+        (Some(a), Some(b)) => Ok(BsdfDesc::TwoSided {
+            front: Arc::new(BsdfDesc::Blend {
+                weight,
+                first: a,
+                second: b,
+            }),
+            back: None,
+        }),
+        _ if !plain(&first) => Err(unsupported(&first_loc)),
+        _ if !plain(&second) => Err(unsupported(&second_loc)),
+        _ => Ok(BsdfDesc::Blend {
+            weight,
+            first,
+            second,
+        }),
+    }
 }
 
 fn check_unit_range(c: Rgb, name: &str, prop: &Prop) -> Result<(), SceneError> {

@@ -10,7 +10,7 @@
 //! Supported plugins: sensors `perspective`, `thinlens`, `orthographic`; film `hdrfilm`; rfilter `box`, `tent`, `gaussian`;
 //! samplers `independent`, `stratified`, `multijitter`, `ldsampler`, `orthogonal`; integrators
 //! `path`, `direct`, `irrcache`; shapes `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk` and
-//! `cylinder` (tessellated), `sphere`; BSDFs `diffuse`, `twosided`, `plastic`, `roughplastic`,
+//! `cylinder` (tessellated), `sphere`, `shapegroup` and `instance` (flattened); BSDFs `diffuse`, `twosided`, `blendbsdf`, `plastic`, `roughplastic`,
 //! `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `thindielectric`, `bumpmap`,
 //! `normalmap`, `mask`, `null`; texture `bitmap`; emitters `area`, `point`, `spot`, `directional`,
 //! `constant`, `envmap`; media `homogeneous`, `heterogeneous` with volumes `constvolume`,
@@ -82,7 +82,14 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, Scen
                 }
                 integrator = Some(sensor::build_integrator(&obj)?);
             }
-            "shape" => shapes.push(shape::build_shape(&ctx, &obj)?),
+            "shape" => match obj.ty.as_str() {
+                // A group is drawn only through its instances.
+                "shapegroup" => {
+                    shape::build_group(&ctx, &obj)?;
+                }
+                "instance" => shapes.extend(shape::build_instance(&ctx, &obj)?),
+                _ => shapes.push(shape::build_shape(&ctx, &obj)?),
+            },
             "emitter" => emitters.push(emitter::build_emitter(&ctx, &obj)?),
             "bsdf" => {
                 bsdf::build_bsdf(&ctx, &obj)?;
@@ -136,6 +143,8 @@ pub(crate) struct Ctx {
     pub notes: RefCell<Vec<String>>,
     /// Built BSDFs by plugin, so `<ref>`s share one `Arc`.
     pub bsdfs: RefCell<HashMap<*const Plugin, Arc<BsdfDesc>>>,
+    /// Built shape groups by plugin, so their instances read each mesh once.
+    pub groups: RefCell<HashMap<*const Plugin, std::rc::Rc<Vec<crate::desc::ShapeDesc>>>>,
     /// Built bitmap textures by plugin.
     pub bitmaps: RefCell<HashMap<*const Plugin, Arc<crate::desc::BitmapDesc>>>,
     /// Images by (path, raw), shared between textures and environment maps.
@@ -155,6 +164,7 @@ impl Ctx {
             scene_dir: path.parent().map(Path::to_path_buf).unwrap_or_default(),
             notes: RefCell::default(),
             bsdfs: RefCell::default(),
+            groups: RefCell::default(),
             bitmaps: RefCell::default(),
             images: RefCell::default(),
             media: RefCell::default(),

@@ -30,11 +30,19 @@ const SHAPES: &[&str] = &[
     "disk",
     "cylinder",
     "sphere",
+    "shapegroup",
+    "instance",
 ];
 
 /// Builds a shape with its BSDF and optional area emitter.
 pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneError> {
     p.expect_type(SHAPES)?;
+    if matches!(p.ty.as_str(), "shapegroup" | "instance") {
+        return Err(p.error(format!(
+            "a {} can appear only in <scene> (Mitsuba permits no nested groups or instancing)",
+            p.ty
+        )));
+    }
     let to_world = p
         .transform_opt("to_world")?
         .map_or(Mat4::IDENTITY, |(m, _)| m);
@@ -209,6 +217,85 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
         media,
         location: p.loc.clone(),
     })
+}
+
+/// Mitsuba's `shapegroup` (built once per plugin): its shapes, in their own `to_world`s, which
+/// only instances draw. Emitters cannot be instanced (as in Mitsuba).
+pub(crate) fn build_group(ctx: &Ctx, p: &Rc<Plugin>) -> Result<Rc<Vec<ShapeDesc>>, SceneError> {
+    let key = Rc::as_ptr(p);
+    if let Some(g) = ctx.groups.borrow().get(&key) {
+        return Ok(g.clone());
+    }
+    let mut shapes = Vec::new();
+    for (obj, prop) in p.objects(&ctx.ids)? {
+        expect_tag(&obj, prop, "shape")?;
+        let shape = build_shape(ctx, &obj)?;
+        if shape.emitter.is_some() {
+            return Err(SceneError::at(
+                obj.loc.clone(),
+                "a shape in a shapegroup cannot be an emitter (Mitsuba does not instance emitters)",
+            ));
+        }
+        shapes.push(shape);
+    }
+    p.check_unused()?;
+    let group = Rc::new(shapes);
+    ctx.groups.borrow_mut().insert(key, group.clone());
+    Ok(group)
+}
+
+/// Mitsuba's `instance`: the shapes of the one `shapegroup` it refers to, placed by its
+/// `to_world` (copied into world space: each instance's triangles are its own).
+pub(crate) fn build_instance(ctx: &Ctx, p: &Rc<Plugin>) -> Result<Vec<ShapeDesc>, SceneError> {
+    let to_world = p
+        .transform_opt("to_world")?
+        .map_or(Mat4::IDENTITY, |(m, _)| m);
+    let objects = p.objects(&ctx.ids)?;
+    let is_group = |obj: &Plugin| obj.tag == "shape" && obj.ty == "shapegroup";
+    if let Some((_, prop)) = objects.iter().find(|(obj, _)| !is_group(obj)) {
+        return Err(SceneError::at(
+            prop.loc.clone(),
+            "only a shapegroup can be given in an instance",
+        ));
+    }
+    let group = match objects.as_slice() {
+        [(obj, _)] => build_group(ctx, obj)?,
+        [] => return Err(p.error("an instance needs a reference to a shapegroup")),
+        [_, (_, prop), ..] => {
+            return Err(SceneError::at(
+                prop.loc.clone(),
+                "an instance refers to one shapegroup only",
+            ))
+        }
+    };
+    p.check_unused()?;
+    let scale = |v: Vec3| to_world.transform_vector3(v).length();
+    let mut shapes = Vec::with_capacity(group.len());
+    for shape in group.iter() {
+        let mut shape = shape.clone();
+        match &mut shape.geometry {
+            Geometry::Mesh(mesh) => {
+                if !shapes::transform_mesh(mesh, &to_world) {
+                    return Err(p.error("to_world is singular"));
+                }
+            }
+            Geometry::Sphere { center, radius, .. } => {
+                let s = scale(Vec3::X);
+                if [scale(Vec3::Y), scale(Vec3::Z)]
+                    .iter()
+                    .any(|t| (t / s - 1.0).abs() > 1e-3)
+                {
+                    return Err(
+                        p.error("to_world must scale an instanced sphere alike along every axis")
+                    );
+                }
+                *center = to_world.transform_point3(*center);
+                *radius *= s;
+            }
+        }
+        shapes.push(shape);
+    }
+    Ok(shapes)
 }
 
 fn finish_analytic(p: &Plugin, mut mesh: TriangleMesh, flip: bool) -> Result<Geometry, SceneError> {
