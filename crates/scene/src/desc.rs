@@ -418,6 +418,21 @@ pub enum MicrofacetDistribution {
     Ggx,
 }
 
+/// The scalar parameters of Mitsuba 3's `principled`, each a float or a texture in [0, 1], with
+/// their defaults: the one table the loader and the renderer read.
+pub const PRINCIPLED_PARAMETERS: [(&str, f32); 10] = [
+    ("roughness", 0.5),
+    ("anisotropic", 0.0),
+    ("metallic", 0.0),
+    ("spec_trans", 0.0),
+    ("spec_tint", 0.0),
+    ("sheen", 0.0),
+    ("sheen_tint", 0.0),
+    ("flatness", 0.0),
+    ("clearcoat", 0.0),
+    ("clearcoat_gloss", 0.0),
+];
+
 /// A BSDF, with Mitsuba 3's parameters and defaults.
 #[derive(Clone, Debug)]
 pub enum BsdfDesc {
@@ -425,6 +440,16 @@ pub enum BsdfDesc {
     Diffuse {
         /// Albedo.
         reflectance: TextureDesc,
+    },
+    /// Mitsuba 3's `principled` (Burley's Disney BSDF as Mitsuba evaluates it).
+    Principled {
+        /// Base colour.
+        base_color: TextureDesc,
+        /// The scalar parameters, textures read by their luminance, in the order and with the
+        /// defaults of [`PRINCIPLED_PARAMETERS`].
+        parameters: [TextureDesc; 10],
+        /// Relative index of refraction (from `eta` or `specular`).
+        eta: f32,
     },
     /// Mitsuba's `blendbsdf`: `(1 − weight) · first + weight · second`, the weight a texture's
     /// luminance clamped to [0, 1]. The loader keeps both models plain (no nested blend, mask or
@@ -652,6 +677,16 @@ impl BsdfDesc {
             BsdfDesc::Mask { opacity, nested } => {
                 tex(opacity, f);
                 nested.for_each_bitmap(f);
+            }
+            BsdfDesc::Principled {
+                base_color,
+                parameters,
+                ..
+            } => {
+                tex(base_color, f);
+                for t in parameters {
+                    tex(t, f);
+                }
             }
             BsdfDesc::Blend {
                 weight,

@@ -701,3 +701,32 @@ fn instancing_errors() {
     );
     assert_error(&err, &path, 4, 3, "alike along every axis");
 }
+
+#[test]
+fn principled_errors() {
+    let (err, path) = load_err(
+        "principled-both-iors",
+        &scene(
+            r#"  <bsdf type="principled" id="b"><float name="eta" value="1.5"/>
+    <float name="specular" value="0.5"/></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "either \"eta\" or \"specular\"");
+    let (err, path) = load_err(
+        "principled-range",
+        &scene(
+            r#"  <bsdf type="principled" id="b">
+    <float name="roughness" value="1.5"/></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "roughness");
+    // Mitsuba's twosided refuses a principled material that transmits.
+    let (err, path) = load_err(
+        "twosided-principled-glass",
+        &scene(
+            r#"  <bsdf type="twosided" id="b">
+    <bsdf type="principled"><float name="spec_trans" value="0.5"/></bsdf></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "without transmission");
+}

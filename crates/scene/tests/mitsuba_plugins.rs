@@ -631,3 +631,44 @@ fn instances_of_a_shape_group() {
         }
     }
 }
+
+/// `principled`: the base colour, the scalar parameters in their table's order with Mitsuba's
+/// defaults, and the index of refraction from `specular` (0.5 by default) or `eta`.
+#[test]
+fn principled_bsdf() {
+    let s = load(
+        "<shape type=\"cube\"><bsdf type=\"principled\"/></shape>\
+         <shape type=\"cube\"><bsdf type=\"principled\"><rgb name=\"base_color\" value=\"0.1, 0.2, 0.3\"/>\
+           <float name=\"metallic\" value=\"0.7\"/><float name=\"eta\" value=\"1.33\"/></bsdf></shape>\
+         <shape type=\"cube\"><bsdf type=\"principled\"><float name=\"spec_trans\" value=\"1\"/>\
+           <float name=\"specular\" value=\"0\"/></bsdf></shape>",
+    );
+    let read = |k: usize| match &*s.shapes[k].bsdf {
+        BsdfDesc::Principled {
+            base_color: TextureDesc::Constant(base),
+            parameters,
+            eta,
+        } => {
+            let values: Vec<f32> = parameters
+                .iter()
+                .map(|t| match t {
+                    TextureDesc::Constant(c) => c.r,
+                    other => panic!("{other:?}"),
+                })
+                .collect();
+            (*base, values, *eta)
+        }
+        other => panic!("{other:?}"),
+    };
+    let (base, values, eta) = read(0);
+    assert_eq!(base, Rgb::splat(0.5));
+    assert_eq!(values, [0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    // specular 0.5: η = 2/(1 − √0.04) − 1 = 1.5.
+    assert!((eta - 1.5).abs() < 1e-6, "{eta}");
+    let (base, values, eta) = read(1);
+    assert_eq!((base, values[2], eta), (Rgb::new(0.1, 0.2, 0.3), 0.7, 1.33));
+    // A transmitting surface needs η ≠ 1: specular 0 becomes 10⁻³, as in Mitsuba.
+    let (_, values, eta) = read(2);
+    assert_eq!(values[3], 1.0);
+    assert!(eta > 1.0 && (eta - (2.0 / (1.0 - (0.08f32 * 1e-3).sqrt()) - 1.0)).abs() < 1e-6);
+}

@@ -20,7 +20,8 @@
 //!   keeps its model's weight (Mitsuba 3.9.1 divides it by a mixed density and loses light).
 //!
 //! Models, one file each: [`diffuse`], [`plastic`], [`roughplastic`], [`conductor`],
-//! [`roughconductor`], [`dielectric`], [`roughdielectric`], [`thindielectric`], [`phong`]; shared: [`microfacet`]
+//! [`roughconductor`], [`dielectric`], [`roughdielectric`], [`thindielectric`], [`phong`],
+//! [`principled`]; shared: [`microfacet`]
 //! (Beckmann and GGX, Walter et al. 2007; visible normals, Heitz 2018) and [`fresnel`].
 
 pub mod conductor;
@@ -30,6 +31,7 @@ pub mod fresnel;
 pub mod microfacet;
 pub mod phong;
 pub mod plastic;
+pub mod principled;
 pub mod roughconductor;
 pub mod roughdielectric;
 pub mod roughplastic;
@@ -45,6 +47,7 @@ pub use diffuse::Diffuse;
 pub use microfacet::Microfacet;
 pub use phong::Phong;
 pub use plastic::Plastic;
+pub use principled::Principled;
 pub use roughconductor::RoughConductor;
 pub use roughdielectric::RoughDielectric;
 pub use roughplastic::{RoughPlastic, RoughPlasticTables};
@@ -106,6 +109,8 @@ pub enum Lobe {
     ThinDielectric(ThinDielectric),
     /// OBJ diffuse + normalised Phong.
     Phong(Phong),
+    /// Mitsuba's principled BSDF.
+    Principled(Principled),
 }
 
 impl Lobe {
@@ -117,6 +122,7 @@ impl Lobe {
             Lobe::RoughConductor(b) => b.eval(wo, wi),
             Lobe::RoughDielectric(b) => b.eval(wo, wi),
             Lobe::Phong(b) => b.eval(wo, wi),
+            Lobe::Principled(b) => b.eval(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => Rgb::ZERO,
         }
     }
@@ -129,6 +135,7 @@ impl Lobe {
             Lobe::RoughConductor(b) => b.pdf(wo, wi),
             Lobe::RoughDielectric(b) => b.pdf(wo, wi),
             Lobe::Phong(b) => b.pdf(wo, wi),
+            Lobe::Principled(b) => b.pdf(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => 0.0,
         }
     }
@@ -144,6 +151,7 @@ impl Lobe {
             Lobe::RoughDielectric(b) => b.sample(wo, u_lobe, u),
             Lobe::ThinDielectric(b) => b.sample(wo, u_lobe),
             Lobe::Phong(b) => b.sample(wo, u_lobe, u),
+            Lobe::Principled(b) => b.sample(wo, u_lobe, u),
         }
     }
 
@@ -164,6 +172,7 @@ impl Lobe {
             Lobe::Plastic(b) => b.lambertian_albedo(wo),
             Lobe::RoughPlastic(b) => b.lambertian_albedo(wo),
             Lobe::Phong(b) => b.diffuse,
+            Lobe::Principled(b) => b.lambertian_albedo(wo),
             _ => Rgb::ZERO,
         }
     }
@@ -173,6 +182,7 @@ impl Lobe {
             Lobe::Diffuse(_) | Lobe::Plastic(_) => Rgb::ZERO,
             Lobe::RoughPlastic(b) => b.eval_specular(wo, wi),
             Lobe::Phong(b) => b.eval_specular(wo, wi),
+            Lobe::Principled(b) => b.eval_glossy(wo, wi),
             other => other.eval(wo, wi),
         }
     }
@@ -192,6 +202,13 @@ impl Lobe {
             Lobe::Plastic(b) => b.sample_specular(wo),
             Lobe::RoughPlastic(b) => b.sample_specular(wo, u),
             Lobe::Phong(b) => b.sample_specular(wo, u),
+            // The whole mixture's directions, weighed by the glossy part alone.
+            Lobe::Principled(b) => b.sample(wo, u_lobe, u).and_then(|s| {
+                let weight = b.eval_glossy(wo, s.wi) / s.pdf;
+                weight
+                    .is_valid_radiance()
+                    .then_some(BsdfSample { weight, ..s })
+            }),
             other => other.sample(wo, u_lobe, u),
         }
     }
@@ -210,6 +227,7 @@ impl Lobe {
             Lobe::Plastic(b) => b.diffuse_reflectance,
             Lobe::RoughPlastic(b) => b.diffuse_reflectance,
             Lobe::Phong(b) => b.diffuse,
+            Lobe::Principled(b) => b.diffuse_reflectance(),
             _ => Rgb::ZERO,
         }
     }
@@ -528,11 +546,10 @@ impl Bsdf {
     /// True when the BSDF sends light through the surface (smooth, rough or thin dielectrics).
     #[must_use]
     pub fn transmits(&self) -> bool {
-        self.lobes().iter().any(|l| {
-            matches!(
-                l,
-                Lobe::Dielectric(_) | Lobe::RoughDielectric(_) | Lobe::ThinDielectric(_)
-            )
+        self.lobes().iter().any(|l| match l {
+            Lobe::Dielectric(_) | Lobe::RoughDielectric(_) | Lobe::ThinDielectric(_) => true,
+            Lobe::Principled(p) => p.transmits(),
+            _ => false,
         })
     }
 
@@ -626,6 +643,12 @@ enum Compiled {
     Phong {
         diffuse: Texture,
         proto: Phong,
+    },
+    Principled {
+        base_color: Texture,
+        /// In the order of [`ircache_scene::PRINCIPLED_PARAMETERS`].
+        parameters: Box<[Texture; 10]>,
+        eta: f32,
     },
     Fixed(Lobe),
 }
@@ -755,6 +778,15 @@ impl Compiled {
                 specular_reflectance: *specular_reflectance,
                 specular_transmittance: *specular_transmittance,
             })),
+            BsdfDesc::Principled {
+                base_color,
+                parameters,
+                eta,
+            } => Compiled::Principled {
+                base_color: Texture::from_desc(base_color),
+                parameters: Box::new(parameters.each_ref().map(Texture::from_desc)),
+                eta: *eta,
+            },
             BsdfDesc::ObjPhong {
                 diffuse,
                 specular,
@@ -787,6 +819,30 @@ impl Compiled {
                 diffuse: diffuse.eval(uv),
                 ..*proto
             }),
+            Compiled::Principled {
+                base_color,
+                parameters,
+                eta,
+            } => {
+                let [roughness, anisotropic, metallic, spec_trans, spec_tint, sheen, sheen_tint, flatness, clearcoat, clearcoat_gloss] =
+                    parameters
+                        .each_ref()
+                        .map(|t| t.eval(uv).luminance().clamp(0.0, 1.0));
+                Lobe::Principled(Principled {
+                    base_color: base_color.eval(uv),
+                    roughness,
+                    anisotropic,
+                    metallic,
+                    spec_trans,
+                    spec_tint,
+                    sheen,
+                    sheen_tint,
+                    flatness,
+                    clearcoat,
+                    clearcoat_gloss,
+                    eta: *eta,
+                })
+            }
             Compiled::Fixed(l) => *l,
         }
     }
@@ -797,6 +853,15 @@ impl Compiled {
             | Compiled::Plastic { diffuse: t, .. }
             | Compiled::RoughPlastic { diffuse: t, .. }
             | Compiled::Phong { diffuse: t, .. } => t.mean(),
+            Compiled::Principled {
+                base_color,
+                parameters,
+                ..
+            } => {
+                // (1 − metallic)(1 − spec_trans) at the parameters' means.
+                let mean = |t: &Texture| t.mean().luminance().clamp(0.0, 1.0);
+                base_color.mean() * ((1.0 - mean(&parameters[2])) * (1.0 - mean(&parameters[3])))
+            }
             Compiled::Fixed(_) => Rgb::ZERO,
         }
     }
@@ -1051,6 +1116,13 @@ impl Material {
             | Compiled::Plastic { diffuse: t, .. }
             | Compiled::RoughPlastic { diffuse: t, .. }
             | Compiled::Phong { diffuse: t, .. } => !matches!(t, Texture::Constant(_)),
+            Compiled::Principled {
+                base_color,
+                parameters,
+                ..
+            } => std::iter::once(base_color)
+                .chain(parameters.iter())
+                .any(|t| !matches!(t, Texture::Constant(_))),
             Compiled::Fixed(_) => false,
         };
         textured(&self.front)

@@ -11,6 +11,7 @@ use super::props::{Plugin, Prop, Value};
 use super::{expect_tag, Ctx};
 use crate::desc::{
     BitmapDesc, BsdfDesc, MicrofacetDistribution, TextureDesc, TextureFilter, WrapMode,
+    PRINCIPLED_PARAMETERS,
 };
 use crate::error::SceneError;
 use crate::ior;
@@ -33,6 +34,7 @@ const BSDFS: &[&str] = &[
     "mask",
     "null",
     "blendbsdf",
+    "principled",
 ];
 const TEXTURES: &[&str] = &["bitmap"];
 
@@ -104,6 +106,7 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
             BsdfDesc::Mask { opacity, nested }
         }
         "blendbsdf" => build_blend(ctx, p)?,
+        "principled" => build_principled(ctx, p)?,
         "twosided" => {
             let nested = p.objects(&ctx.ids)?;
             let mut bsdfs = Vec::new();
@@ -116,13 +119,15 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
                     ));
                 }
                 let b = build_bsdf(ctx, obj)?;
-                let transmits = |b: &BsdfDesc| {
-                    matches!(
-                        b,
-                        BsdfDesc::Dielectric { .. }
-                            | BsdfDesc::RoughDielectric { .. }
-                            | BsdfDesc::ThinDielectric { .. }
-                    )
+                let transmits = |b: &BsdfDesc| match b {
+                    BsdfDesc::Dielectric { .. }
+                    | BsdfDesc::RoughDielectric { .. }
+                    | BsdfDesc::ThinDielectric { .. } => true,
+                    BsdfDesc::Principled { parameters, .. } => !matches!(
+                        &parameters[3],
+                        TextureDesc::Constant(c) if c.max_channel() == 0.0
+                    ),
+                    _ => false,
                 };
                 let blend_transmits = matches!(&*b, BsdfDesc::Blend { first, second, .. }
                     if transmits(first) || transmits(second));
@@ -239,6 +244,88 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
     };
     p.check_unused()?;
     Ok(b)
+}
+
+/// Mitsuba 3's `principled`: the base colour and the scalar parameters of
+/// [`PRINCIPLED_PARAMETERS`] (floats or textures, constants checked to lie in [0, 1]), and the
+/// index of refraction from `eta` or `specular` (not both). Mitsuba's sampling rates only tune its
+/// own lobe choice; they are read and said to be unused.
+fn build_principled(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
+    let base_color = texture_param(ctx, p, "base_color", 0.5)?;
+    let mut parameters: [TextureDesc; 10] =
+        std::array::from_fn(|_| TextureDesc::Constant(Rgb::ZERO));
+    for ((name, default), slot) in PRINCIPLED_PARAMETERS.iter().zip(&mut parameters) {
+        let t = texture_param(ctx, p, name, *default)?;
+        if let (TextureDesc::Constant(c), Some(prop)) = (&t, p.get(name)) {
+            check_unit_range(*c, name, prop)?;
+        }
+        *slot = t;
+    }
+    for (obj, prop) in p.objects(&ctx.ids)? {
+        let named =
+            prop.name == "base_color" || PRINCIPLED_PARAMETERS.iter().any(|(n, _)| *n == prop.name);
+        if !(obj.tag == "texture" && named) {
+            expect_tag(&obj, prop, "textures for principled's parameters")?;
+        }
+    }
+    let transmits = !matches!(&parameters[3], TextureDesc::Constant(c) if c.max_channel() == 0.0);
+    let eta = match (p.get("eta"), p.get("specular")) {
+        (Some(_), Some(prop)) => {
+            return Err(SceneError::at(
+                prop.loc.clone(),
+                "principled takes either \"eta\" or \"specular\", not both",
+            ))
+        }
+        (Some(prop), None) => {
+            let eta = p.float("eta", 1.5)?;
+            if !(eta.is_finite() && eta > 0.0) {
+                return Err(SceneError::at(
+                    prop.loc.clone(),
+                    format!("eta {eta} must be finite and greater than zero"),
+                ));
+            }
+            // As Mitsuba: an interface that refracts needs η ≠ 1.
+            if transmits && eta == 1.0 {
+                1.001
+            } else {
+                eta
+            }
+        }
+        (None, prop) => {
+            let specular = p.float("specular", 0.5)?;
+            if !(0.0..=1.0).contains(&specular) {
+                return Err(SceneError::at(
+                    prop.map_or(p.loc.clone(), |q| q.loc.clone()),
+                    format!("specular {specular} must lie in [0, 1]"),
+                ));
+            }
+            let specular = if transmits && specular == 0.0 {
+                1e-3
+            } else {
+                specular
+            };
+            2.0 / (1.0 - (0.08 * specular).sqrt()) - 1.0
+        }
+    };
+    let rates = [
+        "main_specular_sampling_rate",
+        "clearcoat_sampling_rate",
+        "diffuse_reflectance_sampling_rate",
+    ];
+    for rate in rates {
+        if let Some((_, prop)) = p.float_opt(rate)? {
+            ctx.notes.borrow_mut().push(format!(
+                "{}: principled's \"{rate}\" tunes Mitsuba's own lobe choice; ircache \
+                 chooses lobes by its own estimate (the image is the same)",
+                prop.loc
+            ));
+        }
+    }
+    Ok(BsdfDesc::Principled {
+        base_color,
+        parameters,
+        eta,
+    })
 }
 
 /// Mitsuba's `blendbsdf`: a weight (float or texture, required) and two nested BSDFs. Both

@@ -11,7 +11,7 @@
 //! samplers `independent`, `stratified`, `multijitter`, `ldsampler`, `orthogonal`; integrators
 //! `path`, `direct`, `irrcache`; shapes `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk` and
 //! `cylinder` (tessellated), `sphere`, `shapegroup` and `instance` (flattened); BSDFs `diffuse`, `twosided`, `blendbsdf`, `plastic`, `roughplastic`,
-//! `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `thindielectric`, `bumpmap`,
+//! `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `thindielectric`, `principled`, `bumpmap`,
 //! `normalmap`, `mask`, `null`; texture `bitmap`; emitters `area`, `point`, `spot`, `directional`,
 //! `constant`, `envmap`; media `homogeneous`, `heterogeneous` with volumes `constvolume`,
 //! `gridvolume` and phase functions `isotropic`, `hg`.
