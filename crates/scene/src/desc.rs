@@ -356,6 +356,16 @@ pub enum TextureDesc {
     Constant(Rgb),
     /// An image looked up by the surface's texture coordinates.
     Bitmap(Arc<BitmapDesc>),
+    /// Mitsuba's `checkerboard`: `color0` where the fractional parts of u and v (after
+    /// `to_uv`) lie on the same side of ½, `color1` elsewhere.
+    Checkerboard {
+        /// The squares where both fractional parts agree.
+        color0: Rgb,
+        /// The other squares.
+        color1: Rgb,
+        /// Texture-coordinate transform (homogeneous 2-D).
+        to_uv: ircache_math::Mat3,
+    },
 }
 
 /// An image texture (`<texture type="bitmap">`).

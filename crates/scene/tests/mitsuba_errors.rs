@@ -730,3 +730,25 @@ fn principled_errors() {
     );
     assert_error(&err, &path, 4, 5, "without transmission");
 }
+
+#[test]
+fn checkerboard_errors() {
+    // Nested textures as colours are not read; a checkerboard is no normal map.
+    let (err, path) = load_err(
+        "checker-nested",
+        &scene(
+            r#"  <texture type="checkerboard" id="c">
+    <texture type="checkerboard" name="color0"/></texture>
+  <shape type="cube"><bsdf type="diffuse"><ref name="reflectance" id="c"/></bsdf></shape>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "must be a colour or a float");
+    let (err, path) = load_err(
+        "checker-normalmap",
+        &scene(
+            r#"  <bsdf type="normalmap" id="n">
+    <texture type="checkerboard"/><bsdf type="diffuse"/></bsdf>"#,
+        ),
+    );
+    assert_error(&err, &path, 4, 5, "normal and bump maps read a bitmap");
+}

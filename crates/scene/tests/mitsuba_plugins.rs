@@ -672,3 +672,30 @@ fn principled_bsdf() {
     assert_eq!(values[3], 1.0);
     assert!(eta > 1.0 && (eta - (2.0 / (1.0 - (0.08f32 * 1e-3).sqrt()) - 1.0)).abs() < 1e-6);
 }
+
+/// Mitsuba integrators that render the same image as one of ours are read as it, with their
+/// own defaults (the differentiable ones stop at depth 6), and said so.
+#[test]
+fn integrators_read_as_the_same_image() {
+    for (theirs, ours, depth) in [
+        (
+            "<integrator type=\"volpathmis\"><integer name=\"max_depth\" value=\"4\"/>\
+          <boolean name=\"use_spectral_mis\" value=\"false\"/></integrator>",
+            "volpath",
+            4,
+        ),
+        ("<integrator type=\"prb\"/>", "path", 6),
+        ("<integrator type=\"prbvolpath\"/>", "volpath", 6),
+    ] {
+        let s = load(&format!("{theirs}<shape type=\"cube\"/>"));
+        assert_eq!(
+            (s.integrator.kind.as_str(), s.integrator.max_depth),
+            (ours, depth)
+        );
+        assert!(
+            s.notes.iter().any(|n| n.contains("renders the same image")),
+            "{:?}",
+            s.notes
+        );
+    }
+}

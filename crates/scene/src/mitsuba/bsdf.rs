@@ -36,7 +36,7 @@ const BSDFS: &[&str] = &[
     "blendbsdf",
     "principled",
 ];
-const TEXTURES: &[&str] = &["bitmap"];
+const TEXTURES: &[&str] = &["bitmap", "checkerboard"];
 
 /// Builds (once per plugin) a BSDF.
 pub(crate) fn build_bsdf(ctx: &Ctx, p: &Rc<Plugin>) -> Result<Arc<BsdfDesc>, SceneError> {
@@ -557,9 +557,53 @@ pub(crate) fn texture_param(
     };
     if let Some(obj) = super::props::resolve(prop, &ctx.ids)? {
         expect_tag(&obj, prop, "texture")?;
-        return Ok(TextureDesc::Bitmap(build_texture(ctx, &obj)?));
+        return build_any_texture(ctx, &obj);
     }
     Ok(TextureDesc::Constant(p.rgb(name, Rgb::splat(default))?))
+}
+
+/// A texture's `to_uv`: the 4×4 transform acting on (u, v) through its x/y rows and columns.
+fn to_uv(p: &Plugin) -> Result<Mat3, SceneError> {
+    Ok(match p.transform_opt("to_uv")? {
+        None => Mat3::IDENTITY,
+        Some((m, _)) => Mat3::from_cols(
+            Vec3::new(m.x_axis.x, m.x_axis.y, 0.0),
+            Vec3::new(m.y_axis.x, m.y_axis.y, 0.0),
+            Vec3::new(m.w_axis.x, m.w_axis.y, 1.0),
+        ),
+    })
+}
+
+/// A texture of any kind this loader reads.
+pub(crate) fn build_any_texture(ctx: &Ctx, p: &Rc<Plugin>) -> Result<TextureDesc, SceneError> {
+    if p.ty == "checkerboard" {
+        build_checkerboard(p)
+    } else {
+        Ok(TextureDesc::Bitmap(build_texture(ctx, p)?))
+    }
+}
+
+/// Mitsuba's `checkerboard` (colours 0.4 and 0.2 by default; constant colours only).
+fn build_checkerboard(p: &Plugin) -> Result<TextureDesc, SceneError> {
+    let colour = |name: &str, default: f32| -> Result<Rgb, SceneError> {
+        if let Some(prop) = p.get(name) {
+            if matches!(prop.value, Value::Ref(_) | Value::Object(_)) {
+                return Err(SceneError::at(
+                    prop.loc.clone(),
+                    format!("checkerboard's {name} must be a colour or a float, not a texture"),
+                ));
+            }
+        }
+        p.rgb(name, Rgb::splat(default))
+    };
+    let (color0, color1) = (colour("color0", 0.4)?, colour("color1", 0.2)?);
+    let to_uv = to_uv(p)?;
+    p.check_unused()?;
+    Ok(TextureDesc::Checkerboard {
+        color0,
+        color1,
+        to_uv,
+    })
 }
 
 /// Builds (once per plugin) a `bitmap` texture.
@@ -569,6 +613,12 @@ pub(crate) fn build_texture(ctx: &Ctx, p: &Rc<Plugin>) -> Result<Arc<BitmapDesc>
         return Ok(b.clone());
     }
     p.expect_type(TEXTURES)?;
+    if p.ty != "bitmap" {
+        return Err(p.error(format!(
+            "a {} texture cannot serve here: normal and bump maps read a bitmap",
+            p.ty
+        )));
+    }
     let (name, prop) = p
         .string_opt("filename")?
         .ok_or_else(|| p.error("missing \"filename\""))?;
@@ -603,14 +653,7 @@ pub(crate) fn build_texture(ctx: &Ctx, p: &Rc<Plugin>) -> Result<Arc<BitmapDesc>
             }
         },
     };
-    let to_uv = match p.transform_opt("to_uv")? {
-        None => Mat3::IDENTITY,
-        Some((m, _)) => Mat3::from_cols(
-            Vec3::new(m.x_axis.x, m.x_axis.y, 0.0),
-            Vec3::new(m.y_axis.x, m.y_axis.y, 0.0),
-            Vec3::new(m.w_axis.x, m.w_axis.y, 1.0),
-        ),
-    };
+    let to_uv = to_uv(p)?;
     let loc = prop.loc.clone();
     p.check_unused()?;
     let image = ctx.image(&path, raw, &loc)?;

@@ -7,14 +7,17 @@
 //! into the [`SceneDesc`], and every property a builder did not read is an error, as Mitsuba's
 //! "unreferenced property". Every error names file:line:column.
 //!
-//! Supported plugins: sensors `perspective`, `thinlens`, `orthographic`; film `hdrfilm`; rfilter `box`, `tent`, `gaussian`;
-//! samplers `independent`, `stratified`, `multijitter`, `ldsampler`, `orthogonal`; integrators
-//! `path`, `direct`, `irrcache`; shapes `obj`, `ply`, `serialized`, `rectangle`, `cube`, `disk` and
-//! `cylinder` (tessellated), `sphere`, `shapegroup` and `instance` (flattened); BSDFs `diffuse`, `twosided`, `blendbsdf`, `plastic`, `roughplastic`,
-//! `conductor`, `roughconductor`, `dielectric`, `roughdielectric`, `thindielectric`, `principled`, `bumpmap`,
-//! `normalmap`, `mask`, `null`; texture `bitmap`; emitters `area`, `point`, `spot`, `directional`,
-//! `constant`, `envmap`; media `homogeneous`, `heterogeneous` with volumes `constvolume`,
-//! `gridvolume` and phase functions `isotropic`, `hg`.
+//! Supported plugins: sensors `perspective`, `thinlens`, `orthographic`; film `hdrfilm`;
+//! rfilter `box`, `tent`, `gaussian`; samplers `independent`, `stratified`, `multijitter`,
+//! `ldsampler`, `orthogonal`; integrators `path`, `volpath`, `direct`, `irrcache`, and
+//! `volpathmis`, `prb`, `prbvolpath` read as the one that renders the same image; shapes `obj`,
+//! `ply`, `serialized`, `rectangle`, `cube`, `disk` and `cylinder` (tessellated), `sphere`,
+//! `shapegroup` and `instance` (flattened); BSDFs `diffuse`, `twosided`, `blendbsdf`, `plastic`,
+//! `roughplastic`, `conductor`, `roughconductor`, `dielectric`, `roughdielectric`,
+//! `thindielectric`, `principled`, `bumpmap`, `normalmap`, `mask`, `null`; textures `bitmap`,
+//! `checkerboard`; emitters `area`, `point`, `spot`, `directional`, `constant`, `envmap`; media
+//! `homogeneous`, `heterogeneous` with volumes `constvolume`, `gridvolume` and phase functions
+//! `isotropic`, `hg`.
 
 mod bsdf;
 mod emitter;
@@ -80,7 +83,15 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, Scen
                         "more than one <integrator>",
                     ));
                 }
-                integrator = Some(sensor::build_integrator(&obj)?);
+                let built = sensor::build_integrator(&obj)?;
+                if built.unusable.is_none() && built.kind != obj.ty {
+                    ctx.notes.borrow_mut().push(format!(
+                        "{}: Mitsuba's \"{}\" integrator renders the same image as \"{}\", which \
+                         renders it here",
+                        obj.loc, obj.ty, built.kind
+                    ));
+                }
+                integrator = Some(built);
             }
             "shape" => match obj.ty.as_str() {
                 // A group is drawn only through its instances.
@@ -95,7 +106,7 @@ pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, Scen
                 bsdf::build_bsdf(&ctx, &obj)?;
             }
             "texture" => {
-                bsdf::build_texture(&ctx, &obj)?;
+                bsdf::build_any_texture(&ctx, &obj)?;
             }
             "medium" => {
                 medium::build_medium(&ctx, &obj)?;

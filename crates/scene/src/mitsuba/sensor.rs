@@ -20,7 +20,23 @@ const SAMPLERS: &[&str] = &[
     "orthogonal",
     "sobol",
 ];
-const INTEGRATORS: &[&str] = &["path", "volpath", "direct", "irrcache"];
+const INTEGRATORS: &[&str] = &[
+    "path",
+    "volpath",
+    "direct",
+    "irrcache",
+    "volpathmis",
+    "prb",
+    "prbvolpath",
+];
+
+/// Mitsuba integrators that render what one of ours renders, by another sampling (spectral MIS)
+/// or for derivatives, with the same parameters: read as that one.
+const SAME_IMAGE_AS: &[(&str, &str)] = &[
+    ("volpathmis", "volpath"),
+    ("prb", "path"),
+    ("prbvolpath", "volpath"),
+];
 
 /// A projective sensor (`perspective`, `thinlens` or `orthographic`) with its film and sampler.
 pub(crate) fn build_sensor(ctx: &Ctx, p: &Plugin) -> Result<SensorDesc, SceneError> {
@@ -363,11 +379,23 @@ pub(crate) fn build_integrator(p: &Plugin) -> Result<IntegratorDesc, SceneError>
             ..IntegratorDesc::default()
         });
     }
+    let kind = SAME_IMAGE_AS
+        .iter()
+        .find(|(theirs, _)| *theirs == p.ty)
+        .map_or(p.ty.as_str(), |(_, ours)| ours);
     let mut d = IntegratorDesc {
-        kind: p.ty.clone(),
+        kind: kind.to_string(),
         ..IntegratorDesc::default()
     };
     d.hide_emitters = p.boolean("hide_emitters", false)?;
+    // Mitsuba's differentiable integrators stop at depth 6 unless told otherwise.
+    if matches!(p.ty.as_str(), "prb" | "prbvolpath") {
+        d.max_depth = 6;
+    }
+    // Spectral MIS acts only between wavelengths, which an RGB renderer does not sample.
+    if p.ty == "volpathmis" {
+        let _ = p.boolean("use_spectral_mis", true)?;
+    }
     match p.ty.as_str() {
         "direct" => {
             let shading = count(p, "shading_samples", 1)?;
