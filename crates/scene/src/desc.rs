@@ -457,7 +457,7 @@ pub enum BsdfDesc {
         base_color: TextureDesc,
         /// The scalar parameters, textures read by their luminance, in the order and with the
         /// defaults of [`PRINCIPLED_PARAMETERS`].
-        parameters: [TextureDesc; 10],
+        parameters: Box<[TextureDesc; 10]>,
         /// Relative index of refraction (from `eta` or `specular`).
         eta: f32,
     },
@@ -694,7 +694,7 @@ impl BsdfDesc {
                 ..
             } => {
                 tex(base_color, f);
-                for t in parameters {
+                for t in parameters.iter() {
                     tex(t, f);
                 }
             }

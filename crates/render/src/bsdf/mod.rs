@@ -75,7 +75,18 @@ impl BsdfSample {
     #[inline]
     #[must_use]
     pub fn smooth_reflection(wi: Vec3, pdf: f32, eval: impl FnOnce() -> Rgb) -> Option<Self> {
-        if wi.z <= 0.0 || pdf.is_nan() || pdf <= 0.0 {
+        if wi.z <= 0.0 {
+            return None;
+        }
+        Self::smooth(wi, pdf, eval, 1.0)
+    }
+
+    /// A sample `wi` of a smooth lobe crossing relative index `eta` (1 for reflection), density
+    /// `pdf`, weight `eval / pdf`; `None` where the density is zero, infinite or not a number.
+    #[inline]
+    #[must_use]
+    pub fn smooth(wi: Vec3, pdf: f32, eval: impl FnOnce() -> Rgb, eta: f32) -> Option<Self> {
+        if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
         Some(BsdfSample {
@@ -83,7 +94,7 @@ impl BsdfSample {
             pdf,
             weight: eval() / pdf,
             delta: false,
-            eta: 1.0,
+            eta,
         })
     }
 }

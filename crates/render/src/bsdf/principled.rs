@@ -396,17 +396,7 @@ impl Principled {
         if l.z * v.z == 0.0 || refracted != (l.z * v.z < 0.0) {
             return None;
         }
-        let pdf = self.pdf(v, l);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        Some(BsdfSample {
-            wi: l,
-            pdf,
-            weight: self.eval(v, l) / pdf,
-            delta: false,
-            eta,
-        })
+        BsdfSample::smooth(l, self.pdf(v, l), || self.eval(v, l), eta)
     }
 
     /// The Lambertian part `k(V)` (module doc), zero from the back.

@@ -145,20 +145,9 @@ impl RoughDielectric {
             }
             (wi, fresnel.eta_it)
         };
-        let pdf = self.pdf(wo, wi);
-        if pdf.is_nan() || pdf <= 0.0 || !pdf.is_finite() {
-            return None;
-        }
         // eval / pdf is the scale times G1(wi, m) (times 1/η² for refraction), but near grazing
         // views m recomputed from (wo, wi) differs from the sampled one by rounding: the
         // quotient keeps the weight consistent with eval and pdf.
-        let weight = self.eval(wo, wi) / pdf;
-        Some(BsdfSample {
-            wi,
-            pdf,
-            weight,
-            delta: false,
-            eta,
-        })
+        BsdfSample::smooth(wi, self.pdf(wo, wi), || self.eval(wo, wi), eta)
     }
 }

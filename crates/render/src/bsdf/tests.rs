@@ -172,13 +172,13 @@ fn blend_gold(weight: f32) -> BsdfDesc {
 fn principled(base: Rgb, set: &[(&str, f32)], eta: f32) -> BsdfDesc {
     BsdfDesc::Principled {
         base_color: TextureDesc::Constant(base),
-        parameters: ircache_scene::PRINCIPLED_PARAMETERS.map(|(name, default)| {
+        parameters: Box::new(ircache_scene::PRINCIPLED_PARAMETERS.map(|(name, default)| {
             let value = set
                 .iter()
                 .find(|(n, _)| *n == name)
                 .map_or(default, |(_, v)| *v);
             c(value)
-        }),
+        })),
         eta,
     }
 }

@@ -323,7 +323,7 @@ fn build_principled(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
     }
     Ok(BsdfDesc::Principled {
         base_color,
-        parameters,
+        parameters: Box::new(parameters),
         eta,
     })
 }
