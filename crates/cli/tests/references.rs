@@ -849,12 +849,31 @@ fn lens_and_orthographic_cameras_match_mitsuba() {
     // the cache, whose records are placed through the lens's centre. A pinhole in place of the
     // lens reads 4.4e-4 blurred, a focus 0.5 off 6.3e-3.
     for camera in ["thinlens", "orthographic"] {
+        let scene = format!("scenes/cornell-cameras/{camera}.xml");
         matches_mitsuba_reference(
-            &format!("scenes/cornell-cameras/{camera}.xml"),
+            &scene,
             &format!("scenes/cornell-cameras/reference-{camera}.exr"),
             ((96, 160), (96, 160)),
             6e-5,
         );
+        // Splatting projects records through a pinhole: refused, not a wrong image.
+        let mut desc = ircache_scene::load_scene(&resolve(&scene), &[], &ObjCamera::default())
+            .expect("scene loads");
+        desc.integrator.kind = "splat".into();
+        let built = Scene::build(&desc).expect("scene builds");
+        let integ = Integrator::from_desc(&desc.integrator).expect("integrator");
+        let settings = RenderSettings {
+            width: 32,
+            height: 32,
+            spp: 1,
+            seed: 1,
+            threads: 0,
+            filter: Filter::Box,
+            band: None,
+            sampling: ircache_render::render::Sampling::default(),
+        };
+        let err = render(&built, &integ, &settings, &|_| {}).expect_err("splatting refuses");
+        assert!(err.to_string().contains("pinhole"), "{err}");
     }
 }
 

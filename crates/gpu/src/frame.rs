@@ -169,8 +169,8 @@ impl GpuFrame {
         let unsupported = |what: String| Err(GpuError::Unsupported(what));
         if !scene.camera.is_pinhole() {
             return unsupported(format!(
-                "the GPU frame projects through a pinhole, not the scene's {:?} camera",
-                scene.camera.projection
+                "the GPU frame projects through a pinhole, not the scene's {} camera",
+                scene.camera.projection.name()
             ));
         }
         if scene.lights.only_directional().is_none() {

@@ -268,8 +268,8 @@ impl PlaneVisibility {
     ) -> Result<Seen, crate::GpuError> {
         if !camera.is_pinhole() {
             return Err(crate::GpuError::Unsupported(format!(
-                "rasterising the camera's view needs a pinhole, not a {:?} camera",
-                camera.projection
+                "rasterising the camera's view needs a pinhole, not a {} camera",
+                camera.projection.name()
             )));
         }
         let view = camera_clip(camera);

@@ -81,6 +81,18 @@ pub enum Projection {
     Orthographic,
 }
 
+impl Projection {
+    /// What the camera is, for messages: "pinhole", "thin-lens" or "orthographic".
+    #[must_use]
+    pub fn name(&self) -> &'static str {
+        match self {
+            Projection::Pinhole => "pinhole",
+            Projection::ThinLens { .. } => "thin-lens",
+            Projection::Orthographic => "orthographic",
+        }
+    }
+}
+
 /// Mitsuba's `fov_axis`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FovAxis {

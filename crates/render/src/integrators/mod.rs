@@ -127,8 +127,8 @@ impl Integrator {
             {
                 return Err(crate::scene::RenderError::Invalid(format!(
                     "splatting projects records onto the film through a pinhole; the scene's \
-                     camera is {:?} (render it with --integrator ic)",
-                    scene.camera.projection
+                     camera is {} (render it with --integrator ic)",
+                    scene.camera.projection.name()
                 )));
             }
             Integrator::Ic(_) => {}
