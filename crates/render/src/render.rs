@@ -286,7 +286,8 @@ pub fn render(
                 &mut |layer, values| {
                     for (state, l) in states.iter_mut().zip(values) {
                         if let Some(l) = l {
-                            state.add(l, state.sums.samples, sampler.spp);
+                            // Splatting takes only filters of weight 1 (`Integrator::prepare`).
+                            state.add(l, 1.0, state.sums.samples, sampler.spp);
                             state.sums.samples += 1;
                         }
                     }
@@ -397,9 +398,11 @@ struct PixelState {
 }
 
 impl PixelState {
-    /// Adds sample `index` of `0..to` to the sums (an invalid one is counted and left out).
-    fn add(&mut self, l: Rgb, index: u32, to: u32) {
+    /// Adds sample `index` of `0..to` with its filter weight to the sums (an invalid one is
+    /// counted and left out).
+    fn add(&mut self, l: Rgb, weight: f32, index: u32, to: u32) {
         if l.is_valid_radiance() {
+            let l = l * weight;
             self.sum += l;
             self.sums.add(index, to, Some(f64::from(l.luminance())));
         } else {
@@ -414,7 +417,8 @@ impl PixelState {
 }
 
 /// The camera ray of sample `sample` of pixel (x, y): its film position from the sampler's film
-/// dimensions through the pixel filter. The pixel pass and the splatting G-buffer both trace it.
+/// dimensions through the pixel filter, with the sample's filter weight (1 but for filters with
+/// negative lobes, [`crate::film`]). The pixel pass and the splatting G-buffer both trace it.
 pub fn camera_ray(
     scene: &Scene,
     settings: &RenderSettings,
@@ -422,18 +426,18 @@ pub fn camera_ray(
     x: usize,
     y: usize,
     sample: u32,
-) -> Ray {
+) -> (Ray, f32) {
     sampler.set_sample(sample, dims::FILM);
-    let offset = settings.filter.sample(sampler.next_2d());
+    let (offset, weight) = settings.filter.sample_weighted(sampler.next_2d());
     let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
     let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
     if scene.camera.needs_lens_sample() {
         sampler.set_dimension(dims::LENS);
         let lens = sampler.next_2d();
         sampler.set_dimension(dims::FILM + 2);
-        return scene.camera.generate_ray_through_lens(film, lens);
+        return (scene.camera.generate_ray_through_lens(film, lens), weight);
     }
-    scene.camera.generate_ray(film)
+    (scene.camera.generate_ray(film), weight)
 }
 
 /// Takes pixel (x, y)'s samples `state.sums.samples..to`: filter-importance-sampled estimates,
@@ -456,13 +460,14 @@ fn extend_pixel(
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
     let mut hits = [None; 16];
     let mut l = [Rgb::ZERO; 16];
+    let mut weights = [1.0f32; 16];
     state.sums.extend_to(to);
     let mut done = state.sums.samples;
     while done < to {
         let n = (to - done).min(16);
         sampler.begin_batch(done, n);
-        for (k, ray) in (done..done + n).zip(&mut camera) {
-            *ray = camera_ray(scene, settings, &mut sampler, x, y, k);
+        for ((k, ray), weight) in (done..done + n).zip(&mut camera).zip(&mut weights) {
+            (*ray, *weight) = camera_ray(scene, settings, &mut sampler, x, y, k);
         }
         let n = n as usize;
         scene.accel.intersect16(&camera[..n], &mut hits[..n]);
@@ -480,8 +485,8 @@ fn extend_pixel(
             );
         }
         deferred.resolve(scene, &mut l[..n]);
-        for (k, &li) in (done..).zip(&l[..n]) {
-            state.add(li, k, to);
+        for ((k, &li), &weight) in (done..).zip(&l[..n]).zip(&weights[..n]) {
+            state.add(li, weight, k, to);
         }
         done += n as u32;
     }

@@ -134,6 +134,19 @@ pub enum FilterDesc {
         /// Standard deviation in pixels.
         stddev: f32,
     },
+    /// Mitchell–Netravali cubic of radius 2 (Mitsuba's `mitchell`, B = C = 1/3 by default;
+    /// `catmullrom` is B = 0, C = ½).
+    Mitchell {
+        /// The B parameter.
+        b: f32,
+        /// The C parameter.
+        c: f32,
+    },
+    /// Lanczos-windowed sinc with `lobes` lobes (its radius; Mitsuba's default 3).
+    Lanczos {
+        /// Number of lobes.
+        lobes: u32,
+    },
 }
 
 /// The integrator (`<integrator type=...>`).

@@ -699,3 +699,37 @@ fn integrators_read_as_the_same_image() {
         );
     }
 }
+
+/// Mitsuba's negative-lobed reconstruction filters: `mitchell` (B, C), `catmullrom` (B 0, C ½)
+/// and `lanczos` (lobes).
+#[test]
+fn negative_lobed_filters() {
+    let film = |rfilter: &str| {
+        load_full(&format!(
+            "<scene version=\"3.0.0\"><sensor type=\"perspective\"><film type=\"hdrfilm\">{rfilter}\
+             </film></sensor><shape type=\"cube\"/></scene>"
+        ))
+        .sensor
+        .film
+        .filter
+    };
+    assert_eq!(
+        film("<rfilter type=\"mitchell\"><float name=\"B\" value=\"0.5\"/></rfilter>"),
+        FilterDesc::Mitchell {
+            b: 0.5,
+            c: 1.0 / 3.0
+        }
+    );
+    assert_eq!(
+        film("<rfilter type=\"catmullrom\"/>"),
+        FilterDesc::Mitchell { b: 0.0, c: 0.5 }
+    );
+    assert_eq!(
+        film("<rfilter type=\"lanczos\"/>"),
+        FilterDesc::Lanczos { lobes: 3 }
+    );
+    assert_eq!(
+        film("<rfilter type=\"lanczos\"><integer name=\"lobes\" value=\"2\"/></rfilter>"),
+        FilterDesc::Lanczos { lobes: 2 }
+    );
+}

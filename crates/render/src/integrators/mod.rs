@@ -123,6 +123,15 @@ impl Integrator {
                 return Ok((Integrator::VolPath(volpath), None));
             }
             Integrator::Ic(ic)
+                if ic.pixel_pass != ic::PixelPass::Lookup && settings.filter.is_weighted() =>
+            {
+                return Err(crate::scene::RenderError::Invalid(
+                    "splatting takes the box, tent and gaussian pixel filters, not ones with \
+                     negative lobes (render it with --integrator ic)"
+                        .into(),
+                ));
+            }
+            Integrator::Ic(ic)
                 if ic.pixel_pass != ic::PixelPass::Lookup && !scene.camera.is_pinhole() =>
             {
                 return Err(crate::scene::RenderError::Invalid(format!(

@@ -103,7 +103,8 @@ impl GBuffer {
                     for (i, ray) in camera[..n].iter_mut().enumerate() {
                         let x = x16 * 16 + i;
                         let mut sampler = samplers.pixel(x as u32, y as u32);
-                        *ray = camera_ray(scene, settings, &mut sampler, x, y, layer);
+                        // Splatting takes the filters sampled exactly (weight 1).
+                        *ray = camera_ray(scene, settings, &mut sampler, x, y, layer).0;
                     }
                     scene.accel.intersect16(&camera[..n], &mut hits[..n]);
                     for ((s, ray), hit) in chunk.iter_mut().zip(&camera).zip(&hits) {

@@ -8,7 +8,7 @@
 //! "unreferenced property". Every error names file:line:column.
 //!
 //! Supported plugins: sensors `perspective`, `thinlens`, `orthographic`; film `hdrfilm`;
-//! rfilter `box`, `tent`, `gaussian`; samplers `independent`, `stratified`, `multijitter`,
+//! rfilters `box`, `tent`, `gaussian`, `mitchell`, `catmullrom`, `lanczos`; samplers `independent`, `stratified`, `multijitter`,
 //! `ldsampler`, `orthogonal`; integrators `path`, `volpath`, `direct`, `irrcache`, and
 //! `volpathmis`, `prb`, `prbvolpath` read as the one that renders the same image; shapes `obj`,
 //! `ply`, `serialized`, `rectangle`, `cube`, `disk` and `cylinder` (tessellated), `sphere`,

@@ -11,7 +11,14 @@ use ircache_math::{Mat4, Rgb};
 
 const SENSORS: &[&str] = &["perspective", "thinlens", "orthographic"];
 const FILMS: &[&str] = &["hdrfilm"];
-const FILTERS: &[&str] = &["box", "tent", "gaussian"];
+const FILTERS: &[&str] = &[
+    "box",
+    "tent",
+    "gaussian",
+    "mitchell",
+    "catmullrom",
+    "lanczos",
+];
 const SAMPLERS: &[&str] = &[
     "independent",
     "stratified",
@@ -298,6 +305,21 @@ fn build_filter(p: &Plugin) -> Result<FilterDesc, SceneError> {
         }
         "tent" => FilterDesc::Tent {
             radius: positive("radius", 1.0)?,
+        },
+        "mitchell" => FilterDesc::Mitchell {
+            b: p.float("B", 1.0 / 3.0)?,
+            c: p.float("C", 1.0 / 3.0)?,
+        },
+        "catmullrom" => FilterDesc::Mitchell { b: 0.0, c: 0.5 },
+        "lanczos" => match p.integer_opt("lobes")? {
+            None => FilterDesc::Lanczos { lobes: 3 },
+            Some((n, _)) if (1..=16).contains(&n) => FilterDesc::Lanczos { lobes: n as u32 },
+            Some((n, prop)) => {
+                return Err(SceneError::at(
+                    prop.loc.clone(),
+                    format!("lobes {n} must lie in [1, 16]"),
+                ))
+            }
         },
         _ => FilterDesc::Gaussian {
             stddev: positive("stddev", 0.5)?,
