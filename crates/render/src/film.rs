@@ -177,37 +177,34 @@ impl Filter {
         }
     }
 
-    /// An offset from the pixel centre, in pixels, and the sample's weight (module doc; 1 for
-    /// the filters sampled exactly).
+    /// An offset from the pixel centre, in pixels, and the sample's weight: distributed like
+    /// the filter with weight 1, or for filters with negative lobes like their proposal with
+    /// the signed weight (module doc).
     #[must_use]
-    pub fn sample_weighted(&self, u: Vec2) -> (Vec2, f32) {
+    pub fn sample(&self, u: Vec2) -> (Vec2, f32) {
         let signed = |proposal: &Proposal, f: &dyn Fn(f32) -> f32| {
             let (x, wx) = proposal.sample(u.x, f);
             let (y, wy) = proposal.sample(u.y, f);
             (Vec2::new(x, y), wx * wy)
         };
-        match self {
-            Filter::Mitchell { b, c, proposal } => signed(proposal, &|x| mitchell(x, *b, *c)),
-            Filter::Lanczos { lobes, proposal } => signed(proposal, &|x| lanczos(x, *lobes)),
-            _ => (self.sample(u), 1.0),
-        }
-    }
-
-    /// An offset from the pixel centre, in pixels, distributed like the filter (for the
-    /// weighted filters, their proposal's).
-    #[must_use]
-    pub fn sample(&self, u: Vec2) -> Vec2 {
-        match *self {
-            Filter::Mitchell { .. } | Filter::Lanczos { .. } => self.sample_weighted(u).0,
-            Filter::Box => u - Vec2::splat(0.5),
-            Filter::Tent(r) => {
-                Vec2::new(sampling::sample_tent(u.x, r), sampling::sample_tent(u.y, r))
+        let offset = match self {
+            Filter::Mitchell { b, c, proposal } => {
+                return signed(proposal, &|x| mitchell(x, *b, *c))
             }
-            Filter::Gaussian(s) => Vec2::new(
-                sampling::sample_truncated_gaussian(u.x, s, 4.0 * s),
-                sampling::sample_truncated_gaussian(u.y, s, 4.0 * s),
+            Filter::Lanczos { lobes, proposal } => {
+                return signed(proposal, &|x| lanczos(x, *lobes))
+            }
+            Filter::Box => u - Vec2::splat(0.5),
+            Filter::Tent(r) => Vec2::new(
+                sampling::sample_tent(u.x, *r),
+                sampling::sample_tent(u.y, *r),
             ),
-        }
+            Filter::Gaussian(s) => Vec2::new(
+                sampling::sample_truncated_gaussian(u.x, *s, 4.0 * s),
+                sampling::sample_truncated_gaussian(u.y, *s, 4.0 * s),
+            ),
+        };
+        (offset, 1.0)
     }
 }
 
@@ -226,10 +223,11 @@ mod tests {
             let n = 64;
             for i in 0..n {
                 for j in 0..n {
-                    let o = f.sample(Vec2::new(
+                    let (o, w) = f.sample(Vec2::new(
                         (i as f32 + 0.5) / n as f32,
                         (j as f32 + 0.5) / n as f32,
                     ));
+                    assert_eq!(w, 1.0, "{f:?}");
                     assert!(o.x.abs() <= r && o.y.abs() <= r, "{f:?} {o}");
                     assert!(o.x.abs() <= f.radius() && o.y.abs() <= f.radius());
                     mean += o;
@@ -282,7 +280,7 @@ mod tests {
             for i in 0..m {
                 for j in 0..m {
                     let u = Vec2::new((i as f32 + 0.5) / m as f32, (j as f32 + 0.5) / m as f32);
-                    let (o, w) = filter.sample_weighted(u);
+                    let (o, w) = filter.sample(u);
                     assert!(o.x.abs() <= radius && o.y.abs() <= radius);
                     sum += f64::from(w * g(o.x, o.y));
                     weights += f64::from(w);

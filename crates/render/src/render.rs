@@ -428,7 +428,7 @@ pub fn camera_ray(
     sample: u32,
 ) -> (Ray, f32) {
     sampler.set_sample(sample, dims::FILM);
-    let (offset, weight) = settings.filter.sample_weighted(sampler.next_2d());
+    let (offset, weight) = settings.filter.sample(sampler.next_2d());
     let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
     let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
     if scene.camera.needs_lens_sample() {

@@ -468,6 +468,11 @@ pub const PRINCIPLED_PARAMETERS: [(&str, f32); 10] = [
     ("clearcoat_gloss", 0.0),
 ];
 
+/// Index of `metallic` in [`PRINCIPLED_PARAMETERS`].
+pub const PRINCIPLED_METALLIC: usize = 2;
+/// Index of `spec_trans` in [`PRINCIPLED_PARAMETERS`].
+pub const PRINCIPLED_SPEC_TRANS: usize = 3;
+
 /// A BSDF, with Mitsuba 3's parameters and defaults.
 #[derive(Clone, Debug)]
 pub enum BsdfDesc {
@@ -682,6 +687,14 @@ pub enum EmitterDesc {
         /// Radiance scale.
         scale: f32,
     },
+}
+
+impl TextureDesc {
+    /// True for a constant zero (black) texture.
+    #[must_use]
+    pub fn is_zero(&self) -> bool {
+        matches!(self, TextureDesc::Constant(c) if c.max_channel() == 0.0)
+    }
 }
 
 impl BsdfDesc {

@@ -298,19 +298,14 @@ impl Mixture<'_> {
 
     fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let w = self.weight;
-        let (model, u_lobe) = if u_lobe < w {
-            (self.second, u_lobe / w)
+        let (model, chosen, u_lobe) = if u_lobe < w {
+            (self.second, w, u_lobe / w)
         } else {
-            (self.first, (u_lobe - w) / (1.0 - w))
+            (self.first, 1.0 - w, (u_lobe - w) / (1.0 - w))
         };
         let s = model.sample(wo, u_lobe.min(ONE_MINUS_EPSILON), u)?;
         if s.delta {
             // Chosen with the probability of its weight: the weights cancel.
-            let chosen = if std::ptr::eq(model, self.second) {
-                w
-            } else {
-                1.0 - w
-            };
             return Some(BsdfSample {
                 pdf: chosen * s.pdf,
                 ..s
@@ -871,7 +866,11 @@ impl Compiled {
             } => {
                 // (1 − metallic)(1 − spec_trans) at the parameters' means.
                 let mean = |t: &Texture| t.mean().luminance().clamp(0.0, 1.0);
-                base_color.mean() * ((1.0 - mean(&parameters[2])) * (1.0 - mean(&parameters[3])))
+                {
+                    let metallic = mean(&parameters[ircache_scene::PRINCIPLED_METALLIC]);
+                    let spec_trans = mean(&parameters[ircache_scene::PRINCIPLED_SPEC_TRANS]);
+                    base_color.mean() * ((1.0 - metallic) * (1.0 - spec_trans))
+                }
             }
             Compiled::Fixed(_) => Rgb::ZERO,
         }

@@ -11,7 +11,7 @@ use super::props::{Plugin, Prop, Value};
 use super::{expect_tag, Ctx};
 use crate::desc::{
     BitmapDesc, BsdfDesc, MicrofacetDistribution, TextureDesc, TextureFilter, WrapMode,
-    PRINCIPLED_PARAMETERS,
+    PRINCIPLED_PARAMETERS, PRINCIPLED_SPEC_TRANS,
 };
 use crate::error::SceneError;
 use crate::ior;
@@ -123,10 +123,9 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
                     BsdfDesc::Dielectric { .. }
                     | BsdfDesc::RoughDielectric { .. }
                     | BsdfDesc::ThinDielectric { .. } => true,
-                    BsdfDesc::Principled { parameters, .. } => !matches!(
-                        &parameters[3],
-                        TextureDesc::Constant(c) if c.max_channel() == 0.0
-                    ),
+                    BsdfDesc::Principled { parameters, .. } => {
+                        !parameters[PRINCIPLED_SPEC_TRANS].is_zero()
+                    }
                     _ => false,
                 };
                 let blend_transmits = matches!(&*b, BsdfDesc::Blend { first, second, .. }
@@ -194,9 +193,7 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
                     specular_reflectance,
                 }
             } else {
-                let distribution = distribution(p)?;
-                let _ = p.boolean("sample_visible", true)?;
-                let (alpha_u, alpha_v) = anisotropic_alpha(p)?;
+                let (distribution, alpha_u, alpha_v) = anisotropic_microfacet(p)?;
                 BsdfDesc::RoughConductor {
                     distribution,
                     alpha_u,
@@ -213,9 +210,7 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
             let specular_reflectance = nonnegative_rgb(p, "specular_reflectance", 1.0)?;
             let specular_transmittance = nonnegative_rgb(p, "specular_transmittance", 1.0)?;
             if p.ty == "roughdielectric" {
-                let distribution = distribution(p)?;
-                let _ = p.boolean("sample_visible", true)?;
-                let (alpha_u, alpha_v) = anisotropic_alpha(p)?;
+                let (distribution, alpha_u, alpha_v) = anisotropic_microfacet(p)?;
                 BsdfDesc::RoughDielectric {
                     distribution,
                     alpha_u,
@@ -268,7 +263,7 @@ fn build_principled(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
             expect_tag(&obj, prop, "textures for principled's parameters")?;
         }
     }
-    let transmits = !matches!(&parameters[3], TextureDesc::Constant(c) if c.max_channel() == 0.0);
+    let transmits = !parameters[PRINCIPLED_SPEC_TRANS].is_zero();
     let eta = match (p.get("eta"), p.get("specular")) {
         (Some(_), Some(prop)) => {
             return Err(SceneError::at(
@@ -442,6 +437,15 @@ fn distribution(p: &Plugin) -> Result<MicrofacetDistribution, SceneError> {
 }
 
 /// `alpha`, or `alpha_u` and `alpha_v` together (default 0.1), as Mitsuba 3's rough models.
+/// A rough conductor's or dielectric's microfacets: the distribution and (α_u, α_v); Mitsuba's
+/// `sample_visible` is read (ircache always samples visible normals).
+fn anisotropic_microfacet(p: &Plugin) -> Result<(MicrofacetDistribution, f32, f32), SceneError> {
+    let distribution = distribution(p)?;
+    let _ = p.boolean("sample_visible", true)?;
+    let (alpha_u, alpha_v) = anisotropic_alpha(p)?;
+    Ok((distribution, alpha_u, alpha_v))
+}
+
 fn anisotropic_alpha(p: &Plugin) -> Result<(f32, f32), SceneError> {
     if p.has("alpha") {
         if p.has("alpha_u") || p.has("alpha_v") {
