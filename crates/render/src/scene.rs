@@ -83,8 +83,9 @@ pub struct Shape {
     pub material: usize,
     /// Its area light in [`Scene::lights`], if it emits.
     pub area_light: Option<u32>,
-    /// A flat-shaded mesh whose material has no image texture and ignores tangents: its
-    /// interactions need no vertex data (position from the ray, normal from Embree).
+    /// A flat-shaded mesh whose material and emitter have no image texture and whose material
+    /// ignores tangents: its interactions need no vertex data (position from the ray, normal
+    /// from Embree).
     pub flat: bool,
     /// A `null` BSDF: the invisible boundary of a medium, passed through by rays.
     pub null: bool,
@@ -192,8 +193,8 @@ fn content_hash(desc: &SceneDesc) -> u64 {
                 let _ = write!(h, "{g:?}");
             }
         }
-        let _ = write!(h, "{:?}{:?}", s.bsdf, s.emitter);
-        s.bsdf.for_each_bitmap(&mut |b| {
+        let _ = write!(h, "{:?}{:?}{:?}", s.bsdf, s.emitter, s.emitter_texture);
+        let mut hash_image = |b: &std::sync::Arc<ircache_scene::BitmapDesc>| {
             if !images.contains(&std::sync::Arc::as_ptr(b)) {
                 images.push(std::sync::Arc::as_ptr(b));
                 h.words(
@@ -204,7 +205,11 @@ fn content_hash(desc: &SceneDesc) -> u64 {
                         .map(f32::to_bits),
                 );
             }
-        });
+        };
+        s.bsdf.for_each_bitmap(&mut hash_image);
+        if let Some(ircache_scene::TextureDesc::Bitmap(b)) = &s.emitter_texture {
+            hash_image(b);
+        }
     }
     let _ = write!(h, "{:?}", desc.emitters);
     for m in &desc.media {
@@ -277,7 +282,8 @@ impl Scene {
             let material = Material::from_desc(&s.bsdf);
             let flat = matches!(&geometry, ShapeGeometry::Mesh(m) if m.normals.is_none())
                 && material.is_tangent_free()
-                && !material.is_textured();
+                && !material.is_textured()
+                && s.emitter_texture.is_none();
             materials.push(material);
             shapes.push(Shape {
                 name: s.id.clone(),

@@ -171,6 +171,7 @@ pub fn emitting_shape(geometry: Geometry, radiance: Rgb) -> ShapeDesc {
             reflectance: TextureDesc::Constant(Rgb::splat(0.5)),
         }),
         emitter: Some(radiance),
+        emitter_texture: None,
         location: here(),
     }
 }
@@ -188,6 +189,7 @@ pub fn quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> Sh
         }),
         bsdf,
         emitter,
+        emitter_texture: None,
         location: here(),
     }
 }

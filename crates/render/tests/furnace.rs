@@ -17,6 +17,7 @@ fn sphere_furnace(rho: f32, le: f32, max_depth: i32, spp: u32) -> SceneDesc {
         },
         bsdf: diffuse(Rgb::splat(rho)),
         emitter: Some(Rgb::splat(le)),
+        emitter_texture: None,
         location: here(),
     };
     scene(
@@ -82,6 +83,7 @@ fn box_furnace_with_scaled_geometry_is_scale_free() {
             geometry: Geometry::Mesh(mesh),
             bsdf: diffuse(Rgb::splat(0.5)),
             emitter: Some(Rgb::splat(1.0)),
+            emitter_texture: None,
             location: here(),
         };
         let desc = scene(

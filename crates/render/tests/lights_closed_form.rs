@@ -518,8 +518,11 @@ fn area_emitters_are_one_sided() {
     assert_eq!(lights.area_light_of_shape(0), Some(0));
     assert_eq!(lights.area_light_of_shape(3), None);
     // The rectangle faces p: its normal is −n.
-    assert_eq!(lights.area_radiance(0, -f.n, -f.n), Rgb::splat(2.0));
-    assert_eq!(lights.area_radiance(0, -f.n, f.n), Rgb::ZERO);
+    assert_eq!(
+        lights.area_radiance(0, -f.n, Vec2::ZERO, -f.n),
+        Rgb::splat(2.0)
+    );
+    assert_eq!(lights.area_radiance(0, -f.n, Vec2::ZERO, f.n), Rgb::ZERO);
     let behind = p + 2.0 * f.n;
     let inside_outward = p - 10.0 * f.s + 0.2 * f.t;
     let mut rng = Rng::new(3, 3);
@@ -710,6 +713,7 @@ fn light_samples_are_not_occluded_by_their_own_light() {
         )),
         bsdf: common::diffuse(Rgb::splat(0.5)),
         emitter: None,
+        emitter_texture: None,
         location: common::here(),
     };
     let mut failures = Vec::new();
@@ -851,6 +855,7 @@ fn light_samples_stand_alone_at_a_lambertian_last_vertex() {
         )),
         bsdf: common::diffuse(Rgb::splat(rho as f32)),
         emitter: None,
+        emitter_texture: None,
         location: common::here(),
     };
     // The receiver at the origin lies below the light's corner (the form factor's case).
@@ -932,4 +937,74 @@ fn light_samples_stand_alone_at_a_lambertian_last_vertex() {
     };
     let (_, _, bounces) = render(vec![floor, light], vec![sky]);
     assert!(bounces > 30_000, "environment: {bounces} BSDF rays");
+}
+
+/// The form factor from a receiver below corner (0, 0) of a parallel rectangle at height h to
+/// its part [s0, s1] × [t0, t1], by inclusion and exclusion of corner rectangles.
+fn part_irradiance(l: f64, (s0, s1): (f64, f64), (t0, t1): (f64, f64), h: f64) -> f64 {
+    let corner = |a: f64, b: f64| {
+        if a <= 0.0 || b <= 0.0 {
+            0.0
+        } else {
+            rectangle_irradiance(l, a, b, h)
+        }
+    };
+    corner(s1, t1) - corner(s0, t1) - corner(s1, t0) + corner(s0, t0)
+}
+
+/// A textured area emitter (Mitsuba's `area` with a texture as its radiance): a checkerboard
+/// of two radiances over the rectangle's uv quadrants. Light samples carry the radiance at their
+/// point, so the irradiance below a corner is the quadrants' form factors weighted by their
+/// radiances (the mean radiance alone reads more than 5 % off here); a hit reads the texture at its uv.
+#[test]
+fn textured_rectangle_emits_its_texture() {
+    let (p, f) = receiver();
+    let (w, l, h) = (1.2f32, 0.9f32, 0.7f32);
+    let mut mesh = rectangle(p + h * f.n, f.s, f.t, w, l, p);
+    mesh.uvs = Some(vec![
+        Vec2::new(0.0, 0.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(0.0, 1.0),
+    ]);
+    let (bright, dim) = (3.0f32, 0.5f32);
+    let mut shape = emitting_shape(Geometry::Mesh(mesh), Rgb::splat(0.5 * (bright + dim)));
+    shape.emitter_texture = Some(TextureDesc::Checkerboard {
+        color0: Rgb::splat(bright),
+        color1: Rgb::splat(dim),
+        to_uv: ircache_math::Mat3::IDENTITY,
+    });
+    let lights = LightSet::new(&light_scene(vec![shape], vec![]), p, 5.0);
+    let (w2, l2, wf, lf, hf) = (
+        f64::from(w) / 2.0,
+        f64::from(l) / 2.0,
+        f64::from(w),
+        f64::from(l),
+        f64::from(h),
+    );
+    let expect = part_irradiance(f64::from(bright), (0.0, w2), (0.0, l2), hf)
+        + part_irradiance(f64::from(bright), (w2, wf), (l2, lf), hf)
+        + part_irradiance(f64::from(dim), (w2, wf), (0.0, l2), hf)
+        + part_irradiance(f64::from(dim), (0.0, w2), (l2, lf), hf);
+    let mean_only = rectangle_irradiance(0.5 * f64::from(bright + dim), wf, lf, hf);
+    assert!(
+        (mean_only / expect - 1.0).abs() > 0.05,
+        "{mean_only} {expect}"
+    );
+    let est = irradiance(&lights, p, f.n, 2_000_000, 5);
+    assert_estimate("textured rectangle", est, expect);
+    // Hits: the texture at the hit's uv, on the emitting side only.
+    let n_light = -f.n;
+    assert_eq!(
+        lights.area_radiance(0, n_light, Vec2::new(0.2, 0.3), n_light),
+        Rgb::splat(bright)
+    );
+    assert_eq!(
+        lights.area_radiance(0, n_light, Vec2::new(0.7, 0.3), n_light),
+        Rgb::splat(dim)
+    );
+    assert_eq!(
+        lights.area_radiance(0, n_light, Vec2::new(0.7, 0.3), -n_light),
+        Rgb::ZERO
+    );
 }

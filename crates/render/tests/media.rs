@@ -34,6 +34,7 @@ fn cube(
         geometry: Geometry::Mesh(mesh),
         bsdf,
         emitter: None,
+        emitter_texture: None,
         media,
         location: here(),
     }
@@ -319,6 +320,7 @@ fn single_scattering_matches_quadrature() {
             },
             bsdf: diffuse(Rgb::ZERO),
             emitter: None,
+            emitter_texture: None,
             media: MediumInterface::default(),
             location: here(),
         };
@@ -370,6 +372,7 @@ fn volpath_without_media_is_path_tracing() {
         },
         bsdf: diffuse(Rgb::splat(0.5)),
         emitter: Some(Rgb::splat(0.5)),
+        emitter_texture: None,
         media: MediumInterface::default(),
         location: here(),
     };

@@ -513,6 +513,7 @@ mod in_scenes {
             geometry,
             bsdf,
             emitter: None,
+            emitter_texture: None,
             media,
             location: here(),
         }

@@ -33,6 +33,7 @@ fn floor_under_a_sphere(spp: u32, sampler: &str) -> (SceneDesc, f64) {
             geometry: Geometry::Mesh(floor),
             bsdf: diffuse(Rgb::splat(0.5)),
             emitter: None,
+            emitter_texture: None,
             location: here(),
         },
         emitting_shape(

@@ -211,8 +211,12 @@ pub struct ShapeDesc {
     pub geometry: Geometry,
     /// Its BSDF (shared between shapes that `<ref>` the same one).
     pub bsdf: Arc<BsdfDesc>,
-    /// Radiance of an attached `area` emitter (one-sided, along the shading normal).
+    /// Radiance of an attached `area` emitter (one-sided, along the shading normal); with
+    /// [`Self::emitter_texture`], its mean over the texture.
     pub emitter: Option<Rgb>,
+    /// Where the emitter's radiance varies over the surface (Mitsuba's `area` emitter with a
+    /// texture as its `radiance`): the texture, looked up at the surface's uv.
+    pub emitter_texture: Option<TextureDesc>,
     /// The media on either side of the surface, if it bounds any.
     pub media: MediumInterface,
     /// Where the shape was declared.

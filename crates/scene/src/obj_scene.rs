@@ -270,6 +270,7 @@ fn shape(group: &ObjGroup, bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> ShapeDe
         geometry: Geometry::Mesh(group.mesh.clone()),
         bsdf,
         emitter,
+        emitter_texture: None,
         location: group.location.clone(),
     }
 }

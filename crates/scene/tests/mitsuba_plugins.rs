@@ -733,3 +733,29 @@ fn negative_lobed_filters() {
         FilterDesc::Lanczos { lobes: 2 }
     );
 }
+
+#[test]
+fn textured_area_emitters_keep_their_texture_and_mean() {
+    // Mitsuba's `area` emitter with a texture as its radiance: the texture, and its mean as
+    // the emitter's radiance (what power estimates use).
+    let s = load(
+        "<shape type=\"rectangle\"><emitter type=\"area\">\
+           <texture type=\"checkerboard\" name=\"radiance\">\
+             <rgb name=\"color0\" value=\"0.8, 0.6, 0.2\"/><rgb name=\"color1\" value=\"0.2, 0.2, 0.4\"/>\
+           </texture></emitter></shape>\
+         <shape type=\"rectangle\"><emitter type=\"area\"><rgb name=\"radiance\" value=\"2\"/></emitter></shape>",
+    );
+    let mean = s.shapes[0].emitter.expect("an emitter");
+    assert!(
+        (mean.to_array()[0] - 0.5).abs() < 1e-6
+            && (mean.to_array()[1] - 0.4).abs() < 1e-6
+            && (mean.to_array()[2] - 0.3).abs() < 1e-6,
+        "{mean:?}"
+    );
+    assert!(matches!(
+        s.shapes[0].emitter_texture,
+        Some(TextureDesc::Checkerboard { .. })
+    ));
+    assert_eq!(s.shapes[1].emitter, Some(Rgb::splat(2.0)));
+    assert!(s.shapes[1].emitter_texture.is_none());
+}

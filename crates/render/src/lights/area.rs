@@ -14,15 +14,23 @@
 //!
 //! A mesh that is one flat rectangle (Mitsuba's `rectangle` shape) is sampled uniformly by solid
 //! angle instead, where its solid angle allows ([`super::rectangle`]); the density is then `1/Ω`.
+//!
+//! A textured emitter (Mitsuba's `area` with a texture as its `radiance`) emits the texture's
+//! value at the surface's uv (the mesh's texture coordinates, else the barycentric (b1, b2), as a
+//! hit's). It is sampled by area, rectangles too, and the sample carries the radiance at its
+//! point; Mitsuba samples the texture's luminance in uv instead: the same expectation, another
+//! noise. Its mean radiance stands for it where power is estimated (light selection, photons'
+//! choice of light).
 
 use super::rectangle::{Rectangle, Seen};
 use super::{is_positive_finite, solid_angle_pdf};
+use crate::texture::Texture;
 use ircache_math::sampling::{
     square_to_cosine_hemisphere, square_to_uniform_hemisphere, square_to_uniform_triangle,
     Distribution1D,
 };
 use ircache_math::{Frame, Rgb, Vec2, Vec3, PI};
-use ircache_scene::TriangleMesh;
+use ircache_scene::{TextureDesc, TriangleMesh};
 
 /// A uniformly sampled point on an emitting surface with its normals.
 #[derive(Clone, Copy, Debug)]
@@ -33,6 +41,8 @@ pub struct SurfacePoint {
     pub ng: Vec3,
     /// Unit shading normal (decides the emitting side).
     pub ns: Vec3,
+    /// Texture coordinates, on textured emitters (zero elsewhere).
+    pub uv: Vec2,
 }
 
 impl SurfacePoint {
@@ -59,8 +69,10 @@ pub struct MeshLight {
     tri_dist: Distribution1D,
     /// Total surface area.
     area: f32,
-    /// Emitted radiance (front side only).
+    /// Emitted radiance (front side only); its mean over the texture where there is one.
     radiance: Rgb,
+    /// The texture the radiance is looked up in, with the mesh's texture coordinates.
+    texture: Option<(Texture, Option<Vec<Vec2>>)>,
     /// The mesh as one flat rectangle, with the normal of its emitting side, when it is one:
     /// sampled by solid angle ([`super::rectangle`]).
     rectangle: Option<(Rectangle, Vec3)>,
@@ -77,9 +89,14 @@ impl MeshLight {
         ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
     }
 
-    /// An area light on `mesh` emitting `radiance`; `None` if the mesh has no area.
+    /// An area light on `mesh` emitting `radiance`, or with `texture` the texture's value at each
+    /// point (`radiance` then its mean); `None` if the mesh has no area.
     #[must_use]
-    pub fn new(mesh: &TriangleMesh, radiance: Rgb) -> Option<MeshLight> {
+    pub fn new(
+        mesh: &TriangleMesh,
+        radiance: Rgb,
+        texture: Option<&TextureDesc>,
+    ) -> Option<MeshLight> {
         // (p1 − p0) × (p2 − p0) of each triangle: twice its area along its normal.
         let cross: Vec<Vec3> = mesh
             .indices
@@ -106,14 +123,24 @@ impl MeshLight {
         // Solid-angle sampling needs one emitting side: both triangles wound alike and no
         // vertex normal leaning off the plane.
         let triangle_normals: Vec<Vec3> = cross.iter().map(|c| c.normalize_or_zero()).collect();
-        let rectangle = Rectangle::from_triangles(&mesh.positions, &mesh.indices).and_then(|r| {
-            let n = triangle_normals[0];
-            let flat = |v: Vec3| v.dot(n) > 1.0 - 1e-5;
-            (flat(triangle_normals[1])
-                && normals
-                    .as_ref()
-                    .is_none_or(|ns| ns.iter().all(|&v| flat(v))))
-            .then_some((r, n))
+        let rectangle = Rectangle::from_triangles(&mesh.positions, &mesh.indices)
+            .and_then(|r| {
+                let n = triangle_normals[0];
+                let flat = |v: Vec3| v.dot(n) > 1.0 - 1e-5;
+                (flat(triangle_normals[1])
+                    && normals
+                        .as_ref()
+                        .is_none_or(|ns| ns.iter().all(|&v| flat(v))))
+                .then_some((r, n))
+            })
+            .filter(|_| texture.is_none());
+        let texture = texture.map(|t| {
+            let uvs = mesh
+                .uvs
+                .as_ref()
+                .filter(|t| t.len() == mesh.positions.len())
+                .cloned();
+            (Texture::from_desc(t), uvs)
         });
         Some(MeshLight {
             positions: mesh.positions.clone(),
@@ -123,6 +150,7 @@ impl MeshLight {
             tri_dist: Distribution1D::new(&areas),
             area,
             radiance,
+            texture,
             rectangle,
         })
     }
@@ -141,10 +169,20 @@ impl MeshLight {
         self.rectangle.is_some()
     }
 
-    /// Emitted radiance on the front side.
+    /// Emitted radiance on the front side; its mean where it is textured.
     #[must_use]
     pub fn radiance(&self) -> Rgb {
         self.radiance
+    }
+
+    /// Emitted radiance on the front side at texture coordinates `uv`.
+    #[inline]
+    #[must_use]
+    pub fn radiance_at(&self, uv: Vec2) -> Rgb {
+        match &self.texture {
+            None => self.radiance,
+            Some((t, _)) => t.eval(uv),
+        }
     }
 
     /// Total surface area.
@@ -175,6 +213,7 @@ impl MeshLight {
                 p: rect.point(u),
                 ng: *n,
                 ns: *n,
+                uv: Vec2::ZERO,
             },
             None => self.sample_triangle_position(u),
         }
@@ -194,7 +233,12 @@ impl MeshLight {
             Some(n) => (b0 * n[i0] + b.x * n[i1] + b.y * n[i2]).normalize_or(ng),
             None => ng,
         };
-        SurfacePoint { p, ng, ns }
+        let uv = match &self.texture {
+            None => Vec2::ZERO,
+            Some((_, Some(t))) => b0 * t[i0] + b.x * t[i1] + b.y * t[i2],
+            Some((_, None)) => b,
+        };
+        SurfacePoint { p, ng, ns, uv }
     }
 
     /// A photon start: a point uniform by area, a cosine-distributed direction about the
@@ -205,7 +249,7 @@ impl MeshLight {
         let s = self.sample_position(u_pos);
         let n = s.emitting_normal();
         let d = Frame::from_z(n).from_local(square_to_cosine_hemisphere(u_dir));
-        (d.dot(s.ns) > 0.0).then(|| (s.p, n, d, self.radiance * (PI * self.area)))
+        (d.dot(s.ns) > 0.0).then(|| (s.p, n, d, self.radiance_at(s.uv) * (PI * self.area)))
     }
 
     /// Samples a direction from `p_ref` towards the mesh: `(wi, distance, radiance, solid-angle
@@ -254,7 +298,7 @@ impl MeshLight {
         if !is_positive_finite(pdf) {
             return None;
         }
-        Some((wi, dist, self.radiance, pdf, sp.ng))
+        Some((wi, dist, self.radiance_at(sp.uv), pdf, sp.ng))
     }
 
     /// Solid-angle density (without light selection) with which [`MeshLight::sample`] from `p_ref`

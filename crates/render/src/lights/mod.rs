@@ -202,7 +202,9 @@ impl LightSet {
                 continue;
             };
             let light = match &shape.geometry {
-                Geometry::Mesh(mesh) => MeshLight::new(mesh, radiance).map(Light::Mesh),
+                Geometry::Mesh(mesh) => {
+                    MeshLight::new(mesh, radiance, shape.emitter_texture.as_ref()).map(Light::Mesh)
+                }
                 &Geometry::Sphere {
                     center,
                     radius,
@@ -487,7 +489,13 @@ impl LightSet {
         self.emit(u_select, |light| match light {
             Light::Mesh(m) => {
                 let s = m.sample_position(u_position);
-                from_surface(s.p, s.emitting_normal(), s.ns, m.radiance(), m.area())
+                from_surface(
+                    s.p,
+                    s.emitting_normal(),
+                    s.ns,
+                    m.radiance_at(s.uv),
+                    m.area(),
+                )
             }
             Light::Sphere(s) => {
                 let (p, n) = s.sample_position(u_position);
@@ -564,14 +572,15 @@ impl LightSet {
         self.shape_light.get(shape).copied().flatten()
     }
 
-    /// Radiance leaving a point of area light `light` with shading normal `n_shading` towards the
-    /// world direction `wo`: the emitter's radiance when `n_shading · wo > 0`, zero on the back side
-    /// (one-sided, as Mitsuba's `area` emitter) and for ids that are not area lights.
+    /// Radiance leaving a point of area light `light` with shading normal `n_shading` and
+    /// texture coordinates `uv` towards the world direction `wo`: the emitter's radiance there
+    /// when `n_shading · wo > 0`, zero on the back side (one-sided, as Mitsuba's `area` emitter)
+    /// and for ids that are not area lights.
     #[inline]
     #[must_use]
-    pub fn area_radiance(&self, light: u32, n_shading: Vec3, wo: Vec3) -> Rgb {
+    pub fn area_radiance(&self, light: u32, n_shading: Vec3, uv: Vec2, wo: Vec3) -> Rgb {
         let radiance = match self.lights.get(light as usize) {
-            Some(Light::Mesh(m)) => m.radiance(),
+            Some(Light::Mesh(m)) => m.radiance_at(uv),
             Some(Light::Sphere(s)) => s.radiance(),
             _ => return Rgb::ZERO,
         };

@@ -6,7 +6,7 @@
 
 use super::props::Plugin;
 use super::{check_emission, Ctx};
-use crate::desc::EmitterDesc;
+use crate::desc::{EmitterDesc, TextureDesc};
 use crate::error::SceneError;
 use ircache_math::{Mat4, Rgb, Vec3};
 
@@ -22,15 +22,68 @@ fn emission(p: &Plugin, name: &str) -> Result<Rgb, SceneError> {
     }
 }
 
-/// An `area` emitter attached to a shape: its radiance.
-pub(crate) fn build_area(p: &Plugin) -> Result<Rgb, SceneError> {
+/// An `area` emitter attached to a shape: its radiance, and where that is a texture (Mitsuba's
+/// spatially varying `radiance`), the texture with its mean as the radiance.
+pub(crate) fn build_area(ctx: &Ctx, p: &Plugin) -> Result<(Rgb, Option<TextureDesc>), SceneError> {
     p.expect_type(EMITTERS)?;
     if p.ty != "area" {
         return Err(p.error("only area emitters can be attached to a shape"));
     }
-    let radiance = emission(p, "radiance")?;
+    let loc = p
+        .get("radiance")
+        .map_or(p.loc.clone(), |prop| prop.loc.clone());
+    let area = match super::bsdf::texture_param(ctx, p, "radiance", 1.0)? {
+        TextureDesc::Constant(c) => {
+            check_emission(c, "radiance", &loc)?;
+            (c, None)
+        }
+        texture => {
+            let mean = texture_mean(&texture, &loc)?;
+            (mean, Some(texture))
+        }
+    };
     p.check_unused()?;
-    Ok(radiance)
+    Ok(area)
+}
+
+/// The mean of an emission texture, its values checked as an emission's (finite, non-negative).
+fn texture_mean(
+    texture: &TextureDesc,
+    loc: &crate::error::SourceLocation,
+) -> Result<Rgb, SceneError> {
+    match texture {
+        TextureDesc::Constant(c) => {
+            check_emission(*c, "radiance", loc)?;
+            Ok(*c)
+        }
+        TextureDesc::Checkerboard { color0, color1, .. } => {
+            check_emission(*color0, "radiance's color0", loc)?;
+            check_emission(*color1, "radiance's color1", loc)?;
+            Ok((*color0 + *color1) * 0.5)
+        }
+        TextureDesc::Bitmap(b) => {
+            let mut sum = [0.0f64; 3];
+            for (i, t) in b.image.pixels.iter().enumerate() {
+                if t.to_array().iter().any(|v| !v.is_finite() || *v < 0.0) {
+                    let (x, y) = (i % b.image.width, i / b.image.width);
+                    check_emission(
+                        *t,
+                        &format!("radiance texel ({x}, {y}) of {}", b.path.display()),
+                        loc,
+                    )?;
+                }
+                for (s, v) in sum.iter_mut().zip(t.to_array()) {
+                    *s += f64::from(v);
+                }
+            }
+            let n = b.image.pixels.len().max(1) as f64;
+            Ok(Rgb::new(
+                (sum[0] / n) as f32,
+                (sum[1] / n) as f32,
+                (sum[2] / n) as f32,
+            ))
+        }
+    }
 }
 
 /// An emitter declared directly in the scene.

@@ -203,17 +203,28 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
                         "a shape can have only one emitter",
                     ));
                 }
-                emitter = Some(build_area(&obj)?);
+                emitter = Some(build_area(ctx, &obj)?);
             }
             _ => expect_tag(&obj, prop, "bsdf, emitter or medium")?,
         }
     }
     p.check_unused()?;
+    let (emitter, emitter_texture) = match emitter {
+        Some((radiance, texture)) => (Some(radiance), texture),
+        None => (None, None),
+    };
+    if emitter_texture.is_some() && matches!(geometry, Geometry::Sphere { .. }) {
+        return Err(p.error(
+            "a textured area emitter on a sphere is not supported (on meshes, rectangles, disks \
+             and cubes it is)",
+        ));
+    }
     Ok(ShapeDesc {
         id: p.id.clone(),
         geometry,
         bsdf: bsdf.unwrap_or_else(|| ctx.default_bsdf.clone()),
         emitter,
+        emitter_texture,
         media,
         location: p.loc.clone(),
     })
