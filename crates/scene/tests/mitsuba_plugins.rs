@@ -759,3 +759,38 @@ fn textured_area_emitters_keep_their_texture_and_mean() {
     assert_eq!(s.shapes[1].emitter, Some(Rgb::splat(2.0)));
     assert!(s.shapes[1].emitter_texture.is_none());
 }
+
+#[test]
+fn constant_spectra_of_emitters_are_equal_energy_white() {
+    // Mitsuba 3.9.1's RGB variants read `<spectrum value="v">` as an emitter's radiance,
+    // irradiance or intensity as v · xyz_to_srgb(1, 1, 1): its area emitter evaluates
+    // <spectrum name="radiance" value="1"/> to (1.20479, 0.948291, 0.908916), a constant
+    // environment the same (printed by Mitsuba itself); as a reflectance v stays v.
+    let s = load(
+        "<shape type=\"rectangle\"><emitter type=\"area\"><spectrum name=\"radiance\" value=\"2\"/></emitter>\
+           <bsdf type=\"diffuse\"><spectrum name=\"reflectance\" value=\"0.5\"/></bsdf></shape>\
+         <shape type=\"rectangle\"><emitter type=\"area\"><float name=\"radiance\" value=\"2\"/></emitter></shape>\
+         <emitter type=\"constant\"><spectrum name=\"radiance\" value=\"1\"/></emitter>\
+         <emitter type=\"point\"><spectrum name=\"intensity\" value=\"3\"/></emitter>",
+    );
+    let mitsuba = Rgb::new(1.20479, 0.948291, 0.908916);
+    let near = |a: Rgb, b: Rgb| {
+        (0..3).all(|c| (a.to_array()[c] - b.to_array()[c]).abs() < 2e-5 * b.to_array()[c].max(1.0))
+    };
+    assert!(
+        near(s.shapes[0].emitter.unwrap(), mitsuba * 2.0),
+        "{:?}",
+        s.shapes[0].emitter
+    );
+    assert_eq!(s.shapes[1].emitter, Some(Rgb::splat(2.0)));
+    match &*s.shapes[0].bsdf {
+        BsdfDesc::Diffuse { reflectance } => {
+            assert!(matches!(reflectance, TextureDesc::Constant(c) if *c == Rgb::splat(0.5)))
+        }
+        b => panic!("{b:?}"),
+    }
+    assert!(matches!(s.emitters[0], EmitterDesc::Constant { radiance } if near(radiance, mitsuba)));
+    assert!(
+        matches!(s.emitters[1], EmitterDesc::Point { intensity, .. } if near(intensity, mitsuba * 3.0))
+    );
+}

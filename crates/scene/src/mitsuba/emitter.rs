@@ -4,7 +4,7 @@
 //! `to_world`'s +z), `constant` (radiance 1) and `envmap` (`filename`, scale 1, `to_world`).
 //! Radiance, irradiance and intensity must be finite and non-negative.
 
-use super::props::Plugin;
+use super::props::{Plugin, Value};
 use super::{check_emission, Ctx};
 use crate::desc::{EmitterDesc, TextureDesc};
 use crate::error::SceneError;
@@ -13,7 +13,7 @@ use ircache_math::{Mat4, Rgb, Vec3};
 const EMITTERS: &[&str] = &["area", "point", "spot", "directional", "constant", "envmap"];
 
 fn emission(p: &Plugin, name: &str) -> Result<Rgb, SceneError> {
-    match p.rgb_opt(name)? {
+    match p.emission_opt(name)? {
         None => Ok(Rgb::ONE),
         Some((v, prop)) => {
             check_emission(v, name, &prop.loc)?;
@@ -29,18 +29,17 @@ pub(crate) fn build_area(ctx: &Ctx, p: &Plugin) -> Result<(Rgb, Option<TextureDe
     if p.ty != "area" {
         return Err(p.error("only area emitters can be attached to a shape"));
     }
-    let loc = p
+    let textured = p
         .get("radiance")
-        .map_or(p.loc.clone(), |prop| prop.loc.clone());
-    let area = match super::bsdf::texture_param(ctx, p, "radiance", 1.0)? {
-        TextureDesc::Constant(c) => {
-            check_emission(c, "radiance", &loc)?;
-            (c, None)
-        }
-        texture => {
-            let mean = texture_mean(&texture, &loc)?;
-            (mean, Some(texture))
-        }
+        .is_some_and(|prop| matches!(prop.value, Value::Object(_) | Value::Ref(_)));
+    let area = if textured {
+        let loc = p
+            .get("radiance")
+            .map_or(p.loc.clone(), |prop| prop.loc.clone());
+        let texture = super::bsdf::texture_param(ctx, p, "radiance", 1.0)?;
+        (texture_mean(&texture, &loc)?, Some(texture))
+    } else {
+        (emission(p, "radiance")?, None)
     };
     p.check_unused()?;
     Ok(area)

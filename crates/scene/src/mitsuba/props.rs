@@ -57,8 +57,11 @@ pub(crate) enum Value {
     Boolean(bool),
     /// `<string>`.
     String(String),
-    /// `<rgb>` (or a constant `<spectrum>`).
+    /// `<rgb>`.
     Rgb([f64; 3]),
+    /// A constant `<spectrum value="v">`: v in every channel, except where it is an emitter's
+    /// radiance ([`Plugin::emission_opt`]).
+    Spectrum(f64),
     /// `<vector>` or `<point>`.
     Vector([f64; 3]),
     /// `<transform>`.
@@ -78,6 +81,7 @@ impl Value {
             Value::Boolean(_) => "boolean",
             Value::String(_) => "string",
             Value::Rgb(_) => "rgb",
+            Value::Spectrum(_) => "spectrum",
             Value::Vector(_) => "vector",
             Value::Transform(_) => "transform",
             Value::Object(_) | Value::Ref(_) => "object",
@@ -378,7 +382,7 @@ fn convert_child(el: &Element, ids: &mut Ids, arg: &mut usize) -> Result<Option<
                 ));
             };
             match parse_numbers(&a.value) {
-                Ok(v) if v.len() == 1 => Value::Rgb([v[0]; 3]),
+                Ok(v) if v.len() == 1 => Value::Spectrum(v[0]),
                 _ => {
                     return Err(SceneError::at(
                         a.loc.clone(),
@@ -405,6 +409,15 @@ fn convert_child(el: &Element, ids: &mut Ids, arg: &mut usize) -> Result<Option<
         used: Cell::new(false),
     }))
 }
+
+/// The sRGB colour of a unit equal-energy spectrum: the row sums of the XYZ → linear sRGB
+/// matrix (Mitsuba 3's `xyz_to_srgb(1, 1, 1)`), since a flat spectrum's XYZ is (1, 1, 1) under
+/// the normalisation Mitsuba uses.
+pub(crate) const EQUAL_ENERGY_SRGB: Rgb = Rgb::new(
+    3.240_479 - 1.537_150 - 0.498_535,
+    -0.969_256 + 1.875_991 + 0.041_556,
+    0.055_648 - 0.204_043 + 1.057_311,
+);
 
 /// Splits on commas and whitespace and parses each number; `Err(token)` names a bad one.
 pub(crate) fn parse_numbers(s: &str) -> Result<Vec<f64>, String> {
@@ -659,7 +672,7 @@ impl Plugin {
             None => Ok(None),
             Some(p) => match p.value {
                 Value::Rgb(v) => Ok(Some((Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32), p))),
-                Value::Float(v) => Ok(Some((Rgb::splat(v as f32), p))),
+                Value::Spectrum(v) | Value::Float(v) => Ok(Some((Rgb::splat(v as f32), p))),
                 Value::Integer(v) => Ok(Some((Rgb::splat(v as f32), p))),
                 Value::Object(_) | Value::Ref(_) => Err(SceneError::at(
                     p.loc.clone(),
@@ -671,6 +684,20 @@ impl Plugin {
                 )),
                 _ => Err(self.wrong_type(p, "rgb")),
             },
+        }
+    }
+
+    /// An emitter's radiance, irradiance or intensity: as [`Self::rgb_opt`], except that a
+    /// constant `<spectrum value="v">` is an equal-energy spectrum, which Mitsuba 3's RGB
+    /// variants turn into `v · xyz_to_srgb(1, 1, 1)` (sRGB's white is D65, so equal energy is
+    /// slightly red; `<rgb>` and `<float>` values stay as they are).
+    pub fn emission_opt(&self, name: &str) -> Result<Option<(Rgb, &Prop)>, SceneError> {
+        match self.get(name) {
+            Some(p) => match p.value {
+                Value::Spectrum(v) => Ok(Some((EQUAL_ENERGY_SRGB * v as f32, p))),
+                _ => self.rgb_opt(name),
+            },
+            None => Ok(None),
         }
     }
 

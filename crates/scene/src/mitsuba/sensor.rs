@@ -456,6 +456,7 @@ pub(crate) fn build_integrator(p: &Plugin) -> Result<IntegratorDesc, SceneError>
                     Value::Boolean(v) => ParamValue::Boolean(*v),
                     Value::String(v) => ParamValue::String(v.clone()),
                     Value::Rgb(v) => ParamValue::Rgb(Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32)),
+                    Value::Spectrum(v) => ParamValue::Rgb(Rgb::splat(*v as f32)),
                     other => {
                         return Err(SceneError::at(
                             prop.loc.clone(),
