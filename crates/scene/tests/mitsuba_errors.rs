@@ -779,3 +779,23 @@ fn textured_emitters_are_checked() {
         "a textured area emitter on a sphere is not supported",
     );
 }
+
+#[test]
+fn bad_wavelength_spectra() {
+    for (value, message) in [
+        ("500:1", "at least two wavelength:value pairs"),
+        ("500:1, 450:2", "wavelengths must increase"),
+        ("500:1, 600", "\"600\" is not a wavelength:value pair"),
+        (
+            "500:1, 600:nan",
+            "needs a positive wavelength and a finite value",
+        ),
+        ("1 2", "one number or wavelength:value pairs"),
+    ] {
+        let body = format!(
+            "  <shape type=\"rectangle\">\n    <emitter type=\"area\">\n      <spectrum name=\"radiance\" value=\"{value}\"/>\n    </emitter>\n  </shape>"
+        );
+        let (err, path) = load_err("bad-spectrum", &scene(&body));
+        assert_error(&err, &path, 5, 33, message);
+    }
+}

@@ -794,3 +794,36 @@ fn constant_spectra_of_emitters_are_equal_energy_white() {
         matches!(s.emitters[1], EmitterDesc::Point { intensity, .. } if near(intensity, mitsuba * 3.0))
     );
 }
+
+#[test]
+fn wavelength_spectra_take_mitsubas_colours() {
+    // `<spectrum value="w:v, …">` as Mitsuba 3.9.1's RGB variants read it (the values it
+    // prints for these spectra): an emission unweighted, a reflectance weighted by D65; a
+    // spectrum outside sRGB's gamut raised to zero with a note.
+    let s = load(
+        "<shape type=\"rectangle\"><emitter type=\"area\"><spectrum name=\"radiance\" value=\"450:0.5, 550:1.5, 650:1\"/></emitter>\
+           <bsdf type=\"diffuse\"><spectrum name=\"reflectance\" value=\"380:0.9, 780:0.9\"/></bsdf></shape>\
+         <shape type=\"rectangle\"><emitter type=\"area\"><spectrum name=\"radiance\" value=\"580:0, 590:10, 600:0\"/></emitter></shape>",
+    );
+    let near = |a: Rgb, b: [f32; 3]| {
+        a.to_array()
+            .iter()
+            .zip(b)
+            .all(|(x, y)| (x - y).abs() < 3e-4 * y.max(0.1))
+    };
+    let e = s.shapes[0].emitter.unwrap();
+    assert!(near(e, [1.28426, 1.34645, 0.206701]), "{e:?}");
+    match &*s.shapes[0].bsdf {
+        BsdfDesc::Diffuse {
+            reflectance: TextureDesc::Constant(c),
+        } => assert!(near(*c, [0.899039, 0.89902, 0.89869]), "{c:?}"),
+        b => panic!("{b:?}"),
+    }
+    let sodium = s.shapes[1].emitter.unwrap();
+    assert!(near(sodium, [2.00233, 0.402763, 0.0]), "{sodium:?}");
+    assert!(
+        s.notes.iter().any(|n| n.contains("outside sRGB's gamut")),
+        "{:?}",
+        s.notes
+    );
+}

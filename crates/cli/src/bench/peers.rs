@@ -66,6 +66,10 @@ pub(super) fn multijitter_series(
     }
 }
 
+/// One scene of the comparison: its name, the `max_depth` of its reference and of `ic`, the
+/// scene file, the reference, and the scene's defines (for Mitsuba too).
+type PeerCase<'a> = (&'a str, u32, PathBuf, PathBuf, Vec<(&'a str, &'a str)>);
+
 /// Runs the comparison.
 pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
     // (scene, max_depth of the reference and of `ic`, scene file, reference, defines): the
@@ -76,7 +80,7 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
         .display()
         .to_string();
     let own = super::radiance::own_scenes();
-    let cases: Vec<(&str, u32, PathBuf, PathBuf, Vec<(&str, &str)>)> = vec![
+    let cases: Vec<PeerCase> = vec![
         (
             "cornell-box",
             3,

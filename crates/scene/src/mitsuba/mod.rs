@@ -20,6 +20,7 @@
 //! `isotropic`, `hg`.
 
 mod bsdf;
+mod cie;
 mod emitter;
 mod medium;
 mod props;
@@ -45,7 +46,9 @@ use std::sync::Arc;
 pub fn load(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, SceneError> {
     let root = xml::read_scene(path, defines)?;
     let (scene, ids) = props::build_tree(&root)?;
+    let gamut_notes = props::out_of_gamut_notes(&scene, &ids);
     let ctx = Ctx::new(ids, path);
+    ctx.notes.borrow_mut().extend(gamut_notes);
     let mut sensor = None;
     let mut integrator: Option<IntegratorDesc> = None;
     let mut shapes = Vec::new();

@@ -62,6 +62,9 @@ pub(crate) enum Value {
     /// A constant `<spectrum value="v">`: v in every channel, except where it is an emitter's
     /// radiance ([`Plugin::emission_opt`]).
     Spectrum(f64),
+    /// `<spectrum value="w₁:v₁, w₂:v₂, …">` (nm, increasing): its colour as Mitsuba 3's RGB
+    /// variants compute it ([`super::cie`]).
+    SpectrumList(Vec<(f64, f64)>),
     /// `<vector>` or `<point>`.
     Vector([f64; 3]),
     /// `<transform>`.
@@ -81,7 +84,7 @@ impl Value {
             Value::Boolean(_) => "boolean",
             Value::String(_) => "string",
             Value::Rgb(_) => "rgb",
-            Value::Spectrum(_) => "spectrum",
+            Value::Spectrum(_) | Value::SpectrumList(_) => "spectrum",
             Value::Vector(_) => "vector",
             Value::Transform(_) => "transform",
             Value::Object(_) | Value::Ref(_) => "object",
@@ -378,16 +381,28 @@ fn convert_child(el: &Element, ids: &mut Ids, arg: &mut usize) -> Result<Option<
             let Some(a) = el.attr("value") else {
                 return Err(SceneError::at(
                     el.loc.clone(),
-                    "only constant <spectrum value=\"v\"> is supported",
+                    "spectrum files are not read: give the spectrum as value=\"v\" or value=\"w1:v1, w2:v2, ...\"",
                 ));
             };
-            match parse_numbers(&a.value) {
-                Ok(v) if v.len() == 1 => Value::Spectrum(v[0]),
-                _ => {
-                    return Err(SceneError::at(
+            if a.value.contains(':') {
+                Value::SpectrumList(parse_spectrum_pairs(&a.value).map_err(|m| {
+                    SceneError::at(
                         a.loc.clone(),
-                        format!("only a constant <spectrum> (one number) is supported in RGB mode, got \"{}\"", a.value),
-                    ))
+                        format!("<spectrum value=\"{}\">: {m}", a.value),
+                    )
+                })?)
+            } else {
+                match parse_numbers(&a.value) {
+                    Ok(v) if v.len() == 1 => Value::Spectrum(v[0]),
+                    _ => {
+                        return Err(SceneError::at(
+                            a.loc.clone(),
+                            format!(
+                                "a <spectrum> value is one number or wavelength:value pairs, got \"{}\"",
+                                a.value
+                            ),
+                        ))
+                    }
                 }
             }
         }
@@ -410,14 +425,70 @@ fn convert_child(el: &Element, ids: &mut Ids, arg: &mut usize) -> Result<Option<
     }))
 }
 
-/// The sRGB colour of a unit equal-energy spectrum: the row sums of the XYZ → linear sRGB
-/// matrix (Mitsuba 3's `xyz_to_srgb(1, 1, 1)`), since a flat spectrum's XYZ is (1, 1, 1) under
-/// the normalisation Mitsuba uses.
-pub(crate) const EQUAL_ENERGY_SRGB: Rgb = Rgb::new(
-    3.240_479 - 1.537_150 - 0.498_535,
-    -0.969_256 + 1.875_991 + 0.041_556,
-    0.055_648 - 0.204_043 + 1.057_311,
-);
+/// `w:v` pairs separated by commas or whitespace: at least two, wavelengths increasing and
+/// positive, values finite.
+fn parse_spectrum_pairs(s: &str) -> Result<Vec<(f64, f64)>, String> {
+    let mut pairs: Vec<(f64, f64)> = Vec::new();
+    for token in s
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+    {
+        let (w, v) = token
+            .split_once(':')
+            .and_then(|(w, v)| Some((parse_f64(w)?, parse_f64(v)?)))
+            .ok_or_else(|| format!("\"{token}\" is not a wavelength:value pair"))?;
+        if !(w.is_finite() && w > 0.0 && v.is_finite()) {
+            return Err(format!(
+                "\"{token}\" needs a positive wavelength and a finite value"
+            ));
+        }
+        if pairs.last().is_some_and(|&(last, _)| w <= last) {
+            return Err(format!("wavelengths must increase (at \"{token}\")"));
+        }
+        pairs.push((w, v));
+    }
+    if pairs.len() < 2 {
+        return Err("a spectrum needs at least two wavelength:value pairs".into());
+    }
+    Ok(pairs)
+}
+
+/// Notes for the spectra of the tree whose colour leaves sRGB's gamut below zero: Mitsuba 3
+/// raises the negative channels to zero with a warning, and so does ircache (an emitter's
+/// spectra read as emissions, the others as reflectances weighted by D65).
+pub(crate) fn out_of_gamut_notes(root: &Rc<Plugin>, ids: &Ids) -> Vec<String> {
+    let mut notes = Vec::new();
+    let mut seen: Vec<*const Plugin> = Vec::new();
+    let mut stack: Vec<Rc<Plugin>> = vec![root.clone()];
+    stack.extend(ids.values().cloned());
+    while let Some(p) = stack.pop() {
+        if seen.contains(&Rc::as_ptr(&p)) {
+            continue;
+        }
+        seen.push(Rc::as_ptr(&p));
+        for prop in &p.props {
+            match &prop.value {
+                Value::Object(o) => stack.push(o.clone()),
+                Value::SpectrumList(pairs) => {
+                    use super::cie::{spectrum_to_srgb, SpectrumUse};
+                    let (usage, what) = if p.tag == "emitter" {
+                        (SpectrumUse::Emission, "an emission")
+                    } else {
+                        (SpectrumUse::Ratio, "a reflectance (weighted by D65)")
+                    };
+                    if spectrum_to_srgb(pairs, usage).1 {
+                        notes.push(format!(
+                            "{}: the spectrum \"{}\" lies outside sRGB's gamut as {what}; its negative channels are raised to zero, as Mitsuba 3 does",
+                            prop.loc, prop.name
+                        ));
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    notes
+}
 
 /// Splits on commas and whitespace and parses each number; `Err(token)` names a bad one.
 pub(crate) fn parse_numbers(s: &str) -> Result<Vec<f64>, String> {
@@ -673,6 +744,10 @@ impl Plugin {
             Some(p) => match p.value {
                 Value::Rgb(v) => Ok(Some((Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32), p))),
                 Value::Spectrum(v) | Value::Float(v) => Ok(Some((Rgb::splat(v as f32), p))),
+                Value::SpectrumList(ref pairs) => Ok(Some((
+                    super::cie::spectrum_to_srgb(pairs, super::cie::SpectrumUse::Ratio).0,
+                    p,
+                ))),
                 Value::Integer(v) => Ok(Some((Rgb::splat(v as f32), p))),
                 Value::Object(_) | Value::Ref(_) => Err(SceneError::at(
                     p.loc.clone(),
@@ -694,7 +769,11 @@ impl Plugin {
     pub fn emission_opt(&self, name: &str) -> Result<Option<(Rgb, &Prop)>, SceneError> {
         match self.get(name) {
             Some(p) => match p.value {
-                Value::Spectrum(v) => Ok(Some((EQUAL_ENERGY_SRGB * v as f32, p))),
+                Value::Spectrum(v) => Ok(Some((super::cie::equal_energy_srgb() * v as f32, p))),
+                Value::SpectrumList(ref pairs) => Ok(Some((
+                    super::cie::spectrum_to_srgb(pairs, super::cie::SpectrumUse::Emission).0,
+                    p,
+                ))),
                 _ => self.rgb_opt(name),
             },
             None => Ok(None),
