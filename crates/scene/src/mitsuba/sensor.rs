@@ -298,7 +298,8 @@ fn build_filter(p: &Plugin) -> Result<FilterDesc, SceneError> {
             let r = positive("radius", 0.5)?;
             if r != 0.5 {
                 return Err(p.error(format!(
-                    "radius {r} is not supported (only the default 0.5)"
+                    "radius {r}: Mitsuba 3's box filter has no radius (it is the pixel's own box, \
+                     0.5); a wider filter is a tent or a gaussian"
                 )));
             }
             FilterDesc::Box
