@@ -44,6 +44,9 @@ pub enum ShapeGeometry {
         radius: f32,
         /// Normals point inwards.
         flip_normals: bool,
+        /// World to object rotation (the inverse of the description's `orientation`), for the
+        /// uv parametrisation.
+        to_object: ircache_math::Mat3,
     },
 }
 
@@ -267,6 +270,7 @@ impl Scene {
                     center,
                     radius,
                     flip_normals,
+                    orientation,
                 } => {
                     let id = builder.add_spheres(&[(center, radius)])?;
                     debug_assert_eq!(id as usize, i);
@@ -276,6 +280,7 @@ impl Scene {
                         center,
                         radius,
                         flip_normals,
+                        to_object: orientation.inverse(),
                     }
                 }
             };
@@ -565,39 +570,42 @@ impl Scene {
                 center,
                 radius,
                 flip_normals,
+                to_object,
             } => {
                 let p_raw = ray.at(hit.t);
                 let local = (p_raw - center).normalize_or(Vec3::Z);
                 // Re-project onto the sphere: the analytic hit is more accurate than o + t d.
                 let p = center + local * radius;
                 let n = if flip_normals { -local } else { local };
-                let phi = local.z.atan2(local.x);
-                let phi = if phi < 0.0 {
-                    phi + 2.0 * ircache_math::PI
-                } else {
-                    phi
-                };
-                let uv = Vec2::new(
-                    phi / (2.0 * ircache_math::PI),
-                    local.y.clamp(-1.0, 1.0).acos() / ircache_math::PI,
-                );
-                // Normal and bump maps: p(u, v) = c + R (sin πv cos 2πu, cos πv, sin πv sin 2πu)
-                // gives dp/du = 2πR (−z, 0, x) and dp/dv = πR (cos πv cos 2πu, −sin πv,
-                // cos πv sin 2πu) in the local direction's terms.
+                // Mitsuba's parametrisation, in the sphere's own frame: u the azimuth from its
+                // x axis, v the polar angle from its z axis.
+                let o = to_object * local;
+                let tau = 2.0 * ircache_math::PI;
+                let phi = o.y.atan2(o.x);
+                let phi = if phi < 0.0 { phi + tau } else { phi };
+                let uv = Vec2::new(phi / tau, o.z.clamp(-1.0, 1.0).acos() / ircache_math::PI);
+                let material = &self.materials[shape.material];
+                let perturbation = material.perturbation();
                 let mut frame = Frame::from_z(n);
-                if let Some(perturb) = self.materials[shape.material].perturbation() {
-                    let tau = 2.0 * ircache_math::PI;
-                    let dpdu = Vec3::new(-local.z, 0.0, local.x) * (tau * radius);
-                    let sin_t = (1.0 - local.y * local.y).max(0.0).sqrt();
+                if perturbation.is_some() || !material.is_tangent_free() {
+                    // dp/du = 2πR (−y, x, 0) and dp/dv = πR (z cos φ, z sin φ, −sin θ) in the
+                    // sphere's frame (Mitsuba's), turned to the world's.
+                    let to_world = to_object.transpose();
+                    let dpdu = to_world * (Vec3::new(-o.y, o.x, 0.0) * (tau * radius));
+                    let sin_t = (o.x * o.x + o.y * o.y).sqrt();
                     let (cos_p, sin_p) = if sin_t > 0.0 {
-                        (local.x / sin_t, local.z / sin_t)
+                        (o.x / sin_t, o.y / sin_t)
                     } else {
                         (1.0, 0.0)
                     };
-                    let dpdv =
-                        Vec3::new(local.y * cos_p, -sin_t, local.y * sin_p) * (0.5 * tau * radius);
+                    let dpdv = to_world
+                        * (Vec3::new(o.z * cos_p, o.z * sin_p, -sin_t) * (0.5 * tau * radius));
                     if dpdu.length_squared() > 0.0 {
-                        frame = Frame::from_normal_tangent(perturb.normal(uv, n, dpdu, dpdv), dpdu);
+                        let shading = match perturbation {
+                            Some(perturb) => perturb.normal(uv, n, dpdu, dpdv),
+                            None => n,
+                        };
+                        frame = Frame::from_normal_tangent(shading, dpdu);
                     }
                 }
                 Interaction {

@@ -14,6 +14,7 @@ fn sphere_furnace(rho: f32, le: f32, max_depth: i32, spp: u32) -> SceneDesc {
             center: Vec3::new(1.0, 2.0, 3.0),
             radius: 5.0,
             flip_normals: true,
+            orientation: ircache_math::Mat3::IDENTITY,
         },
         bsdf: diffuse(Rgb::splat(rho)),
         emitter: Some(Rgb::splat(le)),

@@ -335,6 +335,7 @@ fn sphere_case(p: Vec3, c: Vec3, radius: f32, flip: bool, label: &str) {
                 center: c,
                 radius,
                 flip_normals: flip,
+                orientation: ircache_math::Mat3::IDENTITY,
             },
             Rgb::splat(4.0),
         )],

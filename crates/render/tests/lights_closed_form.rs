@@ -18,6 +18,7 @@ fn sphere(center: Vec3, radius: f32, flip_normals: bool, radiance: f32) -> Shape
             center,
             radius,
             flip_normals,
+            orientation: ircache_math::Mat3::IDENTITY,
         },
         Rgb::splat(radiance),
     )

@@ -559,6 +559,7 @@ mod in_scenes {
                     center: Vec3::new(-0.8, 0.3, 0.4),
                     radius: 0.4,
                     flip_normals: false,
+                    orientation: ircache_math::Mat3::IDENTITY,
                 },
                 black.clone(),
                 none,

@@ -112,6 +112,7 @@ fn emitted_photons_carry_each_lights_power() {
             center: Vec3::new(3.0, 0.0, 0.0),
             radius: 0.5,
             flip_normals: false,
+            orientation: ircache_math::Mat3::IDENTITY,
         },
         l,
     );
@@ -331,6 +332,7 @@ fn caustics_through_a_glass_sphere_match_the_path_tracer() {
             center: Vec3::new(0.0, 0.9, 0.0),
             radius: 0.5,
             flip_normals: false,
+            orientation: ircache_math::Mat3::IDENTITY,
         },
         bsdf: glass,
         emitter: None,
@@ -342,6 +344,7 @@ fn caustics_through_a_glass_sphere_match_the_path_tracer() {
             center: Vec3::new(0.8, 3.0, 0.0),
             radius: 0.15,
             flip_normals: false,
+            orientation: ircache_math::Mat3::IDENTITY,
         },
         Rgb::splat(100.0),
     );

@@ -41,6 +41,7 @@ fn floor_under_a_sphere(spp: u32, sampler: &str) -> (SceneDesc, f64) {
                 center: Vec3::new(0.0, 0.0, h),
                 radius: r,
                 flip_normals: false,
+                orientation: ircache_math::Mat3::IDENTITY,
             },
             Rgb::splat(l),
         ),

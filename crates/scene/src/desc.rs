@@ -361,6 +361,9 @@ pub enum Geometry {
         radius: f32,
         /// Normals point inwards.
         flip_normals: bool,
+        /// The rotation (or reflection) of its `to_world`, object to world: its uv parametrisation
+        /// (Mitsuba's: poles on the object's z axis, u from its x axis) turns with it.
+        orientation: ircache_math::Mat3,
     },
 }
 

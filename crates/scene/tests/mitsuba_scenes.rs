@@ -229,8 +229,10 @@ fn veach_mis() {
                 center,
                 radius,
                 flip_normals,
+                orientation,
             } => {
                 assert!(!flip_normals);
+                assert_eq!(orientation, ircache_math::Mat3::IDENTITY);
                 Some((center, radius))
             }
             _ => None,

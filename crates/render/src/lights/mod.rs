@@ -209,6 +209,7 @@ impl LightSet {
                     center,
                     radius,
                     flip_normals,
+                    ..
                 } => SphereLight::new(center, radius, flip_normals, radiance).map(Light::Sphere),
             };
             if let Some(light) = light {

@@ -378,6 +378,7 @@ fn sphere(p: &Plugin, to_world: Mat4, flip: bool) -> Result<Geometry, SceneError
         center,
         radius,
         flip_normals: flip,
+        orientation: lin * (1.0 / s),
     })
 }
 
