@@ -50,6 +50,17 @@ pub enum ShapeGeometry {
     },
 }
 
+/// Mitsuba 3's uv on a sphere at the unit direction `o` from its centre in its own frame: the
+/// azimuth from its x axis over 2π (in [0, 1)), the polar angle from its z axis over π.
+#[inline]
+#[must_use]
+pub fn sphere_uv(o: Vec3) -> Vec2 {
+    let tau = 2.0 * ircache_math::PI;
+    let phi = o.y.atan2(o.x);
+    let phi = if phi < 0.0 { phi + tau } else { phi };
+    Vec2::new(phi / tau, o.z.clamp(-1.0, 1.0).acos() / ircache_math::PI)
+}
+
 /// The rest of a ray along `d` from `o` (just beyond a surface it crossed) to the same `end`
 /// (none: to infinity), aimed from `o` at the end itself: a ray kept parallel would pass the end
 /// at the offset's distance and, after a grazing crossing, reach a light's own surface before
@@ -581,9 +592,7 @@ impl Scene {
                 // x axis, v the polar angle from its z axis.
                 let o = to_object * local;
                 let tau = 2.0 * ircache_math::PI;
-                let phi = o.y.atan2(o.x);
-                let phi = if phi < 0.0 { phi + tau } else { phi };
-                let uv = Vec2::new(phi / tau, o.z.clamp(-1.0, 1.0).acos() / ircache_math::PI);
+                let uv = sphere_uv(o);
                 let material = &self.materials[shape.material];
                 let perturbation = material.perturbation();
                 let mut frame = Frame::from_z(n);

@@ -755,8 +755,7 @@ fn checkerboard_errors() {
 
 #[test]
 fn textured_emitters_are_checked() {
-    // A texel that is not a valid radiance is named with its file and position; a textured
-    // emitter on a sphere (whose uv sampling ircache does not do) is refused.
+    // A texel that is not a valid radiance is named with its file and position.
     let dir = scratch("textured-emitter");
     let mut img = ircache_image::Image::new(2, 1);
     img.pixels[1] = ircache_math::Rgb::new(1.0, -3.0, 1.0);
@@ -768,16 +767,6 @@ fn textured_emitters_are_checked() {
         .to_string();
     assert_error(&err, &path, 5, 7, "radiance texel (1, 0) of");
     assert!(err.contains("must be finite and non-negative"), "{err}");
-
-    let body = "  <shape type=\"sphere\">\n    <emitter type=\"area\">\n      <texture type=\"checkerboard\" name=\"radiance\"/>\n    </emitter>\n  </shape>";
-    let (err, path) = load_err("textured-sphere", &scene(body));
-    assert_error(
-        &err,
-        &path,
-        3,
-        3,
-        "a textured area emitter on a sphere is not supported",
-    );
 }
 
 #[test]

@@ -209,8 +209,15 @@ impl LightSet {
                     center,
                     radius,
                     flip_normals,
-                    ..
-                } => SphereLight::new(center, radius, flip_normals, radiance).map(Light::Sphere),
+                    orientation,
+                } => {
+                    let texture = shape
+                        .emitter_texture
+                        .as_ref()
+                        .map(|t| (crate::texture::Texture::from_desc(t), orientation.inverse()));
+                    SphereLight::new(center, radius, flip_normals, radiance, texture)
+                        .map(Light::Sphere)
+                }
             };
             if let Some(light) = light {
                 shape_light[i] = Some(lights.len() as u32);
@@ -500,7 +507,8 @@ impl LightSet {
             }
             Light::Sphere(s) => {
                 let (p, n) = s.sample_position(u_position);
-                from_surface(p, n, n, s.radiance(), s.area())
+                let outward = (p - s.sphere().0) / s.sphere().1;
+                from_surface(p, n, n, s.radiance_towards(outward), s.area())
             }
             Light::Point(l) => from_point(l.position, &|_| l.intensity),
             Light::Spot(l) => {
@@ -582,7 +590,7 @@ impl LightSet {
     pub fn area_radiance(&self, light: u32, n_shading: Vec3, uv: Vec2, wo: Vec3) -> Rgb {
         let radiance = match self.lights.get(light as usize) {
             Some(Light::Mesh(m)) => m.radiance_at(uv),
-            Some(Light::Sphere(s)) => s.radiance(),
+            Some(Light::Sphere(s)) => s.radiance_at(uv),
             _ => return Rgb::ZERO,
         };
         if n_shading.dot(wo) > 0.0 {

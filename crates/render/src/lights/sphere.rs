@@ -10,18 +10,26 @@
 //!   sampled ray, `t = d_c cos θ − √(r² − d_c² sin²θ)`.
 //! - reference point **inside**: a point uniform by area (density `1/(4πr²)`), converted to solid
 //!   angle with `d² / |cos θ_light|`.
+//!
+//! A textured emitter emits the texture at each point's uv (Mitsuba's parametrisation in the
+//! sphere's frame, [`crate::scene::sphere_uv`]); the sampling stays the same and the sample
+//! carries the radiance at its point.
 
 use super::{is_positive_finite, solid_angle_pdf};
+use crate::texture::Texture;
 use ircache_math::sampling::{square_to_cosine_hemisphere, square_to_uniform_sphere};
-use ircache_math::{Frame, Rgb, Vec2, Vec3, PI};
+use ircache_math::{Frame, Mat3, Rgb, Vec2, Vec3, PI};
 
 /// An emitting sphere.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct SphereLight {
     center: Vec3,
     radius: f32,
     flip_normals: bool,
+    /// The radiance; its mean over the texture where there is one.
     radiance: Rgb,
+    /// The texture the radiance is looked up in, with the sphere's world-to-object rotation.
+    texture: Option<(Texture, Mat3)>,
 }
 
 impl SphereLight {
@@ -31,26 +39,49 @@ impl SphereLight {
         (self.center, self.radius)
     }
 
-    /// A sphere light; `None` for a non-positive or non-finite radius.
+    /// A sphere light emitting `radiance`, or with `texture` (and the world-to-object rotation
+    /// its uv is measured in) the texture's value at each point, `radiance` then its mean; `None`
+    /// for a non-positive or non-finite radius.
     #[must_use]
     pub fn new(
         center: Vec3,
         radius: f32,
         flip_normals: bool,
         radiance: Rgb,
+        texture: Option<(Texture, Mat3)>,
     ) -> Option<SphereLight> {
         (radius > 0.0 && radius.is_finite()).then_some(SphereLight {
             center,
             radius,
             flip_normals,
             radiance,
+            texture,
         })
     }
 
-    /// Emitted radiance on the emitting side.
+    /// Emitted radiance on the emitting side; its mean where it is textured.
     #[must_use]
     pub fn radiance(&self) -> Rgb {
         self.radiance
+    }
+
+    /// Emitted radiance at texture coordinates `uv`.
+    #[inline]
+    #[must_use]
+    pub fn radiance_at(&self, uv: Vec2) -> Rgb {
+        match &self.texture {
+            None => self.radiance,
+            Some((t, _)) => t.eval(uv),
+        }
+    }
+
+    /// Emitted radiance at the point whose outward unit normal is `outward`.
+    #[inline]
+    pub(crate) fn radiance_towards(&self, outward: Vec3) -> Rgb {
+        match &self.texture {
+            None => self.radiance,
+            Some((t, to_object)) => t.eval(crate::scene::sphere_uv(*to_object * outward)),
+        }
     }
 
     /// A photon start: a point uniform by area, a cosine-distributed direction about the
@@ -59,7 +90,8 @@ impl SphereLight {
     pub fn sample_emission(&self, u_pos: Vec2, u_dir: Vec2) -> (Vec3, Vec3, Vec3, Rgb) {
         let (p, n) = self.sample_position(u_pos);
         let d = Frame::from_z(n).from_local(square_to_cosine_hemisphere(u_dir));
-        (p, n, d, self.radiance * (PI * self.area()))
+        let outward = (p - self.center) / self.radius;
+        (p, n, d, self.radiance_towards(outward) * (PI * self.area()))
     }
 
     /// A point uniform by area (density `1 / area()`) with the normal of the emitting side.
@@ -153,7 +185,7 @@ impl SphereLight {
         if self.shading_normal(outward).dot(-wi) <= 0.0 || !is_positive_finite(pdf) {
             return None;
         }
-        Some((wi, dist, self.radiance, pdf, outward))
+        Some((wi, dist, self.radiance_towards(outward), pdf, outward))
     }
 
     /// Solid-angle density (without light selection) with which [`SphereLight::sample`] from

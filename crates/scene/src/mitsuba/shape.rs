@@ -213,12 +213,6 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
         Some((radiance, texture)) => (Some(radiance), texture),
         None => (None, None),
     };
-    if emitter_texture.is_some() && matches!(geometry, Geometry::Sphere { .. }) {
-        return Err(p.error(
-            "a textured area emitter on a sphere is not supported (on meshes, rectangles, disks \
-             and cubes it is)",
-        ));
-    }
     Ok(ShapeDesc {
         id: p.id.clone(),
         geometry,
