@@ -895,15 +895,13 @@ fn lens_and_orthographic_cameras_match_mitsuba() {
     }
 }
 
+/// A block of pixels: its x range and y range.
+type Block = ((usize, usize), (usize, usize));
+
 /// Renders `scene` (256 × 256, seed 5) with `path` at 32 spp and `ic` at 16 and checks each
 /// against Mitsuba's `reference`: mean luminance within 1 %, each block of `regions` (x and y
 /// ranges) within 2 %, relMSE_trim after a 2-px blur below `blurred_limit`.
-fn matches_mitsuba_reference(
-    scene: &str,
-    reference: &str,
-    regions: &[((usize, usize), (usize, usize))],
-    blurred_limit: f64,
-) {
+fn matches_mitsuba_reference(scene: &str, reference: &str, regions: &[Block], blurred_limit: f64) {
     use ircache_image::blur::gaussian_blur;
     let reference = ircache_image::read_image(&resolve(reference)).expect("reference reads");
     for (integrator, spp) in [("path", 32), ("ic", 16)] {
