@@ -827,3 +827,46 @@ fn wavelength_spectra_take_mitsubas_colours() {
         s.notes
     );
 }
+
+#[test]
+fn ply_texture_coordinates_flip_only_when_asked() {
+    // Mitsuba 3's `ply` keeps the file's (s, t) unless `flip_tex_coords` is true (its default
+    // is false, where `obj`'s is true).
+    let dir = std::env::temp_dir().join(format!("ircache-ply-flip-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("tri.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+         property float s\nproperty float t\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+         0 0 0 0.1 0.2\n1 0 0 0.9 0.3\n0 1 0 0.4 0.8\n3 0 1 2\n",
+    )
+    .unwrap();
+    let uv_of = |flip: &str| {
+        let path = dir.join(format!("scene-{}.xml", flip.len()));
+        std::fs::write(
+            &path,
+            format!(
+                "<scene version=\"3.0.0\"><sensor type=\"perspective\"><float name=\"fov\" value=\"45\"/></sensor>\
+                 <shape type=\"ply\"><string name=\"filename\" value=\"tri.ply\"/>{flip}</shape></scene>"
+            ),
+        )
+        .unwrap();
+        let s = mitsuba::load(&path, &[]).unwrap();
+        match &s.shapes[0].geometry {
+            Geometry::Mesh(m) => m.uvs.clone().expect("uvs"),
+            g => panic!("{g:?}"),
+        }
+    };
+    let kept = uv_of("");
+    let flipped = uv_of("<boolean name=\"flip_tex_coords\" value=\"true\"/>");
+    assert!(
+        (kept[0].x - 0.1).abs() < 1e-6 && (kept[0].y - 0.2).abs() < 1e-6,
+        "{kept:?}"
+    );
+    for (k, f) in kept.iter().zip(&flipped) {
+        assert!(
+            (f.x - k.x).abs() < 1e-6 && (f.y - (1.0 - k.y)).abs() < 1e-6,
+            "{f:?}"
+        );
+    }
+}

@@ -114,7 +114,17 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
                 }
                 m
             } else if p.ty == "ply" {
-                read_ply_mesh(&path).map_err(|e| attach_location(e, &loc, &path))?
+                // Mitsuba's `ply` keeps the file's texture coordinates unless asked to flip v.
+                let flip_tex = p.boolean("flip_tex_coords", false)?;
+                let mut m = read_ply_mesh(&path).map_err(|e| attach_location(e, &loc, &path))?;
+                if flip_tex {
+                    if let Some(uvs) = &mut m.uvs {
+                        for uv in uvs {
+                            *uv = Vec2::new(uv.x, 1.0 - uv.y);
+                        }
+                    }
+                }
+                m
             } else {
                 let index = match p.integer_opt("shape_index")? {
                     None => 0,
