@@ -23,14 +23,13 @@
 //! choice of light).
 
 use super::rectangle::{Rectangle, Seen};
-use super::{is_positive_finite, solid_angle_pdf};
-use crate::texture::Texture;
+use super::{is_positive_finite, solid_angle_pdf, EmittedRadiance};
 use ircache_math::sampling::{
     square_to_cosine_hemisphere, square_to_uniform_hemisphere, square_to_uniform_triangle,
     Distribution1D,
 };
 use ircache_math::{Frame, Rgb, Vec2, Vec3, PI};
-use ircache_scene::{TextureDesc, TriangleMesh};
+use ircache_scene::TriangleMesh;
 
 /// A uniformly sampled point on an emitting surface with its normals.
 #[derive(Clone, Copy, Debug)]
@@ -69,10 +68,10 @@ pub struct MeshLight {
     tri_dist: Distribution1D,
     /// Total surface area.
     area: f32,
-    /// Emitted radiance (front side only); its mean over the texture where there is one.
-    radiance: Rgb,
-    /// The texture the radiance is looked up in, with the mesh's texture coordinates.
-    texture: Option<(Texture, Option<Vec<Vec2>>)>,
+    /// Emitted radiance (front side only).
+    radiance: EmittedRadiance,
+    /// The mesh's texture coordinates, where the radiance is textured and the mesh has them.
+    uvs: Option<Vec<Vec2>>,
     /// The mesh as one flat rectangle, with the normal of its emitting side, when it is one:
     /// sampled by solid angle ([`super::rectangle`]).
     rectangle: Option<(Rectangle, Vec3)>,
@@ -89,14 +88,9 @@ impl MeshLight {
         ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
     }
 
-    /// An area light on `mesh` emitting `radiance`, or with `texture` the texture's value at each
-    /// point (`radiance` then its mean); `None` if the mesh has no area.
+    /// An area light on `mesh` emitting `radiance`; `None` if the mesh has no area.
     #[must_use]
-    pub fn new(
-        mesh: &TriangleMesh,
-        radiance: Rgb,
-        texture: Option<&TextureDesc>,
-    ) -> Option<MeshLight> {
+    pub fn new(mesh: &TriangleMesh, radiance: EmittedRadiance) -> Option<MeshLight> {
         // (p1 − p0) × (p2 − p0) of each triangle: twice its area along its normal.
         let cross: Vec<Vec3> = mesh
             .indices
@@ -133,15 +127,12 @@ impl MeshLight {
                         .is_none_or(|ns| ns.iter().all(|&v| flat(v))))
                 .then_some((r, n))
             })
-            .filter(|_| texture.is_none());
-        let texture = texture.map(|t| {
-            let uvs = mesh
-                .uvs
-                .as_ref()
-                .filter(|t| t.len() == mesh.positions.len())
-                .cloned();
-            (Texture::from_desc(t), uvs)
-        });
+            .filter(|_| !radiance.is_textured());
+        let uvs = mesh
+            .uvs
+            .as_ref()
+            .filter(|t| radiance.is_textured() && t.len() == mesh.positions.len())
+            .cloned();
         Some(MeshLight {
             positions: mesh.positions.clone(),
             triangle_normals,
@@ -150,7 +141,7 @@ impl MeshLight {
             tri_dist: Distribution1D::new(&areas),
             area,
             radiance,
-            texture,
+            uvs,
             rectangle,
         })
     }
@@ -169,20 +160,10 @@ impl MeshLight {
         self.rectangle.is_some()
     }
 
-    /// Emitted radiance on the front side; its mean where it is textured.
+    /// Emitted radiance on the front side.
     #[must_use]
-    pub fn radiance(&self) -> Rgb {
-        self.radiance
-    }
-
-    /// Emitted radiance on the front side at texture coordinates `uv`.
-    #[inline]
-    #[must_use]
-    pub fn radiance_at(&self, uv: Vec2) -> Rgb {
-        match &self.texture {
-            None => self.radiance,
-            Some((t, _)) => t.eval(uv),
-        }
+    pub fn radiance(&self) -> &EmittedRadiance {
+        &self.radiance
     }
 
     /// Total surface area.
@@ -233,10 +214,10 @@ impl MeshLight {
             Some(n) => (b0 * n[i0] + b.x * n[i1] + b.y * n[i2]).normalize_or(ng),
             None => ng,
         };
-        let uv = match &self.texture {
-            None => Vec2::ZERO,
-            Some((_, Some(t))) => b0 * t[i0] + b.x * t[i1] + b.y * t[i2],
-            Some((_, None)) => b,
+        let uv = match (&self.uvs, self.radiance.is_textured()) {
+            (_, false) => Vec2::ZERO,
+            (Some(t), true) => b0 * t[i0] + b.x * t[i1] + b.y * t[i2],
+            (None, true) => b,
         };
         SurfacePoint { p, ng, ns, uv }
     }
@@ -249,7 +230,7 @@ impl MeshLight {
         let s = self.sample_position(u_pos);
         let n = s.emitting_normal();
         let d = Frame::from_z(n).from_local(square_to_cosine_hemisphere(u_dir));
-        (d.dot(s.ns) > 0.0).then(|| (s.p, n, d, self.radiance_at(s.uv) * (PI * self.area)))
+        (d.dot(s.ns) > 0.0).then(|| (s.p, n, d, self.radiance.at(s.uv) * (PI * self.area)))
     }
 
     /// Samples a direction from `p_ref` towards the mesh: `(wi, distance, radiance, solid-angle
@@ -269,7 +250,7 @@ impl MeshLight {
                     if !is_positive_finite(dist) || n.dot(-wi) <= 0.0 {
                         return None;
                     }
-                    return Some((wi, dist, self.radiance, pdf?, n));
+                    return Some((wi, dist, self.radiance.mean(), pdf?, n));
                 }
                 Seen::Nearly(axis) => {
                     let wi = Frame::from_z(axis).from_local(square_to_uniform_hemisphere(u));
@@ -277,7 +258,7 @@ impl MeshLight {
                     if n.dot(-wi) <= 0.0 {
                         return None;
                     }
-                    return Some((wi, dist, self.radiance, pdf?, n));
+                    return Some((wi, dist, self.radiance.mean(), pdf?, n));
                 }
                 Seen::Area => {}
             }
@@ -298,7 +279,7 @@ impl MeshLight {
         if !is_positive_finite(pdf) {
             return None;
         }
-        Some((wi, dist, self.radiance_at(sp.uv), pdf, sp.ng))
+        Some((wi, dist, self.radiance.at(sp.uv), pdf, sp.ng))
     }
 
     /// Solid-angle density (without light selection) with which [`MeshLight::sample`] from `p_ref`

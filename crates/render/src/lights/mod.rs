@@ -107,14 +107,14 @@ impl Light {
         match self {
             Light::Mesh(m) => {
                 let (center, radius) = m.bounding_sphere();
-                local(center, radius, m.radiance().luminance() * m.area())
+                local(center, radius, m.radiance().mean().luminance() * m.area())
             }
             Light::Sphere(s) => {
                 let (center, radius) = s.sphere();
                 local(
                     center,
                     radius,
-                    s.radiance().luminance() * std::f32::consts::PI * radius * radius,
+                    s.radiance().mean().luminance() * std::f32::consts::PI * radius * radius,
                 )
             }
             Light::Point(l) => local(l.position, 0.0, l.intensity.luminance()),
@@ -158,8 +158,8 @@ impl Light {
         let disc = std::f32::consts::PI * scene_radius * scene_radius;
         let pi = std::f32::consts::PI;
         match self {
-            Light::Mesh(m) => m.radiance() * (pi * m.area()),
-            Light::Sphere(s) => s.radiance() * (pi * s.area()),
+            Light::Mesh(m) => m.radiance().mean() * (pi * m.area()),
+            Light::Sphere(s) => s.radiance().mean() * (pi * s.area()),
             Light::Point(l) => l.intensity * (4.0 * pi),
             Light::Spot(l) => l.power(),
             Light::Directional(l) => l.irradiance * disc,
@@ -188,6 +188,50 @@ pub struct LightSet {
     diffuse_well: bool,
 }
 
+/// What an area light emits: one radiance, or a texture looked up at the surface's uv (Mitsuba's
+/// `area` emitter with a texture as its `radiance`) with its mean, which stands for the light
+/// where power is estimated.
+#[derive(Clone, Debug)]
+pub struct EmittedRadiance {
+    mean: Rgb,
+    texture: Option<crate::texture::Texture>,
+}
+
+impl EmittedRadiance {
+    /// `mean` everywhere, or `texture` (whose mean `mean` is).
+    #[must_use]
+    pub fn new(mean: Rgb, texture: Option<&ircache_scene::TextureDesc>) -> EmittedRadiance {
+        EmittedRadiance {
+            mean,
+            texture: texture.map(crate::texture::Texture::from_desc),
+        }
+    }
+
+    /// The radiance, or its mean over the texture.
+    #[inline]
+    #[must_use]
+    pub fn mean(&self) -> Rgb {
+        self.mean
+    }
+
+    /// The radiance at texture coordinates `uv`.
+    #[inline]
+    #[must_use]
+    pub fn at(&self, uv: Vec2) -> Rgb {
+        match &self.texture {
+            None => self.mean,
+            Some(t) => t.eval(uv),
+        }
+    }
+
+    /// True where it varies over the surface.
+    #[inline]
+    #[must_use]
+    pub fn is_textured(&self) -> bool {
+        self.texture.is_some()
+    }
+}
+
 impl LightSet {
     /// Builds the lights of `desc`: one area light per emitting shape (in shape order), then the
     /// other emitters in description order. `scene_center` and `scene_radius` describe the scene's
@@ -202,20 +246,19 @@ impl LightSet {
                 continue;
             };
             let light = match &shape.geometry {
-                Geometry::Mesh(mesh) => {
-                    MeshLight::new(mesh, radiance, shape.emitter_texture.as_ref()).map(Light::Mesh)
-                }
+                Geometry::Mesh(mesh) => MeshLight::new(
+                    mesh,
+                    EmittedRadiance::new(radiance, shape.emitter_texture.as_ref()),
+                )
+                .map(Light::Mesh),
                 &Geometry::Sphere {
                     center,
                     radius,
                     flip_normals,
                     orientation,
                 } => {
-                    let texture = shape
-                        .emitter_texture
-                        .as_ref()
-                        .map(|t| (crate::texture::Texture::from_desc(t), orientation.inverse()));
-                    SphereLight::new(center, radius, flip_normals, radiance, texture)
+                    let emitted = EmittedRadiance::new(radiance, shape.emitter_texture.as_ref());
+                    SphereLight::new(center, radius, flip_normals, emitted, orientation.inverse())
                         .map(Light::Sphere)
                 }
             };
@@ -501,7 +544,7 @@ impl LightSet {
                     s.p,
                     s.emitting_normal(),
                     s.ns,
-                    m.radiance_at(s.uv),
+                    m.radiance().at(s.uv),
                     m.area(),
                 )
             }
@@ -589,8 +632,8 @@ impl LightSet {
     #[must_use]
     pub fn area_radiance(&self, light: u32, n_shading: Vec3, uv: Vec2, wo: Vec3) -> Rgb {
         let radiance = match self.lights.get(light as usize) {
-            Some(Light::Mesh(m)) => m.radiance_at(uv),
-            Some(Light::Sphere(s)) => s.radiance_at(uv),
+            Some(Light::Mesh(m)) => m.radiance().at(uv),
+            Some(Light::Sphere(s)) => s.radiance().at(uv),
             _ => return Rgb::ZERO,
         };
         if n_shading.dot(wo) > 0.0 {

@@ -15,8 +15,8 @@
 //! sphere's frame, [`crate::scene::sphere_uv`]); the sampling stays the same and the sample
 //! carries the radiance at its point.
 
+use super::EmittedRadiance;
 use super::{is_positive_finite, solid_angle_pdf};
-use crate::texture::Texture;
 use ircache_math::sampling::{square_to_cosine_hemisphere, square_to_uniform_sphere};
 use ircache_math::{Frame, Mat3, Rgb, Vec2, Vec3, PI};
 
@@ -26,10 +26,10 @@ pub struct SphereLight {
     center: Vec3,
     radius: f32,
     flip_normals: bool,
-    /// The radiance; its mean over the texture where there is one.
-    radiance: Rgb,
-    /// The texture the radiance is looked up in, with the sphere's world-to-object rotation.
-    texture: Option<(Texture, Mat3)>,
+    /// The radiance.
+    radiance: EmittedRadiance,
+    /// World to object rotation, for the uv of a textured radiance.
+    to_object: Mat3,
 }
 
 impl SphereLight {
@@ -39,48 +39,39 @@ impl SphereLight {
         (self.center, self.radius)
     }
 
-    /// A sphere light emitting `radiance`, or with `texture` (and the world-to-object rotation
-    /// its uv is measured in) the texture's value at each point, `radiance` then its mean; `None`
-    /// for a non-positive or non-finite radius.
+    /// A sphere light emitting `radiance` (a texture's uv measured in the frame `to_object`
+    /// turns world directions into); `None` for a non-positive or non-finite radius.
     #[must_use]
     pub fn new(
         center: Vec3,
         radius: f32,
         flip_normals: bool,
-        radiance: Rgb,
-        texture: Option<(Texture, Mat3)>,
+        radiance: EmittedRadiance,
+        to_object: Mat3,
     ) -> Option<SphereLight> {
         (radius > 0.0 && radius.is_finite()).then_some(SphereLight {
             center,
             radius,
             flip_normals,
             radiance,
-            texture,
+            to_object,
         })
     }
 
-    /// Emitted radiance on the emitting side; its mean where it is textured.
+    /// Emitted radiance on the emitting side.
     #[must_use]
-    pub fn radiance(&self) -> Rgb {
-        self.radiance
-    }
-
-    /// Emitted radiance at texture coordinates `uv`.
-    #[inline]
-    #[must_use]
-    pub fn radiance_at(&self, uv: Vec2) -> Rgb {
-        match &self.texture {
-            None => self.radiance,
-            Some((t, _)) => t.eval(uv),
-        }
+    pub fn radiance(&self) -> &EmittedRadiance {
+        &self.radiance
     }
 
     /// Emitted radiance at the point whose outward unit normal is `outward`.
     #[inline]
     pub(crate) fn radiance_towards(&self, outward: Vec3) -> Rgb {
-        match &self.texture {
-            None => self.radiance,
-            Some((t, to_object)) => t.eval(crate::scene::sphere_uv(*to_object * outward)),
+        if self.radiance.is_textured() {
+            self.radiance
+                .at(crate::scene::sphere_uv(self.to_object * outward))
+        } else {
+            self.radiance.mean()
         }
     }
 
