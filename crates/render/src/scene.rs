@@ -111,6 +111,8 @@ pub struct Shape {
     pub masked: bool,
     /// The media on its two sides (indices into [`Scene::media`]).
     pub media: ircache_scene::MediumInterface,
+    /// A bump or normal map with Mitsuba's shadowing function ([`Scene::perturbed_shadowing`]).
+    pub perturbed_shadowing: bool,
 }
 
 /// A ray–surface intersection.
@@ -311,6 +313,9 @@ impl Scene {
                 thin_sheet: materials[i].thin_sheet().is_some(),
                 masked: materials[i].is_masked(),
                 media: s.media,
+                perturbed_shadowing: materials[i]
+                    .perturbation()
+                    .is_some_and(|p| p.shading.shadowing),
             });
         }
         let accel = builder.build()?;
@@ -562,7 +567,7 @@ impl Scene {
                     if det.abs() > f32::MIN_POSITIVE {
                         dpdu = (e1 * d2.y - e2 * d1.y) / det;
                         let dpdv = (e2 * d1.x - e1 * d2.x) / det;
-                        let n = perturb.normal(uv, ns, dpdu, dpdv);
+                        let n = perturb.normal(uv, ns, ng, dpdu, dpdv, -ray.d);
                         frame = Frame::from_normal_tangent(n, dpdu);
                     }
                 }
@@ -611,7 +616,7 @@ impl Scene {
                         * (Vec3::new(o.z * cos_p, o.z * sin_p, -sin_t) * (0.5 * tau * radius));
                     if dpdu.length_squared() > 0.0 {
                         let shading = match perturbation {
-                            Some(perturb) => perturb.normal(uv, n, dpdu, dpdv),
+                            Some(perturb) => perturb.normal(uv, n, n, dpdu, dpdv, -ray.d),
                             None => n,
                         };
                         frame = Frame::from_normal_tangent(shading, dpdu);
@@ -629,6 +634,36 @@ impl Scene {
                 }
             }
         }
+    }
+
+    /// The factor by which a bump or normal map's shadowing function (Mitsuba's default,
+    /// [`crate::bsdf::Perturbation::shadowing`]) scales the BSDF at `it` for light along the
+    /// world direction `wi`: 1 on other surfaces. Applied to BSDF values and sample weights,
+    /// never to densities.
+    #[inline]
+    #[must_use]
+    pub fn perturbed_shadowing(&self, it: &Interaction, wi: Vec3) -> f32 {
+        let shape = &self.shapes[it.shape as usize];
+        if !shape.perturbed_shadowing {
+            return 1.0;
+        }
+        self.materials[shape.material]
+            .perturbation()
+            .map_or(1.0, |p| p.shadowing(it.base_n, it.frame.n, wi))
+    }
+
+    /// [`Scene::perturbed_shadowing`] averaged over light from the whole hemisphere (cosine-
+    /// weighted): the factor for a Lambertian part served by a cache's irradiance.
+    #[inline]
+    #[must_use]
+    pub fn perturbed_mean_shadowing(&self, it: &Interaction) -> f32 {
+        let shape = &self.shapes[it.shape as usize];
+        if !shape.perturbed_shadowing {
+            return 1.0;
+        }
+        self.materials[shape.material]
+            .perturbation()
+            .map_or(1.0, |p| p.mean_shadowing(it.base_n, it.frame.n))
     }
 
     /// A ray leaving surface point `it` along `d`, offset against self-intersection.

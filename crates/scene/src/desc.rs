@@ -149,6 +149,27 @@ pub enum FilterDesc {
     },
 }
 
+/// How a normal or bump map shades, as Mitsuba 3's `normalmap` and `bumpmap` (both on by
+/// default there).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PerturbedShading {
+    /// Estevez et al. 2019's shadowing function (`use_shadowing_function`): the BSDF's response
+    /// falls off towards the unperturbed horizon, softening the bump terminator.
+    pub shadowing: bool,
+    /// A perturbed normal facing away from the viewer is mirrored about the unperturbed one
+    /// (`flip_invalid_normals`).
+    pub flip_invalid_normals: bool,
+}
+
+impl Default for PerturbedShading {
+    fn default() -> Self {
+        PerturbedShading {
+            shadowing: true,
+            flip_invalid_normals: true,
+        }
+    }
+}
+
 /// The integrator (`<integrator type=...>`).
 #[derive(Clone, Debug)]
 pub struct IntegratorDesc {
@@ -524,6 +545,8 @@ pub enum BsdfDesc {
         normals: Arc<BitmapDesc>,
         /// The BSDF it perturbs.
         nested: Arc<BsdfDesc>,
+        /// Mitsuba's `use_shadowing_function` and `flip_invalid_normals`.
+        shading: PerturbedShading,
     },
     /// Mitsuba's `bumpmap` (and MTL's `bump`/`map_bump`): the surface displaced along its
     /// normal by `scale` × the texture's luminance, for shading only.
@@ -534,6 +557,8 @@ pub enum BsdfDesc {
         scale: f32,
         /// The BSDF it perturbs.
         nested: Arc<BsdfDesc>,
+        /// Mitsuba's `use_shadowing_function` and `flip_invalid_normals`.
+        shading: PerturbedShading,
     },
     /// Smooth dielectric coating over a diffuse base.
     Plastic {

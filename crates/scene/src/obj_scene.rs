@@ -258,6 +258,8 @@ fn material(
             }),
             scale: tex.bump_multiplier.unwrap_or(1.0),
             nested: bsdf,
+            // As a Mitsuba bumpmap at its defaults.
+            shading: crate::desc::PerturbedShading::default(),
         });
     }
     Ok((bsdf, emission))

@@ -872,38 +872,42 @@ fn ply_texture_coordinates_flip_only_when_asked() {
 }
 
 #[test]
-fn bump_maps_say_how_they_differ_from_mitsubas_defaults() {
-    // ircache's bump and normal maps are Mitsuba 3's with use_shadowing_function and
-    // flip_invalid_normals false: with Mitsuba's defaults a note says so (once); with both
-    // false nothing is said.
-    let dir = std::env::temp_dir().join(format!("ircache-bump-note-{}", std::process::id()));
+fn bump_and_normal_maps_read_mitsubas_shading_flags() {
+    // `use_shadowing_function` and `flip_invalid_normals`, both true by default as in Mitsuba 3.
+    use ircache_scene::PerturbedShading;
+    let dir = std::env::temp_dir().join(format!("ircache-bump-flags-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let height = dir.join("height.exr");
     ircache_image::write_image(&height, &ircache_image::Image::new(2, 2), 1.0).unwrap();
-    let scene = |flags: &str| {
+    let scene = |ty: &str, texture: &str, flags: &str| {
         format!(
-            "<shape type=\"rectangle\"><bsdf type=\"bumpmap\">{flags}\
-               <texture type=\"bitmap\"><string name=\"filename\" value=\"{}\"/></texture>\
+            "<shape type=\"rectangle\"><bsdf type=\"{ty}\">{flags}\
+               <texture type=\"bitmap\" name=\"{texture}\"><string name=\"filename\" value=\"{}\"/></texture>\
                <bsdf type=\"diffuse\"/></bsdf></shape>",
             height.display()
         )
     };
-    let defaults = load(&(scene("") + &scene("")));
-    let notes: Vec<_> = defaults
-        .notes
-        .iter()
-        .filter(|n| n.contains("use_shadowing_function"))
-        .collect();
-    assert_eq!(notes.len(), 1, "{:?}", defaults.notes);
-    let off = load(&scene(
-        "<boolean name=\"use_shadowing_function\" value=\"false\"/>\
-         <boolean name=\"flip_invalid_normals\" value=\"false\"/>",
-    ));
-    assert!(
-        off.notes
-            .iter()
-            .all(|n| !n.contains("use_shadowing_function")),
-        "{:?}",
-        off.notes
+    let s = load(
+        &(scene("bumpmap", "arbitrary", "")
+            + &scene(
+                "normalmap",
+                "normalmap",
+                "<boolean name=\"use_shadowing_function\" value=\"false\"/>\
+                 <boolean name=\"flip_invalid_normals\" value=\"false\"/>",
+            )),
     );
+    match &*s.shapes[0].bsdf {
+        BsdfDesc::BumpMap { shading, .. } => assert_eq!(*shading, PerturbedShading::default()),
+        b => panic!("{b:?}"),
+    }
+    match &*s.shapes[1].bsdf {
+        BsdfDesc::NormalMap { shading, .. } => assert_eq!(
+            *shading,
+            PerturbedShading {
+                shadowing: false,
+                flip_invalid_normals: false
+            }
+        ),
+        b => panic!("{b:?}"),
+    }
 }

@@ -903,9 +903,39 @@ pub struct Material {
     blend: Option<(Compiled, Texture)>,
 }
 
-/// A perturbation of the shading normal by a texture (normal or bump map).
+/// A perturbation of the shading normal by a texture (normal or bump map), shaded as Mitsuba 3's
+/// `normalmap` and `bumpmap` do.
 #[derive(Clone, Debug)]
-pub enum Perturbation {
+pub struct Perturbation {
+    /// The texture and how it perturbs.
+    pub map: PerturbationMap,
+    /// The shadowing function and the flipping of normals that face away.
+    pub shading: ircache_scene::PerturbedShading,
+    /// [`mean_shadowing_table`], where the shadowing function is on.
+    mean_shadowing: Option<[f32; MEAN_SHADOWING_SAMPLES]>,
+}
+
+/// Samples of [`mean_shadowing_table`] over α ∈ [0, 1] (the mean's slope is steepest near 0).
+const MEAN_SHADOWING_SAMPLES: usize = 65;
+
+/// The cosine-weighted mean of Estevez et al.'s shadowing over the hemisphere about the
+/// unperturbed normal, `2∫₀¹ G(μ) μ dμ = 4∫₀¹ μ² / (μ + √(μ²(1 − α²) + α²)) dμ`, tabulated
+/// over α (what a Lambertian surface's cached irradiance loses to it under uniform light).
+fn mean_shadowing_table() -> [f32; MEAN_SHADOWING_SAMPLES] {
+    let nodes = ircache_math::harmonics::quadrature::gauss_legendre(48, 0.0, 1.0);
+    std::array::from_fn(|i| {
+        let alpha = i as f64 / (MEAN_SHADOWING_SAMPLES - 1) as f64;
+        let a = alpha * alpha;
+        nodes
+            .iter()
+            .map(|&(mu, w)| w * 4.0 * mu * mu / (mu + (mu * mu * (1.0 - a) + a).sqrt()))
+            .sum::<f64>() as f32
+    })
+}
+
+/// The texture of a [`Perturbation`].
+#[derive(Clone, Debug)]
+pub enum PerturbationMap {
     /// Tangent-space normals n = 2·rgb − 1 along (dp/du, dp/dv, n).
     NormalMap(Texture),
     /// Heights scale × luminance; the normal of the displaced surface.
@@ -913,24 +943,37 @@ pub enum Perturbation {
 }
 
 impl Perturbation {
-    /// The perturbed unit shading normal at `uv` for the unperturbed normal `n` and the surface
-    /// derivatives `dpdu`, `dpdv`; `n` itself where the derivatives are degenerate.
+    /// A perturbation by `map`, shaded as `shading` says.
     #[must_use]
-    pub fn normal(&self, uv: Vec2, n: Vec3, dpdu: Vec3, dpdv: Vec3) -> Vec3 {
+    pub fn new(map: PerturbationMap, shading: ircache_scene::PerturbedShading) -> Perturbation {
+        Perturbation {
+            map,
+            shading,
+            mean_shadowing: shading.shadowing.then(mean_shadowing_table),
+        }
+    }
+
+    /// The perturbed unit shading normal at `uv` for the unperturbed normal `n`, the geometric
+    /// normal `ng`, the surface derivatives `dpdu`, `dpdv` and the unit direction `wi` towards
+    /// the viewer; `n` itself where the derivatives are degenerate. As Mitsuba: a bump map's
+    /// normal is turned to the geometric normal's side, and with `flip_invalid_normals` a normal
+    /// facing away from the viewer is mirrored about `n`.
+    #[must_use]
+    pub fn normal(&self, uv: Vec2, n: Vec3, ng: Vec3, dpdu: Vec3, dpdv: Vec3, wi: Vec3) -> Vec3 {
         // An orthonormal tangent frame around n, with s along dp/du.
         let s = (dpdu - n * n.dot(dpdu)).normalize_or_zero();
         if s == Vec3::ZERO {
             return n;
         }
         let t = n.cross(s);
-        // dp/dv's side decides the handedness of the texture's y.
-        let t = if t.dot(dpdv) < 0.0 { -t } else { t };
-        let out = match self {
-            Perturbation::NormalMap(tex) => {
+        let out = match &self.map {
+            // In the shading frame (s, n × s, n), as Mitsuba's: its y is n × s whichever side
+            // dp/dv lies on (on a sphere, the opposite of increasing v).
+            PerturbationMap::NormalMap(tex) => {
                 let c = tex.eval(uv);
                 s * (2.0 * c.r - 1.0) + t * (2.0 * c.g - 1.0) + n * (2.0 * c.b - 1.0)
             }
-            Perturbation::BumpMap(tex, scale) => {
+            PerturbationMap::BumpMap(tex, scale) => {
                 // Central differences of the height, one texel apart.
                 let (du, dv) = tex.texel_size();
                 let h = |uv: Vec2| tex.eval(uv).luminance() * *scale;
@@ -940,15 +983,71 @@ impl Perturbation {
                 if lu <= 0.0 || lv <= 0.0 {
                     return n;
                 }
-                // The displaced surface p + h n has tangents dp/du + h_u n, dp/dv + h_v n.
-                n - s * (dhdu / lu) - t * (dhdv / lv)
+                // The displaced surface p + h n has tangents dp/du + h_u n, dp/dv + h_v n:
+                // its normal leans against the height's gradient along dp/du and dp/dv.
+                let tv = if t.dot(dpdv) < 0.0 { -t } else { t };
+                let out = n - s * (dhdu / lu) - tv * (dhdv / lv);
+                if out.dot(ng) < 0.0 {
+                    -out
+                } else {
+                    out
+                }
             }
         };
-        let out = out.normalize_or_zero();
-        if out == Vec3::ZERO || out.dot(n) <= 0.0 {
-            n
+        let mut out = out.normalize_or_zero();
+        if out == Vec3::ZERO {
+            return n;
+        }
+        if self.shading.flip_invalid_normals && wi.dot(n) * wi.dot(out) <= 0.0 {
+            // Mirrored about n: its tangential part negated.
+            out = (2.0 * out.dot(n)) * n - out;
+        }
+        out
+    }
+
+    /// The mean of [`Self::shadowing`] over light from the whole hemisphere about `n`, weighted
+    /// by its cosine: the factor for a Lambertian part whose irradiance comes from a cache (the
+    /// exact one under uniform light); 1 where the shadowing function is off.
+    #[must_use]
+    pub fn mean_shadowing(&self, n: Vec3, n_p: Vec3) -> f32 {
+        let Some(table) = &self.mean_shadowing else {
+            return 1.0;
+        };
+        let c2 = (n.dot(n_p).powi(2)).min(1.0);
+        let alpha2 = if c2 > 0.0 {
+            (0.125 * (1.0 - c2) / c2).min(1.0)
         } else {
-            out
+            1.0
+        };
+        let x = alpha2.sqrt() * (table.len() - 1) as f32;
+        let i = (x as usize).min(table.len() - 2);
+        let f = x - i as f32;
+        table[i] * (1.0 - f) + table[i + 1] * f
+    }
+
+    /// Estevez et al. 2019's shadowing of a perturbed normal `n_p` for light along `wi` (both
+    /// unit, world), with `n` the unperturbed normal: `2 / (1 + √(1 + α² tan²θᵢ))`,
+    /// `α² = min(tan²θₚ / 8, 1)`, angles measured from `n` (Mitsuba's
+    /// `eval_shadow_terminator`); 1 where the shadowing function is off.
+    #[inline]
+    #[must_use]
+    pub fn shadowing(&self, n: Vec3, n_p: Vec3, wi: Vec3) -> f32 {
+        if !self.shading.shadowing {
+            return 1.0;
+        }
+        let tan2 = |c: f32| {
+            let c2 = (c * c).min(1.0);
+            (1.0 - c2) / c2
+        };
+        let alpha2 = (0.125 * tan2(n.dot(n_p))).min(1.0);
+        if alpha2 <= 0.0 {
+            return 1.0;
+        }
+        let g = 2.0 / (1.0 + (1.0 + alpha2 * tan2(n.dot(wi))).sqrt());
+        if g.is_finite() {
+            g
+        } else {
+            0.0
         }
     }
 }
@@ -1007,21 +1106,32 @@ impl Material {
 
     fn from_unmasked(desc: &BsdfDesc) -> Material {
         let (desc, perturbation) = match desc {
-            BsdfDesc::NormalMap { normals, nested } => (
+            BsdfDesc::NormalMap {
+                normals,
+                nested,
+                shading,
+            } => (
                 nested.as_ref(),
-                Some(Perturbation::NormalMap(Texture::from_desc(
-                    &ircache_scene::TextureDesc::Bitmap(normals.clone()),
-                ))),
+                Some(Perturbation::new(
+                    PerturbationMap::NormalMap(Texture::from_desc(
+                        &ircache_scene::TextureDesc::Bitmap(normals.clone()),
+                    )),
+                    *shading,
+                )),
             ),
             BsdfDesc::BumpMap {
                 height,
                 scale,
                 nested,
+                shading,
             } => (
                 nested.as_ref(),
-                Some(Perturbation::BumpMap(
-                    Texture::from_desc(&ircache_scene::TextureDesc::Bitmap(height.clone())),
-                    *scale,
+                Some(Perturbation::new(
+                    PerturbationMap::BumpMap(
+                        Texture::from_desc(&ircache_scene::TextureDesc::Bitmap(height.clone())),
+                        *scale,
+                    ),
+                    *shading,
                 )),
             ),
             d => (d, None),

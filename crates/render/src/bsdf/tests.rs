@@ -1235,3 +1235,87 @@ fn chi2_principled() {
         }
     }
 }
+
+/// Mitsuba's bump-map shading: Estevez et al.'s shadowing at a closed-form point, 1 when off
+/// or unperturbed; a perturbed normal that faces away from the viewer mirrored about the
+/// unperturbed one; a bump normal turned to the geometric side.
+#[test]
+fn perturbed_shading_follows_mitsuba() {
+    use crate::texture::Texture;
+    use ircache_scene::PerturbedShading;
+    let flat = |shading| {
+        Perturbation::new(
+            PerturbationMap::BumpMap(Texture::from_desc(&TextureDesc::Constant(Rgb::ONE)), 1.0),
+            shading,
+        )
+    };
+    let on = flat(PerturbedShading::default());
+    let off = flat(PerturbedShading {
+        shadowing: false,
+        flip_invalid_normals: false,
+    });
+    let n = Vec3::Z;
+    // n_p 30° from n: tan² = 1/3, α² = 1/24; light 60° from n: tan² = 3.
+    let n_p = Vec3::new(0.5, 0.0, 0.75f32.sqrt());
+    let wi = Vec3::new(0.0, 0.75f32.sqrt(), 0.5);
+    let expect = 2.0 / (1.0 + (1.0f32 + 3.0 / 24.0).sqrt());
+    assert!((on.shadowing(n, n_p, wi) - expect).abs() < 1e-6);
+    assert_eq!(off.shadowing(n, n_p, wi), 1.0);
+    assert_eq!(on.shadowing(n, n, wi), 1.0);
+    // α² is capped at 1: a normal tilted 80° and light at the horizon's edge.
+    let steep = Vec3::new(80f32.to_radians().sin(), 0.0, 80f32.to_radians().cos());
+    let grazing = Vec3::new(0.0, 89f32.to_radians().sin(), 89f32.to_radians().cos());
+    let t2 = 89f32.to_radians().tan().powi(2);
+    assert!((on.shadowing(n, steep, grazing) - 2.0 / (1.0 + (1.0 + t2).sqrt())).abs() < 1e-4);
+
+    // A normal map tilting the normal 60° towards +x, seen from far on −x: the normal faces
+    // away from the viewer and is mirrored about n (towards −x) when flipping is on.
+    let tilt = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
+    let colour = Rgb::new(0.5 * tilt.x + 0.5, 0.5, 0.5 * tilt.z + 0.5);
+    let normal_map = |shading| {
+        Perturbation::new(
+            PerturbationMap::NormalMap(Texture::from_desc(&TextureDesc::Constant(colour))),
+            shading,
+        )
+    };
+    let viewer = Vec3::new(-80f32.to_radians().sin(), 0.0, 80f32.to_radians().cos());
+    let (dpdu, dpdv) = (Vec3::X, Vec3::Y);
+    let kept = normal_map(PerturbedShading {
+        shadowing: true,
+        flip_invalid_normals: false,
+    })
+    .normal(Vec2::ZERO, n, n, dpdu, dpdv, viewer);
+    let flipped =
+        normal_map(PerturbedShading::default()).normal(Vec2::ZERO, n, n, dpdu, dpdv, viewer);
+    assert!((kept - tilt).length() < 1e-5, "{kept}");
+    assert!(
+        (flipped - Vec3::new(-tilt.x, 0.0, tilt.z)).length() < 1e-5,
+        "{flipped}"
+    );
+    // The cosine-weighted mean of the shadowing, against a fine midpoint sum of the same
+    // integral: 1 unperturbed, below 1 perturbed, and ≥ the shadowing at any angle's minimum.
+    for tilt_deg in [0.0f32, 20.0, 45.0, 70.0] {
+        let n_p = Vec3::new(
+            tilt_deg.to_radians().sin(),
+            0.0,
+            tilt_deg.to_radians().cos(),
+        );
+        let steps = 20_000;
+        let mut sum = 0.0f64;
+        for i in 0..steps {
+            let mu = (i as f32 + 0.5) / steps as f32;
+            let wi = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+            sum += f64::from(on.shadowing(n, n_p, wi) * mu) * 2.0 / f64::from(steps);
+        }
+        let mean = on.mean_shadowing(n, n_p);
+        assert!(
+            (f64::from(mean) - sum).abs() < 2e-3,
+            "{tilt_deg}°: {mean} against {sum}"
+        );
+        assert_eq!(off.mean_shadowing(n, n_p), 1.0);
+    }
+    // Seen from +x the same normal faces the viewer and stays.
+    let front = Vec3::new(-viewer.x, 0.0, viewer.z);
+    let stays = normal_map(PerturbedShading::default()).normal(Vec2::ZERO, n, n, dpdu, dpdv, front);
+    assert!((stays - tilt).length() < 1e-5, "{stays}");
+}

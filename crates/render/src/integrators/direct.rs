@@ -106,10 +106,11 @@ pub fn estimate_direct(
         });
         let u_lobe = sampler.next_1d();
         let u = sampler.next_2d();
-        let Some(bs) = bsdf.sample(wo_local, u_lobe, u) else {
+        let Some(mut bs) = bsdf.sample(wo_local, u_lobe, u) else {
             continue;
         };
         let wi = it.frame.from_local(bs.wi);
+        bs.weight *= scene.perturbed_shadowing(it, wi);
         let next = scene.spawn_ray(it, wi);
         rays.bounce += 1;
         // Through window panes, as the light samples see (`Scene::shadow_transmittance`).

@@ -301,7 +301,9 @@ pub fn trace_path_deferring(
                 if let Some(sp) = &sp {
                     sampler.set_dimension(dims::vertex(depth, dims::CACHE));
                     if let Some(e) = source.irradiance(scene, sp, depth, sampler, rays) {
-                        l += beta * k * e * INV_PI;
+                        // A bump map's shadowing, averaged over the hemisphere: the cache
+                        // holds irradiance, not its directions.
+                        l += beta * k * e * (INV_PI * scene.perturbed_mean_shadowing(it));
                         strategy = BsdfStrategy::Glossy;
                         lambertian_served = true;
                         if source.held_environment(sp) == HeldEnvironment::All {
@@ -355,7 +357,8 @@ pub fn trace_path_deferring(
         }
 
         // The BSDF sample that continues the path.
-        let Some((bs, wi)) = sample_continuation(it, &bsdf, wo_local, strategy, depth, sampler)
+        let Some((bs, wi)) =
+            sample_continuation(scene, it, &bsdf, wo_local, strategy, depth, sampler)
         else {
             break;
         };
@@ -453,6 +456,7 @@ pub(crate) fn cross_see_through(
 /// through memory stalled the caller on store forwarding.
 #[inline(always)]
 pub(crate) fn sample_continuation(
+    scene: &Scene,
     it: &Interaction,
     bsdf: &crate::bsdf::Bsdf,
     wo_local: Vec3,
@@ -468,11 +472,12 @@ pub(crate) fn sample_continuation(
         sampler.next_1d()
     };
     let u = sampler.next_2d();
-    let bs = strategy.sample(bsdf, wo_local, u_lobe, u)?;
+    let mut bs = strategy.sample(bsdf, wo_local, u_lobe, u)?;
     let wi = it.frame.from_local(bs.wi);
     if (wi.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
         return None;
     }
+    bs.weight *= scene.perturbed_shadowing(it, wi);
     Some((bs, wi))
 }
 

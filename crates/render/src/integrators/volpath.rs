@@ -287,7 +287,7 @@ impl VolPathIntegrator {
             }
             let strategy = super::light_sampling::BsdfStrategy::All;
             let Some((bs, wi)) = super::path_continuation::sample_continuation(
-                &it, &bsdf, wo_local, strategy, depth, sampler,
+                scene, &it, &bsdf, wo_local, strategy, depth, sampler,
             ) else {
                 break;
             };
@@ -354,7 +354,7 @@ pub(crate) fn light_sample_with(
     let (f, pdf, ray, medium) = match *vertex {
         Vertex::Surface(it, bsdf, wo) => {
             let wi = it.frame.to_local(ls.wi);
-            let f = bsdf.eval(wo, wi);
+            let f = bsdf.eval(wo, wi) * scene.perturbed_shadowing(it, ls.wi);
             if f.is_black() {
                 return Rgb::ZERO;
             }

@@ -291,6 +291,7 @@ impl<'a> SceneMedium<'a> {
                     let side = medium_after(shape.media, it.ng, wo, medium);
                     l += self.direct(it.p, w, Some(it.ng), side, |wi| {
                         bsdf.eval(wo_local, it.frame.to_local(wi))
+                            * scene.perturbed_shadowing(&it, wi)
                     });
                 }
                 (along(segment_origin, it.t), [l.r, l.g, l.b].map(f64::from))

@@ -261,7 +261,7 @@ fn trace_one(
             break;
         }
         // Flux is not scaled by η² across a refraction (radiance is).
-        let weight = bs.weight * (bs.eta * bs.eta);
+        let weight = bs.weight * (bs.eta * bs.eta) * scene.perturbed_shadowing(&it, wo);
         // Russian roulette keeps the flux per photon about even (Jensen §5.2.1).
         let q = weight.max_channel().min(1.0);
         if !is_positive_finite(q) || rng.next_f32() >= q {

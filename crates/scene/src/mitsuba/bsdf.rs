@@ -72,32 +72,15 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
             }
             let texture = texture.ok_or_else(|| p.error("a nested bitmap texture is required"))?;
             let nested = nested.ok_or_else(|| p.error("a nested BSDF is required"))?;
-            // Mitsuba 3 softens the terminator (Estevez et al. 2019's shadowing function) and
-            // mirrors normals that face away from the viewer, by default; ircache perturbs the
-            // normal alone (Mitsuba with both off: relMSE_trim 7e-4 on a bumped plane, against
-            // 2.3e-2 with its defaults). Said once per scene, not silently.
-            let shadowing = p.boolean("use_shadowing_function", true)?;
-            let flip_invalid = p.boolean("flip_invalid_normals", true)?;
-            if shadowing || flip_invalid {
-                let note = format!(
-                    "{}: {} renders as Mitsuba 3's with use_shadowing_function and \
-                     flip_invalid_normals false (ircache has neither); with Mitsuba's defaults its \
-                     images differ near shadow terminators and at grazing views (this note is \
-                     given once)",
-                    p.loc, p.ty
-                );
-                let mut notes = ctx.notes.borrow_mut();
-                if !notes
-                    .iter()
-                    .any(|n| n.contains("use_shadowing_function and"))
-                {
-                    notes.push(note);
-                }
-            }
+            let shading = crate::desc::PerturbedShading {
+                shadowing: p.boolean("use_shadowing_function", true)?,
+                flip_invalid_normals: p.boolean("flip_invalid_normals", true)?,
+            };
             if p.ty == "normalmap" {
                 BsdfDesc::NormalMap {
                     normals: texture,
                     nested,
+                    shading,
                 }
             } else {
                 let scale = p.float("scale", 1.0)?;
@@ -108,6 +91,7 @@ fn build_bsdf_uncached(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
                     height: texture,
                     scale,
                     nested,
+                    shading,
                 }
             }
         }
