@@ -162,6 +162,9 @@ pub struct Scene {
     /// Some shape is a thin sheet or masked ([`Shape::thin_sheet`], [`Shape::masked`]): rays
     /// and shadow rays pass through them.
     pub has_see_through: bool,
+    /// Some surface has a bump or normal map with the shadowing function: without one,
+    /// [`Scene::perturbed_shadowing`] answers 1 without looking at the shape.
+    pub has_perturbed_shadowing: bool,
     /// Content hash of what light transport depends on (geometry, materials, emitters; not the
     /// camera, not where the files are): a cache file records it.
     pub content_hash: u64,
@@ -354,6 +357,7 @@ impl Scene {
             content_hash: content_hash(desc),
             has_hittable_emitters,
             has_see_through: shapes.iter().any(|s| s.thin_sheet || s.masked),
+            has_perturbed_shadowing: shapes.iter().any(|s| s.perturbed_shadowing),
             accel,
             shapes,
             materials,
@@ -643,6 +647,9 @@ impl Scene {
     #[inline]
     #[must_use]
     pub fn perturbed_shadowing(&self, it: &Interaction, wi: Vec3) -> f32 {
+        if !self.has_perturbed_shadowing {
+            return 1.0;
+        }
         let shape = &self.shapes[it.shape as usize];
         if !shape.perturbed_shadowing {
             return 1.0;
@@ -657,6 +664,9 @@ impl Scene {
     #[inline]
     #[must_use]
     pub fn perturbed_mean_shadowing(&self, it: &Interaction) -> f32 {
+        if !self.has_perturbed_shadowing {
+            return 1.0;
+        }
         let shape = &self.shapes[it.shape as usize];
         if !shape.perturbed_shadowing {
             return 1.0;

@@ -477,7 +477,9 @@ pub(crate) fn sample_continuation(
     if (wi.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
         return None;
     }
-    bs.weight *= scene.perturbed_shadowing(it, wi);
+    if scene.has_perturbed_shadowing {
+        bs.weight *= scene.perturbed_shadowing(it, wi);
+    }
     Some((bs, wi))
 }
 
