@@ -647,15 +647,7 @@ impl Scene {
     #[inline]
     #[must_use]
     pub fn perturbed_shadowing(&self, it: &Interaction, wi: Vec3) -> f32 {
-        if !self.has_perturbed_shadowing {
-            return 1.0;
-        }
-        let shape = &self.shapes[it.shape as usize];
-        if !shape.perturbed_shadowing {
-            return 1.0;
-        }
-        self.materials[shape.material]
-            .perturbation()
+        self.shadowing_perturbation(it)
             .map_or(1.0, |p| p.shadowing(it.base_n, it.frame.n, wi))
     }
 
@@ -664,16 +656,22 @@ impl Scene {
     #[inline]
     #[must_use]
     pub fn perturbed_mean_shadowing(&self, it: &Interaction) -> f32 {
+        self.shadowing_perturbation(it)
+            .map_or(1.0, |p| p.mean_shadowing(it.base_n, it.frame.n))
+    }
+
+    /// The bump or normal map at `it` when it has the shadowing function; scenes without one
+    /// answer from a flag, without looking at the shape.
+    #[inline]
+    fn shadowing_perturbation(&self, it: &Interaction) -> Option<&crate::bsdf::Perturbation> {
         if !self.has_perturbed_shadowing {
-            return 1.0;
+            return None;
         }
         let shape = &self.shapes[it.shape as usize];
         if !shape.perturbed_shadowing {
-            return 1.0;
+            return None;
         }
-        self.materials[shape.material]
-            .perturbation()
-            .map_or(1.0, |p| p.mean_shadowing(it.base_n, it.frame.n))
+        self.materials[shape.material].perturbation()
     }
 
     /// A ray leaving surface point `it` along `d`, offset against self-intersection.

@@ -933,6 +933,20 @@ fn mean_shadowing_table() -> [f32; MEAN_SHADOWING_SAMPLES] {
     })
 }
 
+/// tan²θ from cos θ (infinite at the horizon).
+#[inline]
+fn tan2_from_cos(c: f32) -> f32 {
+    let c2 = (c * c).min(1.0);
+    (1.0 - c2) / c2
+}
+
+/// Estevez et al.'s roughness of the bump terminator, `α² = min(tan²θₚ / 8, 1)`, θₚ the angle
+/// of the perturbed normal `n_p` from the unperturbed `n`.
+#[inline]
+fn terminator_alpha2(n: Vec3, n_p: Vec3) -> f32 {
+    (0.125 * tan2_from_cos(n.dot(n_p))).min(1.0)
+}
+
 /// The texture of a [`Perturbation`].
 #[derive(Clone, Debug)]
 pub enum PerturbationMap {
@@ -1013,13 +1027,7 @@ impl Perturbation {
         let Some(table) = &self.mean_shadowing else {
             return 1.0;
         };
-        let c2 = (n.dot(n_p).powi(2)).min(1.0);
-        let alpha2 = if c2 > 0.0 {
-            (0.125 * (1.0 - c2) / c2).min(1.0)
-        } else {
-            1.0
-        };
-        let x = alpha2.sqrt() * (table.len() - 1) as f32;
+        let x = terminator_alpha2(n, n_p).sqrt() * (table.len() - 1) as f32;
         let i = (x as usize).min(table.len() - 2);
         let f = x - i as f32;
         table[i] * (1.0 - f) + table[i + 1] * f
@@ -1035,15 +1043,11 @@ impl Perturbation {
         if !self.shading.shadowing {
             return 1.0;
         }
-        let tan2 = |c: f32| {
-            let c2 = (c * c).min(1.0);
-            (1.0 - c2) / c2
-        };
-        let alpha2 = (0.125 * tan2(n.dot(n_p))).min(1.0);
+        let alpha2 = terminator_alpha2(n, n_p);
         if alpha2 <= 0.0 {
             return 1.0;
         }
-        let g = 2.0 / (1.0 + (1.0 + alpha2 * tan2(n.dot(wi))).sqrt());
+        let g = 2.0 / (1.0 + (1.0 + alpha2 * tan2_from_cos(n.dot(wi))).sqrt());
         if g.is_finite() {
             g
         } else {

@@ -197,10 +197,7 @@ pub fn sample_lights(
             continue;
         };
         let wi = it.frame.to_local(ls.wi);
-        let mut f = bsdf.eval(wo, wi);
-        if scene.has_perturbed_shadowing {
-            f *= scene.perturbed_shadowing(it, ls.wi);
-        }
+        let f = bsdf.eval(wo, wi) * scene.perturbed_shadowing(it, ls.wi);
         if f.is_black() || ls.pdf <= 0.0 {
             continue;
         }

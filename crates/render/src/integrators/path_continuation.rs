@@ -477,9 +477,7 @@ pub(crate) fn sample_continuation(
     if (wi.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
         return None;
     }
-    if scene.has_perturbed_shadowing {
-        bs.weight *= scene.perturbed_shadowing(it, wi);
-    }
+    bs.weight *= scene.perturbed_shadowing(it, wi);
     Some((bs, wi))
 }
 

@@ -128,6 +128,7 @@ pub(crate) enum SpectrumUse {
 /// with negative channels raised to zero, as Mitsuba 3's RGB variants read it, and whether a
 /// channel was raised (Mitsuba warns; the caller says so).
 pub(crate) fn spectrum_to_srgb(pairs: &[(f64, f64)], usage: SpectrumUse) -> (Rgb, bool) {
+    debug_assert!(pairs.len() >= 2, "the parser keeps at least two pairs");
     const STEPS: usize = 1000;
     let (first, last) = (pairs[0].0, pairs[pairs.len() - 1].0);
     let mut xyz = [0.0f64; 3];
@@ -136,17 +137,13 @@ pub(crate) fn spectrum_to_srgb(pairs: &[(f64, f64)], usage: SpectrumUse) -> (Rgb
         if w < first || w > last {
             continue;
         }
-        // The last pair whose wavelength is ≤ w, and the next.
+        // The last pair whose wavelength is ≤ w, and the next (wavelengths increase).
         let k = pairs
             .partition_point(|&(wk, _)| wk <= w)
-            .clamp(1, pairs.len().max(2) - 1)
+            .clamp(1, pairs.len() - 1)
             - 1;
-        let ((w0, v0), (w1, v1)) = (pairs[k], pairs[(k + 1).min(pairs.len() - 1)]);
-        let v = if w1 > w0 {
-            ((w - w1) * v0 + (w0 - w) * v1) / (w0 - w1)
-        } else {
-            v0
-        };
+        let ((w0, v0), (w1, v1)) = (pairs[k], pairs[k + 1]);
+        let v = ((w - w1) * v0 + (w0 - w) * v1) / (w0 - w1);
         let weight = match usage {
             SpectrumUse::Ratio => table(&D65, w) * D65_NORMALIZATION,
             SpectrumUse::Emission => 1.0,

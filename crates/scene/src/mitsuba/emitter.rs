@@ -29,17 +29,12 @@ pub(crate) fn build_area(ctx: &Ctx, p: &Plugin) -> Result<(Rgb, Option<TextureDe
     if p.ty != "area" {
         return Err(p.error("only area emitters can be attached to a shape"));
     }
-    let textured = p
-        .get("radiance")
-        .is_some_and(|prop| matches!(prop.value, Value::Object(_) | Value::Ref(_)));
-    let area = if textured {
-        let loc = p
-            .get("radiance")
-            .map_or(p.loc.clone(), |prop| prop.loc.clone());
-        let texture = super::bsdf::texture_param(ctx, p, "radiance", 1.0)?;
-        (texture_mean(&texture, &loc)?, Some(texture))
-    } else {
-        (emission(p, "radiance")?, None)
+    let area = match p.get("radiance") {
+        Some(prop) if matches!(prop.value, Value::Object(_) | Value::Ref(_)) => {
+            let texture = super::bsdf::texture_param(ctx, p, "radiance", 1.0)?;
+            (texture_mean(&texture, &prop.loc)?, Some(texture))
+        }
+        _ => (emission(p, "radiance")?, None),
     };
     p.check_unused()?;
     Ok(area)
