@@ -26,7 +26,7 @@ use std::path::PathBuf;
 /// Arguments of `ircache irradiance`.
 #[derive(Args, Debug, Clone)]
 pub struct IrradianceArgs {
-    /// Scene file (Mitsuba 3 XML or OBJ). Default: the built-in Cornell box.
+    /// Scene file (Mitsuba 3 XML, OBJ or Radiance .rad). Default: the built-in Cornell box.
     pub scene: Option<PathBuf>,
     /// Points file (default: standard input).
     #[arg(long, short = 'i')]

@@ -22,7 +22,8 @@ pub const BUILTIN_CORNELL_BOX: &str = include_str!("../assets/cornell-box.xml");
 /// Arguments of `ircache render`.
 #[derive(Args, Debug, Clone)]
 pub struct RenderArgs {
-    /// Scene file: Mitsuba 3 XML (.xml) or Wavefront OBJ (.obj). Default: a built-in Cornell box.
+    /// Scene file: Mitsuba 3 XML (.xml), Wavefront OBJ (.obj) or Radiance (.rad). Default: a
+    /// built-in Cornell box.
     pub scene: Option<PathBuf>,
     /// Set a scene parameter: `-D name=value` overrides `<default name=...>` (Mitsuba's -D).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
@@ -76,18 +77,23 @@ pub struct RenderArgs {
     /// Write run statistics as JSON to this file.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
-    /// OBJ scenes: eye position `x,y,z`.
+    /// OBJ and Radiance scenes (without --view): eye position `x,y,z`.
     #[arg(long, value_parser = parse_vec3)]
     pub eye: Option<Vec3>,
-    /// OBJ scenes: point looked at `x,y,z`.
+    /// OBJ and Radiance scenes (without --view): point looked at `x,y,z`.
     #[arg(long, value_parser = parse_vec3)]
     pub target: Option<Vec3>,
-    /// OBJ scenes: up vector `x,y,z`.
+    /// OBJ and Radiance scenes (without --view): up vector `x,y,z`.
     #[arg(long, value_parser = parse_vec3)]
     pub up: Option<Vec3>,
-    /// OBJ scenes: vertical field of view in degrees.
+    /// OBJ and Radiance scenes (without --view): vertical field of view in degrees.
     #[arg(long)]
     pub fov: Option<f32>,
+    /// Radiance scenes: the view, as rpict's options (`"-vp 2 1 1.5 -vd 0 1 0 -vu 0 0 1 -vh 60
+    /// -vv 45"`, `-vtv` or `-vtl`) or a view file (`-vf` inside the options also reads one); the
+    /// picture fits --width × --height (512 × 512) with square pixels, as rpict's -x, -y.
+    #[arg(long, allow_hyphen_values = true)]
+    pub view: Option<String>,
     /// Extra images (ic integrator): `irradiance` (interpolated indirect irradiance, written to
     /// NAME-irradiance.exr), `records` (level-0 record positions as red dots over the image, cyan
     /// for records that also hold radiance, NAME-records.exr) and `glossy` (with
@@ -166,6 +172,7 @@ pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
         fov: args.fov,
         width: args.width,
         height: args.height,
+        radiance_view: args.view.clone(),
     };
     let desc = match &args.scene {
         Some(path) => ircache_scene::load_scene(path, &defines, &obj_camera)?,
@@ -177,10 +184,15 @@ pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
 /// Applies the command line's overrides (size, samples, sampler, integrator, depth) to a
 /// loaded scene.
 pub fn apply_overrides(args: &RenderArgs, mut desc: SceneDesc) -> Result<SceneDesc> {
-    if let Some(w) = args.width {
+    // The Radiance loader has fitted the picture into --width × --height as rpict does.
+    let fitted = desc
+        .source
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("rad"));
+    if let Some(w) = args.width.filter(|_| !fitted) {
         desc.sensor.film.width = w;
     }
-    if let Some(h) = args.height {
+    if let Some(h) = args.height.filter(|_| !fitted) {
         desc.sensor.film.height = h;
     }
     if desc.sensor.film.width == 0 || desc.sensor.film.height == 0 {

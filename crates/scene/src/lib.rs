@@ -12,6 +12,7 @@ pub mod ior;
 pub mod mesh;
 pub mod mitsuba;
 pub mod obj_scene;
+pub mod radiance;
 pub mod shapes;
 pub mod volume_file;
 
@@ -21,7 +22,8 @@ pub use error::{SceneError, SourceLocation};
 use std::path::Path;
 
 /// Loads a scene by file extension: `.xml` as Mitsuba 3 XML (with `-D name=value` overrides in
-/// `defines`), `.obj` as a bare Wavefront OBJ (camera from `obj_camera`, or automatic framing).
+/// `defines`), `.obj` as a bare Wavefront OBJ (camera from `obj_camera`, or automatic framing),
+/// `.rad` as a Radiance scene (its view from `obj_camera.radiance_view`).
 pub fn load_scene(
     path: &Path,
     defines: &[(String, String)],
@@ -34,6 +36,17 @@ pub fn load_scene(
         .as_deref()
     {
         Some("xml") => mitsuba::load(path, defines),
+        Some("rad") => match defines.first() {
+            Some((name, value)) => Err(SceneError::at(
+                SourceLocation::start_of(path),
+                format!(
+                    "-D {name}={value}: a Radiance scene has no parameters (-D sets a Mitsuba XML \
+                     scene's $parameters; for Radiance scenes use --view, --width, --height, \
+                     --spp, --max-depth)"
+                ),
+            )),
+            None => radiance::load(path, obj_camera),
+        },
         Some("obj") => match defines.first() {
             // An OBJ file has no parameters: a -D would be dropped without a word.
             Some((name, value)) => Err(SceneError::at(

@@ -55,6 +55,8 @@ pub struct ObjCamera {
     pub width: Option<u32>,
     /// Image height (default 480).
     pub height: Option<u32>,
+    /// Radiance view options (`-vp … -vd … -vh …`) or a view file, for Radiance scenes.
+    pub radiance_view: Option<String>,
 }
 
 /// Default diffuse albedo (Mitsuba's `diffuse` default).

@@ -36,6 +36,7 @@ pub mod roughconductor;
 pub mod roughdielectric;
 pub mod roughplastic;
 pub mod thindielectric;
+pub mod ward;
 
 use crate::texture::Texture;
 use ircache_math::{Rgb, Vec2, Vec3};
@@ -52,6 +53,7 @@ pub use roughconductor::RoughConductor;
 pub use roughdielectric::RoughDielectric;
 pub use roughplastic::{RoughPlastic, RoughPlasticTables};
 pub use thindielectric::ThinDielectric;
+pub use ward::Ward;
 
 /// A sampled direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -122,6 +124,8 @@ pub enum Lobe {
     Phong(Phong),
     /// Mitsuba's principled BSDF.
     Principled(Principled),
+    /// Radiance's `plastic` and `metal`.
+    Ward(Ward),
 }
 
 impl Lobe {
@@ -134,6 +138,7 @@ impl Lobe {
             Lobe::RoughDielectric(b) => b.eval(wo, wi),
             Lobe::Phong(b) => b.eval(wo, wi),
             Lobe::Principled(b) => b.eval(wo, wi),
+            Lobe::Ward(b) => b.eval(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => Rgb::ZERO,
         }
     }
@@ -147,6 +152,7 @@ impl Lobe {
             Lobe::RoughDielectric(b) => b.pdf(wo, wi),
             Lobe::Phong(b) => b.pdf(wo, wi),
             Lobe::Principled(b) => b.pdf(wo, wi),
+            Lobe::Ward(b) => b.pdf(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => 0.0,
         }
     }
@@ -163,6 +169,7 @@ impl Lobe {
             Lobe::ThinDielectric(b) => b.sample(wo, u_lobe),
             Lobe::Phong(b) => b.sample(wo, u_lobe, u),
             Lobe::Principled(b) => b.sample(wo, u_lobe, u),
+            Lobe::Ward(b) => b.sample(wo, u_lobe, u),
         }
     }
 
@@ -184,6 +191,7 @@ impl Lobe {
             Lobe::RoughPlastic(b) => b.lambertian_albedo(wo),
             Lobe::Phong(b) => b.diffuse,
             Lobe::Principled(b) => b.lambertian_albedo(wo),
+            Lobe::Ward(b) => b.lambertian_albedo(wo),
             _ => Rgb::ZERO,
         }
     }
@@ -194,6 +202,7 @@ impl Lobe {
             Lobe::RoughPlastic(b) => b.eval_specular(wo, wi),
             Lobe::Phong(b) => b.eval_specular(wo, wi),
             Lobe::Principled(b) => b.eval_glossy(wo, wi),
+            Lobe::Ward(b) => b.eval_specular(wo, wi),
             other => other.eval(wo, wi),
         }
     }
@@ -203,6 +212,7 @@ impl Lobe {
             Lobe::Diffuse(_) | Lobe::Plastic(_) => 0.0,
             Lobe::RoughPlastic(b) => b.pdf_specular(wo, wi),
             Lobe::Phong(b) => b.pdf_specular(wo, wi),
+            Lobe::Ward(b) => b.pdf_specular(wo, wi),
             other => other.pdf(wo, wi),
         }
     }
@@ -213,6 +223,7 @@ impl Lobe {
             Lobe::Plastic(b) => b.sample_specular(wo),
             Lobe::RoughPlastic(b) => b.sample_specular(wo, u),
             Lobe::Phong(b) => b.sample_specular(wo, u),
+            Lobe::Ward(b) => b.sample_specular(wo, u),
             // The whole mixture's directions, weighed by the glossy part alone.
             Lobe::Principled(b) => b.sample(wo, u_lobe, u).and_then(|s| {
                 let weight = b.eval_glossy(wo, s.wi) / s.pdf;
@@ -228,6 +239,7 @@ impl Lobe {
         match self {
             Lobe::Diffuse(_) => false,
             Lobe::Phong(b) => !b.specular.is_black(),
+            Lobe::Ward(b) => b.has_specular(),
             _ => true,
         }
     }
@@ -239,6 +251,7 @@ impl Lobe {
             Lobe::RoughPlastic(b) => b.diffuse_reflectance,
             Lobe::Phong(b) => b.diffuse,
             Lobe::Principled(b) => b.diffuse_reflectance(),
+            Lobe::Ward(b) => b.diffuse_reflectance(),
             _ => Rgb::ZERO,
         }
     }
@@ -538,14 +551,13 @@ impl Bsdf {
     /// light through it makes caustics.
     #[must_use]
     pub fn has_delta(&self) -> bool {
-        self.lobes().iter().any(|l| {
-            matches!(
-                l,
-                Lobe::Conductor(_)
-                    | Lobe::Dielectric(_)
-                    | Lobe::ThinDielectric(_)
-                    | Lobe::Plastic(_)
-            )
+        self.lobes().iter().any(|l| match l {
+            Lobe::Conductor(_)
+            | Lobe::Dielectric(_)
+            | Lobe::ThinDielectric(_)
+            | Lobe::Plastic(_) => true,
+            Lobe::Ward(w) => w.is_mirror() && w.has_specular(),
+            _ => false,
         })
     }
 
@@ -774,6 +786,17 @@ impl Compiled {
                 specular_reflectance: *specular_reflectance,
                 specular_transmittance: *specular_transmittance,
             })),
+            BsdfDesc::Ward {
+                color,
+                specularity,
+                roughness,
+                metal,
+            } => Compiled::Fixed(Lobe::Ward(Ward {
+                color: *color,
+                specularity: *specularity,
+                roughness: *roughness,
+                metal: *metal,
+            })),
             BsdfDesc::ThinDielectric {
                 int_ior,
                 ext_ior,
@@ -783,6 +806,16 @@ impl Compiled {
                 eta: int_ior / ext_ior,
                 specular_reflectance: *specular_reflectance,
                 specular_transmittance: *specular_transmittance,
+                transmissivity: None,
+            })),
+            BsdfDesc::Glass {
+                transmissivity,
+                ior,
+            } => Compiled::Fixed(Lobe::ThinDielectric(ThinDielectric {
+                eta: *ior,
+                specular_reflectance: Rgb::ONE,
+                specular_transmittance: Rgb::ONE,
+                transmissivity: Some(*transmissivity),
             })),
             BsdfDesc::Principled {
                 base_color,
@@ -872,7 +905,7 @@ impl Compiled {
                     base_color.mean() * ((1.0 - metallic) * (1.0 - spec_trans))
                 }
             }
-            Compiled::Fixed(_) => Rgb::ZERO,
+            Compiled::Fixed(l) => l.diffuse_reflectance(),
         }
     }
 }

@@ -99,6 +99,23 @@ fn phong(kd: f32, ks: f32, n: f32) -> BsdfDesc {
     }
 }
 
+/// Radiance's `plastic` or `metal`, two-sided as the loader makes it.
+fn ward(color: f32, specularity: f32, roughness: f32, metal: bool) -> BsdfDesc {
+    twosided(BsdfDesc::Ward {
+        color: Rgb::new(color, color * 0.9, color * 0.8),
+        specularity,
+        roughness,
+        metal,
+    })
+}
+
+fn radiance_glass(transmissivity: f32, ior: f32) -> BsdfDesc {
+    BsdfDesc::Glass {
+        transmissivity: Rgb::splat(transmissivity),
+        ior,
+    }
+}
+
 fn dielectric(int_ior: f32) -> BsdfDesc {
     BsdfDesc::Dielectric {
         int_ior,
@@ -231,6 +248,20 @@ fn all_models() -> Vec<(String, BsdfDesc)> {
         ("phong n=1".into(), phong(0.3, 0.7, 1.0)),
         ("phong n=30".into(), phong(0.5, 0.5, 30.0)),
         ("phong n=500".into(), phong(0.0, 1.0, 500.0)),
+        (
+            "radiance plastic α=0.05".into(),
+            ward(0.8, 0.05, 0.05, false),
+        ),
+        ("radiance plastic α=0.3".into(), ward(0.5, 0.1, 0.3, false)),
+        ("radiance metal α=0.1".into(), ward(0.9, 0.9, 0.1, true)),
+        ("radiance metal α=0.6".into(), ward(0.9, 1.0, 0.6, true)),
+        (
+            "radiance plastic mirror".into(),
+            ward(0.6, 0.05, 0.0, false),
+        ),
+        ("radiance metal mirror".into(), ward(0.8, 0.9, 0.0, true)),
+        ("radiance glass".into(), radiance_glass(0.96, 1.52)),
+        ("radiance tinted glass".into(), radiance_glass(0.6, 1.52)),
     ];
     for kind in KINDS {
         for a in [0.05, 0.3, 1.0] {
@@ -337,6 +368,88 @@ fn chi2_diffuse_and_plastic() {
             Domain::Hemisphere,
             &format!("plastic θo={t}"),
         );
+    }
+}
+
+#[test]
+fn chi2_radiance_plastic_and_metal() {
+    for (label, desc) in [
+        ("plastic α=0.05", ward(0.8, 0.05, 0.05, false)),
+        ("plastic α=0.3", ward(0.5, 0.1, 0.3, false)),
+        ("metal α=0.2", ward(0.9, 0.9, 0.2, true)),
+    ] {
+        for (t, p) in WO_ANGLES {
+            run_chi2(
+                &mat(desc.clone()),
+                dir(t, p),
+                Domain::Hemisphere,
+                &format!("{label} θo={t}"),
+            );
+        }
+    }
+}
+
+/// Radiance's plastic and metal against `normal.c`'s own arithmetic: the W-G-M-D lobe at a
+/// hand-picked pair of directions, the diffuse part, and the Fresnel estimate of a smooth one.
+#[test]
+fn radiance_plastic_matches_normal_c() {
+    use crate::bsdf::ward::fresnel_estimate;
+    let b = mat(ward(0.5, 0.04, 0.2, false));
+    let (wo, wi) = (dir(30.0, 0.0), dir(50.0, 180.0));
+    // normal.c: h = l + v, d2 = (h·n)², d3 = h·h, exp(−(d3 − d2)/(d2 α²)) d3 / (π d2² α²).
+    let h = wo + wi;
+    let (d2, d3) = (h.z * h.z, h.dot(h));
+    let spec = (-(d3 - d2) / (d2 * 0.04)).exp() * d3 / (std::f32::consts::PI * d2 * d2 * 0.04);
+    let expect = (0.5 * 0.96 / std::f32::consts::PI + 0.04 * spec) * wi.z;
+    let got = b.eval(wo, wi).r;
+    assert!((got - expect).abs() < 1e-5 * expect, "{got} vs {expect}");
+    // A smooth plastic: the mirror weighs s + F(μ)(1 − s), the diffuse part c (1 − s').
+    let b = mat(ward(0.5, 0.05, 0.0, false));
+    let wo = dir(70.0, 0.0);
+    let f = fresnel_estimate(wo.z);
+    let s = 0.05 + f * 0.95;
+    let wi = dir(20.0, 90.0);
+    let expect = 0.5 * (1.0 - s) / std::f32::consts::PI * (1.0 - fresnel_estimate(wi.z)) * wi.z;
+    assert!((b.eval(wo, wi).r - expect).abs() < 1e-6);
+    let mirror = (0..64)
+        .filter_map(|k| b.sample(wo, (k as f32 + 0.5) / 64.0, Vec2::new(0.3, 0.6)))
+        .find(|x| x.delta)
+        .expect("the mirror lobe is sampled");
+    assert!((mirror.weight.r * mirror.pdf - s).abs() < 1e-5);
+}
+
+/// Radiance's glass: without absorption the sheet's reflectance is 2r/(1 + r) per polarisation
+/// (r its Fresnel reflectance) and reflection and transmission add up to one; with it, less.
+#[test]
+fn radiance_glass_matches_glass_c() {
+    use crate::bsdf::ThinDielectric;
+    let sheet = |t: f32| ThinDielectric {
+        eta: 1.52,
+        specular_reflectance: Rgb::ONE,
+        specular_transmittance: Rgb::ONE,
+        transmissivity: Some(Rgb::splat(t)),
+    };
+    let r = ((1.52f32 - 1.0) / 2.52).powi(2);
+    for u in [0.01, 0.99] {
+        let c = sheet(1.0).choose(1.0, u);
+        let value = c.weight.r * c.prob;
+        let expect = if c.reflected {
+            2.0 * r / (1.0 + r)
+        } else {
+            1.0 - 2.0 * r / (1.0 + r)
+        };
+        assert!((value - expect).abs() < 1e-5, "{c:?}");
+    }
+    for cos in [1.0f32, 0.5, 0.1] {
+        let (tr, re) = (sheet(0.9).transmittance(cos).r, {
+            let c = sheet(0.9).choose(cos, 0.0);
+            c.weight.r * c.prob
+        });
+        assert!(tr + re < 1.0 && tr > 0.0 && re > 0.0);
+        // 88 % transmittance glass is 0.96 transmissivity (glass.c's comment).
+        if cos == 1.0 {
+            assert!((sheet(0.96).transmittance(1.0).r - 0.88).abs() < 0.003);
+        }
     }
 }
 

@@ -5,7 +5,7 @@
 //! [`light_samples_suffice`]) they stand alone, as in `path`.
 
 use super::light_sampling::{
-    light_samples_suffice, sample_lights, BsdfStrategy, EnvironmentServed, Shadows,
+    light_samples_suffice, sample_lights, BsdfStrategy, EnvironmentServed, Selection, Shadows,
 };
 use super::{mis_weight, RayCounts};
 use crate::bsdf::Bsdf;
@@ -88,7 +88,7 @@ pub fn estimate_direct(
         it,
         bsdf,
         wo_local,
-        ne,
+        (ne, Selection::Chosen),
         (BsdfStrategy::All, nb),
         EnvironmentServed::default(),
         0,

@@ -145,6 +145,17 @@ impl EnvironmentServed {
     }
 }
 
+/// How [`sample_lights`] picks the light of each sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Selection {
+    /// One light per sample, chosen by its estimated contribution (`lights::selection`).
+    Chosen,
+    /// Every light in turn, `ne` samples each (as Radiance samples each source): for the few
+    /// points of `ircache irradiance`, where a light that selection starves (a lamp's bulb hidden
+    /// in its shade takes the samples of the panel beside it) must not leave noise.
+    EachLight,
+}
+
 /// Direct light reflected at `it` towards `wo` (local frame) by `ne` light samples (jittered over
 /// a √ne × √ne grid when `ne` > 1 is a square). Each is weighted against `nb` samples of
 /// `strategy` at the same vertex (`nb` = 0: the light samples estimate everything): a light
@@ -162,7 +173,7 @@ pub fn sample_lights(
     it: &Interaction,
     bsdf: &Bsdf,
     wo: Vec3,
-    ne: u32,
+    (ne, selection): (u32, Selection),
     (strategy, nb): (BsdfStrategy, u32),
     served: EnvironmentServed,
     depth: u32,
@@ -193,67 +204,77 @@ pub fn sample_lights(
         if grid {
             u = (Vec2::new((i % side) as f32, (i / side) as f32) + u) / side as f32;
         }
-        let Some(ls) = scene.lights.sample(it.p, u_sel, u) else {
-            continue;
+        let lights = match selection {
+            Selection::Chosen => 0..1,
+            Selection::EachLight => 0..scene.lights.len(),
         };
-        let wi = it.frame.to_local(ls.wi);
-        let f = bsdf.eval(wo, wi) * scene.perturbed_shadowing(it, ls.wi);
-        if f.is_black() || ls.pdf <= 0.0 {
-            continue;
-        }
-        let environment = !served.is_none() && scene.lights.is_environment(ls.light);
-        // Of the environment, the sample estimates what the cache did not serve.
-        let rest = if environment {
-            served.remainder(bsdf, wo, wi, f)
-        } else {
-            f
-        };
-        if rest.is_black() {
-            continue;
-        }
-        rays.shadow += 1;
-        let shadow_ray = scene.shadow_ray(it, ls.wi, ls.distance);
-        // Window panes on the way pass what they transmit (`Scene::shadow_transmittance`).
-        let mut through_sheets = None;
-        if matches!(shadows, Shadows::Traced) {
-            if scene.has_see_through {
-                let tr = scene.shadow_transmittance(&shadow_ray);
-                if tr.is_black() {
-                    continue;
-                }
-                through_sheets = Some(tr);
-            } else if scene.accel.occluded(&shadow_ray) {
+        for light in lights {
+            let ls = match selection {
+                Selection::Chosen => scene.lights.sample(it.p, u_sel, u),
+                Selection::EachLight => scene.lights.sample_light(light, 1.0, it.p, u),
+            };
+            let Some(ls) = ls else {
+                continue;
+            };
+            let wi = it.frame.to_local(ls.wi);
+            let f = bsdf.eval(wo, wi) * scene.perturbed_shadowing(it, ls.wi);
+            if f.is_black() || ls.pdf <= 0.0 {
                 continue;
             }
-        }
-        // With the served parts off (`rest`), the traced glossy part is weighed against its BSDF
-        // sample as ever; only a remainder of the environment may be negative.
-        let weighted = if ls.is_delta || nb == 0 {
-            rest
-        } else {
-            let w = mis_weight(fe * ls.pdf, fb * strategy.pdf(bsdf, wo, wi));
-            match strategy {
-                // The strategy's part is the whole BSDF: f·w, without evaluating it twice.
-                BsdfStrategy::All => rest * w,
-                BsdfStrategy::Glossy => {
-                    let x = rest - bsdf.eval_glossy(wo, wi) * (1.0 - w);
-                    if environment {
-                        x
-                    } else {
-                        x.max(Rgb::ZERO)
+            let environment = !served.is_none() && scene.lights.is_environment(ls.light);
+            // Of the environment, the sample estimates what the cache did not serve.
+            let rest = if environment {
+                served.remainder(bsdf, wo, wi, f)
+            } else {
+                f
+            };
+            if rest.is_black() {
+                continue;
+            }
+            rays.shadow += 1;
+            let shadow_ray = scene.shadow_ray(it, ls.wi, ls.distance);
+            // Window panes on the way pass what they transmit (`Scene::shadow_transmittance`).
+            let mut through_sheets = None;
+            if matches!(shadows, Shadows::Traced) {
+                if scene.has_see_through {
+                    let tr = scene.shadow_transmittance(&shadow_ray);
+                    if tr.is_black() {
+                        continue;
                     }
+                    through_sheets = Some(tr);
+                } else if scene.accel.occluded(&shadow_ray) {
+                    continue;
                 }
             }
-        };
-        let mut value = weighted * ls.radiance / (fe * ls.pdf);
-        if let Some(tr) = through_sheets {
-            value *= tr;
-        }
-        match &mut shadows {
-            Shadows::Traced => l += value,
-            Shadows::Deferred(deferred, beta) => {
-                deferred.rays.push(shadow_ray);
-                deferred.light.push((*beta * value, deferred.owner));
+            // With the served parts off (`rest`), the traced glossy part is weighed against its BSDF
+            // sample as ever; only a remainder of the environment may be negative.
+            let weighted = if ls.is_delta || nb == 0 {
+                rest
+            } else {
+                let w = mis_weight(fe * ls.pdf, fb * strategy.pdf(bsdf, wo, wi));
+                match strategy {
+                    // The strategy's part is the whole BSDF: f·w, without evaluating it twice.
+                    BsdfStrategy::All => rest * w,
+                    BsdfStrategy::Glossy => {
+                        let x = rest - bsdf.eval_glossy(wo, wi) * (1.0 - w);
+                        if environment {
+                            x
+                        } else {
+                            x.max(Rgb::ZERO)
+                        }
+                    }
+                }
+            };
+            let mut value = weighted * ls.radiance / (fe * ls.pdf);
+            if let Some(tr) = through_sheets {
+                value *= tr;
+            }
+            match &mut shadows {
+                Shadows::Traced => l += value,
+                Shadows::Deferred(deferred, beta) => {
+                    deferred.rays.push(shadow_ray);
+                    deferred.light.push((*beta * value, deferred.owner));
+                }
             }
         }
     }

@@ -12,7 +12,8 @@
 //! only. Where it declines, the whole BSDF is sampled, as in path tracing.
 
 use super::light_sampling::{
-    light_samples_suffice, sample_lights, BsdfStrategy, DeferredShadows, EnvironmentServed, Shadows,
+    light_samples_suffice, sample_lights, BsdfStrategy, DeferredShadows, EnvironmentServed,
+    Selection, Shadows,
 };
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::environment::HeldEnvironment;
@@ -344,7 +345,7 @@ pub fn trace_path_deferring(
                 it,
                 &bsdf,
                 wo_local,
-                ne,
+                (ne, Selection::Chosen),
                 (strategy, u32::from(continues)),
                 environment_served,
                 depth,
@@ -427,18 +428,18 @@ pub(crate) fn cross_see_through(
         return Crossing::Stay;
     };
     let cos = it.frame.n.dot(wo);
-    let r = sheet.reflectance(cos);
-    if u >= r {
-        *beta *= sheet.specular_transmittance;
+    let choice = sheet.choose(cos, u);
+    if !choice.reflected {
+        *beta *= choice.weight;
         return Crossing::On(scene.spawn_ray(it, -wo));
     }
     if *depth + 1 >= settings.max_depth {
         return Crossing::End;
     }
-    *beta *= sheet.specular_reflectance;
+    *beta *= choice.weight;
     *arrival = Arrival::Bsdf {
         p: it.p,
-        pdf: r,
+        pdf: choice.prob,
         delta: true,
         light_samples: 0,
     };

@@ -95,7 +95,7 @@ fn direct_irradiance(
 ) -> Rgb {
     use crate::bsdf::{Bsdf, Diffuse, Lobe};
     use crate::integrators::light_sampling::{
-        sample_lights, BsdfStrategy, EnvironmentServed, Shadows,
+        sample_lights, BsdfStrategy, EnvironmentServed, Selection, Shadows,
     };
     let white = Bsdf::Single(Lobe::Diffuse(Diffuse {
         reflectance: Rgb::ONE,
@@ -107,7 +107,7 @@ fn direct_irradiance(
         &sp.it,
         &white,
         wo,
-        samples,
+        (samples, Selection::EachLight),
         (BsdfStrategy::All, 0),
         EnvironmentServed {
             lambertian: if environment { Rgb::ONE } else { Rgb::ZERO },

@@ -389,7 +389,42 @@ impl LightSet {
             return None;
         }
         let (idx, sel) = self.select(p, u_select);
+        self.sample_chosen(idx, sel, p, u, true)
+    }
+
+    /// Samples light `idx` alone with `u`, its densities scaled by `sel` (1 where every light is
+    /// sampled in turn): an environment light's sample carries its own radiance and density,
+    /// not the whole environment's.
+    #[inline]
+    #[must_use]
+    pub fn sample_light(&self, idx: usize, sel: f32, p: Vec3, u: Vec2) -> Option<LightSample> {
+        self.sample_chosen(idx, sel, p, u, false)
+    }
+
+    /// Samples light `idx`, chosen with probability `sel`; with `whole_environment`, an
+    /// environment direction is weighed as every environment light's (one-sample MIS over them,
+    /// [`Self::pdf_environment`]).
+    #[inline]
+    fn sample_chosen(
+        &self,
+        idx: usize,
+        sel: f32,
+        p: Vec3,
+        u: Vec2,
+        whole_environment: bool,
+    ) -> Option<LightSample> {
         let light = idx as u32;
+        let own_environment = |wi: Vec3, pdf: f32, radiance: Rgb| {
+            (is_positive_finite(pdf * sel) && !radiance.is_black()).then_some(LightSample {
+                wi,
+                distance: f32::INFINITY,
+                radiance,
+                pdf: pdf * sel,
+                is_delta: false,
+                light,
+                normal: Vec3::ZERO,
+            })
+        };
         let area =
             |(wi, distance, radiance, pdf, normal): (Vec3, f32, Rgb, f32, Vec3)| LightSample {
                 wi,
@@ -417,8 +452,17 @@ impl LightSet {
             Light::Directional(l) => {
                 (!l.irradiance.is_black()).then(|| delta((l.wi, f32::INFINITY, l.irradiance)))
             }
-            Light::Constant(c) => self.environment_sample(p, c.sample(u), light),
-            Light::Envmap(e) => self.environment_sample(p, e.sample(u)?, light),
+            Light::Constant(c) if whole_environment => {
+                self.environment_sample(p, c.sample(u), light)
+            }
+            Light::Envmap(e) if whole_environment => {
+                self.environment_sample(p, e.sample(u)?, light)
+            }
+            Light::Constant(c) => own_environment(c.sample(u), c.pdf(), c.radiance),
+            Light::Envmap(e) => {
+                let wi = e.sample(u)?;
+                own_environment(wi, e.pdf(wi), e.eval(wi))
+            }
         }
     }
 

@@ -208,15 +208,15 @@ fn trace_one(
             // beyond it stays direct light, which the photons must not hold twice).
             // Reflected (a delta bounce) with probability R'.
             let cos = it.frame.n.dot(incoming);
-            let reflected = rng.next_f32() < sheet.reflectance(cos);
+            let choice = sheet.choose(cos, rng.next_f32());
+            let reflected = choice.reflected;
             if reflected && bounces + 1 > max_bounces {
                 break;
             }
             let (scale, d) = if reflected {
-                let d = 2.0 * cos * it.frame.n - incoming;
-                (sheet.specular_reflectance, d)
+                (choice.weight, 2.0 * cos * it.frame.n - incoming)
             } else {
-                (sheet.specular_transmittance, ray.d)
+                (choice.weight, ray.d)
             };
             let q = scale.max_channel().min(1.0);
             if !is_positive_finite(q) || rng.next_f32() >= q {

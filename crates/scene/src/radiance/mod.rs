@@ -1,0 +1,876 @@
+//! Radiance scene files (`ircache render scene.rad`): the primitives lighting designers write
+//! and `oconv` reads (Ward's `ray(1)` reference manual), turned into a [`SceneDesc`].
+//!
+//! - **Surfaces**: `polygon` (triangulated by ear clipping; the front is where its vertices turn
+//!   counter-clockwise), `sphere` and `bubble` (analytic), `cylinder`, `tube`, `cone`, `cup` and
+//!   `ring` (tessellated into 64 segments whose polygons keep the exact areas). `mesh` and
+//!   `instance` (compiled meshes and octrees) are refused.
+//! - **Materials**: `plastic` and `metal` as Radiance's isotropic Gaussian model
+//!   ([`BsdfDesc::Ward`]), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
+//!   [`BsdfDesc::Glass`]), `dielectric` without absorption (a smooth interface of its index).
+//!   Radiance shades both sides of a surface alike, so the opaque ones are `twosided`.
+//! - **Light**: `light` and `glow` surfaces emit their radiance (W sr⁻¹ m⁻², as ircache's RGB) from
+//!   their front and reflect nothing; a glow's maximum radius only steers Radiance's choice of
+//!   sources, which a path tracer does not need. `illum` is a secondary source standing for the
+//!   light behind it: here it is its alternate material, or nothing where that is `void`, so the
+//!   light it stood for is traced. A distant `source` of material `light` narrower than 10° is a
+//!   directional light of the same irradiance (L·Ω, Ω its solid angle; sharp shadows); wider ones
+//!   and `glow` sources (skies, grounds) are baked into a latitude–longitude environment,
+//!   including gensky's `skyfunc` (`brightfunc skybr skybright.cal`, evaluated here).
+//! - **Commands**: `!xform` is carried out here, other commands are run (see [`parse`]).
+//! - **Camera**: a Radiance view ([`view`]) given with the scene (`--view`), else `eye`, `target`
+//!   and `fov` as for OBJ scenes, else the whole scene framed from Radiance's default direction
+//!   (+y, up +z). The picture fits 512 × 512 (or `width` × `height`) with square pixels, as rpict.
+//! - Everything else (patterns, textures, mixtures, `trans`, `BSDF`, `spotlight`, `antimatter`, ...)
+//!   is an error at the first surface that needs it, naming the primitive. Nothing is skipped
+//!   without a note: surfaces of `void` are dropped with a count in the scene's notes.
+
+pub mod parse;
+pub mod sky;
+pub mod view;
+pub mod xform;
+
+use crate::desc::{
+    BsdfDesc, EmitterDesc, FilmDesc, FilterDesc, FovAxis, Geometry, IntegratorDesc, Projection,
+    SensorDesc, ShapeDesc, TextureDesc, TriangleMesh,
+};
+use crate::error::SourceLocation;
+use crate::obj_scene::ObjCamera;
+use crate::{SceneDesc, SceneError};
+use ircache_math::{DVec3, Mat3, Mat4, Rgb, Vec3};
+use parse::Primitive;
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+use view::View;
+
+/// Segments of a tessellated cylinder, cone or ring.
+const SEGMENTS: u32 = 64;
+/// A `light` source narrower than this (full angle, degrees) becomes a directional light.
+const DIRECTIONAL_MAX_ANGLE: f64 = 10.0;
+/// Width of the baked environment (height half of it).
+const ENVIRONMENT_WIDTH: usize = 1024;
+/// rpict's default picture size.
+const DEFAULT_SIZE: u32 = 512;
+/// Default samples per pixel.
+const DEFAULT_SPP: u32 = 16;
+
+/// True for the types that are modifiers (materials, patterns, textures, mixtures, `alias`):
+/// `!xform -n` and `-m` leave them alone.
+#[must_use]
+pub fn is_modifier_type(kind: &str) -> bool {
+    !matches!(
+        kind,
+        "polygon"
+            | "sphere"
+            | "bubble"
+            | "cone"
+            | "cup"
+            | "cylinder"
+            | "tube"
+            | "ring"
+            | "source"
+            | "mesh"
+            | "instance"
+    )
+}
+
+/// What a modifier is, once read.
+#[derive(Clone, Debug)]
+enum Modifier {
+    /// A reflecting or transmitting material.
+    Bsdf(Arc<BsdfDesc>),
+    /// `light` or `glow` (the kind kept for sources), with a pattern on its radiance.
+    Light {
+        radiance: Rgb,
+        kind: &'static str,
+        pattern: Option<sky::SkyBrightness>,
+    },
+    /// `illum`: its alternate material (`None` for void).
+    Illum(Option<String>),
+    /// gensky's `skyfunc`.
+    Sky(sky::SkyBrightness),
+    /// A type ircache does not render; an error where a surface uses it.
+    Unsupported(String),
+}
+
+/// Loads a Radiance scene; see the [module documentation](self).
+pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
+    let primitives = parse::read(path)?;
+    let mut modifiers: HashMap<String, (Modifier, SourceLocation)> = HashMap::new();
+    let mut shapes = Vec::new();
+    let mut sources = Vec::new();
+    let mut notes = Vec::new();
+    let mut void_surfaces = 0usize;
+    let mut illum_surfaces = 0usize;
+    for p in &primitives {
+        if is_modifier_type(&p.kind) {
+            let m = modifier(p, &modifiers)?;
+            modifiers.insert(p.id.clone(), (m, p.location.clone()));
+            continue;
+        }
+        let Some(material) = surface_material(p, &modifiers, &mut illum_surfaces)? else {
+            void_surfaces += 1;
+            continue;
+        };
+        if p.kind == "source" {
+            sources.push(source(p, material)?);
+            continue;
+        }
+        let (bsdf, emitter) = match material {
+            Modifier::Bsdf(b) => (b, None),
+            Modifier::Light {
+                radiance,
+                pattern: None,
+                ..
+            } => (black(), Some(radiance)),
+            Modifier::Light { .. } => {
+                return Err(SceneError::at(
+                    p.location.clone(),
+                    format!(
+                        "{} '{}': a patterned light on a surface is not supported (skyfunc \
+                         belongs on a distant 'source')",
+                        p.kind, p.id
+                    ),
+                ))
+            }
+            _ => unreachable!("surface_material resolves the rest"),
+        };
+        let Some(geometry) = geometry(p)? else {
+            notes.push(format!(
+                "{}: {} '{}' has no area and was dropped",
+                p.location, p.kind, p.id
+            ));
+            continue;
+        };
+        shapes.push(ShapeDesc {
+            id: Some(p.id.clone()),
+            geometry,
+            bsdf,
+            emitter,
+            emitter_texture: None,
+            media: Default::default(),
+            location: p.location.clone(),
+        });
+    }
+    if void_surfaces > 0 {
+        notes.push(format!(
+            "{void_surfaces} surface(s) with the modifier 'void' are invisible in Radiance and \
+             were left out"
+        ));
+    }
+    if illum_surfaces > 0 {
+        notes.push(format!(
+            "{illum_surfaces} 'illum' surface(s) render as their alternate material (or not at \
+             all, for void): the light they stand for is traced instead"
+        ));
+    }
+    let emitters = environment(&sources, &mut notes);
+    if shapes.is_empty() {
+        return Err(SceneError::at(
+            SourceLocation::start_of(path),
+            "the scene has no surfaces ircache can render",
+        ));
+    }
+    let sensor = sensor(&shapes, camera, path)?;
+    Ok(SceneDesc {
+        source: path.to_path_buf(),
+        sensor,
+        integrator: IntegratorDesc::default(),
+        shapes,
+        emitters,
+        media: Vec::new(),
+        notes,
+    })
+}
+
+fn black() -> Arc<BsdfDesc> {
+    Arc::new(BsdfDesc::TwoSided {
+        front: Arc::new(BsdfDesc::Diffuse {
+            reflectance: TextureDesc::Constant(Rgb::ZERO),
+        }),
+        back: None,
+    })
+}
+
+fn two_sided(b: BsdfDesc) -> Arc<BsdfDesc> {
+    Arc::new(BsdfDesc::TwoSided {
+        front: Arc::new(b),
+        back: None,
+    })
+}
+
+fn rgb(r: &[f64]) -> Rgb {
+    Rgb::new(r[0] as f32, r[1] as f32, r[2] as f32)
+}
+
+/// Reads a modifier primitive.
+fn modifier(
+    p: &Primitive,
+    known: &HashMap<String, (Modifier, SourceLocation)>,
+) -> Result<Modifier, SceneError> {
+    let err = |m: String| SceneError::at(p.location.clone(), format!("{} '{}': {m}", p.kind, p.id));
+    let reals = |n: &[usize]| -> Result<(), SceneError> {
+        if n.contains(&p.reals.len()) {
+            Ok(())
+        } else {
+            Err(err(format!(
+                "expected {} real arguments, found {}",
+                n.iter()
+                    .map(usize::to_string)
+                    .collect::<Vec<_>>()
+                    .join(" or "),
+                p.reals.len()
+            )))
+        }
+    };
+    if p.kind == "alias" {
+        let target = &p.strings[0];
+        return known.get(target).map(|(m, _)| m.clone()).ok_or_else(|| {
+            err(format!(
+                "refers to '{target}', which is not defined before it"
+            ))
+        });
+    }
+    // A material's own modifier: a pattern on it.
+    let pattern = if p.modifier == "void" {
+        None
+    } else {
+        match known.get(&p.modifier) {
+            None => return Err(err(format!("undefined modifier '{}'", p.modifier))),
+            Some((Modifier::Sky(s), _)) => Some(*s),
+            Some((Modifier::Unsupported(what), at)) => {
+                return Err(err(format!(
+                    "its modifier '{}' ({what}, at {at}) is not supported",
+                    p.modifier
+                )))
+            }
+            Some(_) => {
+                return Err(err(format!(
+                    "its modifier '{}' is a material; only patterns and textures modify materials",
+                    p.modifier
+                )))
+            }
+        }
+    };
+    if pattern.is_some() && !matches!(p.kind.as_str(), "glow" | "light") {
+        return Err(err(
+            "a sky pattern is supported on 'glow' and 'light' materials only".into(),
+        ));
+    }
+    let m = match p.kind.as_str() {
+        "plastic" | "metal" => {
+            reals(&[5])?;
+            let r = &p.reals;
+            if !(0.0..=1.0).contains(&r[3]) || r[4] < 0.0 {
+                return Err(err(format!(
+                    "specularity {} must be in [0, 1] and roughness {} at least 0",
+                    r[3], r[4]
+                )));
+            }
+            Modifier::Bsdf(two_sided(BsdfDesc::Ward {
+                color: rgb(r),
+                specularity: r[3] as f32,
+                roughness: r[4] as f32,
+                metal: p.kind == "metal",
+            }))
+        }
+        "mirror" => {
+            reals(&[3])?;
+            if !p.strings.is_empty() {
+                return Err(err(
+                    "a mirror's alternate material (for virtual sources) is not supported".into(),
+                ));
+            }
+            Modifier::Bsdf(two_sided(BsdfDesc::Conductor {
+                eta: Rgb::ZERO,
+                k: Rgb::ONE,
+                specular_reflectance: rgb(&p.reals),
+            }))
+        }
+        "glass" => {
+            reals(&[3, 4])?;
+            let ior = p.reals.get(3).copied().unwrap_or(1.52);
+            if ior <= 0.0 {
+                return Err(err(format!("refractive index {ior} must be positive")));
+            }
+            Modifier::Bsdf(Arc::new(BsdfDesc::Glass {
+                transmissivity: rgb(&p.reals),
+                ior: ior as f32,
+            }))
+        }
+        "dielectric" => {
+            reals(&[5])?;
+            let r = &p.reals;
+            if r[..3].iter().any(|&t| t < 0.999) {
+                return Err(err(format!(
+                    "absorption inside a dielectric (transmission per unit length {} {} {}) is \
+                     not supported; give 1 1 1",
+                    r[0], r[1], r[2]
+                )));
+            }
+            Modifier::Bsdf(Arc::new(BsdfDesc::Dielectric {
+                int_ior: r[3] as f32,
+                ext_ior: 1.0,
+                specular_reflectance: Rgb::ONE,
+                specular_transmittance: Rgb::ONE,
+            }))
+        }
+        "light" | "glow" => {
+            reals(if p.kind == "light" { &[3] } else { &[4] })?;
+            if p.reals[..3].iter().any(|&v| v < 0.0) {
+                return Err(err("negative radiance".into()));
+            }
+            Modifier::Light {
+                radiance: rgb(&p.reals),
+                kind: if p.kind == "light" { "light" } else { "glow" },
+                pattern,
+            }
+        }
+        "illum" => {
+            reals(&[3])?;
+            Modifier::Illum(p.strings.first().filter(|s| *s != "void").cloned())
+        }
+        "brightfunc" => match sky::SkyBrightness::from_primitive(p) {
+            Some(s) => Modifier::Sky(s.map_err(err)?),
+            None => Modifier::Unsupported(format!(
+                "brightfunc {} (function files are not evaluated; gensky's skybright.cal and \
+                 gendaylit's perezlum.cal are)",
+                p.strings.join(" ")
+            )),
+        },
+        other => Modifier::Unsupported(format!("{other}, not rendered by ircache")),
+    };
+    Ok(m)
+}
+
+/// The material a surface uses, aliases and `illum` resolved; `None` for void.
+fn surface_material(
+    p: &Primitive,
+    known: &HashMap<String, (Modifier, SourceLocation)>,
+    illums: &mut usize,
+) -> Result<Option<Modifier>, SceneError> {
+    if p.modifier == "void" {
+        return Ok(None);
+    }
+    let mut name = p.modifier.clone();
+    for _ in 0..16 {
+        let Some((m, at)) = known.get(&name) else {
+            return Err(SceneError::at(
+                p.location.clone(),
+                format!("{} '{}': undefined modifier '{name}'", p.kind, p.id),
+            ));
+        };
+        match m {
+            Modifier::Illum(alt) if p.kind != "source" => {
+                *illums += 1;
+                match alt {
+                    None => return Ok(None),
+                    Some(a) => name = a.clone(),
+                }
+            }
+            Modifier::Illum(_) => {
+                return Err(SceneError::at(
+                    p.location.clone(),
+                    format!(
+                        "source '{}': its material '{name}' (at {at}) is an illum, which a \
+                         distant source cannot be",
+                        p.id
+                    ),
+                ))
+            }
+            Modifier::Unsupported(what) => {
+                return Err(SceneError::at(
+                    p.location.clone(),
+                    format!(
+                        "{} '{}': its material '{name}' (at {at}) is {what}",
+                        p.kind, p.id
+                    ),
+                ))
+            }
+            Modifier::Sky(_) => {
+                return Err(SceneError::at(
+                    p.location.clone(),
+                    format!(
+                        "{} '{}': '{name}' is a pattern, not a material",
+                        p.kind, p.id
+                    ),
+                ))
+            }
+            other => return Ok(Some(other.clone())),
+        }
+    }
+    Err(SceneError::at(
+        p.location.clone(),
+        format!("{} '{}': illum alternates loop", p.kind, p.id),
+    ))
+}
+
+/// A distant source: direction towards it (unit), full angle in degrees, its material.
+struct Source {
+    direction: DVec3,
+    angle: f64,
+    material: Modifier,
+    location: SourceLocation,
+}
+
+fn source(p: &Primitive, material: Modifier) -> Result<Source, SceneError> {
+    let err = |m: &str| SceneError::at(p.location.clone(), format!("source '{}': {m}", p.id));
+    if p.reals.len() != 4 {
+        return Err(err("expected 4 real arguments: direction x y z and angle"));
+    }
+    let d = p
+        .transform
+        .vector(DVec3::new(p.reals[0], p.reals[1], p.reals[2]));
+    let angle = p.reals[3];
+    if d.length() == 0.0 || angle <= 0.0 {
+        return Err(err("needs a non-zero direction and a positive angle"));
+    }
+    if !matches!(material, Modifier::Light { .. }) {
+        return Err(err(
+            "a distant source must be of a 'light' or 'glow' material",
+        ));
+    }
+    Ok(Source {
+        direction: d.normalize(),
+        angle: angle.min(360.0),
+        material,
+        location: p.location.clone(),
+    })
+}
+
+/// Directional lights for narrow `light` sources; the rest baked into one environment.
+fn environment(sources: &[Source], notes: &mut Vec<String>) -> Vec<EmitterDesc> {
+    let mut emitters = Vec::new();
+    let mut baked = Vec::new();
+    for s in sources {
+        let Modifier::Light {
+            radiance,
+            kind,
+            pattern,
+        } = &s.material
+        else {
+            continue;
+        };
+        let half = (s.angle * 0.5).to_radians();
+        let solid_angle = 2.0 * std::f64::consts::PI * (1.0 - half.cos());
+        if *kind == "light" && pattern.is_none() && s.angle < DIRECTIONAL_MAX_ANGLE {
+            emitters.push(EmitterDesc::Directional {
+                direction: (-s.direction).as_vec3(),
+                irradiance: *radiance * solid_angle as f32,
+            });
+            notes.push(format!(
+                "{}: the {}° source is a directional light of the same irradiance (its \
+                 shadows are sharp)",
+                s.location, s.angle
+            ));
+        } else {
+            baked.push((s.direction, half.cos(), *radiance, *pattern));
+        }
+    }
+    if baked.is_empty() {
+        return emitters;
+    }
+    if let [(_, cos, radiance, None)] = baked[..] {
+        if cos <= -1.0 + 1e-12 {
+            emitters.push(EmitterDesc::Constant { radiance });
+            return emitters;
+        }
+    }
+    let (w, h) = (ENVIRONMENT_WIDTH, ENVIRONMENT_WIDTH / 2);
+    let mut image = ircache_image::Image::new(w, h);
+    for j in 0..h {
+        let theta = std::f64::consts::PI * j as f64 / (h - 1) as f64;
+        for i in 0..w {
+            let phi = 2.0 * std::f64::consts::PI * (i as f64 + 0.5) / w as f64;
+            // The inverse of the environment's lat-long mapping (lights/environment.rs).
+            let d = DVec3::new(
+                phi.sin() * theta.sin(),
+                theta.cos(),
+                -phi.cos() * theta.sin(),
+            );
+            let mut sum = Rgb::ZERO;
+            for (dir, cos, radiance, pattern) in &baked {
+                if d.dot(*dir) >= *cos {
+                    let k = pattern.map_or(1.0, |p| p.brightness(d));
+                    sum += *radiance * k as f32;
+                }
+            }
+            image.set(i, j, sum);
+        }
+    }
+    emitters.push(EmitterDesc::Envmap {
+        path: "(Radiance sources baked)".into(),
+        image: Arc::new(image),
+        to_world: Mat4::IDENTITY,
+        scale: 1.0,
+    });
+    emitters
+}
+
+fn v3(v: DVec3) -> Vec3 {
+    v.as_vec3()
+}
+
+/// The surface's geometry in world space; `None` when it has no area.
+fn geometry(p: &Primitive) -> Result<Option<Geometry>, SceneError> {
+    let err = |m: String| SceneError::at(p.location.clone(), format!("{} '{}': {m}", p.kind, p.id));
+    let expect = |n: usize| -> Result<(), SceneError> {
+        if p.reals.len() == n {
+            Ok(())
+        } else {
+            Err(err(format!(
+                "expected {n} real arguments, found {}",
+                p.reals.len()
+            )))
+        }
+    };
+    let r = &p.reals;
+    let t = &p.transform;
+    let point = |i: usize| t.point(DVec3::new(r[i], r[i + 1], r[i + 2]));
+    match p.kind.as_str() {
+        "polygon" => {
+            if r.len() < 9 || !r.len().is_multiple_of(3) {
+                return Err(err(format!(
+                    "expected 3 real arguments per vertex and at least 3 vertices, found {}",
+                    r.len()
+                )));
+            }
+            let mut pts: Vec<DVec3> = (0..r.len() / 3).map(|k| point(3 * k)).collect();
+            if t.reverse {
+                pts.reverse();
+            }
+            Ok(polygon(&pts).map(Geometry::Mesh))
+        }
+        "sphere" | "bubble" => {
+            expect(4)?;
+            let radius = r[3] * t.scale;
+            if radius == 0.0 {
+                return Ok(None);
+            }
+            Ok(Some(Geometry::Sphere {
+                center: v3(point(0)),
+                radius: radius.abs() as f32,
+                // A negative radius turns a sphere inside out, as a bubble.
+                flip_normals: (p.kind == "bubble") != (radius < 0.0),
+                orientation: Mat3::IDENTITY,
+            }))
+        }
+        "cylinder" | "tube" | "cone" | "cup" => {
+            let cylinder = matches!(p.kind.as_str(), "cylinder" | "tube");
+            expect(if cylinder { 7 } else { 8 })?;
+            let (r0, r1) = if cylinder { (r[6], r[6]) } else { (r[6], r[7]) };
+            let inward = matches!(p.kind.as_str(), "tube" | "cup");
+            if r0 < 0.0 || r1 < 0.0 {
+                return Err(err("negative radius".into()));
+            }
+            let (a, b) = (point(0), point(3));
+            if (a - b).length() == 0.0 || (r0 == 0.0 && r1 == 0.0) {
+                return Ok(None);
+            }
+            Ok(Some(Geometry::Mesh(cone(
+                a,
+                b,
+                r0 * t.scale,
+                r1 * t.scale,
+                inward,
+            ))))
+        }
+        "ring" => {
+            expect(8)?;
+            let n = t.vector(DVec3::new(r[3], r[4], r[5]));
+            let (r0, r1) = (r[6] * t.scale, r[7] * t.scale);
+            if n.length() == 0.0 || r0 < 0.0 || r1 <= r0 {
+                return Err(err(format!(
+                    "needs a non-zero normal and radii 0 ≤ r0 < r1, found {} {}",
+                    r[6], r[7]
+                )));
+            }
+            Ok(Some(Geometry::Mesh(ring(point(0), n.normalize(), r0, r1))))
+        }
+        "mesh" | "instance" => Err(err(
+            "Radiance's compiled meshes (.rtm) and octree instances are not read; give the \
+             geometry as polygons or load the model's OBJ or PLY through a Mitsuba scene"
+                .into(),
+        )),
+        other => Err(err(format!("unknown surface type '{other}'"))),
+    }
+}
+
+/// An orthonormal pair perpendicular to unit `n`.
+fn basis(n: DVec3) -> (DVec3, DVec3) {
+    let a = if n.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+    let u = n.cross(a).normalize();
+    (u, n.cross(u))
+}
+
+/// A cone (or cylinder) from `a` (radius `r0`) to `b` (radius `r1`), normals outward or inward,
+/// the polygon radii enlarged so the lateral area is the exact cone's.
+fn cone(a: DVec3, b: DVec3, r0: f64, r1: f64, inward: bool) -> TriangleMesh {
+    let n = SEGMENTS;
+    let nf = f64::from(n);
+    let k = std::f64::consts::PI / (nf * (std::f64::consts::PI / nf).sin());
+    let axis = (b - a).normalize();
+    let len = (b - a).length();
+    let (u, v) = basis(axis);
+    // Outward normal of the slanted side: radial tilted by the radius change.
+    let slope = (r0 - r1) / len;
+    let mut mesh = TriangleMesh::default();
+    let mut normals = Vec::new();
+    for i in 0..n {
+        let phi = 2.0 * std::f64::consts::PI * f64::from(i) / nf;
+        let radial = u * phi.cos() + v * phi.sin();
+        let normal = (radial + axis * slope).normalize();
+        for (c, r) in [(a, r0), (b, r1)] {
+            mesh.positions.push(v3(c + radial * (r * k)));
+            normals.push(v3(if inward { -normal } else { normal }));
+        }
+    }
+    for i in 0..n {
+        let j = (i + 1) % n;
+        let (a0, b0, a1, b1) = (2 * i, 2 * i + 1, 2 * j, 2 * j + 1);
+        // Counter-clockwise seen from outside: a0, a1, b1 and a0, b1, b0.
+        let mut tris = Vec::new();
+        if r0 > 0.0 {
+            tris.push([a0, a1, b1]);
+        }
+        if r1 > 0.0 {
+            tris.push([a0, b1, b0]);
+        }
+        for mut t in tris {
+            if inward {
+                t.swap(1, 2);
+            }
+            mesh.indices.push(t);
+        }
+    }
+    mesh.normals = Some(normals);
+    mesh
+}
+
+/// A ring (annulus, or disc when `r0` = 0) at `c` facing unit `n`, radii enlarged so the area is
+/// the exact ring's.
+fn ring(c: DVec3, n: DVec3, r0: f64, r1: f64) -> TriangleMesh {
+    let segs = SEGMENTS;
+    let nf = f64::from(segs);
+    let k = (2.0 * std::f64::consts::PI / (nf * (2.0 * std::f64::consts::PI / nf).sin())).sqrt();
+    let (u, v) = basis(n);
+    let mut mesh = TriangleMesh::default();
+    for i in 0..segs {
+        let phi = 2.0 * std::f64::consts::PI * f64::from(i) / nf;
+        let radial = u * phi.cos() + v * phi.sin();
+        mesh.positions.push(v3(c + radial * (r0 * k)));
+        mesh.positions.push(v3(c + radial * (r1 * k)));
+    }
+    for i in 0..segs {
+        let j = (i + 1) % segs;
+        let (i0, o0, i1, o1) = (2 * i, 2 * i + 1, 2 * j, 2 * j + 1);
+        // u × v = n: increasing φ turns counter-clockwise seen from the front.
+        mesh.indices.push([o0, o1, i1]);
+        if r0 > 0.0 {
+            mesh.indices.push([o0, i1, i0]);
+        }
+    }
+    mesh
+}
+
+/// Triangulates a planar polygon by ear clipping (its vertex order kept, so the triangles face
+/// where it faces); `None` when it has no area.
+fn polygon(pts: &[DVec3]) -> Option<TriangleMesh> {
+    // Newell's normal: the polygon's area vector.
+    let mut normal = DVec3::ZERO;
+    for (k, p) in pts.iter().enumerate() {
+        let q = pts[(k + 1) % pts.len()];
+        normal += p.cross(q);
+    }
+    if normal.length() <= 1e-12 * bounds_scale(pts).powi(2) {
+        return None;
+    }
+    let normal = normal.normalize();
+    let (u, v) = basis(normal);
+    let flat: Vec<(f64, f64)> = pts.iter().map(|p| (p.dot(u), p.dot(v))).collect();
+    let mut mesh = TriangleMesh {
+        positions: pts.iter().map(|&p| v3(p)).collect(),
+        ..TriangleMesh::default()
+    };
+    let mut left: Vec<u32> = (0..pts.len() as u32).collect();
+    let cross = |a: (f64, f64), b: (f64, f64), c: (f64, f64)| {
+        (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)
+    };
+    // Closed: a vertex on the ear's new edge (a reflex corner collinear with it) blocks it.
+    let inside = |p: (f64, f64), a, b, c| {
+        cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
+    };
+    let mut guard = 0;
+    while left.len() > 3 && guard < 4 * pts.len() * pts.len() {
+        guard += 1;
+        let m = left.len();
+        let mut clipped = false;
+        for k in 0..m {
+            let (ia, ib, ic) = (left[(k + m - 1) % m], left[k], left[(k + 1) % m]);
+            let (a, b, c) = (flat[ia as usize], flat[ib as usize], flat[ic as usize]);
+            if cross(a, b, c) <= 0.0 {
+                continue;
+            }
+            let blocked = left.iter().any(|&q| {
+                q != ia && q != ib && q != ic && {
+                    let p = flat[q as usize];
+                    p != a && p != b && p != c && inside(p, a, b, c)
+                }
+            });
+            if !blocked {
+                mesh.indices.push([ia, ib, ic]);
+                left.remove(k);
+                clipped = true;
+                break;
+            }
+        }
+        if !clipped {
+            break;
+        }
+    }
+    if left.len() > 3 {
+        // Not simple (self-intersecting): a fan over what is left.
+        for k in 1..left.len() - 1 {
+            mesh.indices.push([left[0], left[k], left[k + 1]]);
+        }
+    } else if left.len() == 3 {
+        mesh.indices.push([left[0], left[1], left[2]]);
+    }
+    // Drop slivers of collinear vertices.
+    mesh.indices.retain(|t| {
+        let [a, b, c] = t.map(|i| flat[i as usize]);
+        cross(a, b, c).abs() > 1e-12 * bounds_scale(pts).powi(2)
+    });
+    (!mesh.indices.is_empty()).then_some(mesh)
+}
+
+fn bounds_scale(pts: &[DVec3]) -> f64 {
+    let mut lo = DVec3::splat(f64::INFINITY);
+    let mut hi = DVec3::splat(f64::NEG_INFINITY);
+    for p in pts {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    (hi - lo).length()
+}
+
+/// The camera: the Radiance view if one was given, else the OBJ-style camera settings or the
+/// whole scene framed from +y.
+fn sensor(shapes: &[ShapeDesc], camera: &ObjCamera, path: &Path) -> Result<SensorDesc, SceneError> {
+    let (max_w, max_h) = (
+        camera.width.unwrap_or(DEFAULT_SIZE).max(1),
+        camera.height.unwrap_or(DEFAULT_SIZE).max(1),
+    );
+    let view = match &camera.radiance_view {
+        Some(text) => View::parse(text, Path::new("."))
+            .map_err(|e| SceneError::at(SourceLocation::start_of(path), format!("--view: {e}")))?,
+        None => default_view(shapes, camera),
+    };
+    let (width, height) =
+        if camera.width.is_some() && camera.height.is_some() && camera.radiance_view.is_none() {
+            (max_w, max_h)
+        } else {
+            view.fit(max_w, max_h)
+        };
+    let dir = view.direction.normalize();
+    let right = dir.cross(view.up).normalize();
+    let up = right.cross(dir);
+    let to_world = Mat4::from_cols(
+        v3(-right).extend(0.0),
+        v3(up).extend(0.0),
+        v3(dir).extend(0.0),
+        v3(view.position).extend(1.0),
+    );
+    let scale = bounds(shapes).1.max(1e-6);
+    let (to_world, projection, fov) = if view.parallel {
+        // Orthographic film [−1, 1] × [−1/aspect, 1/aspect] scaled to the view's width.
+        let s = (view.horizontal * 0.5) as f32;
+        (
+            to_world * Mat4::from_scale(Vec3::splat(s)),
+            Projection::Orthographic,
+            1.0,
+        )
+    } else {
+        (to_world, Projection::Pinhole, view.horizontal as f32)
+    };
+    let distance = (bounds(shapes).0 - v3(view.position)).length() + scale;
+    Ok(SensorDesc {
+        to_world,
+        fov_degrees: fov,
+        fov_axis: FovAxis::X,
+        near_clip: 0.01f32.min(1e-4 * distance),
+        far_clip: 10_000f32.max(10.0 * distance),
+        film: FilmDesc {
+            width,
+            height,
+            filter: FilterDesc::Box,
+        },
+        spp: DEFAULT_SPP,
+        sampler: "multijitter".into(),
+        sampler_seed: 0,
+        jitter: true,
+        medium: None,
+        projection,
+    })
+}
+
+/// Centre and radius of the scene's bounding sphere.
+fn bounds(shapes: &[ShapeDesc]) -> (Vec3, f32) {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for s in shapes {
+        match &s.geometry {
+            Geometry::Mesh(m) => {
+                for p in &m.positions {
+                    lo = lo.min(*p);
+                    hi = hi.max(*p);
+                }
+            }
+            Geometry::Sphere { center, radius, .. } => {
+                lo = lo.min(*center - Vec3::splat(*radius));
+                hi = hi.max(*center + Vec3::splat(*radius));
+            }
+        }
+    }
+    ((lo + hi) * 0.5, (hi - lo).length() * 0.5)
+}
+
+/// Without a view: `eye`, `target`, `up` and `fov` where given, the rest framing the scene from
+/// Radiance's default direction (+y, up +z).
+fn default_view(shapes: &[ShapeDesc], camera: &ObjCamera) -> View {
+    let (centre, radius) = bounds(shapes);
+    let fov = f64::from(camera.fov.unwrap_or(45.0).clamp(1e-3, 179.0));
+    let fit = f64::from(radius.max(1e-6)) / (fov.to_radians() * 0.5).sin();
+    let d = |v: Vec3| v.as_dvec3();
+    let up = camera.up.map_or(DVec3::Z, d);
+    let centre = d(centre);
+    let (eye, target) = match (camera.eye.map(d), camera.target.map(d)) {
+        (Some(e), Some(t)) => (e, t),
+        (Some(e), None) => (e, centre),
+        (None, Some(t)) => (t - DVec3::Y * ((centre - t).length() + fit), t),
+        (None, None) => (centre - DVec3::Y * fit, centre),
+    };
+    let w = f64::from(camera.width.unwrap_or(DEFAULT_SIZE));
+    let h = f64::from(camera.height.unwrap_or(DEFAULT_SIZE));
+    // The fov is vertical, as for OBJ scenes; the horizontal one follows from the size.
+    let vertical = fov;
+    let horizontal = 2.0 * ((fov.to_radians() * 0.5).tan() * w / h).atan().to_degrees();
+    let mut direction = target - eye;
+    if direction.length() == 0.0 {
+        direction = DVec3::Y;
+    }
+    let up = if up.cross(direction).length() <= 1e-9 * direction.length() {
+        DVec3::X
+    } else {
+        up
+    };
+    View {
+        parallel: false,
+        position: eye,
+        direction,
+        up,
+        horizontal: horizontal.min(179.0),
+        vertical,
+    }
+}

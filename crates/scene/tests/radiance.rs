@@ -1,0 +1,284 @@
+//! The Radiance scene loader: geometry and transforms against hand-worked values, materials and
+//! sources as documented, views as rpict sizes them, and errors that name the place.
+
+use ircache_math::{Rgb, Vec3};
+use ircache_scene::obj_scene::ObjCamera;
+use ircache_scene::radiance::sky::SkyBrightness;
+use ircache_scene::radiance::view::View;
+use ircache_scene::{BsdfDesc, EmitterDesc, Geometry, SceneDesc, SceneError};
+use std::path::{Path, PathBuf};
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ircache-rad-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn load(d: &Path, files: &[(&str, &str)]) -> Result<SceneDesc, SceneError> {
+    for (name, text) in files {
+        std::fs::write(d.join(name), text).unwrap();
+    }
+    ircache_scene::load_scene(&d.join(files[0].0), &[], &ObjCamera::default())
+}
+
+fn area(desc: &SceneDesc) -> f64 {
+    desc.shapes
+        .iter()
+        .map(|s| match &s.geometry {
+            Geometry::Mesh(m) => ircache_scene::shapes::mesh_area(m),
+            Geometry::Sphere { radius, .. } => {
+                4.0 * std::f64::consts::PI * f64::from(*radius).powi(2)
+            }
+        })
+        .sum()
+}
+
+const GREY: &str = "void plastic grey\n0\n0\n5 .5 .5 .5 0 0\n";
+
+#[test]
+fn polygons_keep_their_area_and_front_concave_ones_included() {
+    // An L-shaped (concave) polygon of area 3, counter-clockwise seen from +z.
+    let d = dir("poly");
+    let desc = load(
+        &d,
+        &[(
+            "l.rad",
+            &format!("{GREY}grey polygon l\n0\n0\n18 0 0 0 2 0 0 2 1 0 1 1 0 1 2 0 0 2 0\n"),
+        )],
+    )
+    .unwrap();
+    assert!((area(&desc) - 3.0).abs() < 1e-5, "area {}", area(&desc));
+    let Geometry::Mesh(m) = &desc.shapes[0].geometry else {
+        panic!()
+    };
+    for t in 0..m.indices.len() {
+        let n = ircache_scene::shapes::triangle_normal(m, t);
+        assert!((n - Vec3::Z).length() < 1e-6, "triangle {t} faces {n}");
+    }
+    // A wall with a window cut in by a seam (Radiance's way of writing holes): 4 × 3 less 2 × 1.5.
+    let desc = load(
+        &d,
+        &[(
+            "w.rad",
+            &format!(
+                "{GREY}grey polygon w\n0\n0\n30 0 0 0 0 0 3 4 0 3 4 0 0 3 0 0.9 3 0 2.4 1 0 2.4 \
+                 1 0 0.9 3 0 0.9 4 0 0\n"
+            ),
+        )],
+    )
+    .unwrap();
+    assert!((area(&desc) - 9.0).abs() < 1e-5, "area {}", area(&desc));
+}
+
+#[test]
+fn xform_transforms_in_the_order_written_and_mirrors_reverse_polygons() {
+    let d = dir("xform");
+    let unit = format!("{GREY}grey polygon sq\n0\n0\n12 0 0 0 1 0 0 1 1 0 0 1 0\n");
+    // Rotate 90° about z (x → y), then move by (5, 0, 0): (1, 0, 0) lands on (5, 1, 0).
+    let desc = load(
+        &d,
+        &[
+            ("main.rad", "!xform -n a -rz 90 -t 5 0 0 sq.rad\n!xform -mz sq.rad\n!xform -s 2 -a 3 -t 10 0 0 sq.rad\n"),
+            ("sq.rad", &unit),
+        ],
+    )
+    .unwrap();
+    let mesh = |i: usize| match &desc.shapes[i].geometry {
+        Geometry::Mesh(m) => m.clone(),
+        Geometry::Sphere { .. } => panic!(),
+    };
+    assert_eq!(desc.shapes[0].id.as_deref(), Some("a.sq"));
+    let m = mesh(0);
+    assert!(m
+        .positions
+        .iter()
+        .any(|p| (*p - Vec3::new(5.0, 1.0, 0.0)).length() < 1e-5));
+    assert!(m
+        .positions
+        .iter()
+        .any(|p| (*p - Vec3::new(4.0, 1.0, 0.0)).length() < 1e-5));
+    // A mirror through z = 0 reverses the vertex order (as xform writes it), so the square's
+    // front turns to −z as a mirror image's does.
+    let m = mesh(1);
+    assert!((ircache_scene::shapes::triangle_normal(&m, 0) - Vec3::NEG_Z).length() < 1e-6);
+    // -a 3: copies at x = 0, 10, 20, each scaled by 2 (area 4).
+    assert_eq!(desc.shapes.len(), 5);
+    for (k, s) in desc.shapes[2..].iter().enumerate() {
+        let Geometry::Mesh(m) = &s.geometry else {
+            panic!()
+        };
+        let min_x = m
+            .positions
+            .iter()
+            .map(|p| p.x)
+            .fold(f32::INFINITY, f32::min);
+        assert!(
+            (min_x - 10.0 * k as f32).abs() < 1e-4,
+            "copy {k} at {min_x}"
+        );
+        assert!((ircache_scene::shapes::mesh_area(m) - 4.0).abs() < 1e-4);
+    }
+}
+
+#[test]
+fn cones_cylinders_and_rings_have_the_exact_areas() {
+    let d = dir("quadrics");
+    let desc = load(
+        &d,
+        &[(
+            "q.rad",
+            &format!(
+                "{GREY}grey cylinder c\n0\n0\n7 0 0 0 0 0 2 0.5\n\
+                 grey cone k\n0\n0\n8 0 0 0 0 0 1 1 0\n\
+                 grey ring r\n0\n0\n8 0 0 0 0 0 1 0.5 1\n\
+                 grey sphere s\n0\n0\n4 0 0 5 2\n"
+            ),
+        )],
+    )
+    .unwrap();
+    let pi = std::f64::consts::PI;
+    let expect = [
+        2.0 * pi * 0.5 * 2.0,   // cylinder
+        pi * 1.0 * 2f64.sqrt(), // cone of radius 1, height 1: π r l
+        pi * (1.0 - 0.25),      // ring
+        4.0 * pi * 4.0,         // sphere
+    ];
+    for (s, e) in desc.shapes.iter().zip(expect) {
+        let a = match &s.geometry {
+            Geometry::Mesh(m) => ircache_scene::shapes::mesh_area(m),
+            Geometry::Sphere { radius, .. } => 4.0 * pi * f64::from(*radius).powi(2),
+        };
+        assert!((a - e).abs() < 2e-3 * e, "{:?}: {a} against {e}", s.id);
+    }
+}
+
+#[test]
+fn materials_and_sources_become_what_the_documentation_says() {
+    let d = dir("materials");
+    let desc = load(
+        &d,
+        &[(
+            "m.rad",
+            "void metal steel\n0\n0\n5 .8 .7 .6 .9 .1\n\
+             void glass pane\n0\n0\n3 .96 .96 .96\n\
+             void light lamp\n0\n0\n3 10 20 30\n\
+             void illum port\n1 steel\n0\n3 1 1 1\n\
+             void alias steel2 steel\n\
+             steel2 sphere ball\n0\n0\n4 0 0 0 1\n\
+             pane polygon window\n0\n0\n12 0 0 0 1 0 0 1 1 0 0 1 0\n\
+             lamp polygon panel\n0\n0\n12 0 0 3 0 1 3 1 1 3 1 0 3\n\
+             port polygon p2\n0\n0\n12 0 0 4 1 0 4 1 1 4 0 1 4\n\
+             void polygon invisible\n0\n0\n12 0 0 5 1 0 5 1 1 5 0 1 5\n\
+             lamp source sun\n0\n0\n4 0 0 1 0.5\n",
+        )],
+    )
+    .unwrap();
+    assert_eq!(desc.shapes.len(), 4, "the void polygon is left out");
+    assert!(desc.notes.iter().any(|n| n.contains("'void'")));
+    assert!(desc.notes.iter().any(|n| n.contains("illum")));
+    let BsdfDesc::TwoSided { front, .. } = &*desc.shapes[0].bsdf else {
+        panic!("{:?}", desc.shapes[0].bsdf)
+    };
+    assert!(
+        matches!(**front, BsdfDesc::Ward { metal: true, specularity, roughness, .. } if specularity == 0.9 && roughness == 0.1)
+    );
+    assert!(matches!(*desc.shapes[1].bsdf, BsdfDesc::Glass { ior, .. } if ior == 1.52));
+    assert_eq!(desc.shapes[2].emitter, Some(Rgb::new(10.0, 20.0, 30.0)));
+    // The illum renders as its alternate, the metal.
+    assert!(
+        matches!(&*desc.shapes[3].bsdf, BsdfDesc::TwoSided { front, .. } if matches!(**front, BsdfDesc::Ward { metal: true, .. }))
+    );
+    // A 0.5° light source: a directional light with the irradiance L·Ω, Ω = 2π(1 − cos 0.25°).
+    let omega = (2.0 * std::f64::consts::PI * (1.0 - 0.25f64.to_radians().cos())) as f32;
+    let [EmitterDesc::Directional {
+        direction,
+        irradiance,
+    }] = desc.emitters.as_slice()
+    else {
+        panic!("{:?}", desc.emitters)
+    };
+    assert!((*direction - Vec3::NEG_Z).length() < 1e-6);
+    assert!((irradiance.g / (20.0 * omega) - 1.0).abs() < 1e-3);
+}
+
+#[test]
+fn errors_name_the_place_and_what_was_expected() {
+    let d = dir("errors");
+    let cases: [(&str, &str); 7] = [
+        (
+            "void plastic p\n0\n0\n4 .5 .5 .5 0\n",
+            "m.rad:1:1: plastic 'p': expected 5 real arguments, found 4",
+        ),
+        (
+            "nothing polygon x\n0\n0\n9 0 0 0 1 0 0 0 1 0\n",
+            "m.rad:1:1: polygon 'x': undefined modifier 'nothing'",
+        ),
+        (
+            "void brightfunc f\n2 x my.cal\n0\n0\nf plastic p\n0\n0\n5 .5 .5 .5 0 0\n",
+            "m.rad:5:1: plastic 'p': its modifier 'f' (brightfunc x my.cal",
+        ),
+        (
+            "void trans t\n0\n0\n7 .5 .5 .5 0 0 .5 0\nt sphere s\n0\n0\n4 0 0 0 1\n",
+            "m.rad:5:1: sphere 's': its material 't'",
+        ),
+        (
+            "void plastic p\n0\n0\n5 .5 .5 x 0 0\n",
+            "m.rad:4:9: expected a real argument, found \"x\"",
+        ),
+        (
+            "!xform -q 3 nothing.rad\n",
+            "m.rad:1:1: !xform: unknown or unsupported option \"-q\"",
+        ),
+        ("!xform missing.rad\n", "m.rad:1:1: cannot read"),
+    ];
+    for (text, expect) in cases {
+        let e = load(&d, &[("m.rad", text)]).unwrap_err().to_string();
+        assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
+    }
+}
+
+#[test]
+fn views_read_as_rpict_and_pictures_fit_with_square_pixels() {
+    let v = View::parse(
+        "-vtv -vp 1 2 3 -vd 0 -1 0 -vu 0 0 1 -vh 90 -vv 53.13010235",
+        Path::new("."),
+    )
+    .unwrap();
+    assert_eq!(v.position.y, 2.0);
+    // tan 45° / tan 26.565° = 2: a 512 × 512 box holds 512 × 256.
+    assert_eq!(v.fit(512, 512), (512, 256));
+    assert_eq!(v.fit(300, 100), (200, 100));
+    assert!(View::parse("-vth -vh 180", Path::new("."))
+        .unwrap_err()
+        .contains("fisheye"));
+    assert!(View::parse("-vd 0 0 1 -vu 0 0 2", Path::new("."))
+        .unwrap_err()
+        .contains("parallel"));
+    // A view file's rvu line.
+    let d = dir("view");
+    std::fs::write(
+        d.join("v.vf"),
+        "rvu -vtv -vp 0 0 1.5 -vd 1 0 0 -vh 60 -vv 40\n",
+    )
+    .unwrap();
+    let v = View::parse("v.vf", &d).unwrap();
+    assert_eq!((v.direction.x, v.horizontal, v.vertical), (1.0, 60.0, 40.0));
+}
+
+#[test]
+fn skybright_follows_the_cal_file() {
+    // Overcast: zenith · (1 + 2 D_z)/3 above, blended into the ground below the horizon.
+    let over = SkyBrightness::Cie {
+        kind: 2,
+        zenith: 9.0,
+        ground: 2.0,
+        norm: 1.0,
+        sun: ircache_math::DVec3::Z,
+    };
+    let up = over.brightness(ircache_math::DVec3::Z);
+    let w = 2.01f64.powi(10);
+    let expect = (w * 9.0 + 2.0 / w) / (w + 1.0 / w);
+    assert!((up - expect).abs() < 1e-9);
+    let down = over.brightness(-ircache_math::DVec3::Z);
+    assert!((down - 2.0).abs() < 1e-6, "{down}");
+}
