@@ -180,32 +180,55 @@ fn an_area_light_behind_a_pane_matches_its_quadrature() {
 }
 
 #[test]
-fn a_sky_behind_a_pane_is_left_to_the_light_samples() {
-    use ircache_render::irradiance_cache::environment::{glazing_note, held_environment};
+fn records_hold_a_sky_seen_through_a_pane() {
+    use ircache_render::irradiance_cache::environment::{held_environment, HeldEnvironment};
     use ircache_render::irradiance_cache::params::CachedEnvironment;
-    // A floor under a pane and a constant sky: records cannot hold the sky seen through the
-    // pane, so every mode leaves it to the light samples (an explicit one says so).
+    use ircache_render::irradiance_cache::points::{irradiance_at_points, PointMethod};
+    use ircache_render::irradiance_cache::IcParams;
+    // A floor under a pane and a constant sky L: the gathers cross the pane, so the records
+    // hold the sky through it and the pane's reflection of the floor. Over infinite planes, at
+    // one bounce, E = π L T̄ (1 + ρ R̄), T̄ and R̄ = 1 − T̄ the pane's cosine-weighted means.
+    let sky = 0.8f32;
     let desc = scene(
         sensor(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, 40.0, 4, 1),
         common::path(3),
         vec![floor(), pane(1.0)],
         vec![EmitterDesc::Constant {
-            radiance: Rgb::new(0.3, 0.4, 0.6),
+            radiance: Rgb::splat(sky),
         }],
     );
     let built = Scene::build(&desc).expect("scene builds");
-    for mode in [
-        CachedEnvironment::Auto,
-        CachedEnvironment::Glossy,
-        CachedEnvironment::All,
-    ] {
-        assert_eq!(
-            held_environment(&built, mode),
-            ircache_render::irradiance_cache::environment::HeldEnvironment::None
-        );
-        assert_eq!(
-            glazing_note(&built, mode).is_some(),
-            mode != CachedEnvironment::Auto
+    assert_eq!(
+        held_environment(&built, CachedEnvironment::All),
+        HeldEnvironment::All
+    );
+    let n = 20_000;
+    let t_mean: f64 = (0..n)
+        .map(|i| {
+            let mu = (i as f64 + 0.5) / n as f64;
+            sheet_transmittance(mu) * 2.0 * mu / n as f64
+        })
+        .sum();
+    let expected =
+        std::f64::consts::PI * f64::from(sky) * t_mean * (1.0 + f64::from(RHO) * (1.0 - t_mean));
+    let params = IcParams {
+        bounces: 1,
+        cached_environment: CachedEnvironment::All,
+        photons: Some(0),
+        ..IcParams::default()
+    };
+    let queries = [
+        (Vec3::new(0.0, 1e-3, 0.0), Vec3::Y),
+        (Vec3::new(3.0, 1e-3, -2.0), Vec3::Y),
+    ];
+    let (results, _) = irradiance_at_points(&built, &params, &queries, PointMethod::Cache, 64, 3);
+    for r in &results {
+        // Lambertian: the light samples leave the held sky to the records.
+        assert_eq!(r.direct, Rgb::ZERO, "{r:?}");
+        let got = f64::from(r.indirect.g);
+        assert!(
+            (got / expected - 1.0).abs() < 0.02,
+            "records {got} against {expected}"
         );
     }
 }

@@ -52,6 +52,13 @@ pub trait IndirectSource {
         HeldEnvironment::None
     }
 
+    /// Whether the irradiance [`Self::irradiance`] just gave at `sp` holds the environment's
+    /// light (its direct light included): where records hold all of it, unless the source
+    /// answered from something that holds only light after a bounce (a photon map).
+    fn irradiance_holds_environment(&self, sp: &ShadingPoint) -> bool {
+        self.held_environment(sp) == HeldEnvironment::All
+    }
+
     /// Radiance assumed beyond the last bounce (Radiance's ambient value): what the Lambertian
     /// part reflects at a vertex where the depth runs out.
     fn ambient(&self) -> Rgb {
@@ -307,7 +314,7 @@ pub fn trace_path_deferring(
                         l += beta * k * e * (INV_PI * scene.perturbed_mean_shadowing(it));
                         strategy = BsdfStrategy::Glossy;
                         lambertian_served = true;
-                        if source.held_environment(sp) == HeldEnvironment::All {
+                        if source.irradiance_holds_environment(sp) {
                             environment_served.lambertian = k;
                         }
                     }

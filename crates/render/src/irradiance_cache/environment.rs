@@ -20,7 +20,10 @@
 //! doubles. So `auto` is `glossy` where the environment is smooth at a gather's resolution: a
 //! sun in the map holds most of the power in a tiny solid angle that few gather rays find (each
 //! record would be wrong by its share, a blotch); light samples find it. The decision is per
-//! scene, by the environment's relative variance over the sphere.
+//! scene, by the environment's relative variance over the sphere. Where little of the sky's
+//! light reaches the surfaces in view (a room lit through windows), `auto` is `all`: there the
+//! light samples of the sky that get through are rare and bright, and a record's gather, which
+//! crosses window panes as paths do, holds that light smoothly ([`environment_visibility`]).
 
 use super::params::CachedEnvironment;
 use crate::scene::Scene;
@@ -43,16 +46,71 @@ pub enum HeldEnvironment {
 /// holding half the power or more is far above (`sky-glossy`'s sky with its sun ≈ 950).
 pub const MAX_RELATIVE_VARIANCE: f64 = 4.0;
 
-/// Which records hold the environment's light under `mode`: for `auto`, radiance records where
-/// the environment's relative variance over the sphere is at most [`MAX_RELATIVE_VARIANCE`].
-/// None without an environment, and none in a scene with window panes or masks (see
-/// [`glazing_note`]).
+/// Share of the environment's light that must reach the surfaces in view for `auto` to leave
+/// the Lambertian parts' share of it to light samples. Below it (a room lit by the sky through
+/// windows: most light samples of the sky end on a wall or a frame), the samples that get
+/// through are rare and bright, speckles in the image, and the records hold all of it, as
+/// Radiance's ambient rays find the sky through `glass`. Measured (BENCHMARKS.md, blurred
+/// relMSE_trim of `all` against `glossy`, two seeds): the interior of `scenes/radiance-office`
+/// (visibility 0.03) 0.47×, `sunlit-window` (0.41, its glazed roof) 0.25×; `bumps` (0.72) 1.43×,
+/// `sky-glossy` (0.83) 1.2×.
+pub const MIN_VISIBILITY_FOR_LIGHT_SAMPLES: f64 = 0.5;
+
+/// Camera rays and light samples [`environment_visibility`] spends.
+const VISIBILITY_POINTS: usize = 1024;
+const VISIBILITY_SAMPLES: usize = 4;
+
+/// The share of the environment's light (by luminance, cosine-weighted) that reaches the
+/// surfaces the camera sees, window panes and masks passing what they transmit: estimated from
+/// the environment's own light samples at the first hits of random camera rays. 1 where no
+/// surface is in view or the environment sends nothing.
+#[must_use]
+pub fn environment_visibility(scene: &Scene) -> f64 {
+    use ircache_math::{Rng, Vec2};
+    let mut rng = Rng::new(0x656e_7669_7369, 0);
+    let (mut reached, mut total) = (0.0f64, 0.0f64);
+    for _ in 0..VISIBILITY_POINTS {
+        let ray = scene.camera.generate_ray(rng.next_2d());
+        let Some(it) = scene.intersect(&ray) else {
+            continue;
+        };
+        let n = if it.frame.n.dot(ray.d) < 0.0 {
+            it.frame.n
+        } else {
+            -it.frame.n
+        };
+        for _ in 0..VISIBILITY_SAMPLES {
+            let u_sel = rng.next_f32();
+            let u = Vec2::new(rng.next_f32(), rng.next_f32());
+            let Some(ls) = scene.lights.sample(it.p, u_sel, u) else {
+                continue;
+            };
+            let cos = n.dot(ls.wi);
+            if !scene.lights.is_environment(ls.light) || cos <= 0.0 || ls.pdf <= 0.0 {
+                continue;
+            }
+            let w = f64::from(ls.radiance.luminance() * cos / ls.pdf);
+            total += w;
+            let tr = scene.shadow_transmittance(&scene.shadow_ray(&it, ls.wi, ls.distance));
+            reached += w * f64::from(tr.luminance());
+        }
+    }
+    if total > 0.0 {
+        reached / total
+    } else {
+        1.0
+    }
+}
+
+/// Which records hold the environment's light under `mode`: for `auto`, none where the
+/// environment's relative variance over the sphere is above [`MAX_RELATIVE_VARIANCE`] (a sun in
+/// it), all where less of its light than [`MIN_VISIBILITY_FOR_LIGHT_SAMPLES`] reaches the
+/// surfaces in view ([`environment_visibility`]), radiance records otherwise. None without an
+/// environment. Behind window panes and masks the gathers cross them
+/// (`SceneRadiance::through_see_through`), so records hold the sky seen through them too.
 #[must_use]
 pub fn held_environment(scene: &Scene, mode: CachedEnvironment) -> HeldEnvironment {
-    // A gather ray that leaves through a window pane or a mask's open part ends in the path it
-    // continues, which holds no environment: the sky beyond is left to the light samples, which
-    // see through them (`Scene::shadow_transmittance`).
-    if !scene.lights.has_environment() || scene.has_see_through {
+    if !scene.lights.has_environment() {
         return HeldEnvironment::None;
     }
     match mode {
@@ -60,24 +118,42 @@ pub fn held_environment(scene: &Scene, mode: CachedEnvironment) -> HeldEnvironme
         CachedEnvironment::All => HeldEnvironment::All,
         CachedEnvironment::Off => HeldEnvironment::None,
         CachedEnvironment::Auto
-            if scene.lights.environment_relative_variance() <= MAX_RELATIVE_VARIANCE =>
+            if scene.lights.environment_relative_variance() > MAX_RELATIVE_VARIANCE =>
         {
-            HeldEnvironment::Glossy
+            HeldEnvironment::None
         }
-        CachedEnvironment::Auto => HeldEnvironment::None,
+        CachedEnvironment::Auto
+            if environment_visibility(scene) < MIN_VISIBILITY_FOR_LIGHT_SAMPLES =>
+        {
+            HeldEnvironment::All
+        }
+        CachedEnvironment::Auto => HeldEnvironment::Glossy,
     }
 }
 
-/// What to tell a user who asked records to hold the environment in a scene with window panes
-/// or masks, where they cannot (the light samples estimate it all instead).
+/// What to tell a user where `auto` made every record hold the environment's light.
 #[must_use]
-pub fn glazing_note(scene: &Scene, mode: CachedEnvironment) -> Option<String> {
-    (scene.has_see_through
-        && scene.lights.has_environment()
-        && matches!(mode, CachedEnvironment::Glossy | CachedEnvironment::All))
-    .then(|| {
-        "--cached-environment: the scene has window panes (thindielectric) or masks, through \
-         which records cannot hold the sky; light samples estimate all of the environment's light"
-            .to_string()
-    })
+pub fn auto_note(scene: &Scene, mode: CachedEnvironment) -> Option<String> {
+    (mode == CachedEnvironment::Auto && held_environment(scene, mode) == HeldEnvironment::All).then(
+        || {
+            format!(
+                "--cached-environment auto: {:.0} % of the environment's light reaches the \
+                 surfaces in view (through windows or openings), so every record holds it \
+                 (all) rather than light samples",
+                100.0 * environment_visibility(scene)
+            )
+        },
+    )
+}
+
+/// `mode` with `auto` replaced by what it chose here, for a cache file's header: `auto` looks at
+/// the view, and a file made from another view may hold the environment otherwise.
+#[must_use]
+pub fn resolved(scene: &Scene, mode: CachedEnvironment) -> CachedEnvironment {
+    match (mode, held_environment(scene, mode)) {
+        (CachedEnvironment::Auto, HeldEnvironment::None) => CachedEnvironment::Off,
+        (CachedEnvironment::Auto, HeldEnvironment::Glossy) => CachedEnvironment::Glossy,
+        (CachedEnvironment::Auto, HeldEnvironment::All) => CachedEnvironment::All,
+        (other, _) => other,
+    }
 }

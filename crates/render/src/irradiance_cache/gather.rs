@@ -485,6 +485,25 @@ pub struct Incident {
     pub normal: Vec3,
     /// The ray and the surface it met, where a scene was traced (a closed form has none).
     pub hit: Option<(Ray, Interaction)>,
+    /// `Some((d, τ))` where the ray crossed window panes or masks' open parts with throughput τ
+    /// and then escaped along `d`: it brings what an escaping ray brings, the environment's
+    /// radiance along `d`, times τ (`radiance` is then zero).
+    pub escaped: Option<(Vec3, Rgb)>,
+}
+
+impl Incident {
+    /// What arrives along a gather ray in direction `d` whose trace gave `found` (`None`: it
+    /// escaped): a surface's light, or `Err` with the escaped light's direction and throughput.
+    #[inline]
+    pub fn or_escaped(found: Option<Incident>, d: Vec3) -> Result<Incident, (Vec3, Rgb)> {
+        match found {
+            None => Err((d, Rgb::ONE)),
+            Some(Incident {
+                escaped: Some(e), ..
+            }) => Err(e),
+            Some(inc) => Ok(inc),
+        }
+    }
 }
 
 /// The narrow interface through which a cache's gather asks for light: the radiance arriving at
@@ -759,19 +778,19 @@ impl<'a> Gatherer<'a> {
         }
         st.counts.gather_rays += 1;
         let mut rng = sample_rng(self.seed, key, level);
-        match self
+        let found = self
             .light
-            .incident(self.cache, self.seed, st, sp, d, level, key, &mut rng)
-        {
-            Some(inc) => Found::Surface(
+            .incident(self.cache, self.seed, st, sp, d, level, key, &mut rng);
+        match Incident::or_escaped(found, d) {
+            Ok(inc) => Found::Surface(
                 inc.radiance,
                 inc.distance,
                 frame.to_local(inc.normal),
                 inc.hit,
             ),
-            None => match environment {
-                Escapes::Irradiance => Found::Escaped(self.light.escaped(d), Rgb::ZERO),
-                Escapes::Apart => Found::Escaped(Rgb::ZERO, self.light.escaped(d)),
+            Err((out, tau)) => match environment {
+                Escapes::Irradiance => Found::Escaped(self.light.escaped(out) * tau, Rgb::ZERO),
+                Escapes::Apart => Found::Escaped(Rgb::ZERO, self.light.escaped(out) * tau),
                 Escapes::Dropped => Found::Escaped(Rgb::ZERO, Rgb::ZERO),
             },
         }
@@ -1075,7 +1094,10 @@ impl IncidentRadiance for SceneRadiance<'_> {
     ) -> Option<Incident> {
         let ray = self.scene.spawn_ray(&sp.it, d);
         let hit = self.scene.intersect(&ray)?;
-        Some(self.incident_at(cache, seed, st, &ray, hit, level, key, rng))
+        if !self.scene.has_see_through || cache.environment == HeldEnvironment::None {
+            return Some(self.incident_at(cache, seed, st, &ray, hit, level, key, rng));
+        }
+        Some(self.through_see_through(cache, seed, st, ray, hit, level, key, rng))
     }
 
     fn escaped(&self, d: Vec3) -> Rgb {
@@ -1084,6 +1106,81 @@ impl IncidentRadiance for SceneRadiance<'_> {
 }
 
 impl<'a> SceneRadiance<'a> {
+    /// Where records hold the environment, a gather ray crosses window panes and masks' open
+    /// parts as paths do (`cross_see_through`: through with the pane's transmittance, mirrored
+    /// with its reflectance, chosen at random by their shares), so that the sky beyond a window
+    /// is in the records as Radiance's ambient rays find it through `glass`. What it then finds
+    /// is reported at its true distance while it went straight, at the first pane's where it was
+    /// mirrored; if it escapes, as escaped with the throughput of the crossings.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(never)]
+    fn through_see_through(
+        &self,
+        cache: &IrradianceCache,
+        seed: u64,
+        st: &mut WorkState,
+        mut ray: Ray,
+        mut hit: Interaction,
+        level: u32,
+        key: u64,
+        rng: &mut Rng,
+    ) -> Incident {
+        let first = (hit.t, hit.ng);
+        let (mut tau, mut straight, mut travelled) = (Rgb::ONE, true, 0.0f32);
+        for _ in 0..crate::scene::MAX_SHEET_CROSSINGS {
+            let shape = &self.scene.shapes[hit.shape as usize];
+            let wo = -ray.d;
+            let next = if shape.masked {
+                let opacity = self.scene.materials[shape.material].opacity(hit.uv);
+                (rng.next_f32() >= opacity).then_some((ray.d, Rgb::ONE))
+            } else if let Some(sheet) = self.scene.thin_sheet(hit.shape) {
+                let cos = hit.frame.n.dot(wo);
+                let c = sheet.choose(cos, rng.next_f32());
+                Some(if c.reflected {
+                    (2.0 * cos * hit.frame.n - wo, c.weight)
+                } else {
+                    (ray.d, c.weight)
+                })
+            } else {
+                None
+            };
+            let Some((d, w)) = next else {
+                let mut inc = self.incident_at(cache, seed, st, &ray, hit, level, key, rng);
+                inc.radiance *= tau;
+                if straight {
+                    inc.distance += travelled;
+                } else {
+                    (inc.distance, inc.normal) = first;
+                }
+                return inc;
+            };
+            st.counts.gather_rays += 1;
+            tau *= w;
+            straight &= d == ray.d;
+            travelled += hit.t;
+            ray = self.scene.spawn_ray(&hit, d);
+            match self.scene.intersect(&ray) {
+                Some(h) => hit = h,
+                None => {
+                    return Incident {
+                        radiance: Rgb::ZERO,
+                        distance: f32::INFINITY,
+                        normal: -d,
+                        hit: None,
+                        escaped: Some((d, tau)),
+                    }
+                }
+            }
+        }
+        Incident {
+            radiance: Rgb::ZERO,
+            distance: first.0,
+            normal: first.1,
+            hit: None,
+            escaped: None,
+        }
+    }
+
     /// The light of `scene`, its deeper bounces path traced.
     #[must_use]
     pub fn path_traced(scene: &'a Scene) -> Self {
@@ -1131,6 +1228,7 @@ impl<'a> SceneRadiance<'a> {
                 deeper: self.deeper,
                 st: &mut *st,
                 key,
+                photon_served: false,
             };
             trace_path(
                 self.scene,
@@ -1149,6 +1247,7 @@ impl<'a> SceneRadiance<'a> {
             distance,
             normal,
             hit: Some((ray, hit)),
+            escaped: None,
         }
     }
 }
@@ -1159,6 +1258,10 @@ struct GatherSource<'g, 'a> {
     deeper: Deeper,
     st: &'g mut WorkState,
     key: u64,
+    /// The last vertex's irradiance came from the global photon map, which holds light after
+    /// a bounce only: the environment's direct light there is the light samples' whatever the
+    /// records hold.
+    photon_served: bool,
 }
 
 impl IndirectSource for GatherSource<'_, '_> {
@@ -1171,11 +1274,13 @@ impl IndirectSource for GatherSource<'_, '_> {
         _: &mut RayCounts,
     ) -> Option<Rgb> {
         let g = self.gatherer;
+        self.photon_served = false;
         if g.cache.is_excluded(sp.it.shape) {
             return Some(g.cache.ambient * std::f32::consts::PI);
         }
         if depth > 0 {
             if let Some(e) = g.cache.photon_irradiance(sp, depth) {
+                self.photon_served = true;
                 return Some(e);
             }
         }
@@ -1197,6 +1302,10 @@ impl IndirectSource for GatherSource<'_, '_> {
 
     fn held_environment(&self, sp: &ShadingPoint) -> HeldEnvironment {
         self.gatherer.cache.held_environment_at(sp)
+    }
+
+    fn irradiance_holds_environment(&self, sp: &ShadingPoint) -> bool {
+        !self.photon_served && self.held_environment(sp) == HeldEnvironment::All
     }
 }
 
@@ -1238,6 +1347,7 @@ mod tests {
                 distance: 1e6,
                 normal: -d,
                 hit: None,
+                escaped: None,
             })
         }
     }

@@ -44,7 +44,7 @@
 //! 1 − F(s), 17 % at s = 2; a vertical edge's 4 %), tripled the errors on real scenes, where the
 //! border pixels see the nearest walls at grazing angles (`ircache bench --only plane`).
 
-use super::gather::{Gatherer, ShadingPoint, WorkState};
+use super::gather::{Gatherer, Incident, ShadingPoint, WorkState};
 use super::hemisphere::LocalGradient;
 use ircache_math::{Frame, Rgb, Rng, Vec3};
 use std::f64::consts::PI;
@@ -346,12 +346,12 @@ impl HemispherePlane {
     ) -> PlanePixels {
         self.sample_with(g.seed, sp, level, key, |_, d, key, rng| {
             st.counts.gather_rays += 1;
-            match g
+            let found = g
                 .light
-                .incident(g.cache, g.seed, st, sp, d, level, key, rng)
-            {
-                Some(inc) => (inc.radiance, inc.distance),
-                None => (g.light.escaped(d), f32::INFINITY),
+                .incident(g.cache, g.seed, st, sp, d, level, key, rng);
+            match Incident::or_escaped(found, d) {
+                Ok(inc) => (inc.radiance, inc.distance),
+                Err((out, tau)) => (g.light.escaped(out) * tau, f32::INFINITY),
             }
         })
     }

@@ -25,10 +25,9 @@ pub fn prepare_cache(
     let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
     let header = header(scene, ic, settings.width);
     let mut loaded = 0u64;
-    let mut notes: Vec<String> =
-        super::environment::glazing_note(scene, ic.params.cached_environment)
-            .into_iter()
-            .collect();
+    let mut notes: Vec<String> = super::environment::auto_note(scene, ic.params.cached_environment)
+        .into_iter()
+        .collect();
     let mut shared = match &ic.cache_file {
         None => None,
         Some(path) => {
@@ -230,7 +229,10 @@ pub fn header(scene: &Scene, ic: &IcIntegrator, width: usize) -> Header {
         version: file::VERSION,
         scene_hash: scene.content_hash ^ ic.exclusions.hash(),
         view_hash: view_hash(scene, &ic.params, width),
-        params: ic.params.clone(),
+        params: super::IcParams {
+            cached_environment: super::environment::resolved(scene, ic.params.cached_environment),
+            ..ic.params.clone()
+        },
     }
 }
 
