@@ -204,7 +204,7 @@ fn materials_and_sources_become_what_the_documentation_says() {
 #[test]
 fn errors_name_the_place_and_what_was_expected() {
     let d = dir("errors");
-    let cases: [(&str, &str); 7] = [
+    let cases: [(&str, &str); 8] = [
         (
             "void plastic p\n0\n0\n4 .5 .5 .5 0\n",
             "m.rad:1:1: plastic 'p': expected 5 real arguments, found 4",
@@ -230,6 +230,10 @@ fn errors_name_the_place_and_what_was_expected() {
             "m.rad:1:1: !xform: unknown or unsupported option \"-q\"",
         ),
         ("!xform missing.rad\n", "m.rad:1:1: cannot read"),
+        (
+            "void plastic p\n0\n0\n5 .5 .5 .5 0 0\np sphere s\n0\n0\n4 1e39 0 0 1\n",
+            "m.rad:5:1: sphere 's': its coordinates, transformed, exceed single precision",
+        ),
     ];
     for (text, expect) in cases {
         let e = load(&d, &[("m.rad", text)]).unwrap_err().to_string();

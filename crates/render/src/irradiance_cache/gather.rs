@@ -1094,7 +1094,7 @@ impl IncidentRadiance for SceneRadiance<'_> {
     ) -> Option<Incident> {
         let ray = self.scene.spawn_ray(&sp.it, d);
         let hit = self.scene.intersect(&ray)?;
-        if !self.scene.has_see_through || cache.environment == HeldEnvironment::None {
+        if !self.scene.has_see_through {
             return Some(self.incident_at(cache, seed, st, &ray, hit, level, key, rng));
         }
         Some(self.through_see_through(cache, seed, st, ray, hit, level, key, rng))
@@ -1106,12 +1106,14 @@ impl IncidentRadiance for SceneRadiance<'_> {
 }
 
 impl<'a> SceneRadiance<'a> {
-    /// Where records hold the environment, a gather ray crosses window panes and masks' open
-    /// parts as paths do (`cross_see_through`: through with the pane's transmittance, mirrored
-    /// with its reflectance, chosen at random by their shares), so that the sky beyond a window
-    /// is in the records as Radiance's ambient rays find it through `glass`. What it then finds
-    /// is reported at its true distance while it went straight, at the first pane's where it was
-    /// mirrored; if it escapes, as escaped with the throughput of the crossings.
+    /// A gather ray crosses window panes and masks' open parts as paths do (through with the
+    /// pane's transmittance, mirrored with its reflectance, chosen at random by their shares),
+    /// so that the sky beyond a window is in records that hold the environment, as Radiance's
+    /// ambient rays find it through `glass`, and light a pane mirrors counts at the record's own
+    /// bounce (the path from the pane counted the mirroring as one more, and lost it at the
+    /// last). What it then finds is reported at its true distance while it went straight, at
+    /// the first pane's where it was mirrored; if it escapes, as escaped with the throughput of
+    /// the crossings.
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     fn through_see_through(

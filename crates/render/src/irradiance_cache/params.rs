@@ -723,8 +723,9 @@ pub const PARAMS: &[ParamSpec] = &[
                it then estimate only the rest of the BSDF): glossy, radiance records (the \
                radiance-cached glossy lobes take it from them); all, irradiance records too, as \
                Radiance's ambient calculation holds a sky (noise-free, with the cache's \
-               interpolation error); auto, glossy where the environment is smooth enough for a \
-               record's gather (no sun in it)",
+               interpolation error; gathers cross window panes); auto: off for an environment \
+               with a sun in it, all where less than half of its light reaches the surfaces in \
+               view (rooms lit through windows, where its light samples speckle), else glossy",
         shapes_records: true,
         get: |p| name_of(p.cached_environment, CACHED_ENVIRONMENTS),
         set: |p, v| {

@@ -143,6 +143,19 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
             ));
             continue;
         };
+        let finite = match &geometry {
+            Geometry::Mesh(m) => m.positions.iter().all(|v| v.is_finite()),
+            Geometry::Sphere { center, radius, .. } => center.is_finite() && radius.is_finite(),
+        };
+        if !finite {
+            return Err(SceneError::at(
+                p.location.clone(),
+                format!(
+                    "{} '{}': its coordinates, transformed, exceed single precision",
+                    p.kind, p.id
+                ),
+            ));
+        }
         shapes.push(ShapeDesc {
             id: Some(p.id.clone()),
             geometry,
