@@ -61,6 +61,41 @@ pub struct SensorDesc {
     pub projection: Projection,
 }
 
+impl SensorDesc {
+    /// The sensor of a loader whose format has none of its own (OBJ, Radiance): a box filter,
+    /// `multijitter` at `spp`, and clip distances that hold a scene reaching `distance` from the
+    /// eye.
+    #[must_use]
+    pub fn standard(
+        to_world: Mat4,
+        (fov_degrees, fov_axis): (f32, FovAxis),
+        projection: Projection,
+        (width, height): (u32, u32),
+        spp: u32,
+        distance: f32,
+        near_share: f32,
+    ) -> SensorDesc {
+        SensorDesc {
+            to_world,
+            fov_degrees,
+            fov_axis,
+            near_clip: 0.01f32.min(near_share * distance),
+            far_clip: 10_000f32.max(10.0 * distance),
+            film: FilmDesc {
+                width,
+                height,
+                filter: FilterDesc::Box,
+            },
+            spp,
+            sampler: "multijitter".into(),
+            sampler_seed: 0,
+            jitter: true,
+            medium: None,
+            projection,
+        }
+    }
+}
+
 /// A sensor's projection (Mitsuba 3's `src/sensors/*.cpp`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Projection {

@@ -28,8 +28,8 @@
 #![deny(missing_docs)]
 
 use crate::desc::{
-    BitmapDesc, BsdfDesc, EmitterDesc, FilmDesc, FilterDesc, FovAxis, Geometry, IntegratorDesc,
-    SensorDesc, ShapeDesc, TextureDesc, TextureFilter, WrapMode,
+    BitmapDesc, BsdfDesc, EmitterDesc, FovAxis, Geometry, IntegratorDesc, SensorDesc, ShapeDesc,
+    TextureDesc, TextureFilter, WrapMode,
 };
 use crate::error::SourceLocation;
 use crate::mesh::{read_obj, MtlMaterial, ObjGroup};
@@ -327,22 +327,13 @@ fn sensor(shapes: &[ShapeDesc], camera: &ObjCamera) -> SensorDesc {
         (None, None) => (centre + Vec3::Z * fit, centre),
     };
     let distance = (eye - centre).length() + radius;
-    SensorDesc {
-        medium: None,
-        projection: crate::desc::Projection::Pinhole,
-        to_world: look_at(eye, target, up),
-        fov_degrees: fov,
-        fov_axis: FovAxis::Y,
-        near_clip: 0.01f32.min(1e-3 * distance),
-        far_clip: 10_000f32.max(10.0 * distance),
-        film: FilmDesc {
-            width,
-            height,
-            filter: FilterDesc::Box,
-        },
-        spp: DEFAULT_SPP,
-        sampler: "multijitter".into(),
-        sampler_seed: 0,
-        jitter: true,
-    }
+    SensorDesc::standard(
+        look_at(eye, target, up),
+        (fov, FovAxis::Y),
+        crate::desc::Projection::Pinhole,
+        (width, height),
+        DEFAULT_SPP,
+        distance,
+        1e-3,
+    )
 }

@@ -31,8 +31,8 @@ pub mod view;
 pub mod xform;
 
 use crate::desc::{
-    BsdfDesc, EmitterDesc, FilmDesc, FilterDesc, FovAxis, Geometry, IntegratorDesc, Projection,
-    SensorDesc, ShapeDesc, TextureDesc, TriangleMesh,
+    BsdfDesc, EmitterDesc, FovAxis, Geometry, IntegratorDesc, Projection, SensorDesc, ShapeDesc,
+    TextureDesc, TriangleMesh,
 };
 use crate::error::SourceLocation;
 use crate::obj_scene::ObjCamera;
@@ -808,24 +808,15 @@ fn sensor(shapes: &[ShapeDesc], camera: &ObjCamera, path: &Path) -> Result<Senso
         (to_world, Projection::Pinhole, view.horizontal as f32)
     };
     let distance = (bounds(shapes).0 - v3(view.position)).length() + scale;
-    Ok(SensorDesc {
+    Ok(SensorDesc::standard(
         to_world,
-        fov_degrees: fov,
-        fov_axis: FovAxis::X,
-        near_clip: 0.01f32.min(1e-4 * distance),
-        far_clip: 10_000f32.max(10.0 * distance),
-        film: FilmDesc {
-            width,
-            height,
-            filter: FilterDesc::Box,
-        },
-        spp: DEFAULT_SPP,
-        sampler: "multijitter".into(),
-        sampler_seed: 0,
-        jitter: true,
-        medium: None,
+        (fov, FovAxis::X),
         projection,
-    })
+        (width, height),
+        DEFAULT_SPP,
+        distance,
+        1e-4,
+    ))
 }
 
 /// Centre and radius of the scene's bounding sphere.
