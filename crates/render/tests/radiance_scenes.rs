@@ -101,3 +101,47 @@ fn sun_panel_and_bulb_match_radiance() {
     // Measured within 0.4 %; the sun is a direction here and a 0.5° disc in Radiance.
     check("direct", &direct_at(&desc, &refs, 1024), &refs, 0.01);
 }
+
+#[test]
+fn light_through_a_trans_roof_matches_its_closed_form_and_radiance() {
+    // A uniform sky above an endless `trans` roof, a black floor below: under the roof the
+    // irradiance is π c T, T = t (1 − s) transmitted diffusely and specularly alike (the
+    // Gaussian loses little of a uniform sky). Radiance 6.0's `rtrace -I -ab 2 -ad 16384 -aa 0`
+    // gives (1.4474, 1.2668, 1.0859).
+    let dir = std::env::temp_dir().join(format!("ircache-trans-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("trans.rad");
+    std::fs::write(
+        &path,
+        "void glow skyglow\n0\n0\n4 1 1 1 0\nskyglow source sky\n0\n0\n4 0 0 1 180\n\
+         void trans tr\n0\n0\n7 .8 .7 .6 .04 .15 .6 .4\n\
+         tr polygon roof\n0\n0\n12 -50 -50 1 50 -50 1 50 50 1 -50 50 1\n\
+         void plastic black\n0\n0\n5 0 0 0 0 0\n\
+         black polygon floor\n0\n0\n12 -50 -50 0 50 -50 0 50 50 0 -50 50 0\n",
+    )
+    .unwrap();
+    let desc = ircache_scene::load_scene(&path, &[], &Default::default()).unwrap();
+    let scene = Scene::build(&desc).unwrap();
+    let params = IcParams {
+        bounces: 2,
+        ..IcParams::default()
+    };
+    let (results, _) = irradiance_at_points(
+        &scene,
+        &params,
+        &[(Vec3::new(0.0, 0.0, 0.5), Vec3::Z)],
+        PointMethod::BruteForce { samples: 16384 },
+        64,
+        1,
+    );
+    let e = results[0].direct + results[0].indirect;
+    let t = 0.6 * (1.0 - 0.04);
+    for (ch, c) in [0.8f32, 0.7, 0.6].into_iter().enumerate() {
+        let expected = std::f32::consts::PI * c * t;
+        assert!(
+            (e[ch] / expected - 1.0).abs() < 0.01,
+            "channel {ch}: {} against {expected}",
+            e[ch]
+        );
+    }
+}

@@ -218,7 +218,7 @@ fn errors_name_the_place_and_what_was_expected() {
             "m.rad:5:1: plastic 'p': its modifier 'f' (brightfunc x my.cal",
         ),
         (
-            "void trans t\n0\n0\n7 .5 .5 .5 0 0 .5 0\nt sphere s\n0\n0\n4 0 0 0 1\n",
+            "void BSDF t\n0\n0\n0\nt sphere s\n0\n0\n4 0 0 0 1\n",
             "m.rad:5:1: sphere 's': its material 't'",
         ),
         (

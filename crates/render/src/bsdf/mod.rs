@@ -223,7 +223,7 @@ impl Lobe {
             Lobe::Plastic(b) => b.sample_specular(wo),
             Lobe::RoughPlastic(b) => b.sample_specular(wo, u),
             Lobe::Phong(b) => b.sample_specular(wo, u),
-            Lobe::Ward(b) => b.sample_specular(wo, u),
+            Lobe::Ward(b) => b.sample_specular(wo, u_lobe, u),
             // The whole mixture's directions, weighed by the glossy part alone.
             Lobe::Principled(b) => b.sample(wo, u_lobe, u).and_then(|s| {
                 let weight = b.eval_glossy(wo, s.wi) / s.pdf;
@@ -556,7 +556,7 @@ impl Bsdf {
             | Lobe::Dielectric(_)
             | Lobe::ThinDielectric(_)
             | Lobe::Plastic(_) => true,
-            Lobe::Ward(w) => w.is_mirror() && w.has_specular(),
+            Lobe::Ward(w) => w.has_delta(),
             _ => false,
         })
     }
@@ -567,6 +567,7 @@ impl Bsdf {
         self.lobes().iter().any(|l| match l {
             Lobe::Dielectric(_) | Lobe::RoughDielectric(_) | Lobe::ThinDielectric(_) => true,
             Lobe::Principled(p) => p.transmits(),
+            Lobe::Ward(w) => w.transmits(),
             _ => false,
         })
     }
@@ -791,11 +792,15 @@ impl Compiled {
                 specularity,
                 roughness,
                 metal,
+                transmissivity,
+                transmitted_specular,
             } => Compiled::Fixed(Lobe::Ward(Ward {
                 color: *color,
                 specularity: *specularity,
                 roughness: *roughness,
                 metal: *metal,
+                transmissivity: *transmissivity,
+                transmitted_specular: *transmitted_specular,
             })),
             BsdfDesc::ThinDielectric {
                 int_ior,

@@ -106,6 +106,20 @@ fn ward(color: f32, specularity: f32, roughness: f32, metal: bool) -> BsdfDesc {
         specularity,
         roughness,
         metal,
+        transmissivity: 0.0,
+        transmitted_specular: 0.0,
+    })
+}
+
+/// Radiance's `trans`, two-sided as the loader makes it.
+fn trans(color: f32, roughness: f32, transmissivity: f32, transmitted_specular: f32) -> BsdfDesc {
+    twosided(BsdfDesc::Ward {
+        color: Rgb::new(color, color * 0.9, color * 0.8),
+        specularity: 0.04,
+        roughness,
+        metal: false,
+        transmissivity,
+        transmitted_specular,
     })
 }
 
@@ -260,6 +274,9 @@ fn all_models() -> Vec<(String, BsdfDesc)> {
             ward(0.6, 0.05, 0.0, false),
         ),
         ("radiance metal mirror".into(), ward(0.8, 0.9, 0.0, true)),
+        ("radiance trans α=0.1".into(), trans(0.8, 0.1, 0.6, 0.5)),
+        ("radiance trans α=0.4".into(), trans(0.9, 0.4, 0.9, 0.3)),
+        ("radiance trans smooth".into(), trans(0.8, 0.0, 0.5, 0.5)),
         ("radiance glass".into(), radiance_glass(0.96, 1.52)),
         ("radiance tinted glass".into(), radiance_glass(0.6, 1.52)),
     ];
@@ -383,6 +400,19 @@ fn chi2_radiance_plastic_and_metal() {
                 &mat(desc.clone()),
                 dir(t, p),
                 Domain::Hemisphere,
+                &format!("{label} θo={t}"),
+            );
+        }
+    }
+    for (label, desc) in [
+        ("trans α=0.1", trans(0.8, 0.1, 0.6, 0.5)),
+        ("trans α=0.4", trans(0.9, 0.4, 0.9, 0.3)),
+    ] {
+        for (t, p) in WO_ANGLES {
+            run_chi2(
+                &mat(desc.clone()),
+                dir(t, p),
+                Domain::Sphere,
                 &format!("{label} θo={t}"),
             );
         }

@@ -5,8 +5,9 @@
 //!   counter-clockwise), `sphere` and `bubble` (analytic), `cylinder`, `tube`, `cone`, `cup` and
 //!   `ring` (tessellated into 64 segments whose polygons keep the exact areas). `mesh` and
 //!   `instance` (compiled meshes and octrees) are refused.
-//! - **Materials**: `plastic` and `metal` as Radiance's isotropic Gaussian model
-//!   ([`BsdfDesc::Ward`]), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
+//! - **Materials**: `plastic`, `metal` and `trans` as Radiance's isotropic Gaussian model
+//!   ([`BsdfDesc::Ward`]; a smooth `trans`'s straight transmission is not followed by light
+//!   samples, with a note where a distant light would need it), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
 //!   [`BsdfDesc::Glass`]), `dielectric` without absorption (a smooth interface of its index).
 //!   Radiance shades both sides of a surface alike, so the opaque ones are `twosided`.
 //! - **Light**: `light` and `glow` surfaces emit their radiance (W sr⁻¹ m⁻², as ircache's RGB) from
@@ -21,7 +22,7 @@
 //! - **Camera**: a Radiance view ([`view`]) given with the scene (`--view`), else `eye`, `target`
 //!   and `fov` as for OBJ scenes, else the whole scene framed from Radiance's default direction
 //!   (+y, up +z). The picture fits 512 × 512 (or `width` × `height`) with square pixels, as rpict.
-//! - Everything else (patterns, textures, mixtures, `trans`, `BSDF`, `spotlight`, `antimatter`, ...)
+//! - Everything else (patterns, textures, mixtures, `plastic2`, `BSDF`, `spotlight`, `antimatter`, ...)
 //!   is an error at the first surface that needs it, naming the primitive. Nothing is skipped
 //!   without a note: surfaces of `void` are dropped with a count in the scene's notes.
 
@@ -179,6 +180,24 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
         ));
     }
     let emitters = environment(&sources, &mut notes);
+    let smooth_trans = shapes.iter().find(|s| {
+        matches!(&*s.bsdf, BsdfDesc::TwoSided { front, .. } if matches!(**front,
+            BsdfDesc::Ward { roughness, transmissivity, transmitted_specular, .. }
+                if roughness == 0.0 && transmissivity * transmitted_specular > 0.0))
+    });
+    if let Some(s) = smooth_trans {
+        if emitters
+            .iter()
+            .any(|e| matches!(e, EmitterDesc::Directional { .. }))
+        {
+            notes.push(format!(
+                "{}: a smooth 'trans' passes light straight through, which light samples do not \
+                 follow (Radiance's do): a distant light source behind it lights nothing through \
+                 it; give it a roughness, or use glass",
+                s.location
+            ));
+        }
+    }
     if shapes.is_empty() {
         return Err(SceneError::at(
             SourceLocation::start_of(path),
@@ -272,8 +291,9 @@ fn modifier(
         ));
     }
     let m = match p.kind.as_str() {
-        "plastic" | "metal" => {
-            reals(&[5])?;
+        "plastic" | "metal" | "trans" => {
+            let trans = p.kind == "trans";
+            reals(if trans { &[7] } else { &[5] })?;
             let r = &p.reals;
             if !(0.0..=1.0).contains(&r[3]) || r[4] < 0.0 {
                 return Err(err(format!(
@@ -281,11 +301,19 @@ fn modifier(
                     r[3], r[4]
                 )));
             }
+            let (t, ts) = if trans { (r[5], r[6]) } else { (0.0, 0.0) };
+            if !(0.0..=1.0).contains(&t) || !(0.0..=1.0).contains(&ts) {
+                return Err(err(format!(
+                    "transmissivity {t} and transmitted specular {ts} must be in [0, 1]"
+                )));
+            }
             Modifier::Bsdf(two_sided(BsdfDesc::Ward {
                 color: rgb(r),
                 specularity: r[3] as f32,
                 roughness: r[4] as f32,
                 metal: p.kind == "metal",
+                transmissivity: t as f32,
+                transmitted_specular: ts as f32,
             }))
         }
         "mirror" => {
