@@ -286,3 +286,53 @@ fn skybright_follows_the_cal_file() {
     let down = over.brightness(-ircache_math::DVec3::Z);
     assert!((down - 2.0).abs() < 1e-6, "{down}");
 }
+
+#[test]
+fn genbox_is_made_as_radiance_makes_it() {
+    // `genbox mat box 1 2 3 -i` as Radiance 6.0 prints it: box.1540 is (0,2,3) (0,2,0) (1,2,0)
+    // (1,2,3); without -i it is (1,0,0) (1,0,3) (0,0,3) (0,0,0).
+    let d = dir("genbox");
+    let desc = load(
+        &d,
+        &[(
+            "g.rad",
+            &format!("{GREY}!genbox grey box 1 2 3 -i\n!genbox grey out 1 2 3\n"),
+        )],
+    )
+    .unwrap();
+    assert_eq!(desc.shapes.len(), 12);
+    assert_eq!(desc.shapes[0].id.as_deref(), Some("box.1540"));
+    let corners = |i: usize| match &desc.shapes[i].geometry {
+        Geometry::Mesh(m) => m.positions.clone(),
+        Geometry::Sphere { .. } => panic!(),
+    };
+    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    assert_eq!(
+        corners(0),
+        vec![
+            v(0.0, 2.0, 3.0),
+            v(0.0, 2.0, 0.0),
+            v(1.0, 2.0, 0.0),
+            v(1.0, 2.0, 3.0)
+        ]
+    );
+    assert_eq!(
+        corners(6),
+        vec![
+            v(1.0, 0.0, 0.0),
+            v(1.0, 0.0, 3.0),
+            v(0.0, 0.0, 3.0),
+            v(0.0, 0.0, 0.0)
+        ]
+    );
+    // Outward faces: each polygon faces away from the box's centre; with -i, towards it.
+    let centre = v(0.5, 1.0, 1.5);
+    for (i, s) in desc.shapes.iter().enumerate() {
+        let Geometry::Mesh(m) = &s.geometry else {
+            panic!()
+        };
+        let n = ircache_scene::shapes::triangle_normal(m, 0);
+        let outward = n.dot(m.positions[0] - centre) > 0.0;
+        assert_eq!(outward, i >= 6, "{:?}", s.id);
+    }
+}

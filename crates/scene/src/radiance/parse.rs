@@ -5,7 +5,7 @@
 //! `!xform` is carried out here (translations, rotations, scales, mirrors, `-i` iterations, `-a`
 //! arrays, `-n` identifier prefixes, `-m` modifiers, `-I`), so that the usual way of placing one
 //! file in another needs no Radiance installation; its transform is kept with each primitive,
-//! applied by the loader. Any other command runs through `sh -c` in the directory of the file
+//! applied by the loader. `!genbox` without bevels or rounding is made here too. Any other command runs through `sh -c` in the directory of the file
 //! that names it, as `oconv` runs it, and its output is read as scene text; a command that fails
 //! is an error at its line.
 
@@ -303,6 +303,14 @@ fn run_command(
     if words.is_empty() {
         return Err(SceneError::at(at.clone(), "an empty '!' command line"));
     }
+    if let Some(text) = genbox(&words) {
+        let name = Arc::new(PathBuf::from(format!("{at} (!{command})")));
+        let inner = Context {
+            depth: ctx.depth + 1,
+            ..ctx.clone()
+        };
+        return read_text(&text, name, &inner, out);
+    }
     let output = std::process::Command::new("sh")
         .arg("-c")
         .arg(command)
@@ -337,6 +345,38 @@ fn run_command(
         ..ctx.clone()
     };
     read_text(&text, name, &inner, out)
+}
+
+/// Radiance's `genbox mat name x y z [-i]` (`src/gen/genbox.c`) as the text it prints: six
+/// polygons named by their corners, corner `v` at coordinate `i` being the size where bit `i` of
+/// `v` is set (the other way round with `-i`, which turns the box inside out). `None` for other
+/// commands and for genbox's bevels and rounded edges, which run as commands.
+fn genbox(words: &[String]) -> Option<String> {
+    let inverted = match words {
+        [g, _, _, _, _, _] if g == "genbox" => false,
+        [g, _, _, _, _, _, i] if g == "genbox" && i == "-i" => true,
+        _ => return None,
+    };
+    let size: Vec<f64> = words[3..6].iter().filter_map(|w| w.parse().ok()).collect();
+    if size.len() != 3 || size.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        return None;
+    }
+    let mut text = String::new();
+    for face in ["1540", "4620", "2310", "3267", "5137", "6457"] {
+        text.push_str(&format!(
+            "{} polygon {}.{face}\n0\n0\n12\n",
+            words[1], words[2]
+        ));
+        for c in face.bytes() {
+            let v = u32::from(c - b'0');
+            for (i, s) in size.iter().enumerate() {
+                let set = (v >> i) & 1 == 1;
+                text.push_str(&format!(" {}", if set != inverted { *s } else { 0.0 }));
+            }
+            text.push('\n');
+        }
+    }
+    Some(text)
 }
 
 /// Carries out `!xform` (see `xform.1`): options, then the files to read.
