@@ -336,3 +336,91 @@ fn genbox_is_made_as_radiance_makes_it() {
         assert_eq!(outward, i >= 6, "{:?}", s.id);
     }
 }
+
+#[test]
+fn gensky_prints_what_radiance_prints() {
+    use ircache_scene::radiance::sky::gensky;
+    // The numbers Radiance 6.0's gensky (pyradiance 1.3.1) prints for each command: the sun's
+    // radiance and direction where there is a sun, then skyfunc's real arguments.
+    let cases: [(&str, &[f64]); 7] = [
+        (
+            "3 21 14 +s -a 40 -o 105 -m 105",
+            &[
+                6.692e6, -0.471761, -0.572142, 0.670892, 1.0, 8.830, 20.05, 0.5284, -0.471761,
+                -0.572142, 0.670892,
+            ],
+        ),
+        (
+            "6 21 9:30 -s -a 51.5 -o 0 -m 0 -g 0.3",
+            &[1.0, 10.93, 34.57, 0.6527, 0.562922, -0.319177, 0.762394],
+        ),
+        (
+            "12 21 12EST +i -a 42 -o 71",
+            &[
+                8.559e5, -0.074842, -0.907560, 0.413200, 4.0, 11.74, 4.411, 1.086, -0.074842,
+                -0.907560, 0.413200,
+            ],
+        ),
+        ("7 4 +15 -c -a 35 -o 110 -m 105", &[2.0, 32.66, 5.081]),
+        (
+            "-ang 30 -45 +s -t 4",
+            &[
+                6.151e6, 0.612372, -0.612372, 0.5, 1.0, 12.38, 16.78, 0.3986, 0.612372, -0.612372,
+                0.5,
+            ],
+        ),
+        ("1 15 10 -u -b 50", &[3.0, 50.0, 10.0]),
+        (
+            "9 1 16 +s -a -33.9 -o -151.2 -m -150 -r 5e6",
+            &[
+                5e6, -0.867612, 0.378577, 0.322379, 1.0, 4.491, 8.185, 0.328, -0.867612, 0.378577,
+                0.322379,
+            ],
+        ),
+    ];
+    for (args, expect) in cases {
+        let words: Vec<String> = std::iter::once("gensky")
+            .chain(args.split_whitespace())
+            .map(str::to_string)
+            .collect();
+        let text = gensky(&words)
+            .expect("a gensky command")
+            .expect("valid arguments");
+        // The reals: the lines after a count, without the sun's angle 0.5 and the sky's count.
+        let mut got = Vec::new();
+        for line in text.lines() {
+            let w: Vec<&str> = line.split_whitespace().collect();
+            if w.len() > 1 && w[0].parse::<usize>() == Ok(w.len() - 1) && !line.contains("skybr") {
+                let v: Vec<f64> = w[1..].iter().map(|x| x.parse().unwrap()).collect();
+                if w[0] == "3" && v[0] == v[1] && v[1] == v[2] && v[0] > 100.0 {
+                    got.push(v[0]); // the sun's radiance, once
+                } else if w[0] == "4" {
+                    got.extend(&v[..3]); // the sun's direction, not its 0.5°
+                } else {
+                    got.extend(v);
+                }
+            }
+        }
+        assert_eq!(got.len(), expect.len(), "{args}: {text}");
+        for (g, e) in got.iter().zip(expect) {
+            assert!(
+                (g - e).abs() <= 1.5e-3 * e.abs().max(1e-3),
+                "{args}: {g} against {e}\n{text}"
+            );
+        }
+    }
+    assert!(
+        gensky(&["gensky".into(), "13".into(), "1".into(), "12".into()])
+            .unwrap()
+            .is_err()
+    );
+    assert!(gensky(&[
+        "gensky".into(),
+        "3".into(),
+        "21".into(),
+        "12".into(),
+        "-y".into(),
+        "2020".into()
+    ])
+    .is_none());
+}

@@ -5,7 +5,8 @@
 //! `!xform` is carried out here (translations, rotations, scales, mirrors, `-i` iterations, `-a`
 //! arrays, `-n` identifier prefixes, `-m` modifiers, `-I`), so that the usual way of placing one
 //! file in another needs no Radiance installation; its transform is kept with each primitive,
-//! applied by the loader. `!genbox` without bevels or rounding is made here too. Any other command runs through `sh -c` in the directory of the file
+//! applied by the loader. `!genbox` without bevels or rounding and `!gensky` (but for `-y`) are
+//! made here too. Any other command runs through `sh -c` in the directory of the file
 //! that names it, as `oconv` runs it, and its output is read as scene text; a command that fails
 //! is an error at its line.
 
@@ -303,7 +304,12 @@ fn run_command(
     if words.is_empty() {
         return Err(SceneError::at(at.clone(), "an empty '!' command line"));
     }
-    if let Some(text) = genbox(&words) {
+    let generated = match super::sky::gensky(&words) {
+        Some(Err(e)) => return Err(SceneError::at(at.clone(), e)),
+        Some(Ok(text)) => Some(text),
+        None => genbox(&words),
+    };
+    if let Some(text) = generated {
         let name = Arc::new(PathBuf::from(format!("{at} (!{command})")));
         let inner = Context {
             depth: ctx.depth + 1,
