@@ -299,26 +299,28 @@ impl Ward {
     /// `f · |cos θ_i|` (delta lobes excluded).
     #[must_use]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
-        if wo.z <= 0.0 || wi.z == 0.0 {
-            return Rgb::ZERO;
-        }
-        let parts = self.parts(wo.z);
-        PARTS
-            .iter()
-            .fold(Rgb::ZERO, |acc, &p| acc + self.eval_part(&parts, p, wo, wi))
+        self.eval_sum(wo, wi, false)
     }
 
     /// Everything but the Lambertian reflection (what a cache does not serve): `f_g · |cos θ_i|`.
     #[must_use]
     pub fn eval_specular(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        self.eval_sum(wo, wi, true)
+    }
+
+    /// The smooth lobes' sum, the Lambertian reflection left out for `glossy`.
+    fn eval_sum(&self, wo: Vec3, wi: Vec3, glossy: bool) -> Rgb {
         if wo.z <= 0.0 || wi.z == 0.0 {
             return Rgb::ZERO;
         }
-        let parts = self.parts(wo.z);
+        self.eval_parts(&self.parts(wo.z), wo, wi, glossy)
+    }
+
+    fn eval_parts(&self, parts: &Parts, wo: Vec3, wi: Vec3, glossy: bool) -> Rgb {
         PARTS
             .iter()
-            .filter(|&&p| p != Part::DiffuseReflection)
-            .fold(Rgb::ZERO, |acc, &p| acc + self.eval_part(&parts, p, wo, wi))
+            .filter(|&&p| !glossy || p != Part::DiffuseReflection)
+            .fold(Rgb::ZERO, |acc, &p| acc + self.eval_part(parts, p, wo, wi))
     }
 
     /// The mixture density of [`Self::sample`]'s smooth lobes.
@@ -409,13 +411,7 @@ impl Ward {
             .zip(probs)
             .map(|(&p, q)| q * self.pdf_part(p, wo, wi))
             .sum();
-        let eval = || {
-            PARTS
-                .iter()
-                .filter(|&&p| !glossy || p != Part::DiffuseReflection)
-                .fold(Rgb::ZERO, |acc, &p| acc + self.eval_part(parts, p, wo, wi))
-        };
-        BsdfSample::smooth(wi, pdf, eval, 1.0)
+        BsdfSample::smooth(wi, pdf, || self.eval_parts(parts, wo, wi, glossy), 1.0)
     }
 
     /// Chooses a lobe by its share of the albedo and samples it.
