@@ -152,7 +152,8 @@ pub enum Selection {
     Chosen,
     /// Every light in turn, `ne` samples each (as Radiance samples each source): for the few
     /// points of `ircache irradiance`, where a light that selection starves (a lamp's bulb hidden
-    /// in its shade takes the samples of the panel beside it) must not leave noise.
+    /// in its shade takes the samples of the panel beside it) must not leave noise; used up to
+    /// `lights::selection::MAX_ESTIMATED` lights.
     EachLight,
 }
 

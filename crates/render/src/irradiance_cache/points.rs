@@ -107,7 +107,16 @@ fn direct_irradiance(
         &sp.it,
         &white,
         wo,
-        (samples, Selection::EachLight),
+        (
+            samples,
+            // Every light in turn, as rtrace does, while that costs less than a selection's
+            // estimate would (beyond, per-sample selection).
+            if scene.lights.len() <= crate::lights::selection::MAX_ESTIMATED {
+                Selection::EachLight
+            } else {
+                Selection::Chosen
+            },
+        ),
         (BsdfStrategy::All, 0),
         EnvironmentServed {
             lambertian: if environment { Rgb::ONE } else { Rgb::ZERO },
