@@ -898,21 +898,36 @@ fn lens_and_orthographic_cameras_match_mitsuba() {
 /// A block of pixels: its x range and y range.
 type Block = ((usize, usize), (usize, usize));
 
+/// `image` against `reference` as it is and after a 2-px Gaussian blur of both, printed under
+/// `label`.
+fn compare_plain_and_blurred(
+    image: &ircache_image::Image,
+    reference: &ircache_image::Image,
+    label: &str,
+) -> (
+    ircache_image::compare::Metrics,
+    ircache_image::compare::Metrics,
+) {
+    use ircache_image::blur::gaussian_blur;
+    let m = compare(image, reference).expect("same size");
+    let blurred =
+        compare(&gaussian_blur(image, 2.0), &gaussian_blur(reference, 2.0)).expect("same size");
+    eprintln!(
+        "{label}: relMSE_trim {:.3e}, blurred {:.3e}, lum {:.4}",
+        m.rel_mse_trim, blurred.rel_mse_trim, m.lum_ratio
+    );
+    (m, blurred)
+}
+
 /// Renders `scene` (256 × 256, seed 5) with `path` at 32 spp and `ic` at 16 and checks each
 /// against Mitsuba's `reference`: mean luminance within 1 %, each block of `regions` (x and y
 /// ranges) within 2 %, relMSE_trim after a 2-px blur below `blurred_limit`.
 fn matches_mitsuba_reference(scene: &str, reference: &str, regions: &[Block], blurred_limit: f64) {
-    use ircache_image::blur::gaussian_blur;
     let reference = ircache_image::read_image(&resolve(reference)).expect("reference reads");
     for (integrator, spp) in [("path", 32), ("ic", 16)] {
         let image = render_256(scene, &[], integrator, spp, 5);
-        let m = compare(&image, &reference).expect("same size");
-        let blurred = compare(&gaussian_blur(&image, 2.0), &gaussian_blur(&reference, 2.0))
-            .expect("same size");
-        eprintln!(
-            "{scene} {integrator}: relMSE_trim {:.3e}, blurred {:.3e}, lum {:.4}",
-            m.rel_mse_trim, blurred.rel_mse_trim, m.lum_ratio,
-        );
+        let (m, blurred) =
+            compare_plain_and_blurred(&image, &reference, &format!("{scene} {integrator}"));
         assert_no_nan_and_lum_within_1_percent(&m, integrator);
         for &(xs, ys) in regions {
             let expected = region_luminance(&reference, xs, ys);
@@ -977,20 +992,14 @@ fn bump_and_normal_maps_match_mitsuba() {
     // the unperturbed normal's irradiance, turned to the bumped one by the rotational gradient
     // (003 item 5), which on bumps this strong reads 1.2–1.5 % bright against the path tracer
     // (1.3 % before these changes too) and 3.5 % on the bumped sphere.
-    use ircache_image::blur::gaussian_blur;
     let reference = ircache_image::read_image(&resolve("scenes/bumps/reference-d3.exr"))
         .expect("reference reads");
     // (integrator, spp, blurred limit, luminance and block tolerance): measured blurred
     // relMSE_trim 4.3e-5 and 9.4e-4, blocks within 0.8 % and 3.5 %.
     for (integrator, spp, limit, tolerance) in [("path", 256, 1e-4, 0.02), ("ic", 64, 2e-3, 0.05)] {
         let image = render_at("scenes/bumps/scene.xml", &[], integrator, 128, spp, 5);
-        let m = compare(&image, &reference).expect("same size");
-        let blurred = compare(&gaussian_blur(&image, 2.0), &gaussian_blur(&reference, 2.0))
-            .expect("same size");
-        eprintln!(
-            "bumps {integrator}: relMSE_trim {:.3e}, blurred {:.3e}, lum {:.4}",
-            m.rel_mse_trim, blurred.rel_mse_trim, m.lum_ratio
-        );
+        let (m, blurred) =
+            compare_plain_and_blurred(&image, &reference, &format!("bumps {integrator}"));
         assert!(
             m.nonfinite_a == 0 && (m.lum_ratio - 1.0).abs() < tolerance / 2.0,
             "{integrator}: lum {:.4}, {} non-finite",
@@ -1071,7 +1080,6 @@ fn two_small_lamps_in_sponza_match_mitsuba() {
     // cache at its defaults (16 spp) measured relMSE_trim 7.1e-5, blurred 5.7e-6 to 1.3e-5
     // over four seeds (the lamps' anti-aliasing carries most of the blurred error), lum within
     // 0.5 %; the path tracer at 32 spp 3.1e-4, blurred 7.3e-6. The limits are about twice those.
-    use ircache_image::blur::gaussian_blur;
     let meshes = shared().join("scenes/sponza-sun/meshes");
     let defines = vec![("meshes".to_string(), meshes.display().to_string())];
     let desc = ircache_scene::load_scene(
@@ -1102,13 +1110,8 @@ fn two_small_lamps_in_sponza_match_mitsuba() {
         let image = render(&built, &integ, &settings, &|_| {})
             .expect("render")
             .image;
-        let m = compare(&image, &reference).expect("same size");
-        let blurred = compare(&gaussian_blur(&image, 2.0), &gaussian_blur(&reference, 2.0))
-            .expect("same size");
-        eprintln!(
-            "sponza-lamps {integrator}: relMSE_trim {:.3e}, blurred {:.3e}, lum {:.4}",
-            m.rel_mse_trim, blurred.rel_mse_trim, m.lum_ratio
-        );
+        let (m, blurred) =
+            compare_plain_and_blurred(&image, &reference, &format!("sponza-lamps {integrator}"));
         assert_no_nan_and_lum_within_1_percent(&m, integrator);
         assert!(
             m.rel_mse_trim < limit,
