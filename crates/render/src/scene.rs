@@ -86,6 +86,19 @@ pub fn ray_on_to(o: Vec3, d: Vec3, end: Option<Vec3>) -> Option<Ray> {
 /// Most thin sheets a ray or a path meets before it is taken as blocked (double glazing is two).
 pub const MAX_SHEET_CROSSINGS: u32 = 64;
 
+/// Where a ray goes on past a window pane or a mask's open part ([`Scene::see_through`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Passage {
+    /// The direction it goes on in (straight on, or mirrored by a pane).
+    pub d: Vec3,
+    /// The throughput of the choice over its probability.
+    pub weight: Rgb,
+    /// A pane mirrored it (a delta bounce).
+    pub reflected: bool,
+    /// The probability of the choice (a mask's crossing: 1, its weight unscaled).
+    pub prob: f32,
+}
+
 /// One shape at render time.
 #[derive(Clone, Debug)]
 pub struct Shape {
@@ -412,6 +425,38 @@ impl Scene {
         } else {
             None
         }
+    }
+
+    /// What a window pane or a mask's open part does to a ray that meets it at `it` arriving
+    /// from `wo` (world, unit, back along the ray), with `u` uniform in [0, 1): `None` where the
+    /// ray meets the surface (a mask's opaque share, any other surface); else where it goes on.
+    /// A mask is crossed with probability 1 − opacity; a pane transmits straight on or mirrors,
+    /// as [`crate::bsdf::ThinDielectric::choose`] decides. The one rule paths, gathers and
+    /// photons follow.
+    #[must_use]
+    pub fn see_through(&self, it: &Interaction, wo: Vec3, u: f32) -> Option<Passage> {
+        let shape = &self.shapes[it.shape as usize];
+        if shape.masked {
+            return (u >= self.materials[shape.material].opacity(it.uv)).then_some(Passage {
+                d: -wo,
+                weight: Rgb::ONE,
+                reflected: false,
+                prob: 1.0,
+            });
+        }
+        let sheet = self.thin_sheet(it.shape)?;
+        let cos = it.frame.n.dot(wo);
+        let c = sheet.choose(cos, u);
+        Some(Passage {
+            d: if c.reflected {
+                2.0 * cos * it.frame.n - wo
+            } else {
+                -wo
+            },
+            weight: c.weight,
+            reflected: c.reflected,
+            prob: c.prob,
+        })
     }
 
     /// What reaches the end of a shadow ray: nothing where a surface blocks it, all where none

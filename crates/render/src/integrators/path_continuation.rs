@@ -423,36 +423,26 @@ pub(crate) fn cross_see_through(
     }
     sampler.set_dimension(dims::sheet(*depth, *crossings));
     let u = sampler.next_1d();
-    let shape = &scene.shapes[it.shape as usize];
-    if shape.masked {
-        return if u < scene.materials[shape.material].opacity(it.uv) {
-            Crossing::Stay
-        } else {
-            Crossing::On(scene.spawn_ray(it, -wo))
-        };
-    }
-    let Some(sheet) = scene.thin_sheet(it.shape) else {
+    let Some(passage) = scene.see_through(it, wo, u) else {
         return Crossing::Stay;
     };
-    let cos = it.frame.n.dot(wo);
-    let choice = sheet.choose(cos, u);
-    if !choice.reflected {
-        *beta *= choice.weight;
-        return Crossing::On(scene.spawn_ray(it, -wo));
+    if !passage.reflected {
+        *beta *= passage.weight;
+        return Crossing::On(scene.spawn_ray(it, passage.d));
     }
     if *depth + 1 >= settings.max_depth {
         return Crossing::End;
     }
-    *beta *= choice.weight;
+    *beta *= passage.weight;
     *arrival = Arrival::Bsdf {
         p: it.p,
-        pdf: choice.prob,
+        pdf: passage.prob,
         delta: true,
         light_samples: 0,
     };
     rays.bounce += 1;
     if count_and_roulette(depth, beta, eta, settings.rr_depth, sampler) {
-        Crossing::On(scene.spawn_ray(it, 2.0 * cos * it.frame.n - wo))
+        Crossing::On(scene.spawn_ray(it, passage.d))
     } else {
         Crossing::End
     }

@@ -110,47 +110,62 @@ pub fn environment_visibility(scene: &Scene) -> f64 {
 /// (`SceneRadiance::through_see_through`), so records hold the sky seen through them too.
 #[must_use]
 pub fn held_environment(scene: &Scene, mode: CachedEnvironment) -> HeldEnvironment {
+    decide(scene, mode).0
+}
+
+/// [`held_environment`]'s choice, with the visibility `auto` measured to make it (`None` where
+/// it measured none).
+#[must_use]
+pub fn decide(scene: &Scene, mode: CachedEnvironment) -> (HeldEnvironment, Option<f64>) {
     if !scene.lights.has_environment() {
-        return HeldEnvironment::None;
+        return (HeldEnvironment::None, None);
     }
     match mode {
-        CachedEnvironment::Glossy => HeldEnvironment::Glossy,
-        CachedEnvironment::All => HeldEnvironment::All,
-        CachedEnvironment::Off => HeldEnvironment::None,
+        CachedEnvironment::Glossy => (HeldEnvironment::Glossy, None),
+        CachedEnvironment::All => (HeldEnvironment::All, None),
+        CachedEnvironment::Off => (HeldEnvironment::None, None),
         CachedEnvironment::Auto
             if scene.lights.environment_relative_variance() > MAX_RELATIVE_VARIANCE =>
         {
-            HeldEnvironment::None
+            (HeldEnvironment::None, None)
         }
-        CachedEnvironment::Auto
-            if environment_visibility(scene) < MIN_VISIBILITY_FOR_LIGHT_SAMPLES =>
-        {
-            HeldEnvironment::All
+        CachedEnvironment::Auto => {
+            let visibility = environment_visibility(scene);
+            let held = if visibility < MIN_VISIBILITY_FOR_LIGHT_SAMPLES {
+                HeldEnvironment::All
+            } else {
+                HeldEnvironment::Glossy
+            };
+            (held, Some(visibility))
         }
-        CachedEnvironment::Auto => HeldEnvironment::Glossy,
     }
 }
 
-/// What to tell a user where `auto` made every record hold the environment's light.
+/// What to tell a user where `auto` made every record hold the environment's light, from the
+/// cache's choice (`held`) and the visibility it measured.
 #[must_use]
-pub fn auto_note(scene: &Scene, mode: CachedEnvironment) -> Option<String> {
-    (mode == CachedEnvironment::Auto && held_environment(scene, mode) == HeldEnvironment::All).then(
-        || {
-            format!(
-                "--cached-environment auto: {:.0} % of the environment's light reaches the \
-                 surfaces in view (through windows or openings), so every record holds it \
-                 (all) rather than light samples",
-                100.0 * environment_visibility(scene)
-            )
-        },
-    )
+pub fn auto_note(
+    mode: CachedEnvironment,
+    held: HeldEnvironment,
+    visibility: Option<f64>,
+) -> Option<String> {
+    let visibility = visibility.filter(|_| mode == CachedEnvironment::Auto)?;
+    (held == HeldEnvironment::All).then(|| {
+        format!(
+            "--cached-environment auto: {:.0} % of the environment's light reaches the surfaces \
+             in view (through windows or openings), so every record holds it (all) rather than \
+             light samples",
+            100.0 * visibility
+        )
+    })
 }
 
-/// `mode` with `auto` replaced by what it chose here, for a cache file's header: `auto` looks at
-/// the view, and a file made from another view may hold the environment otherwise.
+/// `mode` with `auto` replaced by what the cache chose (`held`), for a cache file's header:
+/// `auto` looks at the view, and a file made from another view may hold the environment
+/// otherwise.
 #[must_use]
-pub fn resolved(scene: &Scene, mode: CachedEnvironment) -> CachedEnvironment {
-    match (mode, held_environment(scene, mode)) {
+pub fn resolved(mode: CachedEnvironment, held: HeldEnvironment) -> CachedEnvironment {
+    match (mode, held) {
         (CachedEnvironment::Auto, HeldEnvironment::None) => CachedEnvironment::Off,
         (CachedEnvironment::Auto, HeldEnvironment::Glossy) => CachedEnvironment::Glossy,
         (CachedEnvironment::Auto, HeldEnvironment::All) => CachedEnvironment::All,

@@ -8,7 +8,7 @@
 //! at the last bounce the ambient value. Records needed at deeper levels during a batch go to a
 //! private overlay of the work item, so the batch's result does not depend on thread timing.
 
-use super::environment::{held_environment, HeldEnvironment};
+use super::environment::{decide, HeldEnvironment};
 use super::hemisphere::{largest_eigenvalue, to_world, HemisphereSamples, Stratification};
 pub use super::params::Deeper;
 use super::params::RecordSource;
@@ -59,6 +59,9 @@ pub struct IrradianceCache {
     pub radiance_records: Vec<RadianceRecord>,
     /// Which records hold the environment's light ([`super::environment`]).
     pub environment: HeldEnvironment,
+    /// The share of the environment's light reaching the surfaces in view, where `auto`
+    /// measured it to choose [`Self::environment`] (for its note).
+    pub environment_visibility: Option<f64>,
     /// The photon maps (`--photons`, `--caustic-photons`): the global map serves the vertices
     /// beyond a record's gather hits, the caustic map adds caustics where records serve.
     pub photons: Option<Arc<PhotonMaps>>,
@@ -89,7 +92,8 @@ impl IrradianceCache {
             cache.mean_albedo = mean_albedo(scene);
         }
         cache.excluded = vec![false; scene.shapes.len()];
-        cache.environment = held_environment(scene, params.cached_environment);
+        (cache.environment, cache.environment_visibility) =
+            decide(scene, params.cached_environment);
         cache
     }
 
@@ -196,6 +200,7 @@ impl IrradianceCache {
             radiance_records: Vec::new(),
             pixel_spread: crate::camera::PixelSpread::default(),
             environment: HeldEnvironment::None,
+            environment_visibility: None,
             photons: None,
             plane: (params.record_source != RecordSource::Gather)
                 .then(|| Arc::new(HemispherePlane::new(PLANE_PIXELS, PLANE_HALF_SIZE))),
@@ -1131,18 +1136,10 @@ impl<'a> SceneRadiance<'a> {
         let (mut tau, mut straight, mut travelled) = (Rgb::ONE, true, 0.0f32);
         for _ in 0..crate::scene::MAX_SHEET_CROSSINGS {
             let shape = &self.scene.shapes[hit.shape as usize];
-            let wo = -ray.d;
-            let next = if shape.masked {
-                let opacity = self.scene.materials[shape.material].opacity(hit.uv);
-                (rng.next_f32() >= opacity).then_some((ray.d, Rgb::ONE))
-            } else if let Some(sheet) = self.scene.thin_sheet(hit.shape) {
-                let cos = hit.frame.n.dot(wo);
-                let c = sheet.choose(cos, rng.next_f32());
-                Some(if c.reflected {
-                    (2.0 * cos * hit.frame.n - wo, c.weight)
-                } else {
-                    (ray.d, c.weight)
-                })
+            let next = if shape.masked || shape.thin_sheet {
+                self.scene
+                    .see_through(&hit, -ray.d, rng.next_f32())
+                    .map(|p| (p.d, p.weight))
             } else {
                 None
             };

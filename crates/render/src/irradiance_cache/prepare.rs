@@ -23,11 +23,15 @@ pub fn prepare_cache(
     let tables_start = std::time::Instant::now();
     let mut cache = empty_cache(scene, ic, settings.width, None, None, settings.seed, pool)?;
     let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
-    let header = header(scene, ic, settings.width);
+    let header = header(scene, ic, settings.width, cache.environment);
     let mut loaded = 0u64;
-    let mut notes: Vec<String> = super::environment::auto_note(scene, ic.params.cached_environment)
-        .into_iter()
-        .collect();
+    let mut notes: Vec<String> = super::environment::auto_note(
+        ic.params.cached_environment,
+        cache.environment,
+        cache.environment_visibility,
+    )
+    .into_iter()
+    .collect();
     let mut shared = match &ic.cache_file {
         None => None,
         Some(path) => {
@@ -222,15 +226,21 @@ pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option
     ))
 }
 
-/// The header of a cache file for `scene` rendered by `ic` at `width` pixels across.
+/// The header of a cache file for `scene` rendered by `ic` at `width` pixels across, its records
+/// holding the environment as `held` says.
 #[must_use]
-pub fn header(scene: &Scene, ic: &IcIntegrator, width: usize) -> Header {
+pub fn header(
+    scene: &Scene,
+    ic: &IcIntegrator,
+    width: usize,
+    held: super::environment::HeldEnvironment,
+) -> Header {
     Header {
         version: file::VERSION,
         scene_hash: scene.content_hash ^ ic.exclusions.hash(),
         view_hash: view_hash(scene, &ic.params, width),
         params: super::IcParams {
-            cached_environment: super::environment::resolved(scene, ic.params.cached_environment),
+            cached_environment: super::environment::resolved(ic.params.cached_environment, held),
             ..ic.params.clone()
         },
     }

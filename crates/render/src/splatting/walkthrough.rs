@@ -252,8 +252,12 @@ impl Walkthrough {
         let Some((path, saved)) = &mut self.file else {
             return Err("no cache file: start the walkthrough with --cache FILE to save".into());
         };
-        let header =
-            crate::irradiance_cache::prepare::header(&self.scene, &self.ic, self.settings.width);
+        let header = crate::irradiance_cache::prepare::header(
+            &self.scene,
+            &self.ic,
+            self.settings.width,
+            self.cache.environment,
+        );
         let (mut file, _) =
             CacheFile::open(Path::new(path), &header, true).map_err(|e| e.to_string())?;
         let mut new = Vec::new();
