@@ -225,7 +225,11 @@ fn content_hash(desc: &SceneDesc) -> u64 {
                 let _ = write!(h, "{g:?}");
             }
         }
-        let _ = write!(h, "{:?}{:?}{:?}", s.bsdf, s.emitter, s.emitter_texture);
+        let _ = write!(
+            h,
+            "{:?}{:?}{:?}{:?}",
+            s.bsdf, s.emitter, s.emitter_texture, s.emitter_pattern
+        );
         let mut hash_image = |b: &std::sync::Arc<ircache_scene::BitmapDesc>| {
             if !images.contains(&std::sync::Arc::as_ptr(b)) {
                 images.push(std::sync::Arc::as_ptr(b));

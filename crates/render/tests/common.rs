@@ -172,6 +172,7 @@ pub fn emitting_shape(geometry: Geometry, radiance: Rgb) -> ShapeDesc {
         }),
         emitter: Some(radiance),
         emitter_texture: None,
+        emitter_pattern: None,
         location: here(),
     }
 }
@@ -190,6 +191,7 @@ pub fn quad(corners: [Vec3; 4], bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> Sh
         bsdf,
         emitter,
         emitter_texture: None,
+        emitter_pattern: None,
         location: here(),
     }
 }

@@ -19,6 +19,7 @@ fn sphere_furnace(rho: f32, le: f32, max_depth: i32, spp: u32) -> SceneDesc {
         bsdf: diffuse(Rgb::splat(rho)),
         emitter: Some(Rgb::splat(le)),
         emitter_texture: None,
+        emitter_pattern: None,
         location: here(),
     };
     scene(
@@ -85,6 +86,7 @@ fn box_furnace_with_scaled_geometry_is_scale_free() {
             bsdf: diffuse(Rgb::splat(0.5)),
             emitter: Some(Rgb::splat(1.0)),
             emitter_texture: None,
+            emitter_pattern: None,
             location: here(),
         };
         let desc = scene(

@@ -159,7 +159,10 @@ fn mesh_pdf(lights: &LightSet, light: u32, mesh: &TriangleMesh, p: Vec3, w: Vec3
         );
         if let Some(t) = hit_triangle(p, w, p0, p1, p2) {
             let ng = (p1 - p0).cross(p2 - p0).normalize();
-            if lights.area_radiance(light, ng, Vec2::ZERO, -w).is_black() {
+            if lights
+                .area_radiance(light, Vec3::ZERO, ng, Vec2::ZERO, -w, 1.0)
+                .is_black()
+            {
                 continue;
             }
             let pl = (p.as_dvec3() + w.as_dvec3() * t).as_vec3();
@@ -188,7 +191,10 @@ fn sphere_pdf(lights: &LightSet, light: u32, c: Vec3, r: f32, flip: bool, p: Vec
     let pl = o + d * t;
     let outward = ((pl - c64) / f64::from(r)).as_vec3();
     let ns = if flip { -outward } else { outward };
-    if lights.area_radiance(light, ns, Vec2::ZERO, -w).is_black() {
+    if lights
+        .area_radiance(light, Vec3::ZERO, ns, Vec2::ZERO, -w, 1.0)
+        .is_black()
+    {
         return 0.0;
     }
     lights.pdf_area(light, 0, p, pl.as_vec3(), ns)

@@ -520,10 +520,13 @@ fn area_emitters_are_one_sided() {
     assert_eq!(lights.area_light_of_shape(3), None);
     // The rectangle faces p: its normal is −n.
     assert_eq!(
-        lights.area_radiance(0, -f.n, Vec2::ZERO, -f.n),
+        lights.area_radiance(0, Vec3::ZERO, -f.n, Vec2::ZERO, -f.n, 1.0),
         Rgb::splat(2.0)
     );
-    assert_eq!(lights.area_radiance(0, -f.n, Vec2::ZERO, f.n), Rgb::ZERO);
+    assert_eq!(
+        lights.area_radiance(0, Vec3::ZERO, -f.n, Vec2::ZERO, f.n, 1.0),
+        Rgb::ZERO
+    );
     let behind = p + 2.0 * f.n;
     let inside_outward = p - 10.0 * f.s + 0.2 * f.t;
     let mut rng = Rng::new(3, 3);
@@ -715,6 +718,7 @@ fn light_samples_are_not_occluded_by_their_own_light() {
         bsdf: common::diffuse(Rgb::splat(0.5)),
         emitter: None,
         emitter_texture: None,
+        emitter_pattern: None,
         location: common::here(),
     };
     let mut failures = Vec::new();
@@ -857,6 +861,7 @@ fn light_samples_stand_alone_at_a_lambertian_last_vertex() {
         bsdf: common::diffuse(Rgb::splat(rho as f32)),
         emitter: None,
         emitter_texture: None,
+        emitter_pattern: None,
         location: common::here(),
     };
     // The receiver at the origin lies below the light's corner (the form factor's case).
@@ -997,15 +1002,107 @@ fn textured_rectangle_emits_its_texture() {
     // Hits: the texture at the hit's uv, on the emitting side only.
     let n_light = -f.n;
     assert_eq!(
-        lights.area_radiance(0, n_light, Vec2::new(0.2, 0.3), n_light),
+        lights.area_radiance(0, Vec3::ZERO, n_light, Vec2::new(0.2, 0.3), n_light, 1.0),
         Rgb::splat(bright)
     );
     assert_eq!(
-        lights.area_radiance(0, n_light, Vec2::new(0.7, 0.3), n_light),
+        lights.area_radiance(0, Vec3::ZERO, n_light, Vec2::new(0.7, 0.3), n_light, 1.0),
         Rgb::splat(dim)
     );
     assert_eq!(
-        lights.area_radiance(0, n_light, Vec2::new(0.7, 0.3), -n_light),
+        lights.area_radiance(0, Vec3::ZERO, n_light, Vec2::new(0.7, 0.3), -n_light, 1.0),
         Rgb::ZERO
+    );
+}
+
+/// A direction- and position-dependent emission pattern: `2 cos²θ (1 + x/2)`, θ between the
+/// light leaving and the emitter's normal, x the point's coordinate. Over a rectangle centred on
+/// x = 0 its cosine-weighted mean is 1, so the light's power stays `π L A`.
+#[derive(Debug)]
+struct Lobe;
+
+impl EmissionPattern for Lobe {
+    fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, _distance: f32) -> Rgb {
+        let c = (-direction).dot(normal).max(0.0);
+        Rgb::splat(2.0 * c * c * (1.0 + 0.5 * point.x))
+    }
+}
+
+/// A patterned rectangle light: its samples carry the pattern at their point and direction (the
+/// irradiance they estimate equals a quadrature over the rectangle, near where it is sampled by
+/// solid angle and far where by area), a ray hitting it sees the same radiance as the sample
+/// that chose that point, and its power is the pattern's mean times `π L A`.
+#[test]
+fn patterned_emitter_samples_hits_and_power_agree() {
+    let (w, l) = (1.0f32, 2.0f32);
+    let radiance = 3.0f32;
+    let corner = Vec3::new(-0.5 * w, -0.5 * l, 1.0);
+    let mesh = rectangle(corner, Vec3::X, Vec3::Y, w, l, Vec3::ZERO);
+    let mut shape = emitting_shape(Geometry::Mesh(mesh), Rgb::splat(radiance));
+    shape.emitter_pattern = Some(Arc::new(Lobe));
+    let lights = LightSet::new(&light_scene(vec![shape], vec![]), Vec3::ZERO, 5.0);
+    let n_light = -Vec3::Z;
+    // Quadrature of L f cosθ_r cosθ_l / r² over the rectangle.
+    let quadrature = |p: Vec3, n: Vec3| {
+        let k = 600;
+        let mut e = 0.0f64;
+        for i in 0..k {
+            for j in 0..k {
+                let x = corner
+                    + Vec3::new(
+                        w * (i as f32 + 0.5) / k as f32,
+                        l * (j as f32 + 0.5) / k as f32,
+                        0.0,
+                    );
+                let d = x - p;
+                let r2 = d.length_squared();
+                let wi = d / r2.sqrt();
+                let (cr, cl) = (n.dot(wi).max(0.0), (-wi).dot(n_light).max(0.0));
+                let f = Lobe.factor(x, n_light, wi, r2.sqrt()).g;
+                e += f64::from(radiance * f * cr * cl / r2);
+            }
+        }
+        e * f64::from(w * l) / (k * k) as f64
+    };
+    for (label, p, n) in [
+        ("near, by solid angle", Vec3::new(0.1, 0.2, 0.7), Vec3::Z),
+        (
+            "tilted",
+            Vec3::new(-0.6, 0.4, 0.2),
+            Vec3::new(0.3, -0.2, 0.9).normalize(),
+        ),
+        ("far", Vec3::new(3.0, -2.0, -20.0), Vec3::Z),
+    ] {
+        assert_estimate(
+            label,
+            irradiance(&lights, p, n, 400_000, 11),
+            quadrature(p, n),
+        );
+        // What a ray reaching the sampled point sees.
+        let mut rng = Rng::new(5, 1);
+        for _ in 0..1000 {
+            let Some(ls) = lights.sample(p, rng.next_f32(), rng.next_2d()) else {
+                continue;
+            };
+            let seen = lights.area_radiance(
+                ls.light,
+                p + ls.wi * ls.distance,
+                n_light,
+                Vec2::ZERO,
+                -ls.wi,
+                ls.distance,
+            );
+            assert!(
+                (seen.g - ls.radiance.g).abs() <= 1e-4 * ls.radiance.g.max(1e-3),
+                "{label}: a hit sees {seen:?}, the sample carried {:?}",
+                ls.radiance
+            );
+        }
+    }
+    let power = lights.power(0).g;
+    let expected = PI * radiance * w * l;
+    assert!(
+        (power / expected - 1.0).abs() < 0.01,
+        "power {power} against {expected}"
     );
 }

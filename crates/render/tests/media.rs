@@ -35,6 +35,7 @@ fn cube(
         bsdf,
         emitter: None,
         emitter_texture: None,
+        emitter_pattern: None,
         media,
         location: here(),
     }
@@ -322,6 +323,7 @@ fn single_scattering_matches_quadrature() {
             bsdf: diffuse(Rgb::ZERO),
             emitter: None,
             emitter_texture: None,
+            emitter_pattern: None,
             media: MediumInterface::default(),
             location: here(),
         };
@@ -375,6 +377,7 @@ fn volpath_without_media_is_path_tracing() {
         bsdf: diffuse(Rgb::splat(0.5)),
         emitter: Some(Rgb::splat(0.5)),
         emitter_texture: None,
+        emitter_pattern: None,
         media: MediumInterface::default(),
         location: here(),
     };

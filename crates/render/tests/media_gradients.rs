@@ -514,6 +514,7 @@ mod in_scenes {
             bsdf,
             emitter: None,
             emitter_texture: None,
+            emitter_pattern: None,
             media,
             location: here(),
         }

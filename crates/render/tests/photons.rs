@@ -337,6 +337,7 @@ fn caustics_through_a_glass_sphere_match_the_path_tracer() {
         bsdf: glass,
         emitter: None,
         emitter_texture: None,
+        emitter_pattern: None,
         location: here(),
     };
     let light = emitting_shape(

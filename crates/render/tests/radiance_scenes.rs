@@ -1,6 +1,8 @@
-//! A Radiance scene (`scenes/radiance-office`) against Radiance 6.0's own irradiance at points:
+//! Radiance scenes against Radiance 6.0's own irradiance at points: in `scenes/radiance-office`
 //! the sky and ground of gensky's `skyfunc` seen directly and through the window's `glass`, and
-//! the direct light of the sun through that glass, a `light` polygon and a `light` sphere.
+//! the direct light of the sun through that glass, a `light` polygon and a `light` sphere; in
+//! `scenes/radiance-luminaires` the light of `ies2rad`'s luminaires (`brightdata` over candela
+//! tables with `source.cal`), a `spotlight` with a focus, a `colorfunc` and a `colordata` lamp.
 
 use ircache_math::{Rgb, Vec3};
 use ircache_render::irradiance_cache::points::{irradiance_at_points, PointMethod};
@@ -9,16 +11,28 @@ use ircache_render::scene::Scene;
 use ircache_scene::{EmitterDesc, SceneDesc};
 use std::path::PathBuf;
 
-fn office() -> SceneDesc {
-    let path =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/radiance-office/office.rad");
-    ircache_scene::load_scene(&path, &[], &Default::default()).expect("office.rad loads")
+fn scene_file(dir: &str, file: &str) -> SceneDesc {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(dir)
+        .join(file);
+    ircache_scene::load_scene(&path, &[], &Default::default()).expect("the scene loads")
 }
 
-/// `(point, normal, Radiance's irradiance)` of a reference file.
+fn office() -> SceneDesc {
+    scene_file("radiance-office", "office.rad")
+}
+
+/// `(point, normal, Radiance's irradiance)` of the office's reference file `name`.
 fn reference(name: &str) -> Vec<(Vec3, Vec3, Rgb)> {
+    reference_in("radiance-office", name)
+}
+
+/// `(point, normal, Radiance's irradiance)` of reference file `name` in scene folder `dir`.
+fn reference_in(dir: &str, name: &str) -> Vec<(Vec3, Vec3, Rgb)> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes/radiance-office")
+        .join("../../scenes")
+        .join(dir)
         .join(name);
     std::fs::read_to_string(path)
         .unwrap()
@@ -100,6 +114,21 @@ fn sun_panel_and_bulb_match_radiance() {
     let refs = reference("reference-direct.txt");
     // Measured within 0.4 %; the sun is a direction here and a 0.5° disc in Radiance.
     check("direct", &direct_at(&desc, &refs, 1024), &refs, 0.01);
+}
+
+#[test]
+fn luminaires_spotlight_and_colour_patterns_match_radiance() {
+    let desc = scene_file("radiance-luminaires", "room.rad");
+    let patterned = desc
+        .shapes
+        .iter()
+        .filter(|s| s.emitter_pattern.is_some())
+        .count();
+    // Three downlight/wall-washer faces, the pendant, the spotlight, two colour lamps.
+    assert_eq!(patterned, 7, "every light of the room has its pattern");
+    let refs = reference_in("radiance-luminaires", "reference-direct.txt");
+    // Measured within 0.1 % at 16384 samples; the tolerance leaves room for 2048.
+    check("luminaires", &direct_at(&desc, &refs, 2048), &refs, 0.005);
 }
 
 #[test]

@@ -34,6 +34,7 @@ fn floor_under_a_sphere(spp: u32, sampler: &str) -> (SceneDesc, f64) {
             bsdf: diffuse(Rgb::splat(0.5)),
             emitter: None,
             emitter_texture: None,
+            emitter_pattern: None,
             location: here(),
         },
         emitting_shape(

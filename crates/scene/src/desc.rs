@@ -273,10 +273,23 @@ pub struct ShapeDesc {
     /// Where the emitter's radiance varies over the surface (Mitsuba's `area` emitter with a
     /// texture as its `radiance`): the texture, looked up at the surface's uv.
     pub emitter_texture: Option<TextureDesc>,
+    /// Where the emitter's radiance varies with the direction it is seen from (Radiance's
+    /// patterns on a `light`, a `spotlight`'s cone): a factor on it.
+    pub emitter_pattern: Option<Arc<dyn EmissionPattern>>,
     /// The media on either side of the surface, if it bounds any.
     pub media: MediumInterface,
     /// Where the shape was declared.
     pub location: SourceLocation,
+}
+
+/// A factor on an area emitter's radiance by where and from which direction it is seen
+/// (Radiance's `brightdata` luminaire tables, `brightfunc`s, `spotlight`s). Its `Debug` text
+/// identifies it completely (a cache file's scene hash is made from it).
+pub trait EmissionPattern: Send + Sync + std::fmt::Debug {
+    /// The factor (per channel, finite and non-negative) for a ray along the unit `direction`
+    /// (towards the emitter) meeting it at `point`, whose unit front normal is `normal`,
+    /// `distance` from where the ray started (infinite where no ray looks: photon emission).
+    fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, distance: f32) -> Rgb;
 }
 
 /// The media on the two sides of a shape's surface (indices into [`SceneDesc::media`]); a ray

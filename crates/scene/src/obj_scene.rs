@@ -275,6 +275,7 @@ fn shape(group: &ObjGroup, bsdf: Arc<BsdfDesc>, emitter: Option<Rgb>) -> ShapeDe
         bsdf,
         emitter,
         emitter_texture: None,
+        emitter_pattern: None,
         location: group.location.clone(),
     }
 }

@@ -215,7 +215,7 @@ fn errors_name_the_place_and_what_was_expected() {
         ),
         (
             "void brightfunc f\n2 x my.cal\n0\n0\nf plastic p\n0\n0\n5 .5 .5 .5 0 0\n",
-            "m.rad:5:1: plastic 'p': its modifier 'f' (brightfunc x my.cal",
+            "m.rad:1:1: cannot find function file \"my.cal\"",
         ),
         (
             "void BSDF t\n0\n0\n0\nt sphere s\n0\n0\n4 0 0 0 1\n",
@@ -239,6 +239,57 @@ fn errors_name_the_place_and_what_was_expected() {
         let e = load(&d, &[("m.rad", text)]).unwrap_err().to_string();
         assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
     }
+    // Patterns, their function and data files.
+    let lamp = "f light l\n0\n0\n3 1 1 1\nl polygon q\n0\n0\n12 0 0 1 1 0 1 1 1 1 0 1 1\n";
+    let pattern_cases: [(&str, &str, &str); 6] = [
+        (
+            "void brightfunc f\n2 v my.cal\n0\n0\nf plastic p\n0\n0\n5 .5 .5 .5 0 0\n",
+            "v = 1;\n",
+            "m.rad:5:1: plastic 'p': its modifier 'f' is a pattern; ircache reads patterns on light",
+        ),
+        (
+            "void brightfunc f\n2 v my.cal\n0\n0\n",
+            "a = 1;\nv = a + b;\n",
+            "my.cal:2:1: undefined variable 'b'",
+        ),
+        (
+            "void brightfunc f\n2 v my.cal\n0\n0\n",
+            "v = (1 + ;\n",
+            "my.cal:1:10: an expression expected",
+        ),
+        (
+            "void brightfunc f\n2 A3*Dz .\n0\n2 1 2\n",
+            "",
+            "polygon 'q': its light's patterns give no number",
+        ),
+        (
+            "void brightdata f\n4 noop t.dat . Dz\n0\n0\n",
+            "",
+            "cannot find data file \"t.dat\"",
+        ),
+        (
+            "void brightfunc f\n3 1 . junk\n0\n0\n",
+            "",
+            "m.rad:1:1: brightfunc 'f': unexpected string argument \"junk\"",
+        ),
+    ];
+    for (text, cal, expect) in pattern_cases {
+        let text = format!("{text}{lamp}");
+        let e = load(&d, &[("m.rad", &text), ("my.cal", cal)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
+    }
+    let e = load(
+        &d,
+        &[(
+            "m.rad",
+            "void spotlight s\n0\n0\n7 1 1 1 30 0 0 -1\ns source sun\n0\n0\n4 0 0 1 1\n",
+        )],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("a distant source cannot be a spotlight"), "{e}");
 }
 
 #[test]

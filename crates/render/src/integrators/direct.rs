@@ -46,7 +46,9 @@ impl DirectIntegrator {
         let shape = &scene.shapes[it.shape as usize];
         let mut l = Rgb::ZERO;
         if let (Some(light), false) = (shape.area_light, self.hide_emitters) {
-            l += scene.lights.area_radiance(light, it.frame.n, it.uv, wo);
+            l += scene
+                .lights
+                .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
         }
         let bsdf = scene.materials[shape.material].at(it.uv);
         let wo_local = it.frame.to_local(wo);
@@ -132,10 +134,14 @@ pub fn estimate_direct(
             }
             Some(hit_it) => {
                 if let Some(light) = scene.shapes[hit_it.shape as usize].area_light {
-                    let le = scene
-                        .lights
-                        .area_radiance(light, hit_it.frame.n, hit_it.uv, -wi)
-                        * through;
+                    let le = scene.lights.area_radiance(
+                        light,
+                        hit_it.p,
+                        hit_it.frame.n,
+                        hit_it.uv,
+                        -wi,
+                        hit_it.t,
+                    ) * through;
                     if le.is_black() {
                         continue;
                     }

@@ -250,7 +250,9 @@ pub fn trace_path_deferring(
         let wo = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
         if let Some(light) = shape.area_light.filter(|_| !caustic_chain) {
-            let le = scene.lights.area_radiance(light, it.frame.n, it.uv, wo);
+            let le = scene
+                .lights
+                .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
             if !le.is_black() {
                 let w = arrival.emission_weight(|p| {
                     scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n)

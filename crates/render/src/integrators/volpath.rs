@@ -231,7 +231,9 @@ impl VolPathIntegrator {
             }
             let wo = -ray.d;
             if let Some(light) = shape.area_light {
-                let le = scene.lights.area_radiance(light, it.frame.n, it.uv, wo);
+                let le = scene
+                    .lights
+                    .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
                 if !le.is_black() {
                     let w = arrival.emission_weight(|p| {
                         scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n)

@@ -133,7 +133,7 @@ impl MeshLight {
             .as_ref()
             .filter(|t| radiance.is_textured() && t.len() == mesh.positions.len())
             .cloned();
-        Some(MeshLight {
+        let mut light = MeshLight {
             positions: mesh.positions.clone(),
             triangle_normals,
             normals,
@@ -143,7 +143,14 @@ impl MeshLight {
             radiance,
             uvs,
             rectangle,
-        })
+        };
+        if light.radiance.is_patterned() {
+            light.radiance = light.radiance.clone().with_pattern_mean(|u| {
+                let s = light.sample_position(u);
+                (s.p, s.emitting_normal())
+            });
+        }
+        Some(light)
     }
 
     /// How `p_ref` samples the light when it is one rectangle (with its normal); `None` for
@@ -230,7 +237,10 @@ impl MeshLight {
         let s = self.sample_position(u_pos);
         let n = s.emitting_normal();
         let d = Frame::from_z(n).from_local(square_to_cosine_hemisphere(u_dir));
-        (d.dot(s.ns) > 0.0).then(|| (s.p, n, d, self.radiance.at(s.uv) * (PI * self.area)))
+        (d.dot(s.ns) > 0.0).then(|| {
+            let l = self.radiance.seen(s.uv, s.p, n, d, f32::INFINITY);
+            (s.p, n, d, l * (PI * self.area))
+        })
     }
 
     /// Samples a direction from `p_ref` towards the mesh: `(wi, distance, radiance, solid-angle
@@ -250,7 +260,8 @@ impl MeshLight {
                     if !is_positive_finite(dist) || n.dot(-wi) <= 0.0 {
                         return None;
                     }
-                    return Some((wi, dist, self.radiance.mean(), pdf?, n));
+                    let l = self.radiance.seen(Vec2::ZERO, p_ref + d, n, -wi, dist);
+                    return Some((wi, dist, l, pdf?, n));
                 }
                 Seen::Nearly(axis) => {
                     let wi = Frame::from_z(axis).from_local(square_to_uniform_hemisphere(u));
@@ -258,7 +269,10 @@ impl MeshLight {
                     if n.dot(-wi) <= 0.0 {
                         return None;
                     }
-                    return Some((wi, dist, self.radiance.mean(), pdf?, n));
+                    let l = self
+                        .radiance
+                        .seen(Vec2::ZERO, p_ref + wi * dist, n, -wi, dist);
+                    return Some((wi, dist, l, pdf?, n));
                 }
                 Seen::Area => {}
             }
@@ -279,7 +293,10 @@ impl MeshLight {
         if !is_positive_finite(pdf) {
             return None;
         }
-        Some((wi, dist, self.radiance.at(sp.uv), pdf, sp.ng))
+        let l = self
+            .radiance
+            .seen(sp.uv, sp.p, sp.emitting_normal(), -wi, dist);
+        Some((wi, dist, l, pdf, sp.ng))
     }
 
     /// Solid-angle density (without light selection) with which [`MeshLight::sample`] from `p_ref`

@@ -37,13 +37,16 @@ use area::MeshLight;
 use directional::DirectionalLight;
 use emission::{distant_origin, EmissionSample, Targets};
 use environment::{ConstantLight, EnvmapLight};
-use ircache_math::sampling::{square_to_uniform_sphere, Distribution1D};
-use ircache_math::{Rgb, Vec2, Vec3};
-use ircache_scene::{EmitterDesc, Geometry, SceneDesc};
+use ircache_math::sampling::{
+    square_to_cosine_hemisphere, square_to_uniform_sphere, Distribution1D,
+};
+use ircache_math::{Frame, Rgb, Vec2, Vec3};
+use ircache_scene::{EmissionPattern, EmitterDesc, Geometry, SceneDesc};
 use point::PointLight;
 use selection::LightBound;
 use sphere::SphereLight;
 use spot::SpotLight;
+use std::sync::Arc;
 
 /// Converts an area density to a solid-angle density at a reference point (PBRT 3rd ed. eq. 5.6):
 /// `p_ω = p_A · d² / |cos θ_light|`, infinite when the emitter is seen edge-on.
@@ -189,39 +192,112 @@ pub struct LightSet {
 }
 
 /// What an area light emits: one radiance, or a texture looked up at the surface's uv (Mitsuba's
-/// `area` emitter with a texture as its `radiance`) with its mean, which stands for the light
-/// where power is estimated.
+/// `area` emitter with a texture as its `radiance`), times a factor by the direction it is seen
+/// from where it has a pattern (Radiance's luminaire tables and spotlights). Its mean, the
+/// radiance of a uniform emitter of the same power, stands for the light where power is
+/// estimated.
 #[derive(Clone, Debug)]
 pub struct EmittedRadiance {
-    mean: Rgb,
+    /// The radiance, or the texture's mean.
+    radiance: Rgb,
     texture: Option<crate::texture::Texture>,
+    pattern: Option<Arc<dyn EmissionPattern>>,
+    /// The pattern's mean over the light's surface and its cosine-weighted hemisphere.
+    pattern_mean: Rgb,
 }
 
+/// Samples (positions × directions) over which a pattern's mean is taken.
+const PATTERN_MEAN_SAMPLES: u32 = 4096;
+
 impl EmittedRadiance {
-    /// `mean` everywhere, or `texture` (whose mean `mean` is).
+    /// `radiance` everywhere, or `texture` (whose mean `radiance` is), times `pattern` where
+    /// given; see [`Self::with_pattern_mean`].
     #[must_use]
-    pub fn new(mean: Rgb, texture: Option<&ircache_scene::TextureDesc>) -> EmittedRadiance {
+    pub fn new(
+        radiance: Rgb,
+        texture: Option<&ircache_scene::TextureDesc>,
+        pattern: Option<&Arc<dyn EmissionPattern>>,
+    ) -> EmittedRadiance {
         EmittedRadiance {
-            mean,
+            radiance,
             texture: texture.map(crate::texture::Texture::from_desc),
+            pattern: pattern.cloned(),
+            pattern_mean: Rgb::ONE,
         }
     }
 
-    /// The radiance, or its mean over the texture.
+    /// Sets the pattern's mean from points `position(u)` (point, front normal) uniform over the
+    /// light's surface: the mean factor over them and cosine-distributed directions, so that
+    /// [`Self::mean`] times π times the area is the light's power.
+    #[must_use]
+    pub fn with_pattern_mean(mut self, position: impl Fn(Vec2) -> (Vec3, Vec3)) -> Self {
+        let Some(pattern) = &self.pattern else {
+            return self;
+        };
+        // A grid of 4 × 4 positions, each with 256 cosine-distributed directions from a
+        // Hammersley set (i/N, bit-reversed i).
+        const POSITIONS: u32 = 16;
+        const DIRECTIONS: u32 = PATTERN_MEAN_SAMPLES / POSITIONS;
+        let mut sum = [0f64; 3];
+        for i in 0..POSITIONS {
+            let u = Vec2::new(((i % 4) as f32 + 0.5) / 4.0, ((i / 4) as f32 + 0.5) / 4.0);
+            let (p, n) = position(u);
+            let frame = Frame::from_z(n);
+            for j in 0..DIRECTIONS {
+                let v = Vec2::new(
+                    (j as f32 + 0.5) / DIRECTIONS as f32,
+                    (f64::from(j.reverse_bits()) / 4_294_967_296.0) as f32,
+                );
+                let leaving = frame.from_local(square_to_cosine_hemisphere(v));
+                let f = pattern.factor(p, n, -leaving, f32::INFINITY);
+                for (s, v) in sum.iter_mut().zip(f.to_array()) {
+                    *s += f64::from(v);
+                }
+            }
+        }
+        let k = 1.0 / f64::from(PATTERN_MEAN_SAMPLES);
+        self.pattern_mean = Rgb::new(
+            (sum[0] * k) as f32,
+            (sum[1] * k) as f32,
+            (sum[2] * k) as f32,
+        );
+        self
+    }
+
+    /// The radiance of a uniform emitter of the same power (the texture's mean times the
+    /// pattern's).
     #[inline]
     #[must_use]
     pub fn mean(&self) -> Rgb {
-        self.mean
+        self.radiance * self.pattern_mean
     }
 
-    /// The radiance at texture coordinates `uv`.
+    /// The radiance at texture coordinates `uv`, before any pattern.
     #[inline]
     #[must_use]
     pub fn at(&self, uv: Vec2) -> Rgb {
         match &self.texture {
-            None => self.mean,
+            None => self.radiance,
             Some(t) => t.eval(uv),
         }
+    }
+
+    /// The radiance leaving the point `p` (texture coordinates `uv`, unit front normal `n`)
+    /// along the unit `wo`, towards a viewer `distance` away.
+    #[inline]
+    #[must_use]
+    pub fn seen(&self, uv: Vec2, p: Vec3, n: Vec3, wo: Vec3, distance: f32) -> Rgb {
+        match &self.pattern {
+            None => self.at(uv),
+            Some(f) => self.at(uv) * f.factor(p, n, -wo, distance),
+        }
+    }
+
+    /// True where it varies with the direction it is seen from.
+    #[inline]
+    #[must_use]
+    pub fn is_patterned(&self) -> bool {
+        self.pattern.is_some()
     }
 
     /// True where it varies over the surface.
@@ -248,7 +324,11 @@ impl LightSet {
             let light = match &shape.geometry {
                 Geometry::Mesh(mesh) => MeshLight::new(
                     mesh,
-                    EmittedRadiance::new(radiance, shape.emitter_texture.as_ref()),
+                    EmittedRadiance::new(
+                        radiance,
+                        shape.emitter_texture.as_ref(),
+                        shape.emitter_pattern.as_ref(),
+                    ),
                 )
                 .map(Light::Mesh),
                 &Geometry::Sphere {
@@ -257,7 +337,11 @@ impl LightSet {
                     flip_normals,
                     orientation,
                 } => {
-                    let emitted = EmittedRadiance::new(radiance, shape.emitter_texture.as_ref());
+                    let emitted = EmittedRadiance::new(
+                        radiance,
+                        shape.emitter_texture.as_ref(),
+                        shape.emitter_pattern.as_ref(),
+                    );
                     SphereLight::new(center, radius, flip_normals, emitted, orientation.inverse())
                         .map(Light::Sphere)
                 }
@@ -551,17 +635,18 @@ impl LightSet {
         if targets.is_empty() {
             return None;
         }
-        let from_surface = |p: Vec3, n: Vec3, ns: Vec3, radiance: Rgb, area: f32| {
-            let w = targets.sample_direction(p, u_pick, u_direction);
-            let cos = n.dot(w);
-            let pdf = targets.direction_pdf(p, w);
-            (cos > 0.0 && ns.dot(w) > 0.0 && is_positive_finite(pdf)).then(|| EmissionSample {
-                origin: p,
-                direction: w,
-                normal: Some(n),
-                flux: radiance * (cos * area / pdf),
-            })
-        };
+        let from_surface =
+            |p: Vec3, n: Vec3, ns: Vec3, radiance: &dyn Fn(Vec3) -> Rgb, area: f32| {
+                let w = targets.sample_direction(p, u_pick, u_direction);
+                let cos = n.dot(w);
+                let pdf = targets.direction_pdf(p, w);
+                (cos > 0.0 && ns.dot(w) > 0.0 && is_positive_finite(pdf)).then(|| EmissionSample {
+                    origin: p,
+                    direction: w,
+                    normal: Some(n),
+                    flux: radiance(w) * (cos * area / pdf),
+                })
+            };
         let from_point = |p: Vec3, intensity: &dyn Fn(Vec3) -> Rgb| {
             let w = targets.sample_direction(p, u_pick, u_direction);
             let pdf = targets.direction_pdf(p, w);
@@ -584,18 +669,25 @@ impl LightSet {
         self.emit(u_select, |light| match light {
             Light::Mesh(m) => {
                 let s = m.sample_position(u_position);
+                let n = s.emitting_normal();
                 from_surface(
                     s.p,
-                    s.emitting_normal(),
+                    n,
                     s.ns,
-                    m.radiance().at(s.uv),
+                    &|w| m.radiance().seen(s.uv, s.p, n, w, f32::INFINITY),
                     m.area(),
                 )
             }
             Light::Sphere(s) => {
                 let (p, n) = s.sample_position(u_position);
                 let outward = (p - s.sphere().0) / s.sphere().1;
-                from_surface(p, n, n, s.radiance_towards(outward), s.area())
+                from_surface(
+                    p,
+                    n,
+                    n,
+                    &|w| s.radiance_seen(outward, w, f32::INFINITY),
+                    s.area(),
+                )
             }
             Light::Point(l) => from_point(l.position, &|_| l.intensity),
             Light::Spot(l) => {
@@ -668,22 +760,28 @@ impl LightSet {
         self.shape_light.get(shape).copied().flatten()
     }
 
-    /// Radiance leaving a point of area light `light` with shading normal `n_shading` and
-    /// texture coordinates `uv` towards the world direction `wo`: the emitter's radiance there
-    /// when `n_shading · wo > 0`, zero on the back side (one-sided, as Mitsuba's `area` emitter)
-    /// and for ids that are not area lights.
+    /// Radiance leaving the point `p` of area light `light` with shading normal `n_shading` and
+    /// texture coordinates `uv` towards the world direction `wo`, seen from `distance` away:
+    /// the emitter's radiance there when `n_shading · wo > 0`, zero on the back side (one-sided,
+    /// as Mitsuba's `area` emitter) and for ids that are not area lights.
     #[inline]
     #[must_use]
-    pub fn area_radiance(&self, light: u32, n_shading: Vec3, uv: Vec2, wo: Vec3) -> Rgb {
-        let radiance = match self.lights.get(light as usize) {
-            Some(Light::Mesh(m)) => m.radiance().at(uv),
-            Some(Light::Sphere(s)) => s.radiance().at(uv),
-            _ => return Rgb::ZERO,
-        };
-        if n_shading.dot(wo) > 0.0 {
-            radiance
-        } else {
-            Rgb::ZERO
+    pub fn area_radiance(
+        &self,
+        light: u32,
+        p: Vec3,
+        n_shading: Vec3,
+        uv: Vec2,
+        wo: Vec3,
+        distance: f32,
+    ) -> Rgb {
+        if n_shading.dot(wo) <= 0.0 {
+            return Rgb::ZERO;
+        }
+        match self.lights.get(light as usize) {
+            Some(Light::Mesh(m)) => m.radiance().seen(uv, p, n_shading, wo, distance),
+            Some(Light::Sphere(s)) => s.radiance().seen(uv, p, n_shading, wo, distance),
+            _ => Rgb::ZERO,
         }
     }
 

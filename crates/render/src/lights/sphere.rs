@@ -49,13 +49,23 @@ impl SphereLight {
         radiance: EmittedRadiance,
         to_object: Mat3,
     ) -> Option<SphereLight> {
-        (radius > 0.0 && radius.is_finite()).then_some(SphereLight {
+        if !(radius > 0.0 && radius.is_finite()) {
+            return None;
+        }
+        let mut light = SphereLight {
             center,
             radius,
             flip_normals,
             radiance,
             to_object,
-        })
+        };
+        if light.radiance.is_patterned() {
+            light.radiance = light
+                .radiance
+                .clone()
+                .with_pattern_mean(|u| light.sample_position(u));
+        }
+        Some(light)
     }
 
     /// Emitted radiance on the emitting side.
@@ -64,14 +74,21 @@ impl SphereLight {
         &self.radiance
     }
 
-    /// Emitted radiance at the point whose outward unit normal is `outward`.
+    /// Emitted radiance at the point whose outward unit normal is `outward`, leaving along the
+    /// unit `wo` towards a viewer `distance` away.
     #[inline]
-    pub(crate) fn radiance_towards(&self, outward: Vec3) -> Rgb {
-        if self.radiance.is_textured() {
-            self.radiance
-                .at(crate::scene::sphere_uv(self.to_object * outward))
+    pub(crate) fn radiance_seen(&self, outward: Vec3, wo: Vec3, distance: f32) -> Rgb {
+        let uv = if self.radiance.is_textured() {
+            crate::scene::sphere_uv(self.to_object * outward)
         } else {
-            self.radiance.mean()
+            Vec2::ZERO
+        };
+        if self.radiance.is_patterned() {
+            let p = self.center + outward * self.radius;
+            self.radiance
+                .seen(uv, p, self.shading_normal(outward), wo, distance)
+        } else {
+            self.radiance.at(uv)
         }
     }
 
@@ -82,7 +99,12 @@ impl SphereLight {
         let (p, n) = self.sample_position(u_pos);
         let d = Frame::from_z(n).from_local(square_to_cosine_hemisphere(u_dir));
         let outward = (p - self.center) / self.radius;
-        (p, n, d, self.radiance_towards(outward) * (PI * self.area()))
+        (
+            p,
+            n,
+            d,
+            self.radiance_seen(outward, d, f32::INFINITY) * (PI * self.area()),
+        )
     }
 
     /// A point uniform by area (density `1 / area()`) with the normal of the emitting side.
@@ -176,7 +198,13 @@ impl SphereLight {
         if self.shading_normal(outward).dot(-wi) <= 0.0 || !is_positive_finite(pdf) {
             return None;
         }
-        Some((wi, dist, self.radiance_towards(outward), pdf, outward))
+        Some((
+            wi,
+            dist,
+            self.radiance_seen(outward, -wi, dist),
+            pdf,
+            outward,
+        ))
     }
 
     /// Solid-angle density (without light selection) with which [`SphereLight::sample`] from

@@ -282,7 +282,9 @@ impl<'a> SceneMedium<'a> {
                 let mut l = Rgb::ZERO;
                 if self.include_emitters {
                     if let Some(light) = shape.area_light {
-                        l += scene.lights.area_radiance(light, it.frame.n, it.uv, wo);
+                        l += scene
+                            .lights
+                            .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
                     }
                 }
                 let bsdf = scene.materials[shape.material].at(it.uv);

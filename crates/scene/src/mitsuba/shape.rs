@@ -229,6 +229,7 @@ pub(crate) fn build_shape(ctx: &Ctx, p: &Rc<Plugin>) -> Result<ShapeDesc, SceneE
         bsdf: bsdf.unwrap_or_else(|| ctx.default_bsdf.clone()),
         emitter,
         emitter_texture,
+        emitter_pattern: None,
         media,
         location: p.loc.clone(),
     })

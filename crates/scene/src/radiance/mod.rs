@@ -12,34 +12,42 @@
 //!   Radiance shades both sides of a surface alike, so the opaque ones are `twosided`.
 //! - **Light**: `light` and `glow` surfaces emit their radiance (W sr⁻¹ m⁻², as ircache's RGB) from
 //!   their front and reflect nothing; a glow's maximum radius only steers Radiance's choice of
-//!   sources, which a path tracer does not need. `illum` is a secondary source standing for the
+//!   sources, which a path tracer does not need. `spotlight` emits within its cone, with the
+//!   focus its orientation vector's length sets ([`pattern::Spot`]). `illum` is a secondary source standing for the
 //!   light behind it: here it is its alternate material, or nothing where that is `void`, so the
 //!   light it stood for is traced. A distant `source` of material `light` narrower than 10° is a
 //!   directional light of the same irradiance (L·Ω, Ω its solid angle; sharp shadows); wider ones
 //!   and `glow` sources (skies, grounds) are baked into a latitude–longitude environment,
-//!   including gensky's `skyfunc` (`brightfunc skybr skybright.cal`, evaluated here).
+//!   including gensky's `skyfunc` (`brightfunc skybr skybright.cal`, evaluated natively).
+//! - **Patterns on lights**: `brightfunc`, `colorfunc`, `brightdata` and `colordata` ([`pattern`]),
+//!   with their function files in Radiance's language ([`cal`]) and data files ([`data`]): the
+//!   luminaires `ies2rad` makes render as their candela tables say.
 //! - **Commands**: `!xform` is carried out here, other commands are run (see [`parse`]).
 //! - **Camera**: a Radiance view ([`view`]) given with the scene (`--view`), else `eye`, `target`
 //!   and `fov` as for OBJ scenes, else the whole scene framed from Radiance's default direction
 //!   (+y, up +z). The picture fits 512 × 512 (or `width` × `height`) with square pixels, as rpict.
-//! - Everything else (patterns, textures, mixtures, `plastic2`, `BSDF`, `spotlight`, `antimatter`, ...)
-//!   is an error at the first surface that needs it, naming the primitive. Nothing is skipped
+//! - Everything else (patterns on reflecting materials, textures, mixtures, `plastic2`, `BSDF`,
+//!   `antimatter`, ...) is an error at the first surface that needs it, naming the primitive. Nothing is skipped
 //!   without a note: surfaces of `void` are dropped with a count in the scene's notes.
 
+pub mod cal;
+pub mod data;
 pub mod parse;
+pub mod pattern;
 pub mod sky;
 pub mod view;
 pub mod xform;
 
 use crate::desc::{
-    BsdfDesc, EmitterDesc, FovAxis, Geometry, IntegratorDesc, Projection, SensorDesc, ShapeDesc,
-    TextureDesc, TriangleMesh,
+    BsdfDesc, EmissionPattern, EmitterDesc, FovAxis, Geometry, IntegratorDesc, Projection,
+    SensorDesc, ShapeDesc, TextureDesc, TriangleMesh,
 };
 use crate::error::SourceLocation;
 use crate::obj_scene::ObjCamera;
 use crate::{SceneDesc, SceneError};
 use ircache_math::{DVec3, Mat3, Mat4, Rgb, Vec3};
 use parse::Primitive;
+use pattern::{FunctionPattern, LightPattern, Pattern, PatternFiles, Spot};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -81,16 +89,18 @@ pub fn is_modifier_type(kind: &str) -> bool {
 enum Modifier {
     /// A reflecting or transmitting material.
     Bsdf(Arc<BsdfDesc>),
-    /// `light` or `glow` (the kind kept for sources), with a pattern on its radiance.
+    /// `light`, `glow` or `spotlight` (the kind kept for sources), with the patterns on its
+    /// radiance and a spotlight's cone.
     Light {
         radiance: Rgb,
         kind: &'static str,
-        pattern: Option<sky::SkyBrightness>,
+        pattern: LightPattern,
     },
     /// `illum`: its alternate material (`None` for void).
     Illum(Option<String>),
-    /// gensky's `skyfunc`.
-    Sky(sky::SkyBrightness),
+    /// A pattern (gensky's `skyfunc`, a function or data pattern) with the patterns modifying
+    /// it, outermost first.
+    Pattern(Vec<Pattern>),
     /// A type ircache does not render; an error where a surface uses it.
     Unsupported(String),
 }
@@ -98,6 +108,7 @@ enum Modifier {
 /// Loads a Radiance scene; see the [module documentation](self).
 pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
     let primitives = parse::read(path)?;
+    let mut files = PatternFiles::new(path.parent().unwrap_or(Path::new(".")));
     let mut modifiers: HashMap<String, (Modifier, SourceLocation)> = HashMap::new();
     let mut shapes = Vec::new();
     let mut sources = Vec::new();
@@ -106,7 +117,7 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
     let mut illum_surfaces = 0usize;
     for p in &primitives {
         if is_modifier_type(&p.kind) {
-            let m = modifier(p, &modifiers)?;
+            let m = modifier(p, &modifiers, &mut files)?;
             modifiers.insert(p.id.clone(), (m, p.location.clone()));
             continue;
         }
@@ -118,23 +129,15 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
             sources.push(source(p, material)?);
             continue;
         }
-        let (bsdf, emitter) = match material {
-            Modifier::Bsdf(b) => (b, None),
+        let (bsdf, emitter, pattern) = match material {
+            Modifier::Bsdf(b) => (b, None, None),
             Modifier::Light {
-                radiance,
-                pattern: None,
-                ..
-            } => (black(), Some(radiance)),
-            Modifier::Light { .. } => {
-                return Err(SceneError::at(
-                    p.location.clone(),
-                    format!(
-                        "{} '{}': a patterned light on a surface is not supported (skyfunc \
-                         belongs on a distant 'source')",
-                        p.kind, p.id
-                    ),
-                ))
-            }
+                radiance, pattern, ..
+            } => (
+                black(),
+                Some(radiance),
+                Some(pattern).filter(|p| !p.is_empty()),
+            ),
             _ => unreachable!("surface_material resolves the rest"),
         };
         let Some(geometry) = geometry(p)? else {
@@ -157,12 +160,16 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
                 ),
             ));
         }
+        if let Some(pattern) = &pattern {
+            probe(p, &geometry, pattern, &mut notes)?;
+        }
         shapes.push(ShapeDesc {
             id: Some(p.id.clone()),
             geometry,
             bsdf,
             emitter,
             emitter_texture: None,
+            emitter_pattern: pattern.map(|p| Arc::new(p) as Arc<dyn EmissionPattern>),
             media: Default::default(),
             location: p.location.clone(),
         });
@@ -240,6 +247,7 @@ fn rgb(r: &[f64]) -> Rgb {
 fn modifier(
     p: &Primitive,
     known: &HashMap<String, (Modifier, SourceLocation)>,
+    files: &mut PatternFiles,
 ) -> Result<Modifier, SceneError> {
     let err = |m: String| SceneError::at(p.location.clone(), format!("{} '{}': {m}", p.kind, p.id));
     let reals = |n: &[usize]| -> Result<(), SceneError> {
@@ -264,13 +272,13 @@ fn modifier(
             ))
         });
     }
-    // A material's own modifier: a pattern on it.
-    let pattern = if p.modifier == "void" {
-        None
+    // A material's own modifier: the patterns on it.
+    let chain = if p.modifier == "void" {
+        Vec::new()
     } else {
         match known.get(&p.modifier) {
             None => return Err(err(format!("undefined modifier '{}'", p.modifier))),
-            Some((Modifier::Sky(s), _)) => Some(*s),
+            Some((Modifier::Pattern(chain), _)) => chain.clone(),
             Some((Modifier::Unsupported(what), at)) => {
                 return Err(err(format!(
                     "its modifier '{}' ({what}, at {at}) is not supported",
@@ -285,11 +293,16 @@ fn modifier(
             }
         }
     };
-    if pattern.is_some() && !matches!(p.kind.as_str(), "glow" | "light") {
-        return Err(err(
-            "a sky pattern is supported on 'glow' and 'light' materials only".into(),
-        ));
+    let patterned = FunctionPattern::is_function_pattern(&p.kind);
+    if !chain.is_empty() && !patterned && !matches!(p.kind.as_str(), "glow" | "light" | "spotlight")
+    {
+        return Err(err(format!(
+            "its modifier '{}' is a pattern; ircache reads patterns on light, glow and spotlight \
+             materials (and on other patterns), not yet on reflecting ones",
+            p.modifier
+        )));
     }
+    let pattern = LightPattern { chain, spot: None };
     let m = match p.kind.as_str() {
         "plastic" | "metal" | "trans" => {
             let trans = p.kind == "trans";
@@ -357,14 +370,41 @@ fn modifier(
                 specular_transmittance: Rgb::ONE,
             }))
         }
-        "light" | "glow" => {
-            reals(if p.kind == "light" { &[3] } else { &[4] })?;
+        "light" | "glow" | "spotlight" => {
+            reals(match p.kind.as_str() {
+                "light" => &[3],
+                "glow" => &[4],
+                _ => &[7],
+            })?;
             if p.reals[..3].iter().any(|&v| v < 0.0) {
                 return Err(err("negative radiance".into()));
             }
+            let mut pattern = pattern;
+            if p.kind == "spotlight" {
+                // The cone's full angle and the direction light leaves along, turned by the
+                // !xform around it as xform's m_spot does.
+                let angle = p.reals[3];
+                let aim = p
+                    .transform
+                    .vector(DVec3::new(p.reals[4], p.reals[5], p.reals[6]));
+                if angle.is_nan() || angle <= 0.0 || aim.length() == 0.0 {
+                    return Err(err(
+                        "a spotlight needs a positive angle and a non-zero direction".into(),
+                    ));
+                }
+                pattern.spot = Some(Spot {
+                    aim: aim.normalize(),
+                    cos_half: (angle.min(360.0) * 0.5).to_radians().cos(),
+                    focus: aim.length(),
+                });
+            }
             Modifier::Light {
                 radiance: rgb(&p.reals),
-                kind: if p.kind == "light" { "light" } else { "glow" },
+                kind: match p.kind.as_str() {
+                    "light" => "light",
+                    "glow" => "glow",
+                    _ => "spotlight",
+                },
                 pattern,
             }
         }
@@ -372,14 +412,15 @@ fn modifier(
             reals(&[3])?;
             Modifier::Illum(p.strings.first().filter(|s| *s != "void").cloned())
         }
-        "brightfunc" => match sky::SkyBrightness::from_primitive(p) {
-            Some(s) => Modifier::Sky(s.map_err(err)?),
-            None => Modifier::Unsupported(format!(
-                "brightfunc {} (function files are not evaluated; gensky's skybright.cal and \
-                 gendaylit's perezlum.cal are)",
-                p.strings.join(" ")
-            )),
-        },
+        kind if FunctionPattern::is_function_pattern(kind) => {
+            let own = match sky::SkyBrightness::from_primitive(p) {
+                Some(s) => Pattern::Sky(s.map_err(err)?),
+                None => Pattern::Function(Arc::new(FunctionPattern::from_primitive(p, files)?)),
+            };
+            let mut chain = pattern.chain;
+            chain.push(own);
+            Modifier::Pattern(chain)
+        }
         other => Modifier::Unsupported(format!("{other}, not rendered by ircache")),
     };
     Ok(m)
@@ -429,7 +470,7 @@ fn surface_material(
                     ),
                 ))
             }
-            Modifier::Sky(_) => {
+            Modifier::Pattern(_) => {
                 return Err(SceneError::at(
                     p.location.clone(),
                     format!(
@@ -467,10 +508,16 @@ fn source(p: &Primitive, material: Modifier) -> Result<Source, SceneError> {
     if d.length() == 0.0 || angle <= 0.0 {
         return Err(err("needs a non-zero direction and a positive angle"));
     }
-    if !matches!(material, Modifier::Light { .. }) {
-        return Err(err(
-            "a distant source must be of a 'light' or 'glow' material",
-        ));
+    match &material {
+        Modifier::Light { kind, .. } if *kind != "spotlight" => {}
+        Modifier::Light { .. } => {
+            return Err(err("a distant source cannot be a spotlight"));
+        }
+        _ => {
+            return Err(err(
+                "a distant source must be of a 'light' or 'glow' material",
+            ))
+        }
     }
     Ok(Source {
         direction: d.normalize(),
@@ -495,7 +542,7 @@ fn environment(sources: &[Source], notes: &mut Vec<String>) -> Vec<EmitterDesc> 
         };
         let half = (s.angle * 0.5).to_radians();
         let solid_angle = 2.0 * std::f64::consts::PI * (1.0 - half.cos());
-        if *kind == "light" && pattern.is_none() && s.angle < DIRECTIONAL_MAX_ANGLE {
+        if *kind == "light" && pattern.is_empty() && s.angle < DIRECTIONAL_MAX_ANGLE {
             emitters.push(EmitterDesc::Directional {
                 direction: (-s.direction).as_vec3(),
                 irradiance: *radiance * solid_angle as f32,
@@ -506,14 +553,14 @@ fn environment(sources: &[Source], notes: &mut Vec<String>) -> Vec<EmitterDesc> 
                 s.location, s.angle
             ));
         } else {
-            baked.push((s.direction, half.cos(), *radiance, *pattern));
+            baked.push((s.direction, half.cos(), *radiance, pattern));
         }
     }
     if baked.is_empty() {
         return emitters;
     }
-    if let [(_, cos, radiance, None)] = baked[..] {
-        if cos <= -1.0 + 1e-12 {
+    if let [(_, cos, radiance, pattern)] = baked[..] {
+        if cos <= -1.0 + 1e-12 && pattern.is_empty() {
             emitters.push(EmitterDesc::Constant { radiance });
             return emitters;
         }
@@ -533,8 +580,9 @@ fn environment(sources: &[Source], notes: &mut Vec<String>) -> Vec<EmitterDesc> 
             let mut sum = Rgb::ZERO;
             for (dir, cos, radiance, pattern) in &baked {
                 if d.dot(*dir) >= *cos {
-                    let k = pattern.map_or(1.0, |p| p.brightness(d));
-                    sum += *radiance * k as f32;
+                    // Seen from inside the scene, far away (Radiance's FHUGE).
+                    let [r, g, b] = pattern.factor_f64(d * 1e10, -d, d, 1e10);
+                    sum += *radiance * Rgb::new(r as f32, g as f32, b as f32);
                 }
             }
             image.set(i, j, sum);
@@ -547,6 +595,58 @@ fn environment(sources: &[Source], notes: &mut Vec<String>) -> Vec<EmitterDesc> 
         scale: 1.0,
     });
     emitters
+}
+
+/// Evaluates a patterned light at a point of its surface over its front hemisphere: an error
+/// where the patterns give no number (Radiance's compute error: an argument or `select` index
+/// out of range, a domain error), a note where they are negative (counted as zero).
+fn probe(
+    p: &Primitive,
+    geometry: &Geometry,
+    pattern: &LightPattern,
+    notes: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let (point, normal) = match geometry {
+        Geometry::Mesh(m) => {
+            let [a, b, c] = m.indices[0].map(|i| m.positions[i as usize].as_dvec3());
+            ((a + b + c) / 3.0, (b - a).cross(c - a).normalize_or_zero())
+        }
+        Geometry::Sphere { center, radius, .. } => {
+            ((*center + Vec3::Z * *radius).as_dvec3(), DVec3::Z)
+        }
+    };
+    let (t, b) = basis(normal);
+    let mut negative = None;
+    for i in 0..16 {
+        let phi = std::f64::consts::TAU * (f64::from(i) + 0.5) / 16.0;
+        for j in 0..8 {
+            let cos = (f64::from(j) + 0.5) / 8.0;
+            let leaving = normal * cos + (t * phi.cos() + b * phi.sin()) * (1.0 - cos * cos).sqrt();
+            let v = pattern.raw(point, normal, -leaving, 1.0);
+            let angle = cos.acos().to_degrees();
+            if v.iter().any(|x| !x.is_finite()) {
+                return Err(SceneError::at(
+                    p.location.clone(),
+                    format!(
+                        "{} '{}': its light's patterns give no number ({v:?}) for light leaving \
+                         {angle:.0}° from its normal: check their arguments and files",
+                        p.kind, p.id
+                    ),
+                ));
+            }
+            if v.iter().any(|&x| x < 0.0) {
+                negative.get_or_insert(angle);
+            }
+        }
+    }
+    if let Some(angle) = negative {
+        notes.push(format!(
+            "{}: {} '{}': its light's patterns are negative for light leaving {angle:.0}° from \
+             its normal; ircache counts that as no light",
+            p.location, p.kind, p.id
+        ));
+    }
+    Ok(())
 }
 
 fn v3(v: DVec3) -> Vec3 {

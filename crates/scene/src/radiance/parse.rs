@@ -122,10 +122,24 @@ impl Cursor<'_> {
         String::from_utf8_lossy(&s).into_owned()
     }
 
-    /// The next whitespace-separated word and where it starts; `None` at the end.
+    /// The next whitespace-separated word and where it starts; `None` at the end. A word in
+    /// single or double quotes may hold white space; the quotes are not part of it (as
+    /// Radiance's `fgetword`; `ies2rad` quotes its names).
     fn word(&mut self) -> Option<(String, SourceLocation)> {
         self.skip_space();
         let at = self.location();
+        if let Some(q @ (b'"' | b'\'')) = self.peek() {
+            self.advance();
+            let start = self.pos;
+            while self.peek().is_some_and(|c| c != q) {
+                self.advance();
+            }
+            let word = String::from_utf8_lossy(&self.text[start..self.pos]).into_owned();
+            if self.peek() == Some(q) {
+                self.advance();
+            }
+            return Some((word, at));
+        }
         let start = self.pos;
         while let Some(c) = self.peek() {
             if c.is_ascii_whitespace() {

@@ -1,0 +1,393 @@
+//! Patterns on Radiance's light sources (`src/rt/p_func.c`, `p_data.c`): `brightfunc`,
+//! `colorfunc`, `brightdata` and `colordata`, with the function files and data files they name,
+//! and `spotlight`'s cone (`srcsupp.c`'s `spotout`). `ies2rad`'s luminaires are these:
+//! `brightdata` over a candela table with `source.cal`'s coordinates and `flatcorr`.
+//!
+//! A pattern multiplies the radiance of the light it modifies by its value for the ray that sees
+//! the light: its direction `D` (towards the light), the point `P`, the front normal `N`,
+//! `Rdot = −D·N` and the distance `T`, all in the pattern's own coordinates: the transform written
+//! after its variables, followed by those of the `!xform` commands around it (as `xform` appends
+//! them), inverted as `func.c`'s `setfunc` does. Patterns on patterns multiply. A value that is
+//! not a number (Radiance's "compute error", e.g. an exact grazing view under `flatcorr`) counts
+//! as zero, and a negative one as zero; the loader probes each patterned surface and reports
+//! either.
+
+use super::cal::{self, Channels, Function, Node, Program};
+use super::data::DataArray;
+use super::parse::Primitive;
+use super::sky::SkyBrightness;
+use super::xform::Transform;
+use crate::SceneError;
+use ircache_math::{DMat4, DVec3, Rgb, Vec3};
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// What a function pattern computes.
+#[derive(Debug)]
+enum Kind {
+    /// `brightfunc`: one expression.
+    Bright(Node),
+    /// `colorfunc`: three.
+    Color([Node; 3]),
+    /// `brightdata`: `function(table(x₁ … xₙ))`.
+    BrightData {
+        table: Arc<DataArray>,
+        function: Function,
+        coordinates: Vec<Node>,
+    },
+    /// `colordata`: a table and a function per channel.
+    ColorData {
+        tables: [Arc<DataArray>; 3],
+        functions: [Function; 3],
+        coordinates: Vec<Node>,
+    },
+}
+
+/// One `brightfunc`, `colorfunc`, `brightdata` or `colordata` with its files.
+#[derive(Debug)]
+pub struct FunctionPattern {
+    /// `type 'id'`, for messages.
+    name: String,
+    program: Arc<Program>,
+    kind: Kind,
+    /// The modifier's real arguments (`arg(n)`, `A1` …).
+    args: Vec<f64>,
+    /// World to the pattern's coordinates.
+    to_pattern: DMat4,
+    /// The scale of the pattern's transform (object to world).
+    scale: f64,
+}
+
+/// Files read while patterns are made (each read once per scene).
+pub struct PatternFiles {
+    functions: cal::Loader,
+    tables: HashMap<PathBuf, Arc<DataArray>>,
+}
+
+impl PatternFiles {
+    /// Readers for the scene in `scene_dir`.
+    #[must_use]
+    pub fn new(scene_dir: &std::path::Path) -> PatternFiles {
+        PatternFiles {
+            functions: cal::Loader::new(scene_dir),
+            tables: HashMap::new(),
+        }
+    }
+
+    fn table(&mut self, name: &str, p: &Primitive) -> Result<Arc<DataArray>, SceneError> {
+        let path = self.functions.find(name, &p.location).ok_or_else(|| {
+            SceneError::at(
+                p.location.clone(),
+                format!(
+                    "{} '{}': cannot find data file \"{name}\" (looked beside the file naming \
+                     it, beside the scene and along RAYPATH)",
+                    p.kind, p.id
+                ),
+            )
+        })?;
+        if let Some(t) = self.tables.get(&path) {
+            return Ok(t.clone());
+        }
+        let t = Arc::new(DataArray::read(&path).map_err(|e| match e {
+            SceneError::Io { path, source } => SceneError::Referenced {
+                location: p.location.clone(),
+                path,
+                message: source.to_string(),
+            },
+            other => other,
+        })?);
+        self.tables.insert(path, t.clone());
+        Ok(t)
+    }
+}
+
+/// True for the string arguments that start a transform.
+fn is_transform_option(s: &str) -> bool {
+    matches!(
+        s,
+        "-t" | "-rx" | "-ry" | "-rz" | "-s" | "-mx" | "-my" | "-mz" | "-i"
+    )
+}
+
+impl FunctionPattern {
+    /// True for the types this reads.
+    #[must_use]
+    pub fn is_function_pattern(kind: &str) -> bool {
+        matches!(
+            kind,
+            "brightfunc" | "colorfunc" | "brightdata" | "colordata"
+        )
+    }
+
+    /// Reads the pattern primitive `p`.
+    pub fn from_primitive(
+        p: &Primitive,
+        files: &mut PatternFiles,
+    ) -> Result<FunctionPattern, SceneError> {
+        let err =
+            |m: String| SceneError::at(p.location.clone(), format!("{} '{}': {m}", p.kind, p.id));
+        let s = &p.strings;
+        if !p.integers.is_empty() {
+            return Err(err("expected no integer arguments".into()));
+        }
+        // Index of the function file and how many strings before it are expressions or names.
+        let (file_index, needed) = match p.kind.as_str() {
+            "brightfunc" => (1, 2),
+            "colorfunc" => (3, 4),
+            "brightdata" => (2, 4),
+            "colordata" => (6, 8),
+            other => return Err(err(format!("{other} is not a function pattern"))),
+        };
+        if s.len() < needed {
+            return Err(err(format!(
+                "expected at least {needed} string arguments, found {}",
+                s.len()
+            )));
+        }
+        let program = files.functions.program(&s[file_index], &p.location)?;
+        let expr = |text: &str| -> Result<Node, SceneError> {
+            let e = cal::parse::parse_expression(text, &p.location)?;
+            program
+                .compile(&e, &p.location)
+                .map_err(|e| err(format!("in \"{text}\": {e}")))
+        };
+        let tables_first = match p.kind.as_str() {
+            "brightdata" => Some((1, 1)),
+            "colordata" => Some((3, 3)),
+            _ => None,
+        };
+        let (kind, first_transform) = match p.kind.as_str() {
+            "brightfunc" => (Kind::Bright(expr(&s[0])?), 2),
+            "colorfunc" => (Kind::Color([expr(&s[0])?, expr(&s[1])?, expr(&s[2])?]), 4),
+            _ => {
+                let (first, count) = tables_first.expect("data patterns");
+                let mut tables = Vec::new();
+                for name in &s[first..first + count] {
+                    tables.push(files.table(name, p)?);
+                }
+                let n = tables[0].dimensions();
+                if tables.iter().any(|t| t.dimensions() != n) {
+                    return Err(err("its three data files differ in dimensions".into()));
+                }
+                let start = file_index + 1;
+                if s.len() < start + n {
+                    return Err(err(format!(
+                        "the data has {n} dimension(s), so {n} coordinate expression(s) must \
+                         follow the function file"
+                    )));
+                }
+                let coordinates = s[start..start + n]
+                    .iter()
+                    .map(|t| expr(t))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let function = |name: &str| {
+                    program
+                        .function(name, 1, &p.location)
+                        .map_err(|e| err(e.to_string()))
+                };
+                let kind = if count == 1 {
+                    Kind::BrightData {
+                        table: tables[0].clone(),
+                        function: function(&s[0])?,
+                        coordinates,
+                    }
+                } else {
+                    Kind::ColorData {
+                        tables: [tables[0].clone(), tables[1].clone(), tables[2].clone()],
+                        functions: [function(&s[0])?, function(&s[1])?, function(&s[2])?],
+                        coordinates,
+                    }
+                };
+                (kind, start + n)
+            }
+        };
+        let rest = &s[first_transform..];
+        if let Some(w) = rest.first().filter(|w| !is_transform_option(w)) {
+            return Err(err(format!(
+                "unexpected string argument \"{w}\" (a transform such as -rz 90 -t 0 0 1 may \
+                 follow the pattern's variables)"
+            )));
+        }
+        let own = if rest.is_empty() {
+            Transform::default()
+        } else {
+            let (copies, files_named) =
+                super::xform::parse_options(rest).map_err(|e| err(format!("transform: {e}")))?;
+            match (&copies[..], files_named.is_empty()) {
+                ([(None, t)], true) => *t,
+                _ => {
+                    return Err(err(format!(
+                        "transform \"{}\": expected transform options only",
+                        rest.join(" ")
+                    )))
+                }
+            }
+        };
+        let total = own.then(&p.transform);
+        let to_pattern = total.matrix.inverse();
+        if !to_pattern.is_finite() {
+            return Err(err("its transform cannot be inverted".into()));
+        }
+        Ok(FunctionPattern {
+            name: format!("{} '{}'", p.kind, p.id),
+            program,
+            kind,
+            args: p.reals.clone(),
+            to_pattern,
+            scale: total.scale,
+        })
+    }
+
+    /// The pattern's value (per channel) for a ray along the unit world direction `d` meeting
+    /// the surface at `p` with unit front normal `n`, `t` from where it started.
+    #[must_use]
+    pub fn value(&self, p: DVec3, n: DVec3, d: DVec3, t: f64) -> [f64; 3] {
+        let w = &self.to_pattern;
+        let s = self.scale;
+        let v = |x: DVec3| (w.transform_vector3(x) * s).to_array();
+        let c = Channels {
+            direction: v(d),
+            normal: v(n),
+            point: w.transform_point3(p).to_array(),
+            distance: t / s,
+            rdot: -d.dot(n),
+            scale: 1.0 / s,
+            origin: w.transform_point3(DVec3::ZERO).to_array(),
+            axes: [v(DVec3::X), v(DVec3::Y), v(DVec3::Z)],
+            shadow_distance: t / s,
+            uv: [0.0, 0.0],
+        };
+        let args = &self.args;
+        let prog = &self.program;
+        let table = |table: &DataArray, f: Function, coordinates: &[Node]| {
+            let mut x = [0.0; 5];
+            for (x, e) in x.iter_mut().zip(coordinates) {
+                *x = prog.eval(e, &c, args);
+            }
+            let v = table.value(&x[..coordinates.len()]);
+            prog.call(f, &[v], &c, args)
+        };
+        match &self.kind {
+            Kind::Bright(e) => [prog.eval(e, &c, args); 3],
+            Kind::Color(e) => e.each_ref().map(|e| prog.eval(e, &c, args)),
+            Kind::BrightData {
+                table: t,
+                function,
+                coordinates,
+            } => [table(t, *function, coordinates); 3],
+            Kind::ColorData {
+                tables,
+                functions,
+                coordinates,
+            } => [0, 1, 2].map(|i| table(&tables[i], functions[i], coordinates)),
+        }
+    }
+
+    /// `type 'id'`.
+    #[must_use]
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+}
+
+/// One link of a light's chain of patterns.
+#[derive(Clone, Debug)]
+pub enum Pattern {
+    /// gensky's or gendaylit's sky, evaluated natively.
+    Sky(SkyBrightness),
+    /// A function pattern.
+    Function(Arc<FunctionPattern>),
+}
+
+impl Pattern {
+    fn value(&self, p: DVec3, n: DVec3, d: DVec3, t: f64) -> [f64; 3] {
+        match self {
+            Pattern::Sky(s) => [s.brightness(d); 3],
+            Pattern::Function(f) => f.value(p, n, d, t),
+        }
+    }
+}
+
+/// The patterns on a light (outermost first) and its spotlight cone: the factor on its radiance.
+#[derive(Clone, Debug, Default)]
+pub struct LightPattern {
+    /// Patterns, multiplied.
+    pub chain: Vec<Pattern>,
+    /// A spotlight.
+    pub spot: Option<Spot>,
+}
+
+/// A `spotlight`'s cone and focus (`srcsupp.c`, `source.c`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spot {
+    /// The unit direction light leaves along.
+    pub aim: DVec3,
+    /// The cosine of half the cone's angle.
+    pub cos_half: f64,
+    /// The length of the orientation vector: the focus lies this far behind the source, and
+    /// the light reaching a point `d` away is that of a source `d + focus` away, so its
+    /// radiance is scaled by `(d / (d + focus))²` (Radiance adjusts the solid angle alike).
+    pub focus: f64,
+}
+
+impl LightPattern {
+    /// True when nothing modifies the light.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.chain.is_empty() && self.spot.is_none()
+    }
+
+    /// The factor (per channel; non-negative, finite) for a ray along the unit `d` seeing the
+    /// light at `p` with front normal `n`, `t` from its start.
+    #[must_use]
+    pub fn factor_f64(&self, p: DVec3, n: DVec3, d: DVec3, t: f64) -> [f64; 3] {
+        let mut focus = 1.0;
+        if let Some(spot) = self.spot {
+            // srcsupp.c's spotout: outside when the light's direction −D leaves the cone.
+            if -d.dot(spot.aim) < spot.cos_half {
+                return [0.0; 3];
+            }
+            if spot.focus > 0.0 {
+                // An infinite distance (photons leaving) sees the far field, 1.
+                focus = if t.is_finite() {
+                    (t / (t + spot.focus)).powi(2)
+                } else {
+                    1.0
+                };
+            }
+        }
+        self.raw(p, n, d, t).map(|v| {
+            if v.is_finite() && v > 0.0 {
+                v * focus
+            } else {
+                0.0
+            }
+        })
+    }
+
+    /// The chain's values before non-numbers and negatives are zeroed (for the loader's probe).
+    #[must_use]
+    pub fn raw(&self, p: DVec3, n: DVec3, d: DVec3, t: f64) -> [f64; 3] {
+        let mut f = [1.0; 3];
+        for link in &self.chain {
+            let v = link.value(p, n, d, t);
+            for (f, v) in f.iter_mut().zip(v) {
+                *f *= v;
+            }
+        }
+        f
+    }
+}
+
+impl crate::desc::EmissionPattern for LightPattern {
+    fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, distance: f32) -> Rgb {
+        let [r, g, b] = self.factor_f64(
+            point.as_dvec3(),
+            normal.as_dvec3(),
+            direction.as_dvec3(),
+            f64::from(distance),
+        );
+        Rgb::new(r as f32, g as f32, b as f32)
+    }
+}
