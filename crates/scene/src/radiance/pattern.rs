@@ -145,11 +145,18 @@ impl FunctionPattern {
                 s.len()
             )));
         }
-        let program = files.functions.program(&s[file_index], &p.location)?;
+        // The file's program with this modifier's real arguments folded in.
+        let program = Arc::new(
+            files
+                .functions
+                .program(&s[file_index], &p.location)?
+                .specialized(&p.reals),
+        );
         let expr = |text: &str| -> Result<Node, SceneError> {
             let e = cal::parse::parse_expression(text, &p.location)?;
             program
                 .compile(&e, &p.location)
+                .map(|n| program.fold(n, &p.reals))
                 .map_err(|e| err(format!("in \"{text}\": {e}")))
         };
         let tables_first = match p.kind.as_str() {

@@ -17,6 +17,92 @@ use std::collections::HashMap;
 /// Calls nested deeper than this evaluate to NaN (an endless recursion).
 pub const MAX_DEPTH: u32 = 512;
 
+/// Calls with at most this many arguments pass them on the stack.
+const ARGS_ON_STACK: usize = 8;
+
+/// Definitions of at most this many nodes are written into their callers ...
+const INLINE_SIZE: usize = 24;
+/// ... up to this many levels deep.
+const INLINE_DEPTH: u32 = 8;
+
+/// The number of nodes of an expression.
+fn size(node: &Node) -> usize {
+    match node {
+        Node::Negate(a) => 1 + size(a),
+        Node::Binary(_, a, b) => 1 + size(a) + size(b),
+        Node::Call(_, args) => 1 + args.iter().map(size).sum::<usize>(),
+        _ => 1,
+    }
+}
+
+/// True for arguments that cost nothing to evaluate twice.
+fn is_simple(node: &Node) -> bool {
+    matches!(
+        node,
+        Node::Number(_) | Node::Channel(_) | Node::Param(_) | Node::Variable(_)
+    )
+}
+
+/// `body` with its parameters replaced by `args`; `None` where that would evaluate a costly
+/// argument more than once, use a function as a value or call a value.
+fn substitute(body: &Node, args: &[Node]) -> Option<Node> {
+    fn uses(node: &Node, counts: &mut [usize]) {
+        match node {
+            Node::Param(i) | Node::FunctionArg(Callee::Param(i)) => counts[*i as usize] += 1,
+            Node::Negate(a) => uses(a, counts),
+            Node::Binary(_, a, b) => {
+                uses(a, counts);
+                uses(b, counts);
+            }
+            Node::Call(c, a) => {
+                if let Callee::Param(i) = c {
+                    counts[*i as usize] += 1;
+                }
+                a.iter().for_each(|a| uses(a, counts));
+            }
+            _ => {}
+        }
+    }
+    fn go(node: &Node, args: &[Node]) -> Option<Node> {
+        Some(match node {
+            Node::Param(i) => match args.get(*i as usize)? {
+                Node::FunctionArg(_) => return None,
+                a => a.clone(),
+            },
+            Node::FunctionArg(Callee::Param(i)) => match args.get(*i as usize)? {
+                f @ Node::FunctionArg(_) => f.clone(),
+                _ => return None,
+            },
+            Node::Negate(a) => Node::Negate(Box::new(go(a, args)?)),
+            Node::Binary(op, a, b) => {
+                Node::Binary(*op, Box::new(go(a, args)?), Box::new(go(b, args)?))
+            }
+            Node::Call(c, a) => {
+                let callee = match c {
+                    Callee::Param(i) => match args.get(*i as usize)? {
+                        Node::FunctionArg(Callee::Known(f)) => Callee::Known(*f),
+                        _ => return None,
+                    },
+                    known => *known,
+                };
+                let a = a.iter().map(|a| go(a, args)).collect::<Option<Vec<_>>>()?;
+                Node::Call(callee, a.into_boxed_slice())
+            }
+            other => other.clone(),
+        })
+    }
+    let mut counts = vec![0usize; args.len()];
+    uses(body, &mut counts);
+    if counts
+        .iter()
+        .zip(args)
+        .any(|(&n, a)| n > 1 && !is_simple(a) && !matches!(a, Node::FunctionArg(_)))
+    {
+        return None;
+    }
+    go(body, args)
+}
+
 /// The ray's values a function sees (Radiance's channels, `func.c`'s `chanvalue`), already in
 /// the function's coordinates.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -162,6 +248,7 @@ enum Value {
     Function(Function),
 }
 
+#[derive(Clone)]
 struct Linked {
     name: String,
     arity: Option<usize>,
@@ -274,6 +361,153 @@ impl Program {
         }
     }
 
+    /// This program for a modifier whose real arguments are `args`: every variable and
+    /// subexpression that depends on neither the ray nor a function's parameters is replaced by
+    /// its value (`DEGREE`, `A1`, `AC - .5`), so that evaluations per ray skip them. Values are
+    /// the same as the general program's.
+    #[must_use]
+    pub fn specialized(&self, args: &[f64]) -> Program {
+        let mut p = Program {
+            definitions: self.definitions.clone(),
+            scope: self.scope.clone(),
+        };
+        let channels = Channels::default();
+        let ctx = Context {
+            channels: &channels,
+            args,
+        };
+        // Variables first, until none changes (one may depend on another).
+        loop {
+            let mut changed = false;
+            for i in 0..p.definitions.len() {
+                let d = &p.definitions[i];
+                if d.arity.is_none()
+                    && !matches!(d.body, Node::Number(_))
+                    && p.is_constant(&d.body, false, 0)
+                {
+                    let v = p.value(&d.body, &[], &ctx, 0);
+                    p.definitions[i].body = Node::Number(v);
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        for i in 0..p.definitions.len() {
+            let body = std::mem::replace(&mut p.definitions[i].body, Node::Number(0.0));
+            p.definitions[i].body = p.folded(body, &ctx);
+        }
+        // Small functions and variables written into their callers, then folded again.
+        for i in 0..p.definitions.len() {
+            let body = std::mem::replace(&mut p.definitions[i].body, Node::Number(0.0));
+            let body = p.inlined(body, 0);
+            p.definitions[i].body = p.folded(body, &ctx);
+        }
+        p
+    }
+
+    /// `node` with calls of small definitions and references to small variables replaced by
+    /// their bodies (parameters substituted), so that a ray's evaluation makes fewer calls.
+    fn inlined(&self, node: Node, depth: u32) -> Node {
+        match node {
+            Node::Negate(a) => Node::Negate(Box::new(self.inlined(*a, depth))),
+            Node::Binary(op, a, b) => Node::Binary(
+                op,
+                Box::new(self.inlined(*a, depth)),
+                Box::new(self.inlined(*b, depth)),
+            ),
+            Node::Variable(j) => {
+                let body = &self.definitions[j as usize].body;
+                if depth < INLINE_DEPTH && size(body) <= INLINE_SIZE {
+                    self.inlined(body.clone(), depth + 1)
+                } else {
+                    Node::Variable(j)
+                }
+            }
+            Node::Call(c, args) => {
+                let args: Vec<Node> = args
+                    .into_vec()
+                    .into_iter()
+                    .map(|a| self.inlined(a, depth))
+                    .collect();
+                if let Callee::Known(Function::Defined(j)) = c {
+                    let body = &self.definitions[j as usize].body;
+                    if depth < INLINE_DEPTH && size(body) <= INLINE_SIZE {
+                        if let Some(b) = substitute(body, &args) {
+                            return self.inlined(b, depth + 1);
+                        }
+                    }
+                }
+                Node::Call(c, args.into_boxed_slice())
+            }
+            other => other,
+        }
+    }
+
+    /// `node` with its constant subexpressions replaced by their values (see
+    /// [`Self::specialized`]).
+    #[must_use]
+    pub fn fold(&self, node: Node, args: &[f64]) -> Node {
+        let channels = Channels::default();
+        let ctx = Context {
+            channels: &channels,
+            args,
+        };
+        let node = self.folded(node, &ctx);
+        self.folded(self.inlined(node, 0), &ctx)
+    }
+
+    fn folded(&self, node: Node, ctx: &Context) -> Node {
+        if !matches!(node, Node::Number(_)) && self.is_constant(&node, false, 0) {
+            return Node::Number(self.value(&node, &[], ctx, 0));
+        }
+        match node {
+            Node::Negate(a) => Node::Negate(Box::new(self.folded(*a, ctx))),
+            Node::Binary(op, a, b) => Node::Binary(
+                op,
+                Box::new(self.folded(*a, ctx)),
+                Box::new(self.folded(*b, ctx)),
+            ),
+            Node::Call(c, args) => Node::Call(
+                c,
+                args.into_vec()
+                    .into_iter()
+                    .map(|a| self.folded(a, ctx))
+                    .collect(),
+            ),
+            other => other,
+        }
+    }
+
+    /// True when `node` depends on no channel (nor, unless `params`, on a parameter): calls of
+    /// library functions and of definitions whose bodies are alike, variables already values.
+    fn is_constant(&self, node: &Node, params: bool, depth: u32) -> bool {
+        if depth > 16 {
+            return false;
+        }
+        match node {
+            Node::Number(_) => true,
+            Node::Param(_) => params,
+            Node::Channel(_) | Node::FunctionArg(_) => false,
+            Node::Variable(j) => matches!(self.definitions[*j as usize].body, Node::Number(_)),
+            Node::Negate(a) => self.is_constant(a, params, depth),
+            Node::Binary(_, a, b) => {
+                self.is_constant(a, params, depth) && self.is_constant(b, params, depth)
+            }
+            Node::Call(Callee::Param(_), _) => false,
+            Node::Call(Callee::Known(f), args) => {
+                args.iter().all(|a| self.is_constant(a, params, depth))
+                    && match f {
+                        Function::Library(_) => true,
+                        Function::Defined(j) => {
+                            self.is_constant(&self.definitions[*j as usize].body, true, depth + 1)
+                        }
+                    }
+            }
+        }
+    }
+
     /// The value of `node` for the ray `channels` and the modifier's real arguments `args`.
     #[must_use]
     pub fn eval(&self, node: &Node, channels: &Channels, args: &[f64]) -> f64 {
@@ -285,8 +519,16 @@ impl Program {
     #[must_use]
     pub fn call(&self, f: Function, x: &[f64], channels: &Channels, args: &[f64]) -> f64 {
         let ctx = Context { channels, args };
-        let values: Vec<Value> = x.iter().map(|&v| Value::Number(v)).collect();
-        self.apply(f, &values, &ctx, 0)
+        if x.len() <= ARGS_ON_STACK {
+            let mut values = [Value::Number(0.0); ARGS_ON_STACK];
+            for (v, &x) in values.iter_mut().zip(x) {
+                *v = Value::Number(x);
+            }
+            self.apply(f, &values[..x.len()], &ctx, 0)
+        } else {
+            let values: Vec<Value> = x.iter().map(|&v| Value::Number(v)).collect();
+            self.apply(f, &values, &ctx, 0)
+        }
     }
 
     fn value(&self, node: &Node, frame: &[Value], ctx: &Context, depth: u32) -> f64 {
@@ -330,22 +572,25 @@ impl Program {
                 if let Function::Library(l @ (Library::If | Library::Select)) = f {
                     return self.lazy(l, args, frame, ctx, depth);
                 }
-                let values: Vec<Value> = args
-                    .iter()
-                    .map(|a| match a {
-                        Node::FunctionArg(Callee::Known(f)) => Value::Function(*f),
-                        Node::FunctionArg(Callee::Param(i)) => frame
-                            .get(*i as usize)
-                            .copied()
-                            .unwrap_or(Value::Number(f64::NAN)),
-                        Node::Param(i) => frame
-                            .get(*i as usize)
-                            .copied()
-                            .unwrap_or(Value::Number(f64::NAN)),
-                        a => Value::Number(self.value(a, frame, ctx, depth)),
-                    })
-                    .collect();
-                self.apply(f, &values, ctx, depth + 1)
+                let value = |a: &Node| match a {
+                    Node::FunctionArg(Callee::Known(f)) => Value::Function(*f),
+                    Node::FunctionArg(Callee::Param(i)) | Node::Param(i) => frame
+                        .get(*i as usize)
+                        .copied()
+                        .unwrap_or(Value::Number(f64::NAN)),
+                    a => Value::Number(self.value(a, frame, ctx, depth)),
+                };
+                // Arguments on the stack (calls are per ray: no allocation for the usual few).
+                if args.len() <= ARGS_ON_STACK {
+                    let mut values = [Value::Number(0.0); ARGS_ON_STACK];
+                    for (v, a) in values.iter_mut().zip(args.iter()) {
+                        *v = value(a);
+                    }
+                    self.apply(f, &values[..args.len()], ctx, depth + 1)
+                } else {
+                    let values: Vec<Value> = args.iter().map(value).collect();
+                    self.apply(f, &values, ctx, depth + 1)
+                }
             }
         }
     }
