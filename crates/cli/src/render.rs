@@ -188,7 +188,7 @@ pub fn apply_overrides(args: &RenderArgs, mut desc: SceneDesc) -> Result<SceneDe
     let fitted = desc
         .source
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("rad"));
+        .is_some_and(|e| e.eq_ignore_ascii_case("rad") || e.eq_ignore_ascii_case("oct"));
     if let Some(w) = args.width.filter(|_| !fitted) {
         desc.sensor.film.width = w;
     }

@@ -2,7 +2,8 @@
 //! the sky and ground of gensky's `skyfunc` seen directly and through the window's `glass`, and
 //! the direct light of the sun through that glass, a `light` polygon and a `light` sphere; in
 //! `scenes/radiance-luminaires` the light of `ies2rad`'s luminaires (`brightdata` over candela
-//! tables with `source.cal`), a `spotlight` with a focus, a `colorfunc` and a `colordata` lamp.
+//! tables with `source.cal`), a `spotlight` with a focus, a `colorfunc` and a `colordata` lamp;
+//! in `scenes/radiance-octrees` a frozen octree and `instance`s of one.
 
 use ircache_math::{Rgb, Vec3};
 use ircache_render::irradiance_cache::points::{irradiance_at_points, PointMethod};
@@ -129,6 +130,30 @@ fn luminaires_spotlight_and_colour_patterns_match_radiance() {
     let refs = reference_in("radiance-luminaires", "reference-direct.txt");
     // Measured within 0.1 % at 16384 samples; the tolerance leaves room for 2048.
     check("luminaires", &direct_at(&desc, &refs, 2048), &refs, 0.005);
+}
+
+#[test]
+fn octrees_and_instances_match_radiance() {
+    // The same room read from its frozen octree and from its scene file with instances.
+    let refs = reference_in("radiance-octrees", "reference-direct.txt");
+    let from_octree = scene_file("radiance-octrees", "room.oct");
+    let from_text = scene_file("radiance-octrees", "room.rad");
+    // A floor, two bulbs and five stools of six boxes.
+    assert_eq!(from_octree.shapes.len(), 3 + 5 * 5 * 6);
+    assert_eq!(from_text.shapes.len(), from_octree.shapes.len());
+    // Measured within 0.05 % at 16384 samples.
+    check(
+        "octree",
+        &direct_at(&from_octree, &refs, 2048),
+        &refs,
+        0.005,
+    );
+    check(
+        "instances",
+        &direct_at(&from_text, &refs, 2048),
+        &refs,
+        0.005,
+    );
 }
 
 #[test]

@@ -63,7 +63,7 @@ pub enum SceneError {
         message: String,
     },
     /// The file's extension names no format this crate reads.
-    #[error("{}: unknown scene format (expected .xml for Mitsuba 3, .obj for Wavefront OBJ or .rad for Radiance)", path.display())]
+    #[error("{}: unknown scene format (expected .xml for Mitsuba 3, .obj for Wavefront OBJ, .rad or .oct for Radiance)", path.display())]
     UnknownFormat {
         /// The file.
         path: PathBuf,

@@ -23,7 +23,8 @@ use std::path::Path;
 
 /// Loads a scene by file extension: `.xml` as Mitsuba 3 XML (with `-D name=value` overrides in
 /// `defines`), `.obj` as a bare Wavefront OBJ (camera from `obj_camera`, or automatic framing),
-/// `.rad` as a Radiance scene (its view from `obj_camera.radiance_view`).
+/// `.rad` as a Radiance scene and `.oct` as the scene a Radiance octree holds (the view from
+/// `obj_camera.radiance_view`).
 pub fn load_scene(
     path: &Path,
     defines: &[(String, String)],
@@ -36,7 +37,7 @@ pub fn load_scene(
         .as_deref()
     {
         Some("xml") => mitsuba::load(path, defines),
-        Some("rad") => match defines.first() {
+        Some("rad" | "oct") => match defines.first() {
             Some((name, value)) => Err(SceneError::at(
                 SourceLocation::start_of(path),
                 format!(

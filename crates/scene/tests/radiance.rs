@@ -475,3 +475,98 @@ fn gensky_prints_what_radiance_prints() {
     ])
     .is_none());
 }
+
+/// The octree of `scenes/radiance-octrees`.
+fn stool_octree() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/radiance-octrees/stool.oct")
+}
+
+fn ward_color(b: &BsdfDesc) -> Rgb {
+    match b {
+        BsdfDesc::TwoSided { front, .. } => ward_color(front),
+        BsdfDesc::Ward { color, .. } => *color,
+        other => panic!("not a Ward material: {other:?}"),
+    }
+}
+
+#[test]
+fn instances_place_octrees_with_their_own_or_the_instance_s_materials() {
+    let d = dir("instances");
+    std::fs::copy(stool_octree(), d.join("stool.oct")).unwrap();
+    let s = load(
+        &d,
+        &[(
+            "m.rad",
+            "void plastic wood\n0\n0\n5 .9 .9 .9 0 0\n\
+             void instance a\n1 stool.oct\n0\n0\n\
+             wood instance b\n7 stool.oct -rz 90 -t 5 0 0\n0\n0\n\
+             wood polygon after\n0\n0\n9 0 0 0 1 0 0 0 1 0\n",
+        )],
+    )
+    .unwrap();
+    assert_eq!(s.shapes.len(), 2 * 30 + 1);
+    // The octree's own wood stays its own (not the scene's later 'wood' of the same name).
+    let (a, b): (Vec<_>, Vec<_>) = s.shapes[..60]
+        .iter()
+        .partition(|x| x.id.as_deref().unwrap().starts_with("a/"));
+    assert_eq!((a.len(), b.len()), (30, 30));
+    assert!(a
+        .iter()
+        .all(|x| ward_color(&x.bsdf) == Rgb::new(0.5, 0.3, 0.2)));
+    assert!(b.iter().all(|x| ward_color(&x.bsdf) == Rgb::splat(0.9)));
+    assert_eq!(ward_color(&s.shapes[60].bsdf), Rgb::splat(0.9));
+    // Instance b turned 90° about z and moved 5 along x: its extent is the stool's, moved.
+    let (lo, hi) = b.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), x| match &x.geometry {
+            Geometry::Mesh(m) => m
+                .positions
+                .iter()
+                .fold((lo, hi), |(lo, hi), &p| (lo.min(p), hi.max(p))),
+            _ => (lo, hi),
+        },
+    );
+    assert!(
+        (lo - Vec3::new(4.75, -0.25, 0.0)).abs().max_element() < 1e-4,
+        "{lo}"
+    );
+    assert!(
+        (hi - Vec3::new(5.25, 0.25, 0.5)).abs().max_element() < 1e-4,
+        "{hi}"
+    );
+}
+
+#[test]
+fn damaged_octrees_and_instances_are_errors_naming_the_file() {
+    let d = dir("bad-octrees");
+    let good = std::fs::read(stool_octree()).unwrap();
+    std::fs::write(d.join("cut.oct"), &good[..good.len() / 2]).unwrap();
+    std::fs::write(d.join("text.oct"), "void plastic p 0 0 5 1 1 1 0 0\n").unwrap();
+    let e = ircache_scene::load_scene(&d.join("cut.oct"), &[], &ObjCamera::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cut.oct") && e.contains("truncated"), "{e}");
+    let e = ircache_scene::load_scene(&d.join("text.oct"), &[], &ObjCamera::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not a Radiance octree"), "{e}");
+    let cases = [
+        (
+            "void instance a\n3 cut.oct -q 1\n0\n0\n",
+            "m.rad:1:1: instance 'a': unknown or unsupported option \"-q\"",
+        ),
+        (
+            "void instance a\n1 missing.oct\n0\n0\n",
+            "m.rad:1:1: cannot read",
+        ),
+        ("void instance a\n0\n0\n0\n", "expected the octree file"),
+        (
+            "void instance a\n1 cut.oct\n0\n0\n",
+            "cut.oct:1:1: the octree is truncated",
+        ),
+    ];
+    for (text, expect) in cases {
+        let e = load(&d, &[("m.rad", text)]).unwrap_err().to_string();
+        assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
+    }
+}

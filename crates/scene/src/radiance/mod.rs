@@ -3,8 +3,11 @@
 //!
 //! - **Surfaces**: `polygon` (triangulated by ear clipping; the front is where its vertices turn
 //!   counter-clockwise), `sphere` and `bubble` (analytic), `cylinder`, `tube`, `cone`, `cup` and
-//!   `ring` (tessellated into 64 segments whose polygons keep the exact areas). `mesh` and
-//!   `instance` (compiled meshes and octrees) are refused.
+//!   `ring` (tessellated into 64 segments whose polygons keep the exact areas), `instance`
+//!   (an octree's surfaces placed by its transform, [`octree`]). `mesh` (compiled meshes) is
+//!   refused.
+//! - **Octrees**: `ircache render scene.oct` reads the scene an octree holds (frozen by
+//!   `oconv -f`) or the scene files it names ([`octree`]).
 //! - **Materials**: `plastic`, `metal` and `trans` as Radiance's isotropic Gaussian model
 //!   ([`BsdfDesc::Ward`]; a smooth `trans`'s straight transmission is not followed by light
 //!   samples, with a note where a distant light would need it), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
@@ -32,6 +35,7 @@
 
 pub mod cal;
 pub mod data;
+pub mod octree;
 pub mod parse;
 pub mod pattern;
 pub mod sky;
@@ -729,8 +733,8 @@ fn geometry(p: &Primitive) -> Result<Option<Geometry>, SceneError> {
             }
             Ok(Some(Geometry::Mesh(ring(point(0), n.normalize(), r0, r1))))
         }
-        "mesh" | "instance" => Err(err(
-            "Radiance's compiled meshes (.rtm) and octree instances are not read; give the \
+        "mesh" => Err(err(
+            "Radiance's compiled meshes (.rtm) are not read; give the \
              geometry as polygons or load the model's OBJ or PLY through a Mitsuba scene"
                 .into(),
         )),

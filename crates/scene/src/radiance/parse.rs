@@ -49,11 +49,122 @@ struct Context {
 /// Nested files and commands deeper than this are an error (a file that includes itself).
 const MAX_DEPTH: usize = 32;
 
-/// Reads `path` and everything it includes.
+/// Reads `path` and everything it includes: a scene file, or an octree (`.oct`) for the scene
+/// it holds.
 pub fn read(path: &Path) -> Result<Vec<Primitive>, SceneError> {
     let mut out = Vec::new();
+    if is_octree(path) {
+        let prims = super::octree::read(path, &Transform::default(), 0)?;
+        expand_instances(prims, &Context::default(), &mut out)?;
+        return Ok(out);
+    }
     read_file(path, &Context::default(), &mut out)?;
     Ok(out)
+}
+
+/// Reads the scene file `path` (text) into `out` with `transform`, `depth` deep in files and
+/// instances (an octree's list of the files it was made from).
+pub fn read_nested(
+    path: &Path,
+    transform: &Transform,
+    depth: usize,
+    out: &mut Vec<Primitive>,
+) -> Result<(), SceneError> {
+    if depth >= MAX_DEPTH {
+        return Err(SceneError::at(
+            SourceLocation::start_of(path),
+            format!("files, octrees and instances nest deeper than {MAX_DEPTH}"),
+        ));
+    }
+    let ctx = Context {
+        transform: *transform,
+        depth,
+        ..Context::default()
+    };
+    read_file(path, &ctx, out)
+}
+
+/// True for a file named as an octree.
+pub fn is_octree(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("oct"))
+}
+
+/// Moves `prims` to `out`, each `instance` replaced by its octree's surfaces.
+fn expand_instances(
+    prims: Vec<Primitive>,
+    ctx: &Context,
+    out: &mut Vec<Primitive>,
+) -> Result<(), SceneError> {
+    for p in prims {
+        if p.kind == "instance" {
+            instance(&p, ctx, out)?;
+        } else {
+            out.push(p);
+        }
+    }
+    Ok(())
+}
+
+/// An `instance`: the surfaces of an octree, moved by the transform after its name (then by the
+/// `!xform`s around it), with the instance's modifier in place of their own unless it is void.
+/// The octree's own modifiers keep to themselves: their names (and the references to them)
+/// get the instance's name as a prefix, `instance/name`.
+fn instance(p: &Primitive, ctx: &Context, out: &mut Vec<Primitive>) -> Result<(), SceneError> {
+    let err = |m: String| SceneError::at(p.location.clone(), format!("instance '{}': {m}", p.id));
+    if ctx.depth >= MAX_DEPTH {
+        return Err(err(format!(
+            "instances nest deeper than {MAX_DEPTH} (does an octree hold itself?)"
+        )));
+    }
+    let Some(file) = p.strings.first() else {
+        return Err(err(
+            "expected the octree file as its first string argument".into()
+        ));
+    };
+    let own = match super::xform::parse_options(&p.strings[1..]).map_err(err)? {
+        (copies, files) if files.is_empty() && copies.len() == 1 && copies[0].0.is_none() => {
+            copies[0].1
+        }
+        _ => {
+            return Err(err(format!(
+                "expected transform options after the octree, found \"{}\"",
+                p.strings[1..].join(" ")
+            )))
+        }
+    };
+    let dir = p.location.file.parent().unwrap_or(Path::new(""));
+    let path = dir.join(file);
+    let prims = super::octree::read(&path, &own.then(&p.transform), ctx.depth + 1).map_err(
+        |e| match e {
+            SceneError::Io { path, source } => SceneError::Referenced {
+                location: p.location.clone(),
+                path,
+                message: source.to_string(),
+            },
+            other => other,
+        },
+    )?;
+    let local = |name: &str| format!("{}/{name}", p.id);
+    let renamed: Vec<Primitive> = prims
+        .into_iter()
+        .map(|mut q| {
+            let surface = !super::is_modifier_type(&q.kind) || q.kind == "instance";
+            if surface && p.modifier != "void" {
+                q.modifier = p.modifier.clone();
+            } else if q.modifier != "void" {
+                q.modifier = local(&q.modifier);
+            }
+            q.id = local(&q.id);
+            q
+        })
+        .collect();
+    let inner = Context {
+        depth: ctx.depth + 1,
+        ..ctx.clone()
+    };
+    expand_instances(renamed, &inner, out)
 }
 
 fn read_file(path: &Path, ctx: &Context, out: &mut Vec<Primitive>) -> Result<(), SceneError> {
@@ -207,7 +318,14 @@ fn read_text(
                 let command = c.rest_of_line();
                 run_command(command.trim(), &at, ctx, out)?;
             }
-            _ => out.push(primitive(&mut c, ctx)?),
+            _ => {
+                let p = primitive(&mut c, ctx)?;
+                if p.kind == "instance" {
+                    instance(&p, ctx, out)?;
+                } else {
+                    out.push(p);
+                }
+            }
         }
     }
 }

@@ -394,15 +394,24 @@ impl Program {
                 break;
             }
         }
-        for i in 0..p.definitions.len() {
-            let body = std::mem::replace(&mut p.definitions[i].body, Node::Number(0.0));
-            p.definitions[i].body = p.folded(body, &ctx);
+        // Each pass reads the bodies as they were before it (a recursive definition sees its
+        // own), then replaces them all.
+        let folded: Vec<Node> = p
+            .definitions
+            .iter()
+            .map(|d| p.folded(d.body.clone(), &ctx))
+            .collect();
+        for (d, body) in p.definitions.iter_mut().zip(folded) {
+            d.body = body;
         }
         // Small functions and variables written into their callers, then folded again.
-        for i in 0..p.definitions.len() {
-            let body = std::mem::replace(&mut p.definitions[i].body, Node::Number(0.0));
-            let body = p.inlined(body, 0);
-            p.definitions[i].body = p.folded(body, &ctx);
+        let inlined: Vec<Node> = p
+            .definitions
+            .iter()
+            .map(|d| p.folded(p.inlined(d.body.clone(), 0), &ctx))
+            .collect();
+        for (d, body) in p.definitions.iter_mut().zip(inlined) {
+            d.body = body;
         }
         p
     }

@@ -226,10 +226,15 @@ mod tests {
 
     #[test]
     fn specialized_programs_give_the_general_values() {
-        // Folding and inlining change no value: source.cal's coordinates and corrections and
-        // rayinit's vector functions at many rays, against the program as linked.
-        let mut loader = Loader::new(Path::new("/nonexistent"));
-        let general = loader.program("source.cal", &at()).unwrap();
+        // Folding and inlining change no value: source.cal's coordinates and corrections,
+        // rayinit's vector functions and recursive definitions at many rays, against the
+        // program as linked.
+        let general = program_of(&format!(
+            "{}\nfact(n) = if(n - 1.5, n * fact(n - 1), 1);\n\
+             twice(f, x) = f(f(x));\ninc(x) = x + 1;\n\
+             sum(n) = if(n, Px + sum(n - 1), 0);",
+            library::SOURCE_CAL
+        ));
         let args = [0.7, 0.2, 0.3, 0.4];
         let fast = general.specialized(&args);
         let exprs = [
@@ -243,6 +248,8 @@ mod tests {
             "lboxcorr(1)",
             "dot(D, N) + cross(2, D, N) + linterp(.3, Px, Py)",
             "bezier(1, Px, 3, 4, .25) * fade(1, 2, Pz)",
+            "fact(4) + twice(inc, 2) + fact(Dz + 3)",
+            "sum(3) + sum(A1 * 4)",
         ];
         let mut rng = 0x1234_5678u64;
         let mut next = || {
