@@ -13,8 +13,9 @@ fuzz_target!(|data: &[u8]| {
     let text = String::from_utf8_lossy(data);
     let (expr, file) = text.split_once('\n').unwrap_or((&text, ""));
     let at = SourceLocation::start_of(Path::new("fuzz.cal"));
-    let rayinit = cal::parse::parse_definitions(cal::library::RAYINIT, Arc::new(PathBuf::from("r")))
-        .expect("rayinit parses");
+    let rayinit =
+        cal::parse::parse_definitions(cal::library::RAYINIT, Arc::new(PathBuf::from("r")))
+            .expect("rayinit parses");
     let Ok(defs) = cal::parse::parse_definitions(file, Arc::new(PathBuf::from("fuzz.cal"))) else {
         return;
     };
