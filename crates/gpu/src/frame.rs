@@ -688,7 +688,10 @@ fn traced_pixel(
         return (Rgb::ZERO, false);
     };
     let sp = ShadingPoint::facing(it, -ray.d);
-    let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+    let bsdf = it.bsdf(
+        &scene.materials[scene.shapes[it.shape as usize].material],
+        ray.d,
+    );
     let wo_local = it.frame.to_local(-ray.d);
     let albedo = bsdf.lambertian_albedo(wo_local);
     let site = !cache.is_excluded(it.shape) && is_record_site(&bsdf, wo_local, false);

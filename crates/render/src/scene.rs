@@ -149,6 +149,16 @@ pub struct Interaction {
     pub t: f32,
 }
 
+impl Interaction {
+    /// The BSDF of `material` here, for a ray arriving along the unit `d` (Radiance's patterns
+    /// on a material's colour need the point, normal, direction and distance).
+    #[inline]
+    #[must_use]
+    pub fn bsdf(&self, material: &crate::bsdf::Material, d: Vec3) -> crate::bsdf::Bsdf {
+        material.at_hit(self.uv, self.p, self.ng, d, self.t)
+    }
+}
+
 /// The scene as the integrators see it.
 pub struct Scene {
     /// Embree scene.

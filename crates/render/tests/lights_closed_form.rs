@@ -1021,7 +1021,7 @@ fn textured_rectangle_emits_its_texture() {
 #[derive(Debug)]
 struct Lobe;
 
-impl EmissionPattern for Lobe {
+impl SurfacePattern for Lobe {
     fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, _distance: f32) -> Rgb {
         let c = (-direction).dot(normal).max(0.0);
         Rgb::splat(2.0 * c * c * (1.0 + 0.5 * point.x))

@@ -3,7 +3,8 @@
 //! the direct light of the sun through that glass, a `light` polygon and a `light` sphere; in
 //! `scenes/radiance-luminaires` the light of `ies2rad`'s luminaires (`brightdata` over candela
 //! tables with `source.cal`), a `spotlight` with a focus, a `colorfunc` and a `colordata` lamp;
-//! in `scenes/radiance-octrees` a frozen octree and `instance`s of one.
+//! in `scenes/radiance-octrees` a frozen octree and `instance`s of one; in
+//! `scenes/radiance-patterns` patterns on materials' colours, a picture among them.
 
 use ircache_math::{Rgb, Vec3};
 use ircache_render::irradiance_cache::points::{irradiance_at_points, PointMethod};
@@ -154,6 +155,70 @@ fn octrees_and_instances_match_radiance() {
         &refs,
         0.005,
     );
+}
+
+#[test]
+fn patterned_materials_reflect_as_radiance_s() {
+    // Lambertian materials under direct light alone reflect L = E ρ / π, ρ the colour times its
+    // pattern at the hit: a picture (colorpict) on the floor, stripes (colorfunc) on the back
+    // wall, a ramp (brightfunc, turned) on the side wall, a table over height (brightdata).
+    let desc = scene_file("radiance-patterns", "room.rad");
+    let scene = Scene::build(&desc).unwrap();
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/radiance-patterns/reference-radiance.txt");
+    let text = std::fs::read_to_string(path).unwrap();
+    let rays: Vec<(Vec3, Vec3, Rgb)> = text
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let v: Vec<f32> = l.split_whitespace().map(|w| w.parse().unwrap()).collect();
+            (
+                Vec3::new(v[0], v[1], v[2]),
+                Vec3::new(v[3], v[4], v[5]).normalize(),
+                Rgb::new(v[6], v[7], v[8]),
+            )
+        })
+        .collect();
+    let hits: Vec<_> = rays
+        .iter()
+        .map(|(o, d, _)| {
+            scene
+                .intersect(&ircache_math::Ray::new(*o, *d))
+                .expect("every ray meets a surface")
+        })
+        .collect();
+    let queries: Vec<(Vec3, Vec3)> = hits
+        .iter()
+        .zip(&rays)
+        .map(|(it, (_, d, _))| (it.p, if it.ng.dot(*d) < 0.0 { it.ng } else { -it.ng }))
+        .collect();
+    let params = IcParams {
+        bounces: 0,
+        ..IcParams::default()
+    };
+    let (e, _) = irradiance_at_points(
+        &scene,
+        &params,
+        &queries,
+        PointMethod::BruteForce { samples: 64 },
+        4096,
+        3,
+    );
+    for ((it, (_, d, reference)), e) in hits.iter().zip(&rays).zip(&e) {
+        let material = &scene.materials[scene.shapes[it.shape as usize].material];
+        let wo = it.frame.to_local(-*d);
+        let rho = it.bsdf(material, *d).lambertian_albedo(wo);
+        let ours = (e.direct + e.indirect) * rho * std::f32::consts::FRAC_1_PI;
+        // Measured within 0.005 %.
+        for ch in 0..3 {
+            assert!(
+                (ours[ch] - reference[ch]).abs() <= 0.002 * reference[ch] + 1e-6,
+                "at {}: ircache {ours:?} (E {:?}, ρ {rho:?}), Radiance {reference:?}",
+                it.p,
+                e.direct
+            );
+        }
+    }
 }
 
 #[test]

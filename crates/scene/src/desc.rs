@@ -275,19 +275,20 @@ pub struct ShapeDesc {
     pub emitter_texture: Option<TextureDesc>,
     /// Where the emitter's radiance varies with the direction it is seen from (Radiance's
     /// patterns on a `light`, a `spotlight`'s cone): a factor on it.
-    pub emitter_pattern: Option<Arc<dyn EmissionPattern>>,
+    pub emitter_pattern: Option<Arc<dyn SurfacePattern>>,
     /// The media on either side of the surface, if it bounds any.
     pub media: MediumInterface,
     /// Where the shape was declared.
     pub location: SourceLocation,
 }
 
-/// A factor on an area emitter's radiance by where and from which direction it is seen
-/// (Radiance's `brightdata` luminaire tables, `brightfunc`s, `spotlight`s). Its `Debug` text
-/// identifies it completely (a cache file's scene hash is made from it).
-pub trait EmissionPattern: Send + Sync + std::fmt::Debug {
+/// A factor by where and from which direction a surface is seen: on an area emitter's radiance
+/// (Radiance's `brightdata` luminaire tables, `brightfunc`s, `spotlight`s) or on a material's
+/// colour (Radiance's patterns on `plastic`, `metal` and `trans`). Its `Debug` text identifies it
+/// completely (a cache file's scene hash is made from it).
+pub trait SurfacePattern: Send + Sync + std::fmt::Debug {
     /// The factor (per channel, finite and non-negative) for a ray along the unit `direction`
-    /// (towards the emitter) meeting it at `point`, whose unit front normal is `normal`,
+    /// (towards the surface) meeting it at `point`, whose unit front normal is `normal`,
     /// `distance` from where the ray started (infinite where no ray looks: photon emission).
     fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, distance: f32) -> Rgb;
 }
@@ -727,6 +728,8 @@ pub enum BsdfDesc {
         transmissivity: f32,
         /// `trans`'s transmitted-specular fraction.
         transmitted_specular: f32,
+        /// Patterns on the colour (evaluated at each hit).
+        pattern: Option<Arc<dyn SurfacePattern>>,
     },
     /// Radiance's `glass`: a thin pane (no refraction offset) of index `ior` whose
     /// `transmissivity` per pass at normal incidence absorbs inside it; reflection and

@@ -241,11 +241,18 @@ fn errors_name_the_place_and_what_was_expected() {
     }
     // Patterns, their function and data files.
     let lamp = "f light l\n0\n0\n3 1 1 1\nl polygon q\n0\n0\n12 0 0 1 1 0 1 1 1 1 0 1 1\n";
-    let pattern_cases: [(&str, &str, &str); 6] = [
+    let pattern_cases: [(&str, &str, &str); 7] = [
         (
-            "void brightfunc f\n2 v my.cal\n0\n0\nf plastic p\n0\n0\n5 .5 .5 .5 0 0\n",
+            "void brightfunc f\n2 v my.cal\n0\n0\nf mirror p\n0\n0\n3 .5 .5 .5\n",
             "v = 1;\n",
-            "m.rad:5:1: plastic 'p': its modifier 'f' is a pattern; ircache reads patterns on light",
+            "m.rad:5:1: mirror 'p': its modifier 'f' is a pattern; ircache reads patterns on \
+             plastic, metal, trans, light, glow and spotlight materials (and on other patterns), \
+             not on mirror",
+        ),
+        (
+            "void colorpict f\n7 red green blue none.hdr . Px Py\n0\n0\n",
+            "",
+            "colorpict 'f': cannot find picture \"none.hdr\"",
         ),
         (
             "void brightfunc f\n2 v my.cal\n0\n0\n",

@@ -40,7 +40,8 @@ pub mod ward;
 
 use crate::texture::Texture;
 use ircache_math::{Rgb, Vec2, Vec3};
-use ircache_scene::BsdfDesc;
+use ircache_scene::{BsdfDesc, SurfacePattern};
+use std::sync::Arc;
 
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
@@ -475,7 +476,36 @@ impl Facing<'_> {
     }
 }
 
+/// The patterns on a Radiance material (Ward's model, alone or in `twosided`).
+fn ward_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
+    match desc {
+        BsdfDesc::TwoSided { front, .. } => ward_pattern(front),
+        BsdfDesc::Ward { pattern, .. } => pattern.clone(),
+        _ => None,
+    }
+}
+
 impl Bsdf {
+    /// Multiplies the colour of its Ward models (Radiance's materials) by `factor`.
+    fn tint(&mut self, factor: Rgb) {
+        let tint = |l: &mut Lobe| {
+            if let Lobe::Ward(w) = l {
+                w.color *= factor;
+            }
+        };
+        match self {
+            Bsdf::Single(l) => tint(l),
+            Bsdf::TwoSided { front, back } => {
+                tint(front);
+                tint(back);
+            }
+            Bsdf::Blend { first, second, .. } => {
+                tint(first);
+                tint(second);
+            }
+        }
+    }
+
     /// The model seen from `wo`: one-sided models as they are (they are black from below on
     /// their own); `twosided` the front above, the back (directions mirrored) below, none on the
     /// surface itself.
@@ -794,6 +824,7 @@ impl Compiled {
                 metal,
                 transmissivity,
                 transmitted_specular,
+                ..
             } => Compiled::Fixed(Lobe::Ward(Ward {
                 color: *color,
                 specularity: *specularity,
@@ -939,6 +970,9 @@ pub struct Material {
     /// A `blendbsdf`'s second model and its weight (`front` then is the first model, and
     /// `back`, for a `twosided` blend, a copy of it).
     blend: Option<(Compiled, Texture)>,
+    /// Patterns on a Radiance material's colour, by where and from where it is seen
+    /// ([`Material::at_hit`]).
+    pattern: Option<Arc<dyn SurfacePattern>>,
 }
 
 /// A perturbation of the shading normal by a texture (normal or bump map), shaded as Mitsuba 3's
@@ -1200,6 +1234,7 @@ impl Material {
                     perturbation: None,
                     opacity: None,
                     blend: None,
+                    pattern: None,
                 }
             }
             d => Material {
@@ -1208,8 +1243,10 @@ impl Material {
                 perturbation: None,
                 opacity: None,
                 blend: None,
+                pattern: None,
             },
         };
+        m.pattern = ward_pattern(desc);
         m.blend = blend.map(|(w, second)| (Compiled::new(second), Texture::from_desc(w)));
         // A normal or bump map inside twosided applies to both sides.
         m.perturbation = perturbation.or_else(|| match desc {
@@ -1230,7 +1267,20 @@ impl Material {
         self.perturbation.as_ref()
     }
 
-    /// The BSDF at texture coordinates `uv`.
+    /// The BSDF met at a hit: at texture coordinates `uv` and point `p` with unit geometric
+    /// normal `ng` (unflipped), by a ray along the unit `d`, `t` from its start. Radiance's
+    /// patterns multiply the material's colour there, as `normal.c` does.
+    #[must_use]
+    pub fn at_hit(&self, uv: Vec2, p: Vec3, ng: Vec3, d: Vec3, t: f32) -> Bsdf {
+        let mut bsdf = self.at(uv);
+        if let Some(pattern) = &self.pattern {
+            bsdf.tint(pattern.factor(p, ng, d, t));
+        }
+        bsdf
+    }
+
+    /// The BSDF at texture coordinates `uv`, without the patterns that need the hit's point
+    /// ([`Material::at_hit`]): for the properties all its points share.
     #[must_use]
     pub fn at(&self, uv: Vec2) -> Bsdf {
         if let Some((second, weight)) = &self.blend {
@@ -1273,6 +1323,9 @@ impl Material {
     /// coordinates).
     #[must_use]
     pub fn is_textured(&self) -> bool {
+        if self.pattern.is_some() {
+            return true;
+        }
         let textured = |c: &Compiled| match c {
             Compiled::Diffuse { reflectance: t }
             | Compiled::Plastic { diffuse: t, .. }

@@ -108,6 +108,7 @@ fn ward(color: f32, specularity: f32, roughness: f32, metal: bool) -> BsdfDesc {
         metal,
         transmissivity: 0.0,
         transmitted_specular: 0.0,
+        pattern: None,
     })
 }
 
@@ -120,6 +121,7 @@ fn trans(color: f32, roughness: f32, transmissivity: f32, transmitted_specular: 
         metal: false,
         transmissivity,
         transmitted_specular,
+        pattern: None,
     })
 }
 

@@ -50,7 +50,7 @@ impl DirectIntegrator {
                 .lights
                 .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
         }
-        let bsdf = scene.materials[shape.material].at(it.uv);
+        let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
         let wo_local = it.frame.to_local(wo);
         l + estimate_direct(
             scene,

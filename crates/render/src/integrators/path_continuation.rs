@@ -289,7 +289,7 @@ pub fn trace_path_deferring(
             break;
         }
         travelled += it.t;
-        let bsdf = scene.materials[shape.material].at(it.uv);
+        let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
         let wo_local = it.frame.to_local(wo);
 
         // The Lambertian part's indirect light from the cache, where it serves; the beyond-last

@@ -244,7 +244,7 @@ impl VolPathIntegrator {
             if depth + 1 >= max_depth {
                 break;
             }
-            let bsdf = scene.materials[shape.material].at(it.uv);
+            let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
             let wo_local = it.frame.to_local(wo);
             // The first surface's diffuse indirect light from the media cache, where it serves:
             // the light samples then stand alone and the path ends.

@@ -146,7 +146,10 @@ pub fn record_sites(
         let Some(it) = scene.intersect(&ray) else {
             continue;
         };
-        let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+        let bsdf = it.bsdf(
+            &scene.materials[scene.shapes[it.shape as usize].material],
+            ray.d,
+        );
         let wo = -ray.d;
         let wo_local = it.frame.to_local(wo);
         let travelled = travelled + it.t;

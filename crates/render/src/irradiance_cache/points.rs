@@ -53,7 +53,10 @@ pub fn visible_sites(scene: &Scene, count: usize, seed: u64) -> Vec<ShadingPoint
         let Some(it) = scene.intersect(&ray) else {
             continue;
         };
-        let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+        let bsdf = it.bsdf(
+            &scene.materials[scene.shapes[it.shape as usize].material],
+            ray.d,
+        );
         if super::build::is_record_site(&bsdf, it.frame.to_local(-ray.d), false) {
             sites.push(ShadingPoint::facing(it, -ray.d));
         }

@@ -41,7 +41,7 @@ use ircache_math::sampling::{
     square_to_cosine_hemisphere, square_to_uniform_sphere, Distribution1D,
 };
 use ircache_math::{Frame, Rgb, Vec2, Vec3};
-use ircache_scene::{EmissionPattern, EmitterDesc, Geometry, SceneDesc};
+use ircache_scene::{EmitterDesc, Geometry, SceneDesc, SurfacePattern};
 use point::PointLight;
 use selection::LightBound;
 use sphere::SphereLight;
@@ -201,7 +201,7 @@ pub struct EmittedRadiance {
     /// The radiance, or the texture's mean.
     radiance: Rgb,
     texture: Option<crate::texture::Texture>,
-    pattern: Option<Arc<dyn EmissionPattern>>,
+    pattern: Option<Arc<dyn SurfacePattern>>,
     /// The pattern's mean over the light's surface and its cosine-weighted hemisphere.
     pattern_mean: Rgb,
 }
@@ -216,7 +216,7 @@ impl EmittedRadiance {
     pub fn new(
         radiance: Rgb,
         texture: Option<&ircache_scene::TextureDesc>,
-        pattern: Option<&Arc<dyn EmissionPattern>>,
+        pattern: Option<&Arc<dyn SurfacePattern>>,
     ) -> EmittedRadiance {
         EmittedRadiance {
             radiance,

@@ -179,7 +179,10 @@ pub fn first_site(scene: &Scene, ray: ircache_math::Ray) -> Option<RecordSite> {
     let hit = first_opaque(scene, ray, scene.camera_medium, &mut 0, |_, _, _| {})?;
     let it = hit.it;
     let shape = &scene.shapes[it.shape as usize];
-    if !scene.materials[shape.material].at(it.uv).is_diffuse_only() {
+    if !it
+        .bsdf(&scene.materials[shape.material], ray.d)
+        .is_diffuse_only()
+    {
         return None;
     }
     let n = ShadingPoint::facing(it, -ray.d).n;

@@ -287,7 +287,7 @@ impl<'a> SceneMedium<'a> {
                             .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
                     }
                 }
-                let bsdf = scene.materials[shape.material].at(it.uv);
+                let bsdf = it.bsdf(&scene.materials[shape.material], -wo);
                 if bsdf.has_smooth() {
                     let wo_local = it.frame.to_local(wo);
                     let side = medium_after(shape.media, it.ng, wo, medium);

@@ -227,7 +227,7 @@ fn trace_one(
             ray = scene.spawn_ray(&it, d);
             continue;
         }
-        let bsdf = scene.materials[shape.material].at(it.uv);
+        let bsdf = it.bsdf(&scene.materials[shape.material], -incoming);
         let wo_local = it.frame.to_local(incoming);
         if (bounces >= 1 || kind == MapKind::All) && !bsdf.lambertian_albedo(wo_local).is_black() {
             let normal = if it.ng.dot(incoming) < 0.0 {

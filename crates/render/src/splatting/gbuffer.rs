@@ -133,7 +133,10 @@ fn record_site(
     if cache.is_excluded(it.shape) {
         return None;
     }
-    let bsdf = scene.materials[scene.shapes[it.shape as usize].material].at(it.uv);
+    let bsdf = it.bsdf(
+        &scene.materials[scene.shapes[it.shape as usize].material],
+        ray.d,
+    );
     let wo = -ray.d;
     // As `trace_path` makes the first vertex of a camera path.
     let mut sp = ShadingPoint::facing(it, wo);

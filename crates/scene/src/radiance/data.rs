@@ -141,6 +141,48 @@ impl DataArray {
         Ok(DataArray { dimensions, values })
     }
 
+    /// The three channels of a picture as `colorpict` sees it (`data.c`'s `getpict`): two
+    /// dimensions, y (rows from the bottom) then x, the shorter side spanning [0, 1] and the
+    /// longer its aspect ratio, pixel centres from one end to the other.
+    #[must_use]
+    pub fn from_picture(image: &ircache_image::Image) -> [DataArray; 3] {
+        let (w, h) = (image.width, image.height);
+        let (ysize, xsize) = if w <= h {
+            (h as f64 / w as f64, 1.0)
+        } else {
+            (1.0, w as f64 / h as f64)
+        };
+        let dims = vec![
+            Dimension {
+                origin: 0.0,
+                size: ysize,
+                count: h,
+                points: None,
+            },
+            Dimension {
+                origin: 0.0,
+                size: xsize,
+                count: w,
+                points: None,
+            },
+        ];
+        [0, 1, 2].map(|c| {
+            let mut values = Vec::with_capacity(w * h);
+            for row in 0..h {
+                let y = h - 1 - row;
+                values.extend(
+                    image.pixels[y * w..(y + 1) * w]
+                        .iter()
+                        .map(|p| f64::from(p.to_array()[c])),
+                );
+            }
+            DataArray {
+                dimensions: dims.clone(),
+                values,
+            }
+        })
+    }
+
     /// The number of dimensions.
     #[must_use]
     pub fn dimensions(&self) -> usize {

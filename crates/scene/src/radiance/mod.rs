@@ -22,15 +22,18 @@
 //!   directional light of the same irradiance (L·Ω, Ω its solid angle; sharp shadows); wider ones
 //!   and `glow` sources (skies, grounds) are baked into a latitude–longitude environment,
 //!   including gensky's `skyfunc` (`brightfunc skybr skybright.cal`, evaluated natively).
-//! - **Patterns on lights**: `brightfunc`, `colorfunc`, `brightdata` and `colordata` ([`pattern`]),
-//!   with their function files in Radiance's language ([`cal`]) and data files ([`data`]): the
-//!   luminaires `ies2rad` makes render as their candela tables say.
+//! - **Patterns**: `brightfunc`, `colorfunc`, `brightdata`, `colordata` and `colorpict`
+//!   ([`pattern`]), with their function files in Radiance's language ([`cal`]), data files and
+//!   pictures ([`data`]), on the radiance of `light`, `glow` and `spotlight` (the luminaires
+//!   `ies2rad` makes render as their candela tables say) and on the colour of `plastic`,
+//!   `metal` and `trans` (evaluated at each hit).
 //! - **Commands**: `!xform` is carried out here, other commands are run (see [`parse`]).
 //! - **Camera**: a Radiance view ([`view`]) given with the scene (`--view`), else `eye`, `target`
 //!   and `fov` as for OBJ scenes, else the whole scene framed from Radiance's default direction
 //!   (+y, up +z). The picture fits 512 × 512 (or `width` × `height`) with square pixels, as rpict.
-//! - Everything else (patterns on reflecting materials, textures, mixtures, `plastic2`, `BSDF`,
-//!   `antimatter`, ...) is an error at the first surface that needs it, naming the primitive. Nothing is skipped
+//! - Everything else (patterns on mirrors and glass, textures (`texfunc`, `texdata`), mixtures,
+//!   `plastic2`, `BSDF`, `antimatter`, ...) is an error at the first surface that needs it,
+//!   naming the primitive. Nothing is skipped
 //!   without a note: surfaces of `void` are dropped with a count in the scene's notes.
 
 pub mod cal;
@@ -43,15 +46,15 @@ pub mod view;
 pub mod xform;
 
 use crate::desc::{
-    BsdfDesc, EmissionPattern, EmitterDesc, FovAxis, Geometry, IntegratorDesc, Projection,
-    SensorDesc, ShapeDesc, TextureDesc, TriangleMesh,
+    BsdfDesc, EmitterDesc, FovAxis, Geometry, IntegratorDesc, Projection, SensorDesc, ShapeDesc,
+    SurfacePattern, TextureDesc, TriangleMesh,
 };
 use crate::error::SourceLocation;
 use crate::obj_scene::ObjCamera;
 use crate::{SceneDesc, SceneError};
 use ircache_math::{DVec3, Mat3, Mat4, Rgb, Vec3};
 use parse::Primitive;
-use pattern::{FunctionPattern, LightPattern, Pattern, PatternFiles, Spot};
+use pattern::{FunctionPattern, Pattern, PatternChain, PatternFiles, Spot};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -98,7 +101,7 @@ enum Modifier {
     Light {
         radiance: Rgb,
         kind: &'static str,
-        pattern: LightPattern,
+        pattern: PatternChain,
     },
     /// `illum`: its alternate material (`None` for void).
     Illum(Option<String>),
@@ -173,7 +176,7 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
             bsdf,
             emitter,
             emitter_texture: None,
-            emitter_pattern: pattern.map(|p| Arc::new(p) as Arc<dyn EmissionPattern>),
+            emitter_pattern: pattern.map(|p| Arc::new(p) as Arc<dyn SurfacePattern>),
             media: Default::default(),
             location: p.location.clone(),
         });
@@ -298,15 +301,20 @@ fn modifier(
         }
     };
     let patterned = FunctionPattern::is_function_pattern(&p.kind);
-    if !chain.is_empty() && !patterned && !matches!(p.kind.as_str(), "glow" | "light" | "spotlight")
+    if !chain.is_empty()
+        && !patterned
+        && !matches!(
+            p.kind.as_str(),
+            "glow" | "light" | "spotlight" | "plastic" | "metal" | "trans"
+        )
     {
         return Err(err(format!(
-            "its modifier '{}' is a pattern; ircache reads patterns on light, glow and spotlight \
-             materials (and on other patterns), not yet on reflecting ones",
-            p.modifier
+            "its modifier '{}' is a pattern; ircache reads patterns on plastic, metal, trans, \
+             light, glow and spotlight materials (and on other patterns), not on {}",
+            p.modifier, p.kind
         )));
     }
-    let pattern = LightPattern { chain, spot: None };
+    let pattern = PatternChain { chain, spot: None };
     let m = match p.kind.as_str() {
         "plastic" | "metal" | "trans" => {
             let trans = p.kind == "trans";
@@ -331,6 +339,8 @@ fn modifier(
                 metal: p.kind == "metal",
                 transmissivity: t as f32,
                 transmitted_specular: ts as f32,
+                pattern: (!pattern.is_empty())
+                    .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
             }))
         }
         "mirror" => {
@@ -607,7 +617,7 @@ fn environment(sources: &[Source], notes: &mut Vec<String>) -> Vec<EmitterDesc> 
 fn probe(
     p: &Primitive,
     geometry: &Geometry,
-    pattern: &LightPattern,
+    pattern: &PatternChain,
     notes: &mut Vec<String>,
 ) -> Result<(), SceneError> {
     let (point, normal) = match geometry {

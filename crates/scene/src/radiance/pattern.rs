@@ -1,10 +1,10 @@
-//! Patterns on Radiance's light sources (`src/rt/p_func.c`, `p_data.c`): `brightfunc`,
-//! `colorfunc`, `brightdata` and `colordata`, with the function files and data files they name,
-//! and `spotlight`'s cone (`srcsupp.c`'s `spotout`). `ies2rad`'s luminaires are these:
-//! `brightdata` over a candela table with `source.cal`'s coordinates and `flatcorr`.
+//! Radiance's patterns (`src/rt/p_func.c`, `p_data.c`): `brightfunc`, `colorfunc`,
+//! `brightdata`, `colordata` and `colorpict`, with the function files, data files and pictures
+//! they name, and `spotlight`'s cone (`srcsupp.c`'s `spotout`). `ies2rad`'s luminaires are
+//! these: `brightdata` over a candela table with `source.cal`'s coordinates and `flatcorr`.
 //!
-//! A pattern multiplies the radiance of the light it modifies by its value for the ray that sees
-//! the light: its direction `D` (towards the light), the point `P`, the front normal `N`,
+//! A pattern multiplies the radiance of the light, or the colour of the material, it modifies by
+//! its value for the ray that meets the surface: its direction `D`, the point `P`, the normal `N`,
 //! `Rdot = −D·N` and the distance `T`, all in the pattern's own coordinates: the transform written
 //! after its variables, followed by those of the `!xform` commands around it (as `xform` appends
 //! them), inverted as `func.c`'s `setfunc` does. Patterns on patterns multiply. A value that is
@@ -42,6 +42,13 @@ enum Kind {
         functions: [Function; 3],
         coordinates: Vec<Node>,
     },
+    /// `colorpict`: a picture's channels at (u, v), each through its function, which takes the
+    /// three channels (or its own alone, for the green and blue ones of fewer parameters).
+    Picture {
+        tables: Arc<[DataArray; 3]>,
+        functions: [(Function, bool); 3],
+        coordinates: [Node; 2],
+    },
 }
 
 /// One `brightfunc`, `colorfunc`, `brightdata` or `colordata` with its files.
@@ -63,6 +70,7 @@ pub struct FunctionPattern {
 pub struct PatternFiles {
     functions: cal::Loader,
     tables: HashMap<PathBuf, Arc<DataArray>>,
+    pictures: HashMap<PathBuf, Arc<[DataArray; 3]>>,
 }
 
 impl PatternFiles {
@@ -72,7 +80,41 @@ impl PatternFiles {
         PatternFiles {
             functions: cal::Loader::new(scene_dir),
             tables: HashMap::new(),
+            pictures: HashMap::new(),
         }
+    }
+
+    fn picture(&mut self, name: &str, p: &Primitive) -> Result<Arc<[DataArray; 3]>, SceneError> {
+        let path = self.functions.find(name, &p.location).ok_or_else(|| {
+            SceneError::at(
+                p.location.clone(),
+                format!(
+                    "{} '{}': cannot find picture \"{name}\" (looked beside the file naming it, \
+                     beside the scene and along RAYPATH)",
+                    p.kind, p.id
+                ),
+            )
+        })?;
+        if let Some(t) = self.pictures.get(&path) {
+            return Ok(t.clone());
+        }
+        let image = ircache_image::read_image(&path).map_err(|e| SceneError::Referenced {
+            location: p.location.clone(),
+            path: path.clone(),
+            message: e.to_string(),
+        })?;
+        if image.width < 2 || image.height < 2 {
+            return Err(SceneError::at(
+                p.location.clone(),
+                format!(
+                    "{} '{}': picture \"{name}\" needs at least 2 × 2 pixels",
+                    p.kind, p.id
+                ),
+            ));
+        }
+        let t = Arc::new(DataArray::from_picture(&image));
+        self.pictures.insert(path, t.clone());
+        Ok(t)
     }
 
     fn table(&mut self, name: &str, p: &Primitive) -> Result<Arc<DataArray>, SceneError> {
@@ -116,7 +158,7 @@ impl FunctionPattern {
     pub fn is_function_pattern(kind: &str) -> bool {
         matches!(
             kind,
-            "brightfunc" | "colorfunc" | "brightdata" | "colordata"
+            "brightfunc" | "colorfunc" | "brightdata" | "colordata" | "colorpict"
         )
     }
 
@@ -137,6 +179,7 @@ impl FunctionPattern {
             "colorfunc" => (3, 4),
             "brightdata" => (2, 4),
             "colordata" => (6, 8),
+            "colorpict" => (4, 7),
             other => return Err(err(format!("{other} is not a function pattern"))),
         };
         if s.len() < needed {
@@ -167,6 +210,34 @@ impl FunctionPattern {
         let (kind, first_transform) = match p.kind.as_str() {
             "brightfunc" => (Kind::Bright(expr(&s[0])?), 2),
             "colorfunc" => (Kind::Color([expr(&s[0])?, expr(&s[1])?, expr(&s[2])?]), 4),
+            "colorpict" => {
+                let tables = files.picture(&s[3], p)?;
+                let mut functions = Vec::new();
+                for (i, name) in s[..3].iter().enumerate() {
+                    // p_pdata: the red function takes the three channels; green and blue
+                    // take them too unless defined with fewer parameters (then their own).
+                    // (A red function of one parameter reads the red channel, as the extra
+                    // arguments Radiance passes it go unread.)
+                    let f = match program.function(name, 3, &p.location) {
+                        Ok(f) => (f, false),
+                        Err(_) => (
+                            program
+                                .function(name, 1, &p.location)
+                                .map_err(|e| err(format!("colour function of channel {i}: {e}")))?,
+                            true,
+                        ),
+                    };
+                    functions.push(f);
+                }
+                (
+                    Kind::Picture {
+                        tables,
+                        functions: [functions[0], functions[1], functions[2]],
+                        coordinates: [expr(&s[5])?, expr(&s[6])?],
+                    },
+                    7,
+                )
+            }
             _ => {
                 let (first, count) = tables_first.expect("data patterns");
                 let mut tables = Vec::new();
@@ -288,6 +359,22 @@ impl FunctionPattern {
                 functions,
                 coordinates,
             } => [0, 1, 2].map(|i| table(&tables[i], functions[i], coordinates)),
+            Kind::Picture {
+                tables,
+                functions,
+                coordinates,
+            } => {
+                // y major: (v, u).
+                let at = [
+                    prog.eval(&coordinates[1], &c, args),
+                    prog.eval(&coordinates[0], &c, args),
+                ];
+                let rgb = [0, 1, 2].map(|i| tables[i].value(&at));
+                [0, 1, 2].map(|i| match functions[i] {
+                    (f, false) => prog.call(f, &rgb, &c, args),
+                    (f, true) => prog.call(f, &rgb[i..=i], &c, args),
+                })
+            }
         }
     }
 
@@ -318,7 +405,7 @@ impl Pattern {
 
 /// The patterns on a light (outermost first) and its spotlight cone: the factor on its radiance.
 #[derive(Clone, Debug, Default)]
-pub struct LightPattern {
+pub struct PatternChain {
     /// Patterns, multiplied.
     pub chain: Vec<Pattern>,
     /// A spotlight.
@@ -338,7 +425,7 @@ pub struct Spot {
     pub focus: f64,
 }
 
-impl LightPattern {
+impl PatternChain {
     /// True when nothing modifies the light.
     #[must_use]
     pub fn is_empty(&self) -> bool {
@@ -387,7 +474,7 @@ impl LightPattern {
     }
 }
 
-impl crate::desc::EmissionPattern for LightPattern {
+impl crate::desc::SurfacePattern for PatternChain {
     fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, distance: f32) -> Rgb {
         let [r, g, b] = self.factor_f64(
             point.as_dvec3(),
