@@ -1,5 +1,5 @@
-//! Fuzzes the Radiance octree reader: each input is written to `scene.oct` in a per-process
-//! temporary folder and read. An octree may name scene files (`oconv` without `-f`), which are
+//! Fuzzes the Radiance octree and compiled-mesh readers: each input is written to `scene.oct`
+//! in a per-process temporary folder and read as both. An octree may name scene files (`oconv` without `-f`), which are
 //! read as scene text and may hold `!` commands: inputs with a `/` (a name outside the folder)
 //! or a `!` (the input itself named as scene text) are skipped, so that no command ever runs.
 #![no_main]
@@ -24,4 +24,5 @@ fuzz_target!(|data: &[u8]| {
     let path = scene_path();
     std::fs::write(path, data).expect("write the input");
     let _ = ircache_scene::radiance::octree::read(path, &Default::default(), 0);
+    let _ = ircache_scene::radiance::mesh::read(path, &Default::default());
 });

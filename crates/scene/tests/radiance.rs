@@ -577,3 +577,74 @@ fn damaged_octrees_and_instances_are_errors_naming_the_file() {
         assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
     }
 }
+
+#[test]
+fn meshes_keep_their_materials_normals_and_uvs_and_damaged_ones_are_errors() {
+    let d = dir("meshes");
+    let rtm =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/radiance-octrees/bowl.rtm");
+    std::fs::copy(&rtm, d.join("bowl.rtm")).unwrap();
+    let s = load(
+        &d,
+        &[(
+            "m.rad",
+            "void mesh own\n1 bowl.rtm\n0\n0\n\
+             void plastic grey\n0\n0\n5 .5 .5 .5 0 0\n\
+             grey mesh given\n5 bowl.rtm -t 3 0 0\n0\n0\n",
+        )],
+    )
+    .unwrap();
+    // Its own materials: two bands; given one: the same triangles, grouped as the file groups
+    // them, all grey.
+    let own: Vec<_> = s
+        .shapes
+        .iter()
+        .filter(|x| x.id.as_deref().unwrap().starts_with("own#"))
+        .collect();
+    assert_eq!(own.len(), 2);
+    let colors: Vec<Rgb> = own.iter().map(|x| ward_color(&x.bsdf)).collect();
+    assert!(colors.contains(&Rgb::new(0.7, 0.1, 0.1)) && colors.contains(&Rgb::new(0.1, 0.2, 0.7)));
+    let given: Vec<_> = s
+        .shapes
+        .iter()
+        .filter(|x| x.id.as_deref().unwrap().starts_with("given#"))
+        .collect();
+    assert!(given.iter().all(|x| ward_color(&x.bsdf) == Rgb::splat(0.5)));
+    let triangles = |v: &[&ircache_scene::ShapeDesc]| {
+        v.iter()
+            .map(|x| match &x.geometry {
+                Geometry::Mesh(m) => m.indices.len(),
+                _ => 0,
+            })
+            .sum::<usize>()
+    };
+    // 24 × 12 quads, less the 24 degenerate ones at the pole obj2mesh drops.
+    assert_eq!(triangles(&own), 24 * 12 * 2 - 24);
+    assert_eq!(triangles(&given), triangles(&own));
+    for x in &own {
+        let Geometry::Mesh(m) = &x.geometry else {
+            panic!()
+        };
+        // A unit half sphere below its rim: normals are the positions' directions, quantised
+        // to Radiance's 32-bit code and its 2⁻³² grid.
+        let (n, uv) = (m.normals.as_ref().unwrap(), m.uvs.as_ref().unwrap());
+        for (i, p) in m.positions.iter().enumerate() {
+            assert!((p.length() - 1.0).abs() < 1e-4 && p.z <= 1e-4, "{p}");
+            assert!((n[i] - *p).length() < 1e-3, "{} against {p}", n[i]);
+            assert!((0.0..=1.0).contains(&uv[i].x) && (0.0..=1.0).contains(&uv[i].y));
+        }
+    }
+    let good = std::fs::read(&rtm).unwrap();
+    std::fs::write(d.join("cut.rtm"), &good[..good.len() * 2 / 3]).unwrap();
+    let e = load(&d, &[("m.rad", "void mesh a\n1 cut.rtm\n0\n0\n")])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("cut.rtm") && (e.contains("truncated") || e.contains("damaged")),
+        "{e}"
+    );
+    let e = load(&d, &[("m.rad", "void mesh a\n1 m.rad\n0\n0\n")])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not a Radiance mesh"), "{e}");
+}

@@ -4,8 +4,8 @@
 //! - **Surfaces**: `polygon` (triangulated by ear clipping; the front is where its vertices turn
 //!   counter-clockwise), `sphere` and `bubble` (analytic), `cylinder`, `tube`, `cone`, `cup` and
 //!   `ring` (tessellated into 64 segments whose polygons keep the exact areas), `instance`
-//!   (an octree's surfaces placed by its transform, [`octree`]). `mesh` (compiled meshes) is
-//!   refused.
+//!   (an octree's surfaces placed by its transform, [`octree`]), `mesh` (an `obj2mesh` file's
+//!   triangles with their normals, (u, v) and materials, [`mesh`]).
 //! - **Octrees**: `ircache render scene.oct` reads the scene an octree holds (frozen by
 //!   `oconv -f`) or the scene files it names ([`octree`]).
 //! - **Materials**: `plastic`, `metal` and `trans` as Radiance's isotropic Gaussian model
@@ -38,6 +38,7 @@
 
 pub mod cal;
 pub mod data;
+pub mod mesh;
 pub mod octree;
 pub mod parse;
 pub mod pattern;
@@ -128,6 +129,16 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
             modifiers.insert(p.id.clone(), (m, p.location.clone()));
             continue;
         }
+        if p.kind == "mesh" {
+            for (q, geometry) in mesh_surfaces(p, &mut modifiers, &mut files, &mut notes)? {
+                let Some(material) = surface_material(&q, &modifiers, &mut illum_surfaces)? else {
+                    void_surfaces += 1;
+                    continue;
+                };
+                push_surface(&q, material, geometry, &mut shapes, &mut notes)?;
+            }
+            continue;
+        }
         let Some(material) = surface_material(p, &modifiers, &mut illum_surfaces)? else {
             void_surfaces += 1;
             continue;
@@ -136,17 +147,6 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
             sources.push(source(p, material)?);
             continue;
         }
-        let (bsdf, emitter, pattern) = match material {
-            Modifier::Bsdf(b) => (b, None, None),
-            Modifier::Light {
-                radiance, pattern, ..
-            } => (
-                black(),
-                Some(radiance),
-                Some(pattern).filter(|p| !p.is_empty()),
-            ),
-            _ => unreachable!("surface_material resolves the rest"),
-        };
         let Some(geometry) = geometry(p)? else {
             notes.push(format!(
                 "{}: {} '{}' has no area and was dropped",
@@ -154,32 +154,7 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
             ));
             continue;
         };
-        let finite = match &geometry {
-            Geometry::Mesh(m) => m.positions.iter().all(|v| v.is_finite()),
-            Geometry::Sphere { center, radius, .. } => center.is_finite() && radius.is_finite(),
-        };
-        if !finite {
-            return Err(SceneError::at(
-                p.location.clone(),
-                format!(
-                    "{} '{}': its coordinates, transformed, exceed single precision",
-                    p.kind, p.id
-                ),
-            ));
-        }
-        if let Some(pattern) = &pattern {
-            probe(p, &geometry, pattern, &mut notes)?;
-        }
-        shapes.push(ShapeDesc {
-            id: Some(p.id.clone()),
-            geometry,
-            bsdf,
-            emitter,
-            emitter_texture: None,
-            emitter_pattern: pattern.map(|p| Arc::new(p) as Arc<dyn SurfacePattern>),
-            media: Default::default(),
-            location: p.location.clone(),
-        });
+        push_surface(p, material, geometry, &mut shapes, &mut notes)?;
     }
     if void_surfaces > 0 {
         notes.push(format!(
@@ -228,6 +203,119 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
         media: Vec::new(),
         notes,
     })
+}
+
+/// Adds the surface `p` of `material` and `geometry` to `shapes`.
+fn push_surface(
+    p: &Primitive,
+    material: Modifier,
+    geometry: Geometry,
+    shapes: &mut Vec<ShapeDesc>,
+    notes: &mut Vec<String>,
+) -> Result<(), SceneError> {
+    let (bsdf, emitter, pattern) = match material {
+        Modifier::Bsdf(b) => (b, None, None),
+        Modifier::Light {
+            radiance, pattern, ..
+        } => (
+            black(),
+            Some(radiance),
+            Some(pattern).filter(|p| !p.is_empty()),
+        ),
+        _ => unreachable!("surface_material resolves the rest"),
+    };
+    let finite = match &geometry {
+        Geometry::Mesh(m) => m.positions.iter().all(|v| v.is_finite()),
+        Geometry::Sphere { center, radius, .. } => center.is_finite() && radius.is_finite(),
+    };
+    if !finite {
+        return Err(SceneError::at(
+            p.location.clone(),
+            format!(
+                "{} '{}': its coordinates, transformed, exceed single precision",
+                p.kind, p.id
+            ),
+        ));
+    }
+    if let Some(pattern) = &pattern {
+        probe(p, &geometry, pattern, notes)?;
+    }
+    shapes.push(ShapeDesc {
+        id: Some(p.id.clone()),
+        geometry,
+        bsdf,
+        emitter,
+        emitter_texture: None,
+        emitter_pattern: pattern.map(|p| Arc::new(p) as Arc<dyn SurfacePattern>),
+        media: Default::default(),
+        location: p.location.clone(),
+    });
+    Ok(())
+}
+
+/// A `mesh` (an `obj2mesh` file moved by the transform after its name): its own materials
+/// registered under `mesh/name` (as an instance's), and one surface per material, each a
+/// primitive of the mesh's location whose modifier is the instance's, or the mesh's own where
+/// that is void. Degenerate triangles are dropped with a note.
+fn mesh_surfaces(
+    p: &Primitive,
+    modifiers: &mut HashMap<String, (Modifier, SourceLocation)>,
+    files: &mut PatternFiles,
+    notes: &mut Vec<String>,
+) -> Result<Vec<(Primitive, Geometry)>, SceneError> {
+    let err = |m: String| SceneError::at(p.location.clone(), format!("mesh '{}': {m}", p.id));
+    let Some(file) = p.strings.first() else {
+        return Err(err(
+            "expected the mesh file as its first string argument".into()
+        ));
+    };
+    let own = xform::parse_plain(&p.strings[1..]).map_err(err)?;
+    let path = p.location.file.parent().unwrap_or(Path::new("")).join(file);
+    let m = mesh::read(&path, &own.then(&p.transform)).map_err(|e| match e {
+        SceneError::Io { path, source } => SceneError::Referenced {
+            location: p.location.clone(),
+            path,
+            message: source.to_string(),
+        },
+        other => other,
+    })?;
+    let local = |name: &str| format!("{}/{name}", p.id);
+    for q in &m.materials {
+        let mut q = q.clone();
+        q.id = local(&q.id);
+        if q.modifier != "void" {
+            q.modifier = local(&q.modifier);
+        }
+        let modifier = modifier(&q, modifiers, files)?;
+        modifiers.insert(q.id.clone(), (modifier, q.location.clone()));
+    }
+    let mut out = Vec::new();
+    for (material, mut triangles) in m.groups {
+        let name = match (&*p.modifier, material) {
+            ("void", Some(i)) => local(&m.materials[i].id),
+            ("void", None) => "void".to_string(),
+            (given, _) => given.to_string(),
+        };
+        let before = triangles.indices.len();
+        triangles.indices.retain(|t| {
+            let [a, b, c] = t.map(|i| triangles.positions[i as usize]);
+            (b - a).cross(c - a).length_squared() > 0.0
+        });
+        let dropped = before - triangles.indices.len();
+        let mut q = p.clone();
+        q.modifier = name;
+        q.id = format!("{}#{}", p.id, q.modifier);
+        if dropped > 0 {
+            notes.push(format!(
+                "{}: mesh '{}': {dropped} triangle(s) of '{}' have no area and were dropped",
+                p.location, p.id, q.modifier
+            ));
+        }
+        if !triangles.indices.is_empty() {
+            out.push((q, Geometry::Mesh(triangles)));
+        }
+    }
+    Ok(out)
 }
 
 fn black() -> Arc<BsdfDesc> {
@@ -743,11 +831,7 @@ fn geometry(p: &Primitive) -> Result<Option<Geometry>, SceneError> {
             }
             Ok(Some(Geometry::Mesh(ring(point(0), n.normalize(), r0, r1))))
         }
-        "mesh" => Err(err(
-            "Radiance's compiled meshes (.rtm) are not read; give the \
-             geometry as polygons or load the model's OBJ or PLY through a Mitsuba scene"
-                .into(),
-        )),
+        "mesh" => unreachable!("meshes are read by mesh_surfaces"),
         other => Err(err(format!("unknown surface type '{other}'"))),
     }
 }

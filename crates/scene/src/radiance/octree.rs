@@ -45,16 +45,13 @@ pub fn read(
             m,
         )
     };
-    let start = header_end(&bytes).ok_or_else(|| {
+    let start = header_end(&bytes, "Radiance_octree").ok_or_else(|| {
         err(
             1,
             "not a Radiance octree (its header does not say FORMAT=Radiance_octree)".into(),
         )
     })?;
-    let mut r = Reader {
-        bytes: &bytes,
-        pos: start,
-    };
+    let mut r = Reader::new(&bytes, start);
     let truncated = |r: &Reader| err(1, format!("the octree is truncated at byte {}", r.pos));
     let size = r.int(2).ok_or_else(|| truncated(&r))? - OCTMAGIC;
     if !(1..=8).contains(&size) {
@@ -83,10 +80,41 @@ pub fn read(
         return Ok(out);
     }
     r.skip_tree(size).ok_or_else(|| truncated(&r))?;
+    let mut out = read_scene(&mut r, size, &file)?;
+    for p in &mut out {
+        p.transform = *transform;
+    }
+    if out.len() as i64 != count {
+        return Err(err(
+            1,
+            format!("the octree says {count} objects and holds {}", out.len()),
+        ));
+    }
+    Ok(out)
+}
+
+/// The scene data after an octree or mesh (`sceneio.c`'s `readscene`): the type names, then the
+/// objects until the terminator; their transforms are the identity.
+pub(super) fn read_scene(
+    r: &mut Reader,
+    size: usize,
+    file: &Arc<std::path::PathBuf>,
+) -> Result<Vec<Primitive>, SceneError> {
+    let err = |object: usize, m: String| {
+        SceneError::at(
+            SourceLocation {
+                file: file.clone(),
+                line: object as u32,
+                column: 1,
+            },
+            m,
+        )
+    };
+    let truncated = |r: &Reader| err(1, format!("the file is truncated at byte {}", r.pos()));
     // The type names, in the writer's order.
     let mut types = Vec::new();
     loop {
-        let s = r.string().ok_or_else(|| truncated(&r))?;
+        let s = r.string().ok_or_else(|| truncated(r))?;
         if s.is_empty() {
             break;
         }
@@ -95,7 +123,7 @@ pub fn read(
     let mut out: Vec<Primitive> = Vec::new();
     loop {
         let object = out.len();
-        let t = r.int(1).ok_or_else(|| truncated(&r))?;
+        let t = r.int(1).ok_or_else(|| truncated(r))?;
         if t == -1 {
             break;
         }
@@ -103,7 +131,7 @@ pub fn read(
             .get(t as usize)
             .ok_or_else(|| err(object + 1, format!("object of unknown type number {t}")))?
             .clone();
-        let m = r.int(size).ok_or_else(|| truncated(&r))?;
+        let m = r.int(size).ok_or_else(|| truncated(r))?;
         let modifier = if m == -1 {
             "void".to_string()
         } else {
@@ -114,16 +142,16 @@ pub fn read(
                 )
             })?
         };
-        let id = r.string().ok_or_else(|| truncated(&r))?;
-        let n = r.int(2).ok_or_else(|| truncated(&r))?;
+        let id = r.string().ok_or_else(|| truncated(r))?;
+        let n = r.int(2).ok_or_else(|| truncated(r))?;
         let mut strings = Vec::new();
         for _ in 0..n.max(0) {
-            strings.push(r.string().ok_or_else(|| truncated(&r))?);
+            strings.push(r.string().ok_or_else(|| truncated(r))?);
         }
-        let n = r.int(2).ok_or_else(|| truncated(&r))?;
+        let n = r.int(2).ok_or_else(|| truncated(r))?;
         let mut reals = Vec::new();
         for _ in 0..n.max(0) {
-            let v = r.real().ok_or_else(|| truncated(&r))?;
+            let v = r.real().ok_or_else(|| truncated(r))?;
             if !v.is_finite() {
                 return Err(err(
                     object + 1,
@@ -139,7 +167,7 @@ pub fn read(
             strings,
             integers: Vec::new(),
             reals,
-            transform: *transform,
+            transform: Transform::default(),
             location: SourceLocation {
                 file: file.clone(),
                 line: object as u32 + 1,
@@ -147,33 +175,37 @@ pub fn read(
             },
         });
     }
-    if out.len() as i64 != count {
-        return Err(err(
-            1,
-            format!("the octree says {count} objects and holds {}", out.len()),
-        ));
-    }
     Ok(out)
 }
 
 /// Where the binary part starts: after the header's empty line, if the header names the
-/// octree format.
-fn header_end(bytes: &[u8]) -> Option<usize> {
+/// format `format`.
+pub(super) fn header_end(bytes: &[u8], format: &str) -> Option<usize> {
     let end = bytes.windows(2).position(|w| w == b"\n\n")? + 2;
     let header = String::from_utf8_lossy(&bytes[..end]);
     header
         .lines()
-        .any(|l| l.trim() == "FORMAT=Radiance_octree")
+        .any(|l| l.trim().strip_prefix("FORMAT=") == Some(format))
         .then_some(end)
 }
 
 /// Radiance's portable binary (`portio.c`).
-struct Reader<'a> {
+pub(super) struct Reader<'a> {
     bytes: &'a [u8],
     pos: usize,
 }
 
-impl Reader<'_> {
+impl<'a> Reader<'a> {
+    /// Reading `bytes` from `pos`.
+    pub(super) fn new(bytes: &'a [u8], pos: usize) -> Reader<'a> {
+        Reader { bytes, pos }
+    }
+
+    /// Where it is.
+    pub(super) fn pos(&self) -> usize {
+        self.pos
+    }
+
     fn byte(&mut self) -> Option<u8> {
         let b = *self.bytes.get(self.pos)?;
         self.pos += 1;
@@ -181,7 +213,7 @@ impl Reader<'_> {
     }
 
     /// A big-endian, sign-extended integer of `n` bytes.
-    fn int(&mut self, n: usize) -> Option<i64> {
+    pub(super) fn int(&mut self, n: usize) -> Option<i64> {
         let first = self.byte()?;
         let mut r = i64::from(first as i8);
         for _ in 1..n {
@@ -191,7 +223,7 @@ impl Reader<'_> {
     }
 
     /// A mantissa of 4 bytes over 2³¹ − 1 and an exponent of 1.
-    fn real(&mut self) -> Option<f64> {
+    pub(super) fn real(&mut self) -> Option<f64> {
         let m = self.int(4)?;
         let e = self.int(1)?;
         if m == 0 {
@@ -202,7 +234,7 @@ impl Reader<'_> {
     }
 
     /// A NUL-terminated string.
-    fn string(&mut self) -> Option<String> {
+    pub(super) fn string(&mut self) -> Option<String> {
         let len = self.bytes[self.pos..].iter().position(|&b| b == 0)?;
         let s = String::from_utf8_lossy(&self.bytes[self.pos..self.pos + len]).into_owned();
         self.pos += len + 1;
@@ -210,7 +242,7 @@ impl Reader<'_> {
     }
 
     /// Skips a pre-ordered octree (without recursion: a damaged file cannot exhaust the stack).
-    fn skip_tree(&mut self, size: usize) -> Option<()> {
+    pub(super) fn skip_tree(&mut self, size: usize) -> Option<()> {
         let mut pending = 1usize;
         while pending > 0 {
             pending -= 1;

@@ -123,17 +123,7 @@ fn instance(p: &Primitive, ctx: &Context, out: &mut Vec<Primitive>) -> Result<()
             "expected the octree file as its first string argument".into()
         ));
     };
-    let own = match super::xform::parse_options(&p.strings[1..]).map_err(err)? {
-        (copies, files) if files.is_empty() && copies.len() == 1 && copies[0].0.is_none() => {
-            copies[0].1
-        }
-        _ => {
-            return Err(err(format!(
-                "expected transform options after the octree, found \"{}\"",
-                p.strings[1..].join(" ")
-            )))
-        }
-    };
+    let own = super::xform::parse_plain(&p.strings[1..]).map_err(err)?;
     let dir = p.location.file.parent().unwrap_or(Path::new(""));
     let path = dir.join(file);
     let prims = super::octree::read(&path, &own.then(&p.transform), ctx.depth + 1).map_err(

@@ -16,7 +16,6 @@ use super::cal::{self, Channels, Function, Node, Program};
 use super::data::DataArray;
 use super::parse::Primitive;
 use super::sky::SkyBrightness;
-use super::xform::Transform;
 use crate::SceneError;
 use ircache_math::{DMat4, DVec3, Rgb, Vec3};
 use std::collections::HashMap;
@@ -287,21 +286,7 @@ impl FunctionPattern {
                  follow the pattern's variables)"
             )));
         }
-        let own = if rest.is_empty() {
-            Transform::default()
-        } else {
-            let (copies, files_named) =
-                super::xform::parse_options(rest).map_err(|e| err(format!("transform: {e}")))?;
-            match (&copies[..], files_named.is_empty()) {
-                ([(None, t)], true) => *t,
-                _ => {
-                    return Err(err(format!(
-                        "transform \"{}\": expected transform options only",
-                        rest.join(" ")
-                    )))
-                }
-            }
-        };
+        let own = super::xform::parse_plain(rest).map_err(|e| err(format!("transform: {e}")))?;
         let total = own.then(&p.transform);
         let to_pattern = total.matrix.inverse();
         if !to_pattern.is_finite() {

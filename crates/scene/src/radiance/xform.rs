@@ -90,6 +90,20 @@ fn step(args: &[String], i: &mut usize) -> Result<Option<(DMat4, f64)>, String> 
     Ok(Some((m, s)))
 }
 
+/// A transform written after a name (an `instance`'s, a `mesh`'s, a pattern's): options only,
+/// no arrays and no files.
+pub fn parse_plain(args: &[String]) -> Result<Transform, String> {
+    match parse_options(args)? {
+        (copies, files) if files.is_empty() && copies.len() == 1 && copies[0].0.is_none() => {
+            Ok(copies[0].1)
+        }
+        _ => Err(format!(
+            "expected transform options only, found \"{}\"",
+            args.join(" ")
+        )),
+    }
+}
+
 /// Parses a transform's options; returns the copies to make (`Some(k)` for copy `k` of an
 /// array, with its transform) and the file names after the options.
 #[allow(clippy::type_complexity)]
