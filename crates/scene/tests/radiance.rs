@@ -569,7 +569,7 @@ fn damaged_octrees_and_instances_are_errors_naming_the_file() {
         ("void instance a\n0\n0\n0\n", "expected the octree file"),
         (
             "void instance a\n1 cut.oct\n0\n0\n",
-            "cut.oct:1:1: the octree is truncated",
+            "cut.oct:1:1: the file is truncated",
         ),
     ];
     for (text, expect) in cases {
