@@ -742,6 +742,10 @@ fn link(e: &Expr, s: &Scope, at: &SourceLocation) -> Result<Node, SceneError> {
                     return Err(err(format!("'{n}' is a function and needs arguments")));
                 }
                 Node::Variable(i)
+            } else if n == "Lu" || n == "Lv" {
+                return Err(err(format!(
+                    "'{n}' (a mesh's local (u, v)) is not passed to patterns by ircache yet"
+                )));
             } else if let Some(c) = CHANNELS.iter().position(|c| c == n) {
                 Node::Channel(c as u8)
             } else if UNAVAILABLE.contains(&n.as_str()) {
