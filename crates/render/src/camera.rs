@@ -11,7 +11,7 @@
 
 use ircache_math::{sampling::square_to_disk_concentric, Mat4, Ray, Vec2, Vec3};
 pub use ircache_scene::Projection;
-use ircache_scene::{FovAxis, SensorDesc};
+use ircache_scene::{FovAxis, PanoramicMapping, SensorDesc};
 
 /// A camera.
 #[derive(Clone, Debug)]
@@ -111,6 +111,11 @@ impl Camera {
     pub fn pixel_spread(&self, width: usize) -> PixelSpread {
         let across = 2.0 * self.tan_half_x / width.max(1) as f32;
         match self.projection {
+            // About the angle a pixel spans across the view.
+            Projection::Panoramic { horizontal, .. } => PixelSpread {
+                width: 0.0,
+                angle: horizontal.to_radians() / width.max(1) as f32,
+            },
             Projection::Orthographic => PixelSpread {
                 width: across * self.to_world.x_axis.truncate().length(),
                 angle: 0.0,
@@ -156,6 +161,40 @@ impl Camera {
                     t_max: self.far_clip - self.near_clip,
                 }
             }
+            Projection::Panoramic {
+                mapping,
+                horizontal,
+                vertical,
+            } => match panoramic_direction(mapping, horizontal, vertical, film) {
+                Some(d) => Ray {
+                    o: self.origin,
+                    d: self.to_world.transform_vector3(d).normalize(),
+                    t_min: self.near_clip,
+                    t_max: self.far_clip,
+                },
+                // Outside the fisheye's circle: a ray that meets nothing ([`Self::sees`]).
+                None => Ray {
+                    o: self.origin,
+                    d: self.to_world.transform_vector3(Vec3::Z).normalize(),
+                    t_min: 0.0,
+                    t_max: 0.0,
+                },
+            },
+        }
+    }
+
+    /// False where the film sees nothing (outside a fisheye's circle): the pixel pass gives
+    /// such samples no weight.
+    #[inline]
+    #[must_use]
+    pub fn sees(&self, film: Vec2) -> bool {
+        match self.projection {
+            Projection::Panoramic {
+                mapping,
+                horizontal,
+                vertical,
+            } => panoramic_direction(mapping, horizontal, vertical, film).is_some(),
+            _ => true,
         }
     }
 
@@ -183,6 +222,14 @@ impl Camera {
     #[must_use]
     pub fn project(&self, p: Vec3) -> Option<Vec2> {
         let q = self.to_world.inverse().transform_point3(p);
+        if let Projection::Panoramic {
+            mapping,
+            horizontal,
+            vertical,
+        } = self.projection
+        {
+            return panoramic_film(mapping, horizontal, vertical, q.normalize());
+        }
         if q.z <= 0.0 {
             return None;
         }
@@ -212,6 +259,121 @@ impl Camera {
         let dist = to.length();
         (Ray::new(from, to / dist), dist)
     }
+}
+
+/// The half-extents of a panoramic film in its mapping's units (`image.c`'s `setview`).
+fn panoramic_extents(mapping: PanoramicMapping, horizontal: f32, vertical: f32) -> (f32, f32) {
+    let half = |a: f32| (a * 0.5).to_radians();
+    match mapping {
+        PanoramicMapping::Hemispherical => {
+            (2.0 * half(horizontal).sin(), 2.0 * half(vertical).sin())
+        }
+        PanoramicMapping::Angular => (horizontal / 180.0, vertical / 180.0),
+        PanoramicMapping::Planispheric => (
+            2.0 * half(horizontal).sin() / (1.0 + half(horizontal).cos()),
+            2.0 * half(vertical).sin() / (1.0 + half(vertical).cos()),
+        ),
+        PanoramicMapping::Cylindrical => (horizontal.to_radians(), 2.0 * half(vertical).tan()),
+    }
+}
+
+/// The camera-space unit direction (+z forward, +x the viewer's left, +y up) of film point
+/// `film` in a panoramic view (`image.c`'s `viewray`), `None` outside a fisheye's circle.
+fn panoramic_direction(
+    mapping: PanoramicMapping,
+    horizontal: f32,
+    vertical: f32,
+    film: Vec2,
+) -> Option<Vec3> {
+    let (h, v) = panoramic_extents(mapping, horizontal, vertical);
+    // Radiance's image coordinates: right and up from the centre, in [−½, ½].
+    let (x, y) = (film.x - 0.5, 0.5 - film.y);
+    let (right, up, forward) = match mapping {
+        PanoramicMapping::Hemispherical => {
+            let (x, y) = (x * h, y * v);
+            let z = 1.0 - x * x - y * y;
+            if z < 0.0 {
+                return None;
+            }
+            (x, y, z.sqrt())
+        }
+        PanoramicMapping::Angular => {
+            let (x, y) = (x * h, y * v);
+            let d2 = x * x + y * y;
+            if d2 > 1.0 {
+                return None;
+            }
+            let d = d2.sqrt();
+            let z = (std::f32::consts::PI * d).cos();
+            let s = if d <= 1e-7 {
+                std::f32::consts::PI
+            } else {
+                (1.0 - z * z).max(0.0).sqrt() / d
+            };
+            (x * s, y * s, z)
+        }
+        PanoramicMapping::Planispheric => {
+            let (x, y) = (x * h, y * v);
+            let d = x * x + y * y;
+            let z = (1.0 - d) / (1.0 + d);
+            (x * (1.0 + z), y * (1.0 + z), z)
+        }
+        PanoramicMapping::Cylindrical => {
+            let a = x * h;
+            let d = Vec3::new(a.sin(), y * v, a.cos());
+            let d = d / d.length();
+            (d.x, d.y, d.z)
+        }
+    };
+    Some(Vec3::new(-right, up, forward))
+}
+
+/// The film point of the camera-space unit direction `d` in a panoramic view (the inverse of
+/// [`panoramic_direction`]); `None` where the mapping has none (behind a hemispherical view,
+/// the direction straight back for an angular one).
+fn panoramic_film(
+    mapping: PanoramicMapping,
+    horizontal: f32,
+    vertical: f32,
+    d: Vec3,
+) -> Option<Vec2> {
+    let (h, v) = panoramic_extents(mapping, horizontal, vertical);
+    let (right, up, forward) = (-d.x, d.y, d.z);
+    let (x, y) = match mapping {
+        PanoramicMapping::Hemispherical => {
+            if forward < 0.0 {
+                return None;
+            }
+            (right / h, up / v)
+        }
+        PanoramicMapping::Angular => {
+            let s = (right * right + up * up).sqrt();
+            let d = forward.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+            if s <= 0.0 {
+                if forward > 0.0 {
+                    (0.0, 0.0)
+                } else {
+                    return None;
+                }
+            } else {
+                (right / s * d / h, up / s * d / v)
+            }
+        }
+        PanoramicMapping::Planispheric => {
+            if forward <= -1.0 {
+                return None;
+            }
+            (right / (1.0 + forward) / h, up / (1.0 + forward) / v)
+        }
+        PanoramicMapping::Cylindrical => {
+            let across = (right * right + forward * forward).sqrt();
+            if across <= 0.0 {
+                return None;
+            }
+            (right.atan2(forward) / h, up / across / v)
+        }
+    };
+    Some(Vec2::new(x + 0.5, 0.5 - y))
 }
 
 impl Camera {

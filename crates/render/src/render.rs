@@ -431,6 +431,8 @@ pub fn camera_ray(
     let (offset, weight) = settings.filter.sample(sampler.next_2d());
     let inv_size = Vec2::new(1.0 / settings.width as f32, 1.0 / settings.height as f32);
     let film = (Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + offset) * inv_size;
+    // Outside a fisheye's circle the sample sees nothing.
+    let weight = if scene.camera.sees(film) { weight } else { 0.0 };
     if scene.camera.needs_lens_sample() {
         sampler.set_dimension(dims::LENS);
         let lens = sampler.next_2d();

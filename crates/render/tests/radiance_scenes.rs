@@ -297,3 +297,127 @@ fn light_through_a_trans_roof_matches_its_closed_form_and_radiance() {
         );
     }
 }
+
+#[test]
+fn fisheye_and_panoramic_views_trace_radiance_s_rays() {
+    // vwrays' rays for hemispherical, angular, planisphere and cylindrical views: the picture
+    // size rpict fits, each pixel centre's direction, the pixels outside a fisheye's circle.
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/radiance-office/reference-views.txt");
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#')).peekable();
+    let mut views = 0;
+    while let Some(view) = lines.next() {
+        let view = view.strip_prefix("view ").expect("a view line");
+        let size: Vec<u32> = lines
+            .next()
+            .unwrap()
+            .strip_prefix("size ")
+            .unwrap()
+            .split_whitespace()
+            .map(|w| w.parse().unwrap())
+            .collect();
+        let camera = ircache_scene::obj_scene::ObjCamera {
+            radiance_view: Some(view.to_string()),
+            width: Some(12),
+            height: Some(12),
+            ..Default::default()
+        };
+        let office = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenes/radiance-office/office.rad");
+        let desc = ircache_scene::load_scene(&office, &[], &camera).unwrap();
+        let (w, h) = (desc.sensor.film.width, desc.sensor.film.height);
+        assert_eq!((w, h), (size[0], size[1]), "{view}: the picture rpict fits");
+        let cam = ircache_render::camera::Camera::new(&desc.sensor, w, h);
+        for j in 0..h {
+            for i in 0..w {
+                let v: Vec<f32> = lines
+                    .next()
+                    .unwrap()
+                    .split_whitespace()
+                    .map(|x| x.parse().unwrap())
+                    .collect();
+                let film = ircache_math::Vec2::new(
+                    (i as f32 + 0.5) / w as f32,
+                    (j as f32 + 0.5) / h as f32,
+                );
+                let theirs = Vec3::new(v[3], v[4], v[5]);
+                if theirs == Vec3::ZERO {
+                    assert!(
+                        !cam.sees(film),
+                        "{view}: pixel ({i}, {j}) is outside the view"
+                    );
+                    continue;
+                }
+                assert!(cam.sees(film), "{view}: pixel ({i}, {j}) sees");
+                let ray = cam.generate_ray(film);
+                let theirs = theirs.normalize();
+                assert!(
+                    (ray.d - theirs).length() < 2e-4
+                        && (ray.o - Vec3::new(v[0], v[1], v[2])).length() < 1e-4,
+                    "{view}: pixel ({i}, {j}) looks along {} from {}, Radiance's along {theirs}",
+                    ray.d,
+                    ray.o
+                );
+                // What the view sees there projects back onto the pixel.
+                let back = cam.project(ray.o + ray.d * 3.0).expect("projects");
+                assert!((back - film).length() < 1e-4, "{view}: {film} → {back}");
+            }
+        }
+        views += 1;
+    }
+    assert_eq!(views, 5);
+}
+
+#[test]
+fn a_hemispherical_fisheye_sees_the_irradiance_at_its_eye() {
+    // Every film area of a 180° hemispherical view stands for the same cosine-weighted solid
+    // angle, so π times the mean radiance over its circle, 4 · Σ L / (w h) over the whole film
+    // (pixels hold their area's mean, zero outside), is the irradiance at the eye from the
+    // hemisphere it faces: against a gather of that irradiance at the same depth (the view at
+    // max_depth 5, the point at four bounces). Facing away from the window and the sun (a
+    // direction no camera ray can see).
+    let camera = ircache_scene::obj_scene::ObjCamera {
+        radiance_view: Some("-vth -vp 2 3 1.2 -vd 0 1 0 -vu 0 0 1 -vh 180 -vv 180".into()),
+        width: Some(48),
+        height: Some(48),
+        ..Default::default()
+    };
+    let office =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/radiance-office/office.rad");
+    let mut desc = ircache_scene::load_scene(&office, &[], &camera).unwrap();
+    desc.integrator.kind = "path".into();
+    desc.integrator.max_depth = 5;
+    desc.sensor.spp = 256;
+    let scene = Scene::build(&desc).unwrap();
+    let integrator = ircache_render::integrators::Integrator::from_desc(&desc.integrator).unwrap();
+    let settings = ircache_render::render::RenderSettings::from_desc(&desc, 1, 2).unwrap();
+    let image = ircache_render::render::render(&scene, &integrator, &settings, &|_| {})
+        .unwrap()
+        .image;
+    let (w, h) = (image.width, image.height);
+    let mut sum = Rgb::ZERO;
+    for p in &image.pixels {
+        sum += *p;
+    }
+    let from_view = sum * (4.0 / (w * h) as f32);
+    let params = IcParams {
+        bounces: 4,
+        ..IcParams::default()
+    };
+    let (e, _) = irradiance_at_points(
+        &scene,
+        &params,
+        &[(Vec3::new(2.0, 3.0, 1.2), Vec3::Y)],
+        PointMethod::BruteForce { samples: 16384 },
+        256,
+        5,
+    );
+    let e = e[0].direct + e[0].indirect;
+    for ch in 0..3 {
+        assert!(
+            (from_view[ch] / e[ch] - 1.0).abs() < 0.03,
+            "the view says {from_view:?}, the irradiance is {e:?}"
+        );
+    }
+}

@@ -114,6 +114,30 @@ pub enum Projection {
     /// [−1/aspect, 1/aspect] of camera space (its size set by the `to_world` scale); the field
     /// of view is unused.
     Orthographic,
+    /// Radiance's fisheye and panoramic views (`-vth`, `-vta`, `-vts`, `-vtc`; `image.c`'s
+    /// `viewray`), `horizontal` × `vertical` degrees; film points outside the fisheye's circle
+    /// see nothing.
+    Panoramic {
+        /// How directions map to the film.
+        mapping: PanoramicMapping,
+        /// Horizontal view size in degrees.
+        horizontal: f32,
+        /// Vertical view size in degrees.
+        vertical: f32,
+    },
+}
+
+/// The mappings of [`Projection::Panoramic`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PanoramicMapping {
+    /// `-vth`: hemispherical fisheye, the film holds the sine of the angle off the axis.
+    Hemispherical,
+    /// `-vta`: angular fisheye, the film holds the angle off the axis.
+    Angular,
+    /// `-vts`: planisphere (stereographic) fisheye.
+    Planispheric,
+    /// `-vtc`: cylindrical panorama, angle across, perspective up.
+    Cylindrical,
 }
 
 impl Projection {
@@ -124,6 +148,7 @@ impl Projection {
             Projection::Pinhole => "pinhole",
             Projection::ThinLens { .. } => "thin-lens",
             Projection::Orthographic => "orthographic",
+            Projection::Panoramic { .. } => "fisheye or panoramic",
         }
     }
 }

@@ -310,9 +310,18 @@ fn views_read_as_rpict_and_pictures_fit_with_square_pixels() {
     // tan 45° / tan 26.565° = 2: a 512 × 512 box holds 512 × 256.
     assert_eq!(v.fit(512, 512), (512, 256));
     assert_eq!(v.fit(300, 100), (200, 100));
-    assert!(View::parse("-vth -vh 180", Path::new("."))
+    // Fisheyes: a hemispherical 180° view is square; an angular one keeps its degrees' ratio;
+    // sizes beyond each type's limit are refused.
+    let hem = View::parse("-vth -vh 180 -vv 180", Path::new(".")).unwrap();
+    assert_eq!(hem.fit(512, 512), (512, 512));
+    let ang = View::parse("-vta -vh 200 -vv 100", Path::new(".")).unwrap();
+    assert_eq!(ang.fit(512, 512), (512, 256));
+    assert!(View::parse("-vta -vh 400", Path::new("."))
         .unwrap_err()
-        .contains("fisheye"));
+        .contains("out of range"));
+    assert!(View::parse("-vth -vh 190", Path::new("."))
+        .unwrap_err()
+        .contains("out of range"));
     assert!(View::parse("-vd 0 0 1 -vu 0 0 2", Path::new("."))
         .unwrap_err()
         .contains("parallel"));

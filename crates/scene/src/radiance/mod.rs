@@ -28,7 +28,8 @@
 //!   `ies2rad` makes render as their candela tables say) and on the colour of `plastic`,
 //!   `metal` and `trans` (evaluated at each hit).
 //! - **Commands**: `!xform` is carried out here, other commands are run (see [`parse`]).
-//! - **Camera**: a Radiance view ([`view`]) given with the scene (`--view`), else `eye`, `target`
+//! - **Camera**: a Radiance view ([`view`]: perspective, parallel, fisheye or panoramic) given
+//!   with the scene (`--view`), else `eye`, `target`
 //!   and `fov` as for OBJ scenes, else the whole scene framed from Radiance's default direction
 //!   (+y, up +z). The picture fits 512 × 512 (or `width` × `height`) with square pixels, as rpict.
 //! - Everything else (patterns on mirrors and glass, textures (`texfunc`, `texdata`), mixtures,
@@ -47,8 +48,8 @@ pub mod view;
 pub mod xform;
 
 use crate::desc::{
-    BsdfDesc, EmitterDesc, FovAxis, Geometry, IntegratorDesc, Projection, SensorDesc, ShapeDesc,
-    SurfacePattern, TextureDesc, TriangleMesh,
+    BsdfDesc, EmitterDesc, FovAxis, Geometry, IntegratorDesc, PanoramicMapping, Projection,
+    SensorDesc, ShapeDesc, SurfacePattern, TextureDesc, TriangleMesh,
 };
 use crate::error::SourceLocation;
 use crate::obj_scene::ObjCamera;
@@ -59,7 +60,7 @@ use pattern::{FunctionPattern, Pattern, PatternChain, PatternFiles, Spot};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
-use view::View;
+use view::{View, ViewType};
 
 /// Segments of a tessellated cylinder, cone or ring.
 const SEGMENTS: u32 = 64;
@@ -1022,16 +1023,32 @@ fn sensor(shapes: &[ShapeDesc], camera: &ObjCamera, path: &Path) -> Result<Senso
         v3(view.position).extend(1.0),
     );
     let scale = bounds(shapes).1.max(1e-6);
-    let (to_world, projection, fov) = if view.parallel {
-        // Orthographic film [−1, 1] × [−1/aspect, 1/aspect] scaled to the view's width.
-        let s = (view.horizontal * 0.5) as f32;
+    let panoramic = |mapping| {
         (
-            to_world * Mat4::from_scale(Vec3::splat(s)),
-            Projection::Orthographic,
+            to_world,
+            Projection::Panoramic {
+                mapping,
+                horizontal: view.horizontal as f32,
+                vertical: view.vertical as f32,
+            },
             1.0,
         )
-    } else {
-        (to_world, Projection::Pinhole, view.horizontal as f32)
+    };
+    let (to_world, projection, fov) = match view.kind {
+        ViewType::Parallel => {
+            // Orthographic film [−1, 1] × [−1/aspect, 1/aspect] scaled to the view's width.
+            let s = (view.horizontal * 0.5) as f32;
+            (
+                to_world * Mat4::from_scale(Vec3::splat(s)),
+                Projection::Orthographic,
+                1.0,
+            )
+        }
+        ViewType::Perspective => (to_world, Projection::Pinhole, view.horizontal as f32),
+        ViewType::Hemispherical => panoramic(PanoramicMapping::Hemispherical),
+        ViewType::Angular => panoramic(PanoramicMapping::Angular),
+        ViewType::Planispheric => panoramic(PanoramicMapping::Planispheric),
+        ViewType::Cylindrical => panoramic(PanoramicMapping::Cylindrical),
     };
     let distance = (bounds(shapes).0 - v3(view.position)).length() + scale;
     Ok(SensorDesc::standard(
@@ -1096,7 +1113,7 @@ fn default_view(shapes: &[ShapeDesc], camera: &ObjCamera) -> View {
         up
     };
     View {
-        parallel: false,
+        kind: ViewType::Perspective,
         position: eye,
         direction,
         up,

@@ -1,21 +1,40 @@
-//! Radiance views (`src/common/image.c`, `rpict(1)`): `-vtv` (perspective) and `-vtl`
-//! (parallel) with `-vp`, `-vd`, `-vu`, `-vh`, `-vv`; `-vf file` reads a view file (`rvu` or
-//! `rpict` lines, or `VIEW=` lines of a picture header). Radiance's defaults: `-vtv -vp 0 0 0
-//! -vd 0 1 0 -vu 0 0 1 -vh 45 -vv 45`. Shifts, lifts, fore and aft clipping, and the fisheye and
-//! panoramic types are refused rather than rendered as something else.
+//! Radiance views (`src/common/image.c`, `rpict(1)`): `-vtv` (perspective), `-vtl` (parallel),
+//! `-vth` (hemispherical fisheye), `-vta` (angular fisheye), `-vts` (planisphere) and `-vtc`
+//! (cylindrical panorama) with `-vp`, `-vd`, `-vu`, `-vh`, `-vv`; `-vf file` reads a view file
+//! (`rvu` or `rpict` lines, or `VIEW=` lines of a picture header). Radiance's defaults: `-vtv
+//! -vp 0 0 0 -vd 0 1 0 -vu 0 0 1 -vh 45 -vv 45`. Shifts, lifts, fore and aft clipping are
+//! refused rather than rendered as something else.
 //!
 //! rpict fits the picture into `-x` × `-y` keeping square pixels: the picture's aspect is the
-//! view's, `tan(vh/2) / tan(vv/2)` (for parallel views `vh / vv`), and the larger of the two
-//! sizes that fits is used ([`View::fit`]).
+//! view's (`setview`'s `√(hn2/vn2)`: `tan(vh/2) / tan(vv/2)` for perspective views, `vh / vv`
+//! for parallel and angular ones), and the larger of the two sizes that fits is used
+//! ([`View::fit`]).
 
 use ircache_math::DVec3;
 use std::path::Path;
 
+/// A Radiance view's type (`-vt?`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewType {
+    /// `-vtv`.
+    Perspective,
+    /// `-vtl`.
+    Parallel,
+    /// `-vth`.
+    Hemispherical,
+    /// `-vta`.
+    Angular,
+    /// `-vts`.
+    Planispheric,
+    /// `-vtc`.
+    Cylindrical,
+}
+
 /// A Radiance view.
 #[derive(Clone, Debug, PartialEq)]
 pub struct View {
-    /// Parallel (`-vtl`) rather than perspective (`-vtv`).
-    pub parallel: bool,
+    /// Its type.
+    pub kind: ViewType,
     /// Eye point.
     pub position: DVec3,
     /// View direction.
@@ -31,7 +50,7 @@ pub struct View {
 impl Default for View {
     fn default() -> Self {
         View {
-            parallel: false,
+            kind: ViewType::Perspective,
             position: DVec3::ZERO,
             direction: DVec3::Y,
             up: DVec3::Z,
@@ -59,18 +78,16 @@ impl View {
                     .ok_or_else(|| format!("{w}: expected a number, found \"{s}\""))
             };
             let used = match w {
-                "-vtv" => {
-                    self.parallel = false;
+                "-vtv" | "-vtl" | "-vth" | "-vta" | "-vts" | "-vtc" => {
+                    self.kind = match w {
+                        "-vtv" => ViewType::Perspective,
+                        "-vtl" => ViewType::Parallel,
+                        "-vth" => ViewType::Hemispherical,
+                        "-vta" => ViewType::Angular,
+                        "-vts" => ViewType::Planispheric,
+                        _ => ViewType::Cylindrical,
+                    };
                     0
-                }
-                "-vtl" => {
-                    self.parallel = true;
-                    0
-                }
-                "-vth" | "-vta" | "-vts" | "-vtc" => {
-                    return Err(format!(
-                        "{w}: fisheye and panoramic views are not supported (only -vtv and -vtl)"
-                    ))
                 }
                 "-vp" | "-vd" | "-vu" => {
                     let v = DVec3::new(num(1)?, num(2)?, num(3)?);
@@ -146,27 +163,49 @@ impl View {
             return Err("-vu is parallel to -vd".into());
         }
         let (h, v) = (self.horizontal, self.vertical);
-        let ok = if self.parallel {
-            h > 0.0 && v > 0.0
-        } else {
-            h > 0.0 && h < 180.0 && v > 0.0 && v < 180.0
+        // setview's limits per type: (largest -vh, largest -vv, whether the largest is allowed).
+        let (max_h, max_v, closed) = match self.kind {
+            ViewType::Parallel => (f64::INFINITY, f64::INFINITY, false),
+            ViewType::Perspective => (180.0, 180.0, false),
+            ViewType::Hemispherical => (180.0, 180.0, true),
+            ViewType::Angular => (360.0, 360.0, true),
+            ViewType::Planispheric => (360.0, 360.0, false),
+            ViewType::Cylindrical => (360.0, 180.0, false),
         };
-        if !ok {
+        let within = |x: f64, max: f64| x > 0.0 && (x < max || (closed && x == max));
+        let horizontal_ok = within(h, max_h) || (self.kind == ViewType::Cylindrical && h == 360.0);
+        if !horizontal_ok || !within(v, max_v) {
             return Err(format!(
-                "view size -vh {h} -vv {v} out of range (perspective: between 0 and 180 degrees)"
+                "view size -vh {h} -vv {v} out of range for this view type (at most {max_h} and \
+                 {max_v} degrees)"
             ));
         }
         Ok(())
     }
 
+    /// `setview`'s half-extents of the film in its own units, horizontal and vertical (their
+    /// ratio is the picture's aspect).
+    #[must_use]
+    pub fn extents(&self) -> (f64, f64) {
+        let (h, v) = (self.horizontal, self.vertical);
+        let half = |a: f64| (a * 0.5).to_radians();
+        match self.kind {
+            ViewType::Parallel | ViewType::Angular => (h, v),
+            ViewType::Perspective => (2.0 * half(h).tan(), 2.0 * half(v).tan()),
+            ViewType::Hemispherical => (2.0 * half(h).sin(), 2.0 * half(v).sin()),
+            ViewType::Planispheric => (
+                2.0 * half(h).sin() / (1.0 + half(h).cos()),
+                2.0 * half(v).sin() / (1.0 + half(v).cos()),
+            ),
+            ViewType::Cylindrical => (h.to_radians(), 2.0 * half(v).tan()),
+        }
+    }
+
     /// The view's aspect, width over height.
     #[must_use]
     pub fn aspect(&self) -> f64 {
-        if self.parallel {
-            self.horizontal / self.vertical
-        } else {
-            (self.horizontal.to_radians() * 0.5).tan() / (self.vertical.to_radians() * 0.5).tan()
-        }
+        let (h, v) = self.extents();
+        h / v
     }
 
     /// rpict's picture size within `x` × `y` with square pixels.
