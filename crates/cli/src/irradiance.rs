@@ -61,7 +61,14 @@ pub struct IrradianceArgs {
     pub cache: CacheArgs,
 }
 
-fn parse_points(text: &str, name: &str) -> Result<Vec<(Vec3, Vec3)>> {
+/// Lines of six numbers, a point and a direction (`layout` names them for messages, `vector`
+/// the direction): blank lines and `#` comments skipped, the direction normalised.
+pub(crate) fn parse_points(
+    text: &str,
+    name: &str,
+    layout: &str,
+    vector: &str,
+) -> Result<Vec<(Vec3, Vec3)>> {
     let mut points = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
@@ -75,7 +82,7 @@ fn parse_points(text: &str, name: &str) -> Result<Vec<(Vec3, Vec3)>> {
             .filter(|v| v.len() == 6)
             .with_context(|| {
                 format!(
-                    "{name}:{}: expected six finite numbers \"x y z nx ny nz\", found \"{line}\"",
+                    "{name}:{}: expected six finite numbers \"{layout}\", found \"{line}\"",
                     i + 1
                 )
             })?;
@@ -83,7 +90,7 @@ fn parse_points(text: &str, name: &str) -> Result<Vec<(Vec3, Vec3)>> {
         let len = n.length();
         if len.is_nan() || len <= 0.0 || len.is_infinite() {
             bail!(
-                "{name}:{}: the normal ({} {} {}) has no direction",
+                "{name}:{}: {vector} ({} {} {}) has no direction",
                 i + 1,
                 v[3],
                 v[4],
@@ -93,6 +100,45 @@ fn parse_points(text: &str, name: &str) -> Result<Vec<(Vec3, Vec3)>> {
         points.push((Vec3::new(v[0], v[1], v[2]), n.normalize()));
     }
     Ok(points)
+}
+
+/// The text of `input` (standard input when `None`) and its name for messages.
+pub(crate) fn read_input(input: Option<&std::path::Path>) -> Result<(String, String)> {
+    Ok(match input {
+        Some(p) => (
+            std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?,
+            p.display().to_string(),
+        ),
+        None => {
+            let mut s = String::new();
+            for line in std::io::stdin().lock().lines() {
+                s.push_str(&line.context("reading standard input")?);
+                s.push('\n');
+            }
+            (s, "<stdin>".to_string())
+        }
+    })
+}
+
+/// The scene at `scene` (the built-in Cornell box when `None`) with the `-D` definitions
+/// `define`, its camera the loaders' default.
+pub(crate) fn load_desc(
+    scene: Option<&std::path::Path>,
+    define: &[String],
+) -> Result<ircache_scene::SceneDesc> {
+    let defines = parse_defines(define)?;
+    Ok(match scene {
+        Some(p) => ircache_scene::load_scene(p, &defines, &ObjCamera::default())?,
+        None => {
+            let dir = std::env::temp_dir().join(format!("ircache-irr-{}", std::process::id()));
+            std::fs::create_dir_all(&dir)?;
+            let path = dir.join("cornell-box.xml");
+            std::fs::write(&path, BUILTIN_CORNELL_BOX)?;
+            let r = ircache_scene::mitsuba::load(&path, &defines);
+            let _ = std::fs::remove_dir_all(&dir);
+            r?
+        }
+    })
 }
 
 /// Runs `ircache irradiance`.
@@ -109,34 +155,9 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         }
         other => bail!("--integrator {other}: expected ic or path"),
     };
-    let (text, name) = match &args.input {
-        Some(p) => (
-            std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?,
-            p.display().to_string(),
-        ),
-        None => {
-            let mut s = String::new();
-            for line in std::io::stdin().lock().lines() {
-                s.push_str(&line.context("reading standard input")?);
-                s.push('\n');
-            }
-            (s, "<stdin>".to_string())
-        }
-    };
-    let queries = parse_points(&text, &name)?;
-    let defines = parse_defines(&args.define)?;
-    let desc = match &args.scene {
-        Some(p) => ircache_scene::load_scene(p, &defines, &ObjCamera::default())?,
-        None => {
-            let dir = std::env::temp_dir().join(format!("ircache-irr-{}", std::process::id()));
-            std::fs::create_dir_all(&dir)?;
-            let path = dir.join("cornell-box.xml");
-            std::fs::write(&path, BUILTIN_CORNELL_BOX)?;
-            let r = ircache_scene::mitsuba::load(&path, &defines);
-            let _ = std::fs::remove_dir_all(&dir);
-            r?
-        }
-    };
+    let (text, name) = read_input(args.input.as_deref())?;
+    let queries = parse_points(&text, &name, "x y z nx ny nz", "the normal")?;
+    let desc = load_desc(args.scene.as_deref(), &args.define)?;
     let scene = Scene::build(&desc).context("building the scene")?;
     let mut params = IcParams::default();
     if args.cache.cache.is_some() || args.cache.exclusions()? != Default::default() {

@@ -7,6 +7,7 @@
 //! - `ircache compare A B` prints relMSE, relMSE_trim, RMSE and the mean-luminance ratio of A
 //!   against the reference B (the measures of `shared/tools/relmse.py`).
 //! - `ircache irradiance SCENE` prints irradiance at points (by the cache or by brute force).
+//! - `ircache rays SCENE` prints the radiance arriving along rays (path traced).
 //! - `ircache cache info FILE` prints what an irradiance cache file holds.
 //! - `ircache bench` measures ray throughput and rendering speed.
 //! - `ircache view [SCENE]` serves the progressive walkthrough to a browser.
@@ -18,6 +19,7 @@ mod cache_info;
 mod compare;
 mod gpu;
 mod irradiance;
+mod rays;
 mod render;
 mod view;
 
@@ -42,6 +44,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Irradiance at points read as lines "x y z nx ny nz" (Radiance's rtrace -I).
     Irradiance(Box<irradiance::IrradianceArgs>),
+    /// Radiance arriving along rays read as lines "ox oy oz dx dy dz" (Radiance's rtrace -ov).
+    Rays(Box<rays::RaysArgs>),
     /// Sum images of the same size (the bands of `render --tile i/n` make the whole image).
     Merge(compare::MergeArgs),
     /// Inspect an irradiance cache file (`ircache cache info FILE`).
@@ -62,6 +66,7 @@ fn main() -> ExitCode {
         Command::Animate(a) => animate::run(&a),
         Command::Compare(a) => compare::run(&a),
         Command::Irradiance(a) => irradiance::run(&a),
+        Command::Rays(a) => rays::run(&a),
         Command::Cache(c) => cache_info::run(&c),
         Command::Merge(a) => compare::merge(&a),
         Command::Bench(a) => bench::run(&a),

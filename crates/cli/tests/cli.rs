@@ -1161,3 +1161,81 @@ fn animate_bad_input_names_the_place() {
     );
     assert!(!o.status.success() && stderr(&o).contains("run of #"));
 }
+
+#[test]
+fn rays_give_the_radiance_along_them() {
+    // A light sphere of radius r and radiance L at height h over a Lambertian floor of
+    // reflectance ρ: straight below it the floor's radiance is E ρ / π = L ρ r²/h² (direct light,
+    // max_depth 2; aimed a hair off the floor's diagonal, an edge Embree's fast, non-robust
+    // test may miss); a ray into the sphere sees L; one into empty space nothing. Radiance's units
+    // and luminance (179 lm/W) with --lum; a bad line names its place.
+    let d = temp_dir("rays");
+    std::fs::write(
+        d.join("s.rad"),
+        "void light lamp\n0\n0\n3 40 20 10\nlamp sphere bulb\n0\n0\n4 0 0 2 0.25\n\
+         void plastic floor_mat\n0\n0\n5 .6 .5 .4 0 0\n\
+         floor_mat polygon floor\n0\n0\n12 -50 -50 0 50 -50 0 50 50 0 -50 50 0\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("r.txt"),
+        "# from above the floor, beside the bulb, down at the point below it\n\
+         1 0 1 -1 0.0005 -1\n\
+         -3 0 2 1 0 0\n\
+         0 0 3 0 0 1\n",
+    )
+    .unwrap();
+    let o = ircache(
+        &[
+            "rays",
+            "s.rad",
+            "-i",
+            "r.txt",
+            "--max-depth",
+            "2",
+            "--samples",
+            "256",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v = numbers(&o);
+    let k = 0.25f64.powi(2) / 4.0;
+    for (ch, (l, rho)) in [(40.0, 0.6), (20.0, 0.5), (10.0, 0.4)]
+        .into_iter()
+        .enumerate()
+    {
+        let expected = l * rho * k;
+        assert!(
+            (v[0][ch] / expected - 1.0).abs() < 5e-3,
+            "floor {ch}: {} against {expected}",
+            v[0][ch]
+        );
+        assert!((v[1][ch] - l).abs() < 1e-3 * l, "bulb {ch}: {}", v[1][ch]);
+        assert_eq!(v[2][ch], 0.0);
+    }
+    let o = ircache(
+        &[
+            "rays",
+            "s.rad",
+            "-i",
+            "r.txt",
+            "--max-depth",
+            "2",
+            "--samples",
+            "16",
+            "--lum",
+        ],
+        &d,
+    );
+    let lum = numbers(&o);
+    assert!((lum[1][0] - 179.0 * (0.265 * 40.0 + 0.670 * 20.0 + 0.065 * 10.0)).abs() < 0.1);
+    std::fs::write(d.join("bad.txt"), "1 0 1 -1 0 -1\n1 2 3 0 0 0\n").unwrap();
+    let o = ircache(&["rays", "s.rad", "-i", "bad.txt"], &d);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("bad.txt:2: the direction (0 0 0) has no direction"),
+        "{}",
+        stderr(&o)
+    );
+}
