@@ -192,14 +192,38 @@ impl CacheArgs {
     }
 }
 
+/// How many values rpict's view option `opt` takes (`-vtv` none, `-vp` three, ...), if it is one.
+fn view_option_arity(opt: &str) -> Option<usize> {
+    match opt {
+        "-vtv" | "-vtl" | "-vth" | "-vta" | "-vts" | "-vtc" => Some(0),
+        "-vp" | "-vd" | "-vu" => Some(3),
+        "-vh" | "-vv" | "-vo" | "-va" | "-vs" | "-vl" | "-vf" => Some(1),
+        _ => None,
+    }
+}
+
 /// Rewrites Radiance-style options (`-aa 0.1`, `-av 0.1 0.1 0.1`) into the long forms clap
-/// parses.
+/// parses; rpict's view options (`-vp 1 2 3 -vd 0 1 0 -vth …`, `-vf file`) join into one
+/// `--view`, and `-x N`, `-y N` become `--width N`, `--height N`, so that an rpict command line
+/// reads as it is.
 #[must_use]
 pub fn rewrite_radiance_options(args: Vec<String>) -> Vec<String> {
     let mut out = Vec::with_capacity(args.len());
+    let mut view: Vec<String> = Vec::new();
     let mut i = 0;
     while i < args.len() {
         let a = &args[i];
+        if let Some(n) = view_option_arity(a) {
+            view.extend(args[i..(i + 1 + n).min(args.len())].iter().cloned());
+            i += 1 + n;
+            continue;
+        }
+        if (a == "-x" || a == "-y") && args.get(i + 1).is_some_and(|v| v.parse::<u32>().is_ok()) {
+            out.push(if a == "-x" { "--width" } else { "--height" }.into());
+            out.push(args[i + 1].clone());
+            i += 2;
+            continue;
+        }
         match a.as_str() {
             "-af" | "-ae" | "-aE" | "-ai" | "-aI" => out.push(format!("-{a}")),
             "-av" => {
@@ -217,6 +241,10 @@ pub fn rewrite_radiance_options(args: Vec<String>) -> Vec<String> {
             _ => out.push(a.clone()),
         }
         i += 1;
+    }
+    if !view.is_empty() {
+        out.push("--view".into());
+        out.push(view.join(" "));
     }
     out
 }

@@ -1239,3 +1239,49 @@ fn rays_give_the_radiance_along_them() {
         stderr(&o)
     );
 }
+
+#[test]
+fn rpict_command_lines_read_as_they_are() {
+    // rpict's view options, -x and -y and -ab: the same picture as --view, --width, --height.
+    let d = temp_dir("rpict");
+    let office = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/radiance-office/office.rad")
+        .canonicalize()
+        .unwrap();
+    let office = office.to_str().unwrap();
+    let a = ircache(
+        &[
+            "render", office, "-vth", "-vp", "2", "3", "1.2", "-vd", "0", "1", "0", "-vh", "180",
+            "-vv", "180", "-x", "40", "-y", "30", "-ab", "1", "--spp", "2", "-o", "a.hdr",
+        ],
+        &d,
+    );
+    assert!(a.status.success(), "{}", stderr(&a));
+    let b = ircache(
+        &[
+            "render",
+            office,
+            "--view",
+            "-vth -vp 2 3 1.2 -vd 0 1 0 -vh 180 -vv 180",
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--ab",
+            "1",
+            "--spp",
+            "2",
+            "-o",
+            "b.hdr",
+        ],
+        &d,
+    );
+    assert!(b.status.success(), "{}", stderr(&b));
+    let (ia, ib) = (
+        ircache_image::read_image(&d.join("a.hdr")).unwrap(),
+        ircache_image::read_image(&d.join("b.hdr")).unwrap(),
+    );
+    // A 180° fisheye fits 30 × 30 in 40 × 30.
+    assert_eq!((ia.width, ia.height), (30, 30));
+    assert_eq!(ia.pixels, ib.pixels);
+}

@@ -28,6 +28,8 @@
 //!   `ies2rad` makes render as their candela tables say) and on the colour of `plastic`,
 //!   `metal` and `trans` (evaluated at each hit).
 //! - **Commands**: `!xform` is carried out here, other commands are run (see [`parse`]).
+//! - **Integrator**: the irradiance cache (`irrcache`), as rpict computes, with unbounded bounces
+//!   unless `-ab` or `--max-depth` bounds them.
 //! - **Camera**: a Radiance view ([`view`]: perspective, parallel, fisheye or panoramic) given
 //!   with the scene (`--view`), else `eye`, `target`
 //!   and `fov` as for OBJ scenes, else the whole scene framed from Radiance's default direction
@@ -198,7 +200,12 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
     Ok(SceneDesc {
         source: path.to_path_buf(),
         sensor,
-        integrator: IntegratorDesc::default(),
+        // rpict's way: the irradiance cache, its bounces unbounded unless -ab or --max-depth
+        // says otherwise.
+        integrator: IntegratorDesc {
+            kind: "irrcache".into(),
+            ..IntegratorDesc::default()
+        },
         shapes,
         emitters,
         media: Vec::new(),
