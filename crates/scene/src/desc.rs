@@ -604,6 +604,9 @@ pub enum BsdfDesc {
         first: Arc<BsdfDesc>,
         /// The model weighted by `weight`.
         second: Arc<BsdfDesc>,
+        /// Where given, the weight at each hit (its first channel, clamped to [0, 1]) in place
+        /// of `weight` (Radiance's `mixfunc`).
+        pattern: Option<Arc<dyn SurfacePattern>>,
     },
     /// The nested BSDF on both sides (Mitsuba: the back side sees the front's BSDF mirrored).
     TwoSided {
@@ -876,6 +879,7 @@ impl BsdfDesc {
                 weight,
                 first,
                 second,
+                ..
             } => {
                 tex(weight, f);
                 first.for_each_bitmap(f);

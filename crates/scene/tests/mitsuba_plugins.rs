@@ -558,6 +558,7 @@ fn blend_bsdf() {
             weight: TextureDesc::Constant(w),
             first,
             second,
+            ..
         } => {
             assert_eq!(*w, Rgb::splat(0.25));
             assert!(matches!(**first, BsdfDesc::Diffuse { .. }));

@@ -476,6 +476,15 @@ impl Facing<'_> {
     }
 }
 
+/// The weight pattern of a Radiance mixture (a blend, alone or in `twosided`).
+fn blend_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
+    match desc {
+        BsdfDesc::TwoSided { front, .. } => blend_pattern(front),
+        BsdfDesc::Blend { pattern, .. } => pattern.clone(),
+        _ => None,
+    }
+}
+
 /// The patterns on a Radiance material (Ward's model, alone or in `twosided`).
 fn ward_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
     match desc {
@@ -973,6 +982,8 @@ pub struct Material {
     /// Patterns on a Radiance material's colour, by where and from where it is seen
     /// ([`Material::at_hit`]).
     pattern: Option<Arc<dyn SurfacePattern>>,
+    /// A Radiance mixture's weight of the second model at each hit ([`Material::at_hit`]).
+    blend_pattern: Option<Arc<dyn SurfacePattern>>,
 }
 
 /// A perturbation of the shading normal by a texture (normal or bump map), shaded as Mitsuba 3's
@@ -1235,6 +1246,7 @@ impl Material {
                     opacity: None,
                     blend: None,
                     pattern: None,
+                    blend_pattern: None,
                 }
             }
             d => Material {
@@ -1244,9 +1256,11 @@ impl Material {
                 opacity: None,
                 blend: None,
                 pattern: None,
+                blend_pattern: None,
             },
         };
         m.pattern = ward_pattern(desc);
+        m.blend_pattern = blend_pattern(desc);
         m.blend = blend.map(|(w, second)| (Compiled::new(second), Texture::from_desc(w)));
         // A normal or bump map inside twosided applies to both sides.
         m.perturbation = perturbation.or_else(|| match desc {
@@ -1275,6 +1289,9 @@ impl Material {
         let mut bsdf = self.at(uv);
         if let Some(pattern) = &self.pattern {
             bsdf.tint(pattern.factor(p, ng, d, t));
+        }
+        if let (Some(pattern), Bsdf::Blend { weight, .. }) = (&self.blend_pattern, &mut bsdf) {
+            *weight = pattern.factor(p, ng, d, t).r.clamp(0.0, 1.0);
         }
         bsdf
     }
@@ -1323,7 +1340,7 @@ impl Material {
     /// coordinates).
     #[must_use]
     pub fn is_textured(&self) -> bool {
-        if self.pattern.is_some() {
+        if self.pattern.is_some() || self.blend_pattern.is_some() {
             return true;
         }
         let textured = |c: &Compiled| match c {

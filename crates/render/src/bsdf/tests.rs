@@ -181,6 +181,7 @@ fn blend(weight: f32, first: BsdfDesc, second: BsdfDesc) -> BsdfDesc {
         weight: c(weight),
         first: Arc::new(first),
         second: Arc::new(second),
+        pattern: None,
     }
 }
 

@@ -385,6 +385,7 @@ fn build_blend(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
                 weight,
                 first: a,
                 second: b,
+                pattern: None,
             }),
             back: None,
         }),
@@ -394,6 +395,7 @@ fn build_blend(ctx: &Ctx, p: &Plugin) -> Result<BsdfDesc, SceneError> {
             weight,
             first,
             second,
+            pattern: None,
         }),
     }
 }

@@ -26,7 +26,8 @@
 //!   ([`pattern`]), with their function files in Radiance's language ([`cal`]), data files and
 //!   pictures ([`data`]), on the radiance of `light`, `glow` and `spotlight` (the luminaires
 //!   `ies2rad` makes render as their candela tables say) and on the colour of `plastic`,
-//!   `metal` and `trans` (evaluated at each hit).
+//!   `metal` and `trans` (evaluated at each hit); `mixfunc` blends two such materials by its
+//!   coefficient at each hit.
 //! - **Commands**: `!xform` is carried out here, other commands are run (see [`parse`]).
 //! - **Integrator**: the irradiance cache (`irrcache`), as rpict computes, with unbounded bounces
 //!   unless `-ab` or `--max-depth` bounds them.
@@ -521,6 +522,62 @@ fn modifier(
         "illum" => {
             reals(&[3])?;
             Modifier::Illum(p.strings.first().filter(|s| *s != "void").cloned())
+        }
+        "mixfunc" => {
+            if !pattern.is_empty() {
+                return Err(err("patterns on a mixture are not supported".into()));
+            }
+            if p.strings.len() < 4 {
+                return Err(err(format!(
+                    "expected at least 4 string arguments (foreground background coefficient \
+                     file), found {}",
+                    p.strings.len()
+                )));
+            }
+            // Both parts opaque or transmitting Radiance materials without patterns: the
+            // mixture is then the twosided blend of the two.
+            let part = |name: &str| -> Result<Arc<BsdfDesc>, SceneError> {
+                let plain = match known.get(name) {
+                    Some((Modifier::Bsdf(b), _)) => match b.as_ref() {
+                        BsdfDesc::TwoSided { front, back: None }
+                            if !matches!(
+                                front.as_ref(),
+                                BsdfDesc::Ward {
+                                    pattern: Some(_),
+                                    ..
+                                } | BsdfDesc::Blend { .. }
+                            ) =>
+                        {
+                            Some(front.clone())
+                        }
+                        _ => None,
+                    },
+                    None if name != "void" => {
+                        return Err(err(format!("undefined modifier '{name}'")))
+                    }
+                    _ => None,
+                };
+                plain.ok_or_else(|| {
+                    err(format!(
+                        "'{name}': a mixture's parts must be plastic, metal, trans or mirror \
+                         materials without patterns (not void, lights, glass or mixtures)"
+                    ))
+                })
+            };
+            let (foreground, background) = (part(&p.strings[0])?, part(&p.strings[1])?);
+            let coefficient = FunctionPattern::from_primitive(p, files)?;
+            Modifier::Bsdf(Arc::new(BsdfDesc::TwoSided {
+                front: Arc::new(BsdfDesc::Blend {
+                    weight: TextureDesc::Constant(Rgb::splat(0.5)),
+                    first: background,
+                    second: foreground,
+                    pattern: Some(Arc::new(PatternChain {
+                        chain: vec![Pattern::Function(Arc::new(coefficient))],
+                        spot: None,
+                    })),
+                }),
+                back: None,
+            }))
         }
         kind if FunctionPattern::is_function_pattern(kind) => {
             let own = match sky::SkyBrightness::from_primitive(p) {

@@ -179,6 +179,8 @@ impl FunctionPattern {
             "brightdata" => (2, 4),
             "colordata" => (6, 8),
             "colorpict" => (4, 7),
+            // The mixture's coefficient of its foreground.
+            "mixfunc" => (3, 4),
             other => return Err(err(format!("{other} is not a function pattern"))),
         };
         if s.len() < needed {
@@ -208,6 +210,7 @@ impl FunctionPattern {
         };
         let (kind, first_transform) = match p.kind.as_str() {
             "brightfunc" => (Kind::Bright(expr(&s[0])?), 2),
+            "mixfunc" => (Kind::Bright(expr(&s[2])?), 4),
             "colorfunc" => (Kind::Color([expr(&s[0])?, expr(&s[1])?, expr(&s[2])?]), 4),
             "colorpict" => {
                 let tables = files.picture(&s[3], p)?;
