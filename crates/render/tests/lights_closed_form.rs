@@ -1022,7 +1022,7 @@ fn textured_rectangle_emits_its_texture() {
 struct Lobe;
 
 impl SurfacePattern for Lobe {
-    fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, _distance: f32) -> Rgb {
+    fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, _distance: f32, _uv: Vec2) -> Rgb {
         let c = (-direction).dot(normal).max(0.0);
         Rgb::splat(2.0 * c * c * (1.0 + 0.5 * point.x))
     }
@@ -1058,7 +1058,7 @@ fn patterned_emitter_samples_hits_and_power_agree() {
                 let r2 = d.length_squared();
                 let wi = d / r2.sqrt();
                 let (cr, cl) = (n.dot(wi).max(0.0), (-wi).dot(n_light).max(0.0));
-                let f = Lobe.factor(x, n_light, wi, r2.sqrt()).g;
+                let f = Lobe.factor(x, n_light, wi, r2.sqrt(), Vec2::ZERO).g;
                 e += f64::from(radiance * f * cr * cl / r2);
             }
         }

@@ -314,8 +314,14 @@ pub struct ShapeDesc {
 pub trait SurfacePattern: Send + Sync + std::fmt::Debug {
     /// The factor (per channel, finite and non-negative) for a ray along the unit `direction`
     /// (towards the surface) meeting it at `point`, whose unit front normal is `normal`,
-    /// `distance` from where the ray started (infinite where no ray looks: photon emission).
-    fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, distance: f32) -> Rgb;
+    /// `distance` from where the ray started (infinite where no ray looks: photon emission),
+    /// the surface's texture coordinates there `uv` (a Radiance mesh's local (u, v)).
+    fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, distance: f32, uv: Vec2) -> Rgb;
+
+    /// True when the factor depends on `uv`.
+    fn reads_uv(&self) -> bool {
+        false
+    }
 }
 
 /// The media on the two sides of a shape's surface (indices into [`SceneDesc::media`]); a ray

@@ -241,7 +241,7 @@ fn errors_name_the_place_and_what_was_expected() {
     }
     // Patterns, their function and data files.
     let lamp = "f light l\n0\n0\n3 1 1 1\nl polygon q\n0\n0\n12 0 0 1 1 0 1 1 1 1 0 1 1\n";
-    let pattern_cases: [(&str, &str, &str); 8] = [
+    let pattern_cases: [(&str, &str, &str); 9] = [
         (
             "void brightfunc f\n2 v my.cal\n0\n0\nf mirror p\n0\n0\n3 .5 .5 .5\n",
             "v = 1;\n",
@@ -253,6 +253,11 @@ fn errors_name_the_place_and_what_was_expected() {
             "void colorpict f\n7 red green blue none.hdr . Px Py\n0\n0\n",
             "",
             "colorpict 'f': cannot find picture \"none.hdr\"",
+        ),
+        (
+            "void brightfunc f\n2 Lu+1 .\n0\n0\n",
+            "",
+            "polygon 'q': its patterns read Lu or Lv, which only a mesh with (u, v) has",
         ),
         (
             "void plastic a\n0\n0\n5 .5 .5 .5 0 0\nvoid mixfunc f\n4 a void .5 .\n0\n0\n",

@@ -1288,10 +1288,10 @@ impl Material {
     pub fn at_hit(&self, uv: Vec2, p: Vec3, ng: Vec3, d: Vec3, t: f32) -> Bsdf {
         let mut bsdf = self.at(uv);
         if let Some(pattern) = &self.pattern {
-            bsdf.tint(pattern.factor(p, ng, d, t));
+            bsdf.tint(pattern.factor(p, ng, d, t, uv));
         }
         if let (Some(pattern), Bsdf::Blend { weight, .. }) = (&self.blend_pattern, &mut bsdf) {
-            *weight = pattern.factor(p, ng, d, t).r.clamp(0.0, 1.0);
+            *weight = pattern.factor(p, ng, d, t, uv).r.clamp(0.0, 1.0);
         }
         bsdf
     }

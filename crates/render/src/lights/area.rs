@@ -127,11 +127,17 @@ impl MeshLight {
                         .is_none_or(|ns| ns.iter().all(|&v| flat(v))))
                 .then_some((r, n))
             })
-            .filter(|_| !radiance.is_textured());
+            // By area where the radiance varies over the surface (a texture, or a pattern that
+            // reads the mesh's (u, v)), so that each sample carries its point's.
+            .filter(|_| {
+                !radiance.is_textured() && !(radiance.is_patterned() && mesh.uvs.is_some())
+            });
+        // Texture coordinates where the radiance or its pattern reads them.
+        let uses_uv = radiance.is_textured() || radiance.is_patterned();
         let uvs = mesh
             .uvs
             .as_ref()
-            .filter(|t| radiance.is_textured() && t.len() == mesh.positions.len())
+            .filter(|t| uses_uv && t.len() == mesh.positions.len())
             .cloned();
         let mut light = MeshLight {
             positions: mesh.positions.clone(),
@@ -221,7 +227,10 @@ impl MeshLight {
             Some(n) => (b0 * n[i0] + b.x * n[i1] + b.y * n[i2]).normalize_or(ng),
             None => ng,
         };
-        let uv = match (&self.uvs, self.radiance.is_textured()) {
+        let uv = match (
+            &self.uvs,
+            self.radiance.is_textured() || self.radiance.is_patterned(),
+        ) {
             (_, false) => Vec2::ZERO,
             (Some(t), true) => b0 * t[i0] + b.x * t[i1] + b.y * t[i2],
             (None, true) => b,

@@ -249,7 +249,8 @@ impl EmittedRadiance {
                     (f64::from(j.reverse_bits()) / 4_294_967_296.0) as f32,
                 );
                 let leaving = frame.from_local(square_to_cosine_hemisphere(v));
-                let f = pattern.factor(p, n, -leaving, f32::INFINITY);
+                // (At uv 0: the mean is an estimate of the power, for choosing lights.)
+                let f = pattern.factor(p, n, -leaving, f32::INFINITY, Vec2::ZERO);
                 for (s, v) in sum.iter_mut().zip(f.to_array()) {
                     *s += f64::from(v);
                 }
@@ -289,7 +290,7 @@ impl EmittedRadiance {
     pub fn seen(&self, uv: Vec2, p: Vec3, n: Vec3, wo: Vec3, distance: f32) -> Rgb {
         match &self.pattern {
             None => self.at(uv),
-            Some(f) => self.at(uv) * f.factor(p, n, -wo, distance),
+            Some(f) => self.at(uv) * f.factor(p, n, -wo, distance, uv),
         }
     }
 

@@ -214,6 +214,26 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
     })
 }
 
+/// The patterns a Radiance material carries (on its colour, a mixture's weight).
+fn bsdf_patterns(b: &BsdfDesc) -> Vec<Arc<dyn SurfacePattern>> {
+    match b {
+        BsdfDesc::TwoSided { front, .. } => bsdf_patterns(front),
+        BsdfDesc::Ward { pattern, .. } => pattern.iter().cloned().collect(),
+        BsdfDesc::Blend {
+            pattern,
+            first,
+            second,
+            ..
+        } => pattern
+            .iter()
+            .cloned()
+            .chain(bsdf_patterns(first))
+            .chain(bsdf_patterns(second))
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
 /// Adds the surface `p` of `material` and `geometry` to `shapes`.
 fn push_surface(
     p: &Primitive,
@@ -248,6 +268,18 @@ fn push_surface(
     }
     if let Some(pattern) = &pattern {
         probe(p, &geometry, pattern, notes)?;
+    }
+    // Lu and Lv exist on meshes with (u, v) only.
+    let has_uv = matches!(&geometry, Geometry::Mesh(m) if m.uvs.is_some());
+    let material_reads_uv = bsdf_patterns(&bsdf).iter().any(|p| p.reads_uv());
+    if !has_uv && (material_reads_uv || pattern.as_ref().is_some_and(SurfacePattern::reads_uv)) {
+        return Err(SceneError::at(
+            p.location.clone(),
+            format!(
+                "{} '{}': its patterns read Lu or Lv, which only a mesh with (u, v) has",
+                p.kind, p.id
+            ),
+        ));
     }
     shapes.push(ShapeDesc {
         id: Some(p.id.clone()),
@@ -748,7 +780,7 @@ fn environment(sources: &[Source], notes: &mut Vec<String>) -> Vec<EmitterDesc> 
             for (dir, cos, radiance, pattern) in &baked {
                 if d.dot(*dir) >= *cos {
                     // Seen from inside the scene, far away (Radiance's FHUGE).
-                    let [r, g, b] = pattern.factor_f64(d * 1e10, -d, d, 1e10);
+                    let [r, g, b] = pattern.factor_f64(d * 1e10, -d, d, 1e10, [0.0; 2]);
                     sum += *radiance * Rgb::new(r as f32, g as f32, b as f32);
                 }
             }
@@ -789,7 +821,7 @@ fn probe(
         for j in 0..8 {
             let cos = (f64::from(j) + 0.5) / 8.0;
             let leaving = normal * cos + (t * phi.cos() + b * phi.sin()) * (1.0 - cos * cos).sqrt();
-            let v = pattern.raw(point, normal, -leaving, 1.0);
+            let v = pattern.raw(point, normal, -leaving, 1.0, [0.5; 2]);
             let angle = cos.acos().to_degrees();
             if v.iter().any(|x| !x.is_finite()) {
                 return Err(SceneError::at(

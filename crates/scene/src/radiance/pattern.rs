@@ -17,7 +17,7 @@ use super::data::DataArray;
 use super::parse::Primitive;
 use super::sky::SkyBrightness;
 use crate::SceneError;
-use ircache_math::{DMat4, DVec3, Rgb, Vec3};
+use ircache_math::{DMat4, DVec3, Rgb, Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -63,6 +63,8 @@ pub struct FunctionPattern {
     to_pattern: DMat4,
     /// The scale of the pattern's transform (object to world).
     scale: f64,
+    /// It reads `Lu` or `Lv` (only meshes with (u, v) give them).
+    reads_uv: bool,
 }
 
 /// Files read while patterns are made (each read once per scene).
@@ -295,6 +297,25 @@ impl FunctionPattern {
         if !to_pattern.is_finite() {
             return Err(err("its transform cannot be inverted".into()));
         }
+        let nodes: Vec<&Node> = match &kind {
+            Kind::Bright(e) => vec![e],
+            Kind::Color(e) => e.iter().collect(),
+            Kind::BrightData { coordinates, .. } | Kind::ColorData { coordinates, .. } => {
+                coordinates.iter().collect()
+            }
+            Kind::Picture { coordinates, .. } => coordinates.iter().collect(),
+        };
+        let mut functions: Vec<Function> = match &kind {
+            Kind::BrightData { function, .. } => vec![*function],
+            Kind::ColorData { functions, .. } => functions.to_vec(),
+            Kind::Picture { functions, .. } => functions.iter().map(|f| f.0).collect(),
+            _ => Vec::new(),
+        };
+        functions.dedup();
+        let reads_uv = nodes.iter().any(|n| program.reads_channels(n, &[25, 26]))
+            || functions
+                .iter()
+                .any(|&f| program.function_reads_channels(f, &[25, 26]));
         Ok(FunctionPattern {
             name: format!("{} '{}'", p.kind, p.id),
             program,
@@ -302,13 +323,14 @@ impl FunctionPattern {
             args: p.reals.clone(),
             to_pattern,
             scale: total.scale,
+            reads_uv,
         })
     }
 
     /// The pattern's value (per channel) for a ray along the unit world direction `d` meeting
     /// the surface at `p` with unit front normal `n`, `t` from where it started.
     #[must_use]
-    pub fn value(&self, p: DVec3, n: DVec3, d: DVec3, t: f64) -> [f64; 3] {
+    pub fn value(&self, p: DVec3, n: DVec3, d: DVec3, t: f64, uv: [f64; 2]) -> [f64; 3] {
         let w = &self.to_pattern;
         let s = self.scale;
         let v = |x: DVec3| (w.transform_vector3(x) * s).to_array();
@@ -322,7 +344,7 @@ impl FunctionPattern {
             origin: w.transform_point3(DVec3::ZERO).to_array(),
             axes: [v(DVec3::X), v(DVec3::Y), v(DVec3::Z)],
             shadow_distance: t / s,
-            uv: [0.0, 0.0],
+            uv,
         };
         let args = &self.args;
         let prog = &self.program;
@@ -383,10 +405,19 @@ pub enum Pattern {
 }
 
 impl Pattern {
-    fn value(&self, p: DVec3, n: DVec3, d: DVec3, t: f64) -> [f64; 3] {
+    fn value(&self, p: DVec3, n: DVec3, d: DVec3, t: f64, uv: [f64; 2]) -> [f64; 3] {
         match self {
             Pattern::Sky(s) => [s.brightness(d); 3],
-            Pattern::Function(f) => f.value(p, n, d, t),
+            Pattern::Function(f) => f.value(p, n, d, t, uv),
+        }
+    }
+
+    /// True when it reads a mesh's (u, v) (`Lu`, `Lv`).
+    #[must_use]
+    pub fn reads_uv(&self) -> bool {
+        match self {
+            Pattern::Sky(_) => false,
+            Pattern::Function(f) => f.reads_uv,
         }
     }
 }
@@ -423,7 +454,7 @@ impl PatternChain {
     /// The factor (per channel; non-negative, finite) for a ray along the unit `d` seeing the
     /// light at `p` with front normal `n`, `t` from its start.
     #[must_use]
-    pub fn factor_f64(&self, p: DVec3, n: DVec3, d: DVec3, t: f64) -> [f64; 3] {
+    pub fn factor_f64(&self, p: DVec3, n: DVec3, d: DVec3, t: f64, uv: [f64; 2]) -> [f64; 3] {
         let mut focus = 1.0;
         if let Some(spot) = self.spot {
             // srcsupp.c's spotout: outside when the light's direction −D leaves the cone.
@@ -439,7 +470,7 @@ impl PatternChain {
                 };
             }
         }
-        self.raw(p, n, d, t).map(|v| {
+        self.raw(p, n, d, t, uv).map(|v| {
             if v.is_finite() && v > 0.0 {
                 v * focus
             } else {
@@ -450,10 +481,10 @@ impl PatternChain {
 
     /// The chain's values before non-numbers and negatives are zeroed (for the loader's probe).
     #[must_use]
-    pub fn raw(&self, p: DVec3, n: DVec3, d: DVec3, t: f64) -> [f64; 3] {
+    pub fn raw(&self, p: DVec3, n: DVec3, d: DVec3, t: f64, uv: [f64; 2]) -> [f64; 3] {
         let mut f = [1.0; 3];
         for link in &self.chain {
-            let v = link.value(p, n, d, t);
+            let v = link.value(p, n, d, t, uv);
             for (f, v) in f.iter_mut().zip(v) {
                 *f *= v;
             }
@@ -463,13 +494,18 @@ impl PatternChain {
 }
 
 impl crate::desc::SurfacePattern for PatternChain {
-    fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, distance: f32) -> Rgb {
+    fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, distance: f32, uv: Vec2) -> Rgb {
         let [r, g, b] = self.factor_f64(
             point.as_dvec3(),
             normal.as_dvec3(),
             direction.as_dvec3(),
             f64::from(distance),
+            [f64::from(uv.x), f64::from(uv.y)],
         );
         Rgb::new(r as f32, g as f32, b as f32)
+    }
+
+    fn reads_uv(&self) -> bool {
+        self.chain.iter().any(Pattern::reads_uv)
     }
 }

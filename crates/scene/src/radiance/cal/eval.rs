@@ -517,6 +517,56 @@ impl Program {
         }
     }
 
+    /// True when evaluating `node` may read one of the channels `which` (by their numbers in
+    /// `chanvalue`'s order), through the variables and functions it uses.
+    #[must_use]
+    pub fn reads_channels(&self, node: &Node, which: &[u8]) -> bool {
+        let mut seen = vec![false; self.definitions.len()];
+        self.reads(node, which, &mut seen)
+    }
+
+    /// [`Self::reads_channels`] for a call of `f`.
+    #[must_use]
+    pub fn function_reads_channels(&self, f: Function, which: &[u8]) -> bool {
+        match f {
+            Function::Library(_) => false,
+            Function::Defined(i) => {
+                let mut seen = vec![false; self.definitions.len()];
+                seen[i as usize] = true;
+                self.reads(&self.definitions[i as usize].body, which, &mut seen)
+            }
+        }
+    }
+
+    fn reads(&self, node: &Node, which: &[u8], seen: &mut [bool]) -> bool {
+        let definition = |i: u32, seen: &mut [bool]| {
+            let i = i as usize;
+            !std::mem::replace(&mut seen[i], true)
+                && self.reads(&self.definitions[i].body, which, seen)
+        };
+        match node {
+            Node::Channel(c) => which.contains(c),
+            Node::Number(_) | Node::Param(_) => false,
+            Node::Variable(i) => definition(*i, seen),
+            Node::Negate(a) => self.reads(a, which, seen),
+            Node::Binary(_, a, b) => self.reads(a, which, seen) || self.reads(b, which, seen),
+            Node::FunctionArg(c) | Node::Call(c, _)
+                if matches!(c, Callee::Known(Function::Defined(_))) =>
+            {
+                let Callee::Known(Function::Defined(i)) = c else {
+                    unreachable!()
+                };
+                let args_read = match node {
+                    Node::Call(_, args) => args.iter().any(|a| self.reads(a, which, seen)),
+                    _ => false,
+                };
+                args_read || definition(*i, seen)
+            }
+            Node::Call(_, args) => args.iter().any(|a| self.reads(a, which, seen)),
+            Node::FunctionArg(_) => false,
+        }
+    }
+
     /// The value of `node` for the ray `channels` and the modifier's real arguments `args`.
     #[must_use]
     pub fn eval(&self, node: &Node, channels: &Channels, args: &[f64]) -> f64 {
@@ -742,10 +792,6 @@ fn link(e: &Expr, s: &Scope, at: &SourceLocation) -> Result<Node, SceneError> {
                     return Err(err(format!("'{n}' is a function and needs arguments")));
                 }
                 Node::Variable(i)
-            } else if n == "Lu" || n == "Lv" {
-                return Err(err(format!(
-                    "'{n}' (a mesh's local (u, v)) is not passed to patterns by ircache yet"
-                )));
             } else if let Some(c) = CHANNELS.iter().position(|c| c == n) {
                 Node::Channel(c as u8)
             } else if UNAVAILABLE.contains(&n.as_str()) {

@@ -292,7 +292,6 @@ mod tests {
         assert!(bad("f(x) = x;\nb = f(1, 2);").contains("'f' takes 1 argument(s)"));
         assert!(bad("b = noise3(1, 2, 3);").contains("not available"));
         assert!(bad("b = NxP;").contains("textures"));
-        assert!(bad("b = Lu + 1;").contains("not passed to patterns"));
         let mut loader = Loader::new(Path::new("/nonexistent"));
         let e = loader
             .program("missing.cal", &at())
