@@ -130,7 +130,7 @@ impl MeshLight {
             // By area where the radiance varies over the surface (a texture, or a pattern that
             // reads the mesh's (u, v)), so that each sample carries its point's.
             .filter(|_| {
-                !radiance.is_textured() && !(radiance.is_patterned() && mesh.uvs.is_some())
+                !(radiance.is_textured() || (radiance.is_patterned() && mesh.uvs.is_some()))
             });
         // Texture coordinates where the radiance or its pattern reads them.
         let uses_uv = radiance.is_textured() || radiance.is_patterned();
