@@ -1185,19 +1185,12 @@ fn rays_give_the_radiance_along_them() {
          0 0 3 0 0 1\n",
     )
     .unwrap();
-    let o = ircache(
-        &[
-            "rays",
-            "s.rad",
-            "-i",
-            "r.txt",
-            "--max-depth",
-            "2",
-            "--samples",
-            "256",
-        ],
-        &d,
-    );
+    let rays = |more: &[&str]| {
+        let mut args = vec!["rays", "s.rad", "-i", "r.txt", "--max-depth", "2"];
+        args.extend_from_slice(more);
+        ircache(&args, &d)
+    };
+    let o = rays(&["--samples", "256"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v = numbers(&o);
     let k = 0.25f64.powi(2) / 4.0;
@@ -1214,21 +1207,7 @@ fn rays_give_the_radiance_along_them() {
         assert!((v[1][ch] - l).abs() < 1e-3 * l, "bulb {ch}: {}", v[1][ch]);
         assert_eq!(v[2][ch], 0.0);
     }
-    let o = ircache(
-        &[
-            "rays",
-            "s.rad",
-            "-i",
-            "r.txt",
-            "--max-depth",
-            "2",
-            "--samples",
-            "16",
-            "--lum",
-        ],
-        &d,
-    );
-    let lum = numbers(&o);
+    let lum = numbers(&rays(&["--samples", "16", "--lum"]));
     assert!((lum[1][0] - 179.0 * (0.265 * 40.0 + 0.670 * 20.0 + 0.065 * 10.0)).abs() < 0.1);
     std::fs::write(d.join("bad.txt"), "1 0 1 -1 0 -1\n1 2 3 0 0 0\n").unwrap();
     let o = ircache(&["rays", "s.rad", "-i", "bad.txt"], &d);

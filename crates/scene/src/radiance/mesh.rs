@@ -8,11 +8,10 @@
 //! (u, v) across their limits), its local triangles (three vertex bytes and a material), and
 //! triangles joining it to other patches (one or two vertices given as patch · 256 + vertex).
 
-use super::octree::{header_end, Reader};
+use super::octree::{at_object, header_end, Reader};
 use super::parse::Primitive;
 use super::xform::Transform;
 use crate::desc::TriangleMesh;
-use crate::error::SourceLocation;
 use crate::SceneError;
 use ircache_math::{DVec3, Vec2};
 use std::collections::HashMap;
@@ -47,16 +46,7 @@ pub fn read(path: &Path, transform: &Transform) -> Result<Mesh, SceneError> {
         source,
     })?;
     let file = Arc::new(path.to_path_buf());
-    let err = |m: String| {
-        SceneError::at(
-            SourceLocation {
-                file: file.clone(),
-                line: 1,
-                column: 1,
-            },
-            m,
-        )
-    };
+    let err = |m: String| at_object(&file, 1, m);
     let start = header_end(&bytes, "Radiance_tmesh").ok_or_else(|| {
         err("not a Radiance mesh (its header does not say FORMAT=Radiance_tmesh)".into())
     })?;

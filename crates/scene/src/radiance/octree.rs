@@ -35,16 +35,7 @@ pub fn read(
         source,
     })?;
     let file = Arc::new(path.to_path_buf());
-    let err = |object: usize, m: String| {
-        SceneError::at(
-            SourceLocation {
-                file: file.clone(),
-                line: object as u32,
-                column: 1,
-            },
-            m,
-        )
-    };
+    let err = |object: usize, m: String| at_object(&file, object, m);
     let start = header_end(&bytes, "Radiance_octree").ok_or_else(|| {
         err(
             1,
@@ -100,16 +91,7 @@ pub(super) fn read_scene(
     size: usize,
     file: &Arc<std::path::PathBuf>,
 ) -> Result<Vec<Primitive>, SceneError> {
-    let err = |object: usize, m: String| {
-        SceneError::at(
-            SourceLocation {
-                file: file.clone(),
-                line: object as u32,
-                column: 1,
-            },
-            m,
-        )
-    };
+    let err = |object: usize, m: String| at_object(file, object, m);
     let truncated = |r: &Reader| err(1, format!("the file is truncated at byte {}", r.pos()));
     // The type names, in the writer's order.
     let mut types = Vec::new();
@@ -176,6 +158,22 @@ pub(super) fn read_scene(
         });
     }
     Ok(out)
+}
+
+/// An error about object `object` (from 1; 1 also for the file as a whole) of `file`.
+pub(super) fn at_object(
+    file: &Arc<std::path::PathBuf>,
+    object: usize,
+    message: String,
+) -> SceneError {
+    SceneError::at(
+        SourceLocation {
+            file: file.clone(),
+            line: object as u32,
+            column: 1,
+        },
+        message,
+    )
 }
 
 /// Where the binary part starts: after the header's empty line, if the header names the
