@@ -440,4 +440,12 @@ fn mixtures_blend_their_materials_as_radiance_does() {
     // radiance is the coefficient's blend of the two at each hit. Measured within 0.01 %.
     let desc = scene_file("radiance-patterns", "mix.rad");
     check_reflected_along_rays(&desc, "radiance-patterns", "reference-mix.txt", 0.002);
+    // mixdata over a table along x, mixpict by a picture's grey. Measured within 0.01 %.
+    let desc = scene_file("radiance-patterns", "mix-tables.rad");
+    check_reflected_along_rays(
+        &desc,
+        "radiance-patterns",
+        "reference-mix-tables.txt",
+        0.002,
+    );
 }

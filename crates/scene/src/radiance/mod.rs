@@ -26,8 +26,8 @@
 //!   ([`pattern`]), with their function files in Radiance's language ([`cal`]), data files and
 //!   pictures ([`data`]), on the radiance of `light`, `glow` and `spotlight` (the luminaires
 //!   `ies2rad` makes render as their candela tables say) and on the colour of `plastic`,
-//!   `metal` and `trans` (evaluated at each hit); `mixfunc` blends two such materials by its
-//!   coefficient at each hit.
+//!   `metal` and `trans` (evaluated at each hit); `mixfunc`, `mixdata` and `mixpict` blend two
+//!   such materials by their coefficient at each hit.
 //! - **Commands**: `!xform` is carried out here, other commands are run (see [`parse`]).
 //! - **Integrator**: the irradiance cache (`irrcache`), as rpict computes, with unbounded bounces
 //!   unless `-ab` or `--max-depth` bounds them.
@@ -555,7 +555,7 @@ fn modifier(
             reals(&[3])?;
             Modifier::Illum(p.strings.first().filter(|s| *s != "void").cloned())
         }
-        "mixfunc" => {
+        "mixfunc" | "mixdata" | "mixpict" => {
             if !pattern.is_empty() {
                 return Err(err("patterns on a mixture are not supported".into()));
             }
@@ -597,7 +597,32 @@ fn modifier(
                 })
             };
             let (foreground, background) = (part(&p.strings[0])?, part(&p.strings[1])?);
-            let coefficient = FunctionPattern::from_primitive(p, files)?;
+            // The coefficient: mixfunc's expression; mixdata's function of a table (as
+            // brightdata after the two materials); mixpict's function of a picture's channels
+            // (as colorpict, that one function for each channel).
+            let coefficient = match p.kind.as_str() {
+                "mixfunc" => FunctionPattern::from_primitive(p, files)?,
+                kind => {
+                    let rest = &p.strings[2..];
+                    let (as_kind, strings) = if kind == "mixdata" {
+                        ("brightdata", rest.to_vec())
+                    } else {
+                        let f = rest[0].clone();
+                        let strings = [f.clone(), f.clone(), f]
+                            .into_iter()
+                            .chain(rest[1..].iter().cloned())
+                            .collect();
+                        ("colorpict", strings)
+                    };
+                    let q = Primitive {
+                        kind: as_kind.into(),
+                        strings,
+                        ..p.clone()
+                    };
+                    FunctionPattern::from_primitive(&q, files)
+                        .map_err(|e| err(format!("its coefficient (read as {as_kind}): {e}")))?
+                }
+            };
             Modifier::Bsdf(Arc::new(BsdfDesc::TwoSided {
                 front: Arc::new(BsdfDesc::Blend {
                     weight: TextureDesc::Constant(Rgb::splat(0.5)),
