@@ -449,3 +449,44 @@ fn mixtures_blend_their_materials_as_radiance_does() {
         0.002,
     );
 }
+
+#[test]
+fn a_sky_of_a_user_s_function_file_has_its_closed_form_irradiance() {
+    // A glow source all round with brightfunc 10 (2 + Dx + Dy/2) from a .cal file: facing up,
+    // E = 10 · 2π (the linear terms cancel); facing +x, E = 10 (2π + 2π/3).
+    let dir = std::env::temp_dir().join(format!("ircache-customsky-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("smooth.cal"), "skyb = 2 + Dx + 0.5*Dy;\n").unwrap();
+    std::fs::write(
+        dir.join("sky.rad"),
+        "void brightfunc skyfunc\n2 skyb smooth.cal\n0\n0\n\
+         skyfunc glow sky_glow\n0\n0\n4 10 10 10 0\n\
+         sky_glow source sky\n0\n0\n4 0 0 1 360\n\
+         void plastic black\n0\n0\n5 0 0 0 0 0\n\
+         black sphere dot\n0\n0\n4 50 50 50 0.01\n",
+    )
+    .unwrap();
+    let desc = ircache_scene::load_scene(&dir.join("sky.rad"), &[], &Default::default()).unwrap();
+    let scene = Scene::build(&desc).unwrap();
+    let params = IcParams {
+        bounces: 0,
+        ..IcParams::default()
+    };
+    let (e, _) = irradiance_at_points(
+        &scene,
+        &params,
+        &[(Vec3::ZERO, Vec3::Z), (Vec3::ZERO, Vec3::X)],
+        PointMethod::BruteForce { samples: 64 },
+        4096,
+        9,
+    );
+    let tau = std::f32::consts::TAU;
+    for (e, expected) in e.iter().zip([10.0 * tau, 10.0 * (tau + tau / 3.0)]) {
+        let got = (e.direct + e.indirect).g;
+        // Measured within 0.1 %.
+        assert!(
+            (got / expected - 1.0).abs() < 0.005,
+            "{got} against {expected}"
+        );
+    }
+}
