@@ -589,3 +589,31 @@ fn aimed_photons_carry_the_flux_that_enters_their_targets() {
         "directional: {got} against {expect}"
     );
 }
+
+/// Lamps over an open floor: light reflected once leaves the scene, so a global map (photons
+/// after a bounce) keeps almost nothing. The pass stops once its rate says so instead of
+/// emitting up to its cap (64 per photon asked for).
+#[test]
+fn a_pass_that_keeps_nothing_stops_early() {
+    let le = 2.0;
+    let panel = [
+        Vec3::new(0.0, 1.0, -0.5),
+        Vec3::new(1.0, 1.0, -0.5),
+        Vec3::new(1.0, 1.0, 0.5),
+        Vec3::new(0.0, 1.0, 0.5),
+    ];
+    let light = quad(panel, diffuse(Rgb::ZERO), Some(Rgb::splat(le)));
+    let desc = light_scene(vec![floor(2.0), light], vec![]);
+    let scene = Scene::build(&desc).expect("scene");
+    let wanted = 50_000;
+    let map = PhotonMap::build(&scene, MapKind::Global, wanted, 4, 3, None);
+    assert_eq!(map.stats.stored, 0);
+    assert!(
+        map.stats.emitted <= 2 * wanted,
+        "emitted {} for a map that keeps nothing",
+        map.stats.emitted
+    );
+    // A map that keeps first hits too fills up and is not cut short.
+    let all = PhotonMap::build(&scene, MapKind::All, wanted, 4, 3, None);
+    assert!(all.stats.stored >= wanted, "{:?}", all.stats);
+}

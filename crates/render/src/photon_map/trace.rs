@@ -19,8 +19,9 @@
 //! and `i`; photons are traced in fixed batches and kept in emission order, whatever the
 //! threads. Each pass emits batches until it has stored the number asked for (as Radiance's
 //! `-apg` and Mitsuba 0.6's `globalPhotons` count stored photons), at most
-//! [`MAX_EMITTED_PER_STORED`] times as many emitted; the flux of every photon is divided by the
-//! number emitted in its pass.
+//! [`MAX_EMITTED_PER_STORED`] times as many emitted, or fewer where the rate of storing says
+//! the cap would hold under a tenth of the number asked; the flux of every photon is divided by
+//! the number emitted in its pass.
 
 use super::photon::Photon;
 use crate::lights::emission::Targets;
@@ -114,6 +115,16 @@ pub fn trace_photons(
             stats.rays += rays;
         }
         stats.emitted += BATCH;
+        // Where light mostly leaves the scene before it may be stored (lamps over an open
+        // floor), emitting up to the cap would spend its time on a map of almost nothing: stop
+        // once the rate so far says the cap would hold under a tenth of what was asked.
+        let stored = photons.len() as u64;
+        if stats.emitted >= wanted
+            && stored.saturating_mul(limit).saturating_mul(10)
+                < wanted.saturating_mul(stats.emitted)
+        {
+            break;
+        }
     }
     let scale = 1.0 / stats.emitted as f32;
     for p in &mut photons {
