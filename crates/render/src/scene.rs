@@ -429,13 +429,14 @@ impl Scene {
         Some(self.interaction(ray, &hit))
     }
 
-    /// The sheet of shape `shape` when it is a thin sheet ([`Shape::thin_sheet`]).
+    /// The sheet met at `it` by a ray along the unit `d`, when its shape is a thin sheet
+    /// ([`Shape::thin_sheet`]; a Radiance pane's patterns evaluated there).
     #[inline]
     #[must_use]
-    pub fn thin_sheet(&self, shape: u32) -> Option<crate::bsdf::ThinDielectric> {
-        let shape = &self.shapes[shape as usize];
+    pub fn thin_sheet(&self, it: &Interaction, d: Vec3) -> Option<crate::bsdf::ThinDielectric> {
+        let shape = &self.shapes[it.shape as usize];
         if shape.thin_sheet {
-            self.materials[shape.material].thin_sheet()
+            self.materials[shape.material].thin_sheet_at(it.uv, it.p, it.ng, d, it.t)
         } else {
             None
         }
@@ -458,7 +459,7 @@ impl Scene {
                 prob: 1.0,
             });
         }
-        let sheet = self.thin_sheet(it.shape)?;
+        let sheet = self.thin_sheet(it, -wo)?;
         let cos = it.frame.n.dot(wo);
         let c = sheet.choose(cos, u);
         Some(Passage {
@@ -539,7 +540,7 @@ impl Scene {
             let open = 1.0 - self.materials[shape.material].opacity(it.uv);
             return (open > 0.0).then(|| Rgb::splat(open));
         }
-        self.thin_sheet(it.shape)
+        self.thin_sheet(it, d)
             .map(|sheet| sheet.transmittance(it.frame.n.dot(d)))
     }
 

@@ -773,6 +773,8 @@ pub enum BsdfDesc {
         transmissivity: Rgb,
         /// Index of refraction (Radiance's default 1.52).
         ior: f32,
+        /// Patterns on the transmissivity (evaluated at each crossing).
+        pattern: Option<Arc<dyn SurfacePattern>>,
     },
     /// No scattering: the invisible boundary of a medium (rays pass straight through).
     Null,

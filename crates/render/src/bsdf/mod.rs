@@ -485,22 +485,25 @@ fn blend_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
     }
 }
 
-/// The patterns on a Radiance material (Ward's model, alone or in `twosided`).
+/// The patterns on a Radiance material (Ward's model, alone or in `twosided`; glass).
 fn ward_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
     match desc {
         BsdfDesc::TwoSided { front, .. } => ward_pattern(front),
-        BsdfDesc::Ward { pattern, .. } => pattern.clone(),
+        BsdfDesc::Ward { pattern, .. } | BsdfDesc::Glass { pattern, .. } => pattern.clone(),
         _ => None,
     }
 }
 
 impl Bsdf {
-    /// Multiplies the colour of its Ward models (Radiance's materials) by `factor`.
+    /// Multiplies the colour of its Ward models and what its Radiance panes transmit (not what
+    /// they reflect, as `glass.c`) by `factor`.
     fn tint(&mut self, factor: Rgb) {
-        let tint = |l: &mut Lobe| {
-            if let Lobe::Ward(w) = l {
-                w.color *= factor;
+        let tint = |l: &mut Lobe| match l {
+            Lobe::Ward(w) => w.color *= factor,
+            Lobe::ThinDielectric(t) if t.transmissivity.is_some() => {
+                t.specular_transmittance *= factor;
             }
+            _ => {}
         };
         match self {
             Bsdf::Single(l) => tint(l),
@@ -856,6 +859,7 @@ impl Compiled {
             BsdfDesc::Glass {
                 transmissivity,
                 ior,
+                ..
             } => Compiled::Fixed(Lobe::ThinDielectric(ThinDielectric {
                 eta: *ior,
                 specular_reflectance: Rgb::ONE,
@@ -1152,6 +1156,27 @@ impl Material {
             }
             _ => None,
         }
+    }
+
+    /// [`Material::thin_sheet`] where a ray along the unit `d` crosses it at the point `p`
+    /// (unit geometric normal `ng`, texture coordinates `uv`, `t` from the ray's start): a
+    /// Radiance pane's patterns tint what it transmits there (`glass.c`).
+    #[must_use]
+    pub fn thin_sheet_at(
+        &self,
+        uv: Vec2,
+        p: Vec3,
+        ng: Vec3,
+        d: Vec3,
+        t: f32,
+    ) -> Option<ThinDielectric> {
+        let mut sheet = self.thin_sheet()?;
+        if let Some(pattern) = &self.pattern {
+            if sheet.transmissivity.is_some() {
+                sheet.specular_transmittance *= pattern.factor(p, ng, d, t, uv);
+            }
+        }
+        Some(sheet)
     }
 
     /// Compiles a description.

@@ -129,6 +129,7 @@ fn radiance_glass(transmissivity: f32, ior: f32) -> BsdfDesc {
     BsdfDesc::Glass {
         transmissivity: Rgb::splat(transmissivity),
         ior,
+        pattern: None,
     }
 }
 

@@ -210,7 +210,7 @@ fn trace_one(
             ray = scene.spawn_ray(&it, ray.d);
             continue;
         }
-        if let Some(sheet) = scene.thin_sheet(it.shape) {
+        if let Some(sheet) = scene.thin_sheet(&it, ray.d) {
             crossings += 1;
             if crossings > crate::scene::MAX_SHEET_CROSSINGS {
                 break;

@@ -218,7 +218,9 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
 fn bsdf_patterns(b: &BsdfDesc) -> Vec<Arc<dyn SurfacePattern>> {
     match b {
         BsdfDesc::TwoSided { front, .. } => bsdf_patterns(front),
-        BsdfDesc::Ward { pattern, .. } => pattern.iter().cloned().collect(),
+        BsdfDesc::Ward { pattern, .. } | BsdfDesc::Glass { pattern, .. } => {
+            pattern.iter().cloned().collect()
+        }
         BsdfDesc::Blend {
             pattern,
             first,
@@ -434,12 +436,12 @@ fn modifier(
         && !patterned
         && !matches!(
             p.kind.as_str(),
-            "glow" | "light" | "spotlight" | "plastic" | "metal" | "trans"
+            "glow" | "light" | "spotlight" | "plastic" | "metal" | "trans" | "glass"
         )
     {
         return Err(err(format!(
             "its modifier '{}' is a pattern; ircache reads patterns on plastic, metal, trans, \
-             light, glow and spotlight materials (and on other patterns), not on {}",
+             glass, light, glow and spotlight materials (and on other patterns), not on {}",
             p.modifier, p.kind
         )));
     }
@@ -494,6 +496,8 @@ fn modifier(
             Modifier::Bsdf(Arc::new(BsdfDesc::Glass {
                 transmissivity: rgb(&p.reals),
                 ior: ior as f32,
+                pattern: (!pattern.is_empty())
+                    .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
             }))
         }
         "dielectric" => {
