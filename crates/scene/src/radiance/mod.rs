@@ -25,20 +25,20 @@
 //! - **Patterns**: `brightfunc`, `colorfunc`, `brightdata`, `colordata` and `colorpict`
 //!   ([`pattern`]), with their function files in Radiance's language ([`cal`]), data files and
 //!   pictures ([`data`]), on the radiance of `light`, `glow` and `spotlight` (the luminaires
-//!   `ies2rad` makes render as their candela tables say) and on the colour of `plastic`,
-//!   `metal` and `trans` (evaluated at each hit); `mixfunc`, `mixdata` and `mixpict` blend two
-//!   such materials by their coefficient at each hit.
+//!   `ies2rad` makes render as their candela tables say), on the colour of `plastic`, `metal`
+//!   and `trans` (evaluated at each hit) and on what `glass` transmits; `mixfunc`, `mixdata`
+//!   and `mixpict` blend two such materials by their coefficient at each hit.
 //! - **Commands**: `!xform` is carried out here, other commands are run (see [`parse`]).
 //! - **Integrator**: the irradiance cache (`irrcache`), as rpict computes, with unbounded bounces
 //!   unless `-ab` or `--max-depth` bounds them.
 //! - **Camera**: a Radiance view ([`view`]: perspective, parallel, fisheye or panoramic) given
-//!   with the scene (`--view`), else `eye`, `target`
-//!   and `fov` as for OBJ scenes, else the whole scene framed from Radiance's default direction
-//!   (+y, up +z). The picture fits 512 × 512 (or `width` × `height`) with square pixels, as rpict.
-//! - Everything else (patterns on mirrors and glass, textures (`texfunc`, `texdata`), mixtures,
+//!   with the scene (`--view`), else `eye`, `target` and `fov` as for OBJ scenes, else the whole
+//!   scene framed from Radiance's default direction (+y, up +z). The picture fits 512 × 512 (or
+//!   `width` × `height`) with square pixels, as rpict.
+//! - Everything else (patterns on mirrors, textures (`texfunc`, `texdata`), `mixtext`,
 //!   `plastic2`, `BSDF`, `antimatter`, ...) is an error at the first surface that needs it,
-//!   naming the primitive. Nothing is skipped
-//!   without a note: surfaces of `void` are dropped with a count in the scene's notes.
+//!   naming the primitive. Nothing is skipped without a note: surfaces of `void` are dropped
+//!   with a count in the scene's notes.
 
 pub mod cal;
 pub mod data;
