@@ -227,12 +227,8 @@ fn a_plane_under_a_constant_sky_gets_pi_l_from_photons_at_its_edge_too() {
     );
 }
 
-/// NOTES-001 E-T3: the translational and rotational gradients from photon cells (Ward–Heckbert
-/// from the photons' arrival directions and flight distances) against central differences of
-/// the exact irradiance under a square emitter (Lambert's formula).
-#[test]
-fn photon_cell_gradients_match_central_differences_of_the_exact_irradiance() {
-    let le = 2.0;
+/// A unit square emitter of radiance `le` facing down at height 1 over a floor, and its corners.
+fn panel_over_floor(le: f32) -> (Scene, [Vec3; 4]) {
     let panel = [
         Vec3::new(0.0, 1.0, -0.5),
         Vec3::new(1.0, 1.0, -0.5),
@@ -241,7 +237,16 @@ fn photon_cell_gradients_match_central_differences_of_the_exact_irradiance() {
     ];
     let light = quad(panel, diffuse(Rgb::ZERO), Some(Rgb::splat(le)));
     let desc = light_scene(vec![floor(2.0), light], vec![]);
-    let scene = Scene::build(&desc).expect("scene");
+    (Scene::build(&desc).expect("scene"), panel)
+}
+
+/// NOTES-001 E-T3: the translational and rotational gradients from photon cells (Ward–Heckbert
+/// from the photons' arrival directions and flight distances) against central differences of
+/// the exact irradiance under a square emitter (Lambert's formula).
+#[test]
+fn photon_cell_gradients_match_central_differences_of_the_exact_irradiance() {
+    let le = 2.0;
+    let (scene, panel) = panel_over_floor(le);
     let map = PhotonMap::build(&scene, MapKind::All, 600_000, 0, 9, None);
     let exact = |x: Vec3, n: Vec3| PI * le * form_factor(x, n, &panel);
 
@@ -596,15 +601,7 @@ fn aimed_photons_carry_the_flux_that_enters_their_targets() {
 #[test]
 fn a_pass_that_keeps_nothing_stops_early() {
     let le = 2.0;
-    let panel = [
-        Vec3::new(0.0, 1.0, -0.5),
-        Vec3::new(1.0, 1.0, -0.5),
-        Vec3::new(1.0, 1.0, 0.5),
-        Vec3::new(0.0, 1.0, 0.5),
-    ];
-    let light = quad(panel, diffuse(Rgb::ZERO), Some(Rgb::splat(le)));
-    let desc = light_scene(vec![floor(2.0), light], vec![]);
-    let scene = Scene::build(&desc).expect("scene");
+    let (scene, _) = panel_over_floor(le);
     let wanted = 50_000;
     let map = PhotonMap::build(&scene, MapKind::Global, wanted, 4, 3, None);
     assert_eq!(map.stats.stored, 0);

@@ -51,23 +51,38 @@ fn reference_in(dir: &str, name: &str) -> Vec<(Vec3, Vec3, Rgb)> {
         .collect()
 }
 
+/// Irradiance at `queries` by brute force: `bounces` indirect bounces, a gather of `gather`
+/// rays and `direct` light samples per point (`(gather, direct)`), seed `seed`.
+fn brute_force(
+    scene: &Scene,
+    bounces: u32,
+    queries: &[(Vec3, Vec3)],
+    (gather, direct): (usize, u32),
+    seed: u64,
+) -> Vec<ircache_render::irradiance_cache::points::PointIrradiance> {
+    let params = IcParams {
+        bounces,
+        ..IcParams::default()
+    };
+    irradiance_at_points(
+        scene,
+        &params,
+        queries,
+        PointMethod::BruteForce { samples: gather },
+        direct,
+        seed,
+    )
+    .0
+}
+
 /// Direct irradiance at the reference points (no bounce), each light sampled `samples` times.
 fn direct_at(desc: &SceneDesc, refs: &[(Vec3, Vec3, Rgb)], samples: u32) -> Vec<Rgb> {
     let scene = Scene::build(desc).unwrap();
-    let params = IcParams {
-        bounces: 0,
-        ..IcParams::default()
-    };
     let queries: Vec<(Vec3, Vec3)> = refs.iter().map(|r| (r.0, r.1)).collect();
-    let (results, _) = irradiance_at_points(
-        &scene,
-        &params,
-        &queries,
-        PointMethod::BruteForce { samples: 64 },
-        samples,
-        7,
-    );
-    results.iter().map(|r| r.direct + r.indirect).collect()
+    brute_force(&scene, 0, &queries, (64, samples), 7)
+        .iter()
+        .map(|r| r.direct + r.indirect)
+        .collect()
 }
 
 fn check(label: &str, ours: &[Rgb], refs: &[(Vec3, Vec3, Rgb)], tolerance: f32) {
@@ -195,18 +210,7 @@ fn check_reflected_along_rays(desc: &SceneDesc, dir: &str, reference: &str, tole
             (it.p, if n.dot(*d) < 0.0 { n } else { -n })
         })
         .collect();
-    let params = IcParams {
-        bounces: 0,
-        ..IcParams::default()
-    };
-    let (e, _) = irradiance_at_points(
-        &scene,
-        &params,
-        &queries,
-        PointMethod::BruteForce { samples: 64 },
-        4096,
-        3,
-    );
+    let e = brute_force(&scene, 0, &queries, (64, 4096), 3);
     for ((it, (_, d, reference)), e) in hits.iter().zip(&rays).zip(&e) {
         let material = &scene.materials[scene.shapes[it.shape as usize].material];
         let wo = it.frame.to_local(-*d);
@@ -286,16 +290,11 @@ fn light_through_a_trans_roof_matches_its_closed_form_and_radiance() {
     .unwrap();
     let desc = ircache_scene::load_scene(&path, &[], &Default::default()).unwrap();
     let scene = Scene::build(&desc).unwrap();
-    let params = IcParams {
-        bounces: 2,
-        ..IcParams::default()
-    };
-    let (results, _) = irradiance_at_points(
+    let results = brute_force(
         &scene,
-        &params,
+        2,
         &[(Vec3::new(0.0, 0.0, 0.5), Vec3::Z)],
-        PointMethod::BruteForce { samples: 16384 },
-        64,
+        (16384, 64),
         1,
     );
     let e = results[0].direct + results[0].indirect;
@@ -413,16 +412,11 @@ fn a_hemispherical_fisheye_sees_the_irradiance_at_its_eye() {
         sum += *p;
     }
     let from_view = sum * (4.0 / (w * h) as f32);
-    let params = IcParams {
-        bounces: 4,
-        ..IcParams::default()
-    };
-    let (e, _) = irradiance_at_points(
+    let e = brute_force(
         &scene,
-        &params,
+        4,
         &[(Vec3::new(2.0, 3.0, 1.2), Vec3::Y)],
-        PointMethod::BruteForce { samples: 16384 },
-        256,
+        (16384, 256),
         5,
     );
     let e = e[0].direct + e[0].indirect;
@@ -482,16 +476,11 @@ fn a_sky_of_a_user_s_function_file_has_its_closed_form_irradiance() {
     .unwrap();
     let desc = ircache_scene::load_scene(&dir.join("sky.rad"), &[], &Default::default()).unwrap();
     let scene = Scene::build(&desc).unwrap();
-    let params = IcParams {
-        bounces: 0,
-        ..IcParams::default()
-    };
-    let (e, _) = irradiance_at_points(
+    let e = brute_force(
         &scene,
-        &params,
+        0,
         &[(Vec3::ZERO, Vec3::Z), (Vec3::ZERO, Vec3::X)],
-        PointMethod::BruteForce { samples: 64 },
-        4096,
+        (64, 4096),
         9,
     );
     let tau = std::f32::consts::TAU;
