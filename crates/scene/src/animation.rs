@@ -267,14 +267,7 @@ pub fn load_animation(
         defines,
         &crate::obj_scene::ObjCamera::default(),
     )
-    .map_err(|e| match e {
-        SceneError::Io { path, source } => SceneError::Referenced {
-            location: at(root),
-            path,
-            message: source.to_string(),
-        },
-        other => other,
-    })?;
+    .map_err(|e| e.referenced_from(&at(root)))?;
     let mut tracks: Vec<Track> = Vec::new();
     for node in root.children().filter(roxmltree::Node::is_element) {
         let (target, pivot) = match node.tag_name().name() {

@@ -78,4 +78,18 @@ impl SceneError {
             message: message.into(),
         }
     }
+
+    /// This error, met reading a file that `location` names: a file that could not be read
+    /// becomes [`SceneError::Referenced`] there; other errors stay as they are.
+    #[must_use]
+    pub fn referenced_from(self, location: &SourceLocation) -> SceneError {
+        match self {
+            SceneError::Io { path, source } => SceneError::Referenced {
+                location: location.clone(),
+                path,
+                message: source.to_string(),
+            },
+            other => other,
+        }
+    }
 }

@@ -314,14 +314,8 @@ fn mesh_surfaces(
     };
     let own = xform::parse_plain(&p.strings[1..]).map_err(err)?;
     let path = p.location.file.parent().unwrap_or(Path::new("")).join(file);
-    let m = mesh::read(&path, &own.then(&p.transform)).map_err(|e| match e {
-        SceneError::Io { path, source } => SceneError::Referenced {
-            location: p.location.clone(),
-            path,
-            message: source.to_string(),
-        },
-        other => other,
-    })?;
+    let m =
+        mesh::read(&path, &own.then(&p.transform)).map_err(|e| e.referenced_from(&p.location))?;
     let local = |name: &str| format!("{}/{name}", p.id);
     for q in &m.materials {
         let mut q = q.clone();

@@ -126,16 +126,8 @@ fn instance(p: &Primitive, ctx: &Context, out: &mut Vec<Primitive>) -> Result<()
     let own = super::xform::parse_plain(&p.strings[1..]).map_err(err)?;
     let dir = p.location.file.parent().unwrap_or(Path::new(""));
     let path = dir.join(file);
-    let prims = super::octree::read(&path, &own.then(&p.transform), ctx.depth + 1).map_err(
-        |e| match e {
-            SceneError::Io { path, source } => SceneError::Referenced {
-                location: p.location.clone(),
-                path,
-                message: source.to_string(),
-            },
-            other => other,
-        },
-    )?;
+    let prims = super::octree::read(&path, &own.then(&p.transform), ctx.depth + 1)
+        .map_err(|e| e.referenced_from(&p.location))?;
     let local = |name: &str| format!("{}/{name}", p.id);
     let renamed: Vec<Primitive> = prims
         .into_iter()
@@ -577,14 +569,7 @@ fn xform(
         };
         for f in &files {
             let path = dir.join(f);
-            read_file(&path, &inner, out).map_err(|e| match e {
-                SceneError::Io { path, source } => SceneError::Referenced {
-                    location: at.clone(),
-                    path,
-                    message: source.to_string(),
-                },
-                other => other,
-            })?;
+            read_file(&path, &inner, out).map_err(|e| e.referenced_from(at))?;
         }
     }
     Ok(())

@@ -132,14 +132,7 @@ impl PatternFiles {
         if let Some(t) = self.tables.get(&path) {
             return Ok(t.clone());
         }
-        let t = Arc::new(DataArray::read(&path).map_err(|e| match e {
-            SceneError::Io { path, source } => SceneError::Referenced {
-                location: p.location.clone(),
-                path,
-                message: source.to_string(),
-            },
-            other => other,
-        })?);
+        let t = Arc::new(DataArray::read(&path).map_err(|e| e.referenced_from(&p.location))?);
         self.tables.insert(path, t.clone());
         Ok(t)
     }
