@@ -306,30 +306,17 @@ fn mesh_surfaces(
     files: &mut PatternFiles,
     notes: &mut Vec<String>,
 ) -> Result<Vec<(Primitive, Geometry)>, SceneError> {
-    let err = |m: String| SceneError::at(p.location.clone(), format!("mesh '{}': {m}", p.id));
-    let Some(file) = p.strings.first() else {
-        return Err(err(
-            "expected the mesh file as its first string argument".into()
-        ));
-    };
-    let own = xform::parse_plain(&p.strings[1..]).map_err(err)?;
-    let path = p.location.file.parent().unwrap_or(Path::new("")).join(file);
-    let m =
-        mesh::read(&path, &own.then(&p.transform)).map_err(|e| e.referenced_from(&p.location))?;
-    let local = |name: &str| format!("{}/{name}", p.id);
-    for q in &m.materials {
-        let mut q = q.clone();
-        q.id = local(&q.id);
-        if q.modifier != "void" {
-            q.modifier = local(&q.modifier);
-        }
-        let modifier = modifier(&q, modifiers, files)?;
+    let (path, transform) = parse::placed_file(p, "mesh")?;
+    let m = mesh::read(&path, &transform).map_err(|e| e.referenced_from(&p.location))?;
+    let materials = parse::localised(m.materials, p);
+    for q in &materials {
+        let modifier = modifier(q, modifiers, files)?;
         modifiers.insert(q.id.clone(), (modifier, q.location.clone()));
     }
     let mut out = Vec::new();
     for (material, mut triangles) in m.groups {
         let name = match (&*p.modifier, material) {
-            ("void", Some(i)) => local(&m.materials[i].id),
+            ("void", Some(i)) => materials[i].id.clone(),
             ("void", None) => "void".to_string(),
             (given, _) => given.to_string(),
         };

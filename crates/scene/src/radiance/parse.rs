@@ -118,35 +118,49 @@ fn instance(p: &Primitive, ctx: &Context, out: &mut Vec<Primitive>) -> Result<()
             "instances nest deeper than {MAX_DEPTH} (does an octree hold itself?)"
         )));
     }
+    let (path, transform) = placed_file(p, "octree")?;
+    let prims = super::octree::read(&path, &transform, ctx.depth + 1)
+        .map_err(|e| e.referenced_from(&p.location))?;
+    let renamed = localised(prims, p);
+    let inner = Context {
+        depth: ctx.depth + 1,
+        ..ctx.clone()
+    };
+    expand_instances(renamed, &inner, out)
+}
+
+/// The file an `instance` or a `mesh` (`p`) names, a `what` file: its first string, found
+/// beside the file naming it, and the transform after it followed by the `!xform`s around `p`.
+pub(super) fn placed_file(p: &Primitive, what: &str) -> Result<(PathBuf, Transform), SceneError> {
+    let err = |m: String| SceneError::at(p.location.clone(), format!("{} '{}': {m}", p.kind, p.id));
     let Some(file) = p.strings.first() else {
-        return Err(err(
-            "expected the octree file as its first string argument".into()
-        ));
+        return Err(err(format!(
+            "expected the {what} file as its first string argument"
+        )));
     };
     let own = super::xform::parse_plain(&p.strings[1..]).map_err(err)?;
     let dir = p.location.file.parent().unwrap_or(Path::new(""));
-    let path = dir.join(file);
-    let prims = super::octree::read(&path, &own.then(&p.transform), ctx.depth + 1)
-        .map_err(|e| e.referenced_from(&p.location))?;
-    let local = |name: &str| format!("{}/{name}", p.id);
-    let renamed: Vec<Primitive> = prims
+    Ok((dir.join(file), own.then(&p.transform)))
+}
+
+/// The primitives of the file `owner` (an `instance` or a `mesh`) places, kept apart from the
+/// scene's: every name and every reference to a modifier prefixed `owner/`, surfaces given
+/// `owner`'s modifier instead of their own unless it is void.
+pub(super) fn localised(prims: Vec<Primitive>, owner: &Primitive) -> Vec<Primitive> {
+    let local = |name: &str| format!("{}/{name}", owner.id);
+    prims
         .into_iter()
         .map(|mut q| {
             let surface = !super::is_modifier_type(&q.kind) || q.kind == "instance";
-            if surface && p.modifier != "void" {
-                q.modifier = p.modifier.clone();
+            if surface && owner.modifier != "void" {
+                q.modifier = owner.modifier.clone();
             } else if q.modifier != "void" {
                 q.modifier = local(&q.modifier);
             }
             q.id = local(&q.id);
             q
         })
-        .collect();
-    let inner = Context {
-        depth: ctx.depth + 1,
-        ..ctx.clone()
-    };
-    expand_instances(renamed, &inner, out)
+        .collect()
 }
 
 fn read_file(path: &Path, ctx: &Context, out: &mut Vec<Primitive>) -> Result<(), SceneError> {
