@@ -85,17 +85,23 @@ impl PatternFiles {
         }
     }
 
-    fn picture(&mut self, name: &str, p: &Primitive) -> Result<Arc<[DataArray; 3]>, SceneError> {
-        let path = self.functions.find(name, &p.location).ok_or_else(|| {
+    /// Where the `what` file `name` that `p` names is, or an error saying where it was looked
+    /// for.
+    fn locate(&self, name: &str, what: &str, p: &Primitive) -> Result<PathBuf, SceneError> {
+        self.functions.find(name, &p.location).ok_or_else(|| {
             SceneError::at(
                 p.location.clone(),
                 format!(
-                    "{} '{}': cannot find picture \"{name}\" (looked beside the file naming it, \
+                    "{} '{}': cannot find {what} \"{name}\" (looked beside the file naming it, \
                      beside the scene and along RAYPATH)",
                     p.kind, p.id
                 ),
             )
-        })?;
+        })
+    }
+
+    fn picture(&mut self, name: &str, p: &Primitive) -> Result<Arc<[DataArray; 3]>, SceneError> {
+        let path = self.locate(name, "picture", p)?;
         if let Some(t) = self.pictures.get(&path) {
             return Ok(t.clone());
         }
@@ -119,16 +125,7 @@ impl PatternFiles {
     }
 
     fn table(&mut self, name: &str, p: &Primitive) -> Result<Arc<DataArray>, SceneError> {
-        let path = self.functions.find(name, &p.location).ok_or_else(|| {
-            SceneError::at(
-                p.location.clone(),
-                format!(
-                    "{} '{}': cannot find data file \"{name}\" (looked beside the file naming \
-                     it, beside the scene and along RAYPATH)",
-                    p.kind, p.id
-                ),
-            )
-        })?;
+        let path = self.locate(name, "data file", p)?;
         if let Some(t) = self.tables.get(&path) {
             return Ok(t.clone());
         }
@@ -298,13 +295,12 @@ impl FunctionPattern {
             }
             Kind::Picture { coordinates, .. } => coordinates.iter().collect(),
         };
-        let mut functions: Vec<Function> = match &kind {
+        let functions: Vec<Function> = match &kind {
             Kind::BrightData { function, .. } => vec![*function],
             Kind::ColorData { functions, .. } => functions.to_vec(),
             Kind::Picture { functions, .. } => functions.iter().map(|f| f.0).collect(),
             _ => Vec::new(),
         };
-        functions.dedup();
         let reads_uv = nodes.iter().any(|n| program.reads_channels(n, &[25, 26]))
             || functions
                 .iter()
