@@ -485,12 +485,21 @@ fn blend_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
     }
 }
 
-/// The patterns on a Radiance material (Ward's model, alone or in `twosided`; glass).
-fn ward_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
+/// The patterns on a Radiance material's colour (Ward's model, alone or in `twosided`) or on
+/// what its pane transmits (glass).
+fn color_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
     match desc {
-        BsdfDesc::TwoSided { front, .. } => ward_pattern(front),
+        BsdfDesc::TwoSided { front, .. } => color_pattern(front),
         BsdfDesc::Ward { pattern, .. } | BsdfDesc::Glass { pattern, .. } => pattern.clone(),
         _ => None,
+    }
+}
+
+/// Scales what a Radiance pane transmits, not what it reflects (`glass.c`); other thin sheets
+/// carry no pattern.
+fn tint_pane(t: &mut ThinDielectric, factor: Rgb) {
+    if t.transmissivity.is_some() {
+        t.specular_transmittance *= factor;
     }
 }
 
@@ -500,9 +509,7 @@ impl Bsdf {
     fn tint(&mut self, factor: Rgb) {
         let tint = |l: &mut Lobe| match l {
             Lobe::Ward(w) => w.color *= factor,
-            Lobe::ThinDielectric(t) if t.transmissivity.is_some() => {
-                t.specular_transmittance *= factor;
-            }
+            Lobe::ThinDielectric(t) => tint_pane(t, factor),
             _ => {}
         };
         match self {
@@ -1172,9 +1179,7 @@ impl Material {
     ) -> Option<ThinDielectric> {
         let mut sheet = self.thin_sheet()?;
         if let Some(pattern) = &self.pattern {
-            if sheet.transmissivity.is_some() {
-                sheet.specular_transmittance *= pattern.factor(p, ng, d, t, uv);
-            }
+            tint_pane(&mut sheet, pattern.factor(p, ng, d, t, uv));
         }
         Some(sheet)
     }
@@ -1284,7 +1289,7 @@ impl Material {
                 blend_pattern: None,
             },
         };
-        m.pattern = ward_pattern(desc);
+        m.pattern = color_pattern(desc);
         m.blend_pattern = blend_pattern(desc);
         m.blend = blend.map(|(w, second)| (Compiled::new(second), Texture::from_desc(w)));
         // A normal or bump map inside twosided applies to both sides.

@@ -133,11 +133,10 @@ impl MeshLight {
                 !(radiance.is_textured() || (radiance.is_patterned() && mesh.uvs.is_some()))
             });
         // Texture coordinates where the radiance or its pattern reads them.
-        let uses_uv = radiance.is_textured() || radiance.is_patterned();
         let uvs = mesh
             .uvs
             .as_ref()
-            .filter(|t| uses_uv && t.len() == mesh.positions.len())
+            .filter(|t| radiance.reads_uv() && t.len() == mesh.positions.len())
             .cloned();
         let mut light = MeshLight {
             positions: mesh.positions.clone(),
@@ -227,10 +226,7 @@ impl MeshLight {
             Some(n) => (b0 * n[i0] + b.x * n[i1] + b.y * n[i2]).normalize_or(ng),
             None => ng,
         };
-        let uv = match (
-            &self.uvs,
-            self.radiance.is_textured() || self.radiance.is_patterned(),
-        ) {
+        let uv = match (&self.uvs, self.radiance.reads_uv()) {
             (_, false) => Vec2::ZERO,
             (Some(t), true) => b0 * t[i0] + b.x * t[i1] + b.y * t[i2],
             (None, true) => b,

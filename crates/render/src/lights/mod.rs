@@ -301,6 +301,14 @@ impl EmittedRadiance {
         self.pattern.is_some()
     }
 
+    /// True where what it emits may read the surface's texture coordinates (a texture, or a
+    /// pattern that may read a mesh's (u, v)): samples then carry their point's.
+    #[inline]
+    #[must_use]
+    pub fn reads_uv(&self) -> bool {
+        self.texture.is_some() || self.pattern.is_some()
+    }
+
     /// True where it varies over the surface.
     #[inline]
     #[must_use]
