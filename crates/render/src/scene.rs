@@ -155,7 +155,7 @@ impl Interaction {
     #[inline]
     #[must_use]
     pub fn bsdf(&self, material: &crate::bsdf::Material, d: Vec3) -> crate::bsdf::Bsdf {
-        material.at_hit(self.uv, self.p, self.ng, d, self.t)
+        material.at_hit(self.uv, self.p, self.ng, d, self.t, &self.frame)
     }
 }
 

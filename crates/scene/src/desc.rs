@@ -776,6 +776,22 @@ pub enum BsdfDesc {
         /// Patterns on the transmissivity (evaluated at each crossing).
         pattern: Option<Arc<dyn SurfacePattern>>,
     },
+    /// Radiance's `BSDF` material of zero thickness: the Klems matrices of an XML file
+    /// (reflection and transmission on both sides, [`crate::klems`]) plus the Lambertian parts
+    /// the material adds. Only produced by the Radiance loader.
+    Klems {
+        /// The matrices.
+        data: Arc<crate::klems::KlemsBsdf>,
+        /// The world direction that orients the matrices about the normal `n`: their x axis is
+        /// `up × n` (`bsdf.c`'s `SDcompXform`).
+        up: Vec3,
+        /// Lambertian reflectance added on the front (the side the normal points to).
+        reflect_front: Rgb,
+        /// Lambertian reflectance added on the back.
+        reflect_back: Rgb,
+        /// Lambertian transmittance added both ways.
+        transmit: Rgb,
+    },
     /// No scattering: the invisible boundary of a medium (rays pass straight through).
     Null,
     /// Wavefront MTL material: Lambertian `Kd` plus normalised modified-Phong lobe `Ks`, `Ns`

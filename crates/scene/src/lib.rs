@@ -9,6 +9,7 @@ pub mod animation;
 pub mod desc;
 pub mod error;
 pub mod ior;
+pub mod klems;
 pub mod mesh;
 pub mod mitsuba;
 pub mod obj_scene;

@@ -218,7 +218,7 @@ fn errors_name_the_place_and_what_was_expected() {
             "m.rad:1:1: cannot find function file \"my.cal\"",
         ),
         (
-            "void BSDF t\n0\n0\n0\nt sphere s\n0\n0\n4 0 0 0 1\n",
+            "void aBSDF t\n0\n0\n0\nt sphere s\n0\n0\n4 0 0 0 1\n",
             "m.rad:5:1: sphere 's': its material 't'",
         ),
         (
@@ -666,4 +666,94 @@ fn meshes_keep_their_materials_normals_and_uvs_and_damaged_ones_are_errors() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("not a Radiance mesh"), "{e}");
+}
+
+#[test]
+fn klems_bsdf_files_load_with_their_sides_and_errors_name_the_place() {
+    use ircache_scene::klems::KlemsComponent;
+    let d = dir("klems");
+    let xml = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/radiance-bsdf/diffuser.xml")
+        .canonicalize()
+        .unwrap();
+    let text = std::fs::read_to_string(&xml).unwrap();
+    std::fs::write(d.join("diffuser.xml"), &text).unwrap();
+    let surface = "w polygon p\n0\n0\n12 0 0 0 1 0 0 1 1 0 0 1 0\n";
+    let desc = load(
+        &d,
+        &[(
+            "m.rad",
+            &format!("void BSDF w\n6 0 diffuser.xml 0 0 1 .\n0\n3 .1 .2 .3\n{surface}"),
+        )],
+    )
+    .unwrap();
+    let BsdfDesc::Klems {
+        data,
+        up,
+        reflect_front,
+        ..
+    } = &*desc.shapes[0].bsdf
+    else {
+        panic!("a Klems BSDF: {:?}", desc.shapes[0].bsdf);
+    };
+    assert_eq!(*up, Vec3::Z);
+    assert_eq!(*reflect_front, Rgb::new(0.1, 0.2, 0.3));
+    // Every side present, 41 × 41 on the quarter basis, 0.35/π transmitted.
+    for c in KlemsComponent::ALL {
+        let m = data.component(c).unwrap();
+        assert_eq!(m.values.len(), 41 * 41);
+    }
+    let t = data
+        .component(KlemsComponent::TransmitFront)
+        .unwrap()
+        .value(3, 17);
+    assert!((t.g - 0.35 / std::f32::consts::PI).abs() < 1e-6);
+    // The up vector turned by the !xform around the material.
+    let desc = load(
+        &d,
+        &[
+            ("n.rad", "!xform -rz 90 m2.rad\n"),
+            (
+                "m2.rad",
+                &format!("void BSDF w\n6 0 diffuser.xml 1 0 0 .\n0\n0\n{surface}"),
+            ),
+        ],
+    )
+    .unwrap();
+    let BsdfDesc::Klems { up, .. } = &*desc.shapes[0].bsdf else {
+        panic!()
+    };
+    assert!((*up - Vec3::Y).length() < 1e-6, "{up}");
+    // Errors.
+    let tree = text.replace(">Rows<", ">TensorTree3<");
+    std::fs::write(d.join("tree.xml"), tree).unwrap();
+    let short = text.replacen("0.063662, ", "", 1);
+    std::fs::write(d.join("short.xml"), short).unwrap();
+    let cases = [
+        (
+            "6 0 missing.xml 0 0 1 .\n0\n0",
+            "m.rad:1:1: BSDF 'w': cannot find BSDF file \"missing.xml\"",
+        ),
+        ("6 0 tree.xml 0 0 1 .\n0\n0", "tensor tree (TensorTree3)"),
+        (
+            "6 0 short.xml 0 0 1 .\n0\n0",
+            "1680 values where a 41 × 41 matrix has 1681",
+        ),
+        (
+            "6 0.01 diffuser.xml 0 0 1 .\n0\n0",
+            "thickness 0.01: a BSDF proxy",
+        ),
+        ("6 0 diffuser.xml 0 0 0 .\n0\n0", "its up vector is zero"),
+        ("6 0 diffuser.xml 0 0 Dx .\n0\n0", "depends on the ray"),
+        (
+            "6 0 diffuser.xml 0 0 1 .\n0\n2 1 1",
+            "expected 0 or 3 or 6 or 9 real arguments, found 2",
+        ),
+    ];
+    for (args, expect) in cases {
+        let e = load(&d, &[("m.rad", &format!("void BSDF w\n{args}\n{surface}"))])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
+    }
 }

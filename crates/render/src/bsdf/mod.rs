@@ -21,13 +21,14 @@
 //!
 //! Models, one file each: [`diffuse`], [`plastic`], [`roughplastic`], [`conductor`],
 //! [`roughconductor`], [`dielectric`], [`roughdielectric`], [`thindielectric`], [`phong`],
-//! [`principled`]; shared: [`microfacet`]
+//! [`principled`], Radiance's [`ward`] and [`klems`] (tabulated `BSDF` files); shared: [`microfacet`]
 //! (Beckmann and GGX, Walter et al. 2007; visible normals, Heitz 2018) and [`fresnel`].
 
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
 pub mod fresnel;
+pub mod klems;
 pub mod microfacet;
 pub mod phong;
 pub mod plastic;
@@ -39,13 +40,14 @@ pub mod thindielectric;
 pub mod ward;
 
 use crate::texture::Texture;
-use ircache_math::{Rgb, Vec2, Vec3};
+use ircache_math::{Frame, Rgb, Vec2, Vec3};
 use ircache_scene::{BsdfDesc, SurfacePattern};
 use std::sync::Arc;
 
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
+pub use klems::{Klems, KlemsTables};
 pub use microfacet::Microfacet;
 pub use phong::Phong;
 pub use plastic::Plastic;
@@ -127,6 +129,8 @@ pub enum Lobe {
     Principled(Principled),
     /// Radiance's `plastic` and `metal`.
     Ward(Ward),
+    /// Radiance's `BSDF` with Klems matrices.
+    Klems(Klems),
 }
 
 impl Lobe {
@@ -140,6 +144,7 @@ impl Lobe {
             Lobe::Phong(b) => b.eval(wo, wi),
             Lobe::Principled(b) => b.eval(wo, wi),
             Lobe::Ward(b) => b.eval(wo, wi),
+            Lobe::Klems(b) => b.eval(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => Rgb::ZERO,
         }
     }
@@ -154,6 +159,7 @@ impl Lobe {
             Lobe::Phong(b) => b.pdf(wo, wi),
             Lobe::Principled(b) => b.pdf(wo, wi),
             Lobe::Ward(b) => b.pdf(wo, wi),
+            Lobe::Klems(b) => b.pdf(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => 0.0,
         }
     }
@@ -171,6 +177,7 @@ impl Lobe {
             Lobe::Phong(b) => b.sample(wo, u_lobe, u),
             Lobe::Principled(b) => b.sample(wo, u_lobe, u),
             Lobe::Ward(b) => b.sample(wo, u_lobe, u),
+            Lobe::Klems(b) => b.sample(wo, u_lobe, u),
         }
     }
 
@@ -590,6 +597,18 @@ impl Bsdf {
         })
     }
 
+    /// Samples the direction light arriving from `wl` (local frame, towards where it came from)
+    /// leaves in, weight `f(wo, wl) |cos θₒ| / pdf` with `wo` the sampled direction: the photon
+    /// passes' sampling. The same as [`Self::sample`] for every reciprocal model; Klems matrices
+    /// are not reciprocal ([`Klems::sample_adjoint`]).
+    #[must_use]
+    pub fn sample_adjoint(&self, wl: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
+            Bsdf::Single(Lobe::Klems(k)) => k.sample_adjoint(wl, u_lobe, u),
+            _ => self.sample(wl, u_lobe, u),
+        }
+    }
+
     /// True when the BSDF has a non-delta component (next-event estimation is worthwhile).
     #[must_use]
     pub fn has_smooth(&self) -> bool {
@@ -617,6 +636,7 @@ impl Bsdf {
             Lobe::Dielectric(_) | Lobe::RoughDielectric(_) | Lobe::ThinDielectric(_) => true,
             Lobe::Principled(p) => p.transmits(),
             Lobe::Ward(w) => w.transmits(),
+            Lobe::Klems(k) => k.transmits(),
             _ => false,
         })
     }
@@ -852,6 +872,19 @@ impl Compiled {
                 transmissivity: *transmissivity,
                 transmitted_specular: *transmitted_specular,
             })),
+            BsdfDesc::Klems {
+                data,
+                reflect_front,
+                reflect_back,
+                transmit,
+                ..
+            } => Compiled::Fixed(Lobe::Klems(Klems {
+                tables: KlemsTables::interned(data),
+                axis: [1.0, 0.0],
+                reflect_front: *reflect_front,
+                reflect_back: *reflect_back,
+                transmit: *transmit,
+            })),
             BsdfDesc::ThinDielectric {
                 int_ior,
                 ext_ior,
@@ -995,6 +1028,22 @@ pub struct Material {
     pattern: Option<Arc<dyn SurfacePattern>>,
     /// A Radiance mixture's weight of the second model at each hit ([`Material::at_hit`]).
     blend_pattern: Option<Arc<dyn SurfacePattern>>,
+    /// A Klems BSDF's up vector (world), which orients its matrices at each hit.
+    klems_up: Option<Vec3>,
+}
+
+/// The Klems matrices' x axis, `up × n`, in `frame` as (cos, sin) of its angle from the frame's
+/// first tangent; the tangent itself where `up` is along the normal (Radiance warns there and
+/// leaves the surface black).
+fn klems_axis(up: Vec3, frame: &Frame) -> [f32; 2] {
+    let x = up.cross(frame.n);
+    let (c, s) = (x.dot(frame.s), x.dot(frame.t));
+    let len = c.hypot(s);
+    if len > 1e-6 * x.length().max(f32::MIN_POSITIVE) && len > 0.0 {
+        [c / len, s / len]
+    } else {
+        [1.0, 0.0]
+    }
 }
 
 /// A perturbation of the shading normal by a texture (normal or bump map), shaded as Mitsuba 3's
@@ -1277,6 +1326,7 @@ impl Material {
                     blend: None,
                     pattern: None,
                     blend_pattern: None,
+                    klems_up: None,
                 }
             }
             d => Material {
@@ -1287,8 +1337,12 @@ impl Material {
                 blend: None,
                 pattern: None,
                 blend_pattern: None,
+                klems_up: None,
             },
         };
+        if let BsdfDesc::Klems { up, .. } = desc {
+            m.klems_up = Some(*up);
+        }
         m.pattern = color_pattern(desc);
         m.blend_pattern = blend_pattern(desc);
         m.blend = blend.map(|(w, second)| (Compiled::new(second), Texture::from_desc(w)));
@@ -1312,11 +1366,15 @@ impl Material {
     }
 
     /// The BSDF met at a hit: at texture coordinates `uv` and point `p` with unit geometric
-    /// normal `ng` (unflipped), by a ray along the unit `d`, `t` from its start. Radiance's
-    /// patterns multiply the material's colour there, as `normal.c` does.
+    /// normal `ng` (unflipped) and shading `frame`, by a ray along the unit `d`, `t` from its
+    /// start. Radiance's patterns multiply the material's colour there, as `normal.c` does, and
+    /// a Klems BSDF's azimuth is set from its up vector and the frame's normal.
     #[must_use]
-    pub fn at_hit(&self, uv: Vec2, p: Vec3, ng: Vec3, d: Vec3, t: f32) -> Bsdf {
+    pub fn at_hit(&self, uv: Vec2, p: Vec3, ng: Vec3, d: Vec3, t: f32, frame: &Frame) -> Bsdf {
         let mut bsdf = self.at(uv);
+        if let (Some(up), Bsdf::Single(Lobe::Klems(k))) = (self.klems_up, &mut bsdf) {
+            k.axis = klems_axis(up, frame);
+        }
         if let Some(pattern) = &self.pattern {
             bsdf.tint(pattern.factor(p, ng, d, t, uv));
         }

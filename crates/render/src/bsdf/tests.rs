@@ -1466,3 +1466,108 @@ fn perturbed_shading_follows_mitsuba() {
     let stays = normal_map(PerturbedShading::default()).normal(Vec2::ZERO, n, n, dpdu, dpdv, front);
     assert!((stays - tilt).length() < 1e-5, "{stays}");
 }
+
+/// Radiance's `BSDF` with the Klems matrices of `scenes/radiance-bsdf/<file>`, turned by
+/// `axis`, with Lambertian terms added.
+fn klems(file: &str, axis: [f32; 2], added: [f32; 3]) -> Bsdf {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/radiance-bsdf")
+        .join(file);
+    let data = Arc::new(ircache_scene::radiance::bsdf_xml::read(&path).unwrap());
+    let mut b = mat(BsdfDesc::Klems {
+        data,
+        up: Vec3::Z,
+        reflect_front: Rgb::splat(added[0]),
+        reflect_back: Rgb::splat(added[1]),
+        transmit: Rgb::splat(added[2]),
+    });
+    if let Bsdf::Single(Lobe::Klems(k)) = &mut b {
+        k.axis = axis;
+    }
+    b
+}
+
+#[test]
+fn chi2_and_weights_of_klems_matrices() {
+    // The asymmetric matrix (full basis) from both sides, turned, with Lambertian terms; the
+    // diffuser (quarter basis).
+    let t = 0.4f32;
+    let cases = [
+        (
+            "deflect",
+            klems("deflect.xml", [t.cos(), t.sin()], [0.05, 0.0, 0.02]),
+        ),
+        ("diffuser", klems("diffuser.xml", [1.0, 0.0], [0.0; 3])),
+    ];
+    let mut rng = Rng::new(5, 6);
+    for (label, b) in &cases {
+        for (theta, phi) in [(33.0, 70.0), (118.0, 15.0)] {
+            let wo = dir(theta, phi);
+            // Fewer samples than the other models': each density averages 16 lookups.
+            let test = ChiSquareTest {
+                integration_tol: 1e-4,
+                theta_bins: 10,
+                phi_bins: 10,
+                ..ChiSquareTest::sphere().with_samples(100_000)
+            };
+            let report = test.run(
+                |u, u_lobe| b.sample(wo, u_lobe, u).map(|s| (s.wi, s.pdf)),
+                |wi| b.pdf(wo, wi),
+            );
+            report.assert_ok(ALPHA, CHI2_TESTS, &format!("klems {label} θo={theta}"));
+            for _ in 0..2000 {
+                let Some(s) = b.sample(wo, rng.next_f32(), rng.next_2d()) else {
+                    continue;
+                };
+                let (pdf, f) = (b.pdf(wo, s.wi), b.eval(wo, s.wi));
+                assert!(
+                    (pdf - s.pdf).abs() <= 1e-4 * pdf,
+                    "{label}: {} vs {pdf}",
+                    s.pdf
+                );
+                assert!(
+                    (s.weight.g - f.g / pdf).abs() <= 1e-3 * (f.g / pdf),
+                    "{label}: weight {:?}, eval/pdf {}",
+                    s.weight,
+                    f.g / pdf
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn klems_photons_scatter_by_the_transposed_matrix() {
+    // A photon arriving from wl leaves along wo weighted by f(wo, wl) |cos θo| / pdf (the
+    // matrices are read with the view direction incident): the mean weight is
+    // ∫ f(wo, wl) |cos θo| dwo, here by quadrature over the sphere with `eval`.
+    let b = klems("deflect.xml", [0.6, 0.8], [0.05, 0.0, 0.0]);
+    let mut rng = Rng::new(8, 9);
+    for wl in [dir(20.0, 40.0), dir(130.0, 250.0)] {
+        let mut quadrature = 0.0f64;
+        let cells = upper_hemisphere_midpoints(|v| {
+            for w in [v, Vec3::new(v.x, v.y, -v.z)] {
+                quadrature += f64::from(b.eval(w, wl).g / wl.z.abs() * w.z.abs());
+            }
+        });
+        quadrature *= 2.0 * f64::from(PI) / cells as f64;
+        let n = 400_000;
+        let mut sum = 0.0f64;
+        for _ in 0..n {
+            if let Some(s) = b.sample_adjoint(wl, rng.next_f32(), rng.next_2d()) {
+                sum += f64::from(s.weight.g);
+            }
+        }
+        let mean = sum / n as f64;
+        assert!(
+            (mean / quadrature - 1.0).abs() < 0.01,
+            "from {wl}: photons keep {mean}, the transposed matrix {quadrature}"
+        );
+        // Not what sampling the view-incident matrix would give.
+        let forward = albedo(&b, wl, n, 3).0;
+        assert!(
+            (forward / quadrature - 1.0).abs() > 0.05,
+            "{forward} vs {quadrature}"
+        );
+    }
+}

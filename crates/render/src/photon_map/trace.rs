@@ -259,7 +259,7 @@ fn trace_one(
         if bounces + 1 > max_bounces {
             break;
         }
-        let Some(bs) = bsdf.sample(wo_local, rng.next_f32(), rng.next_2d()) else {
+        let Some(bs) = bsdf.sample_adjoint(wo_local, rng.next_f32(), rng.next_2d()) else {
             break;
         };
         // A caustic photon leaves the pass at its first non-delta bounce.

@@ -11,7 +11,9 @@
 //! - **Materials**: `plastic`, `metal` and `trans` as Radiance's isotropic Gaussian model
 //!   ([`BsdfDesc::Ward`]; a smooth `trans`'s straight transmission is not followed by light
 //!   samples, with a note where a distant light would need it), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
-//!   [`BsdfDesc::Glass`]), `dielectric` without absorption (a smooth interface of its index).
+//!   [`BsdfDesc::Glass`]), `dielectric` without absorption (a smooth interface of its index),
+//!   `BSDF` of zero thickness with the Klems matrices of an XML file ([`bsdf_xml`],
+//!   [`BsdfDesc::Klems`]; tensor trees, proxies of non-zero thickness and `aBSDF` are refused).
 //!   Radiance shades both sides of a surface alike, so the opaque ones are `twosided`.
 //! - **Light**: `light` and `glow` surfaces emit their radiance (W sr⁻¹ m⁻², as ircache's RGB) from
 //!   their front and reflect nothing; a glow's maximum radius only steers Radiance's choice of
@@ -36,10 +38,11 @@
 //!   scene framed from Radiance's default direction (+y, up +z). The picture fits 512 × 512 (or
 //!   `width` × `height`) with square pixels, as rpict.
 //! - Everything else (patterns on mirrors, textures (`texfunc`, `texdata`), `mixtext`,
-//!   `plastic2`, `BSDF`, `antimatter`, ...) is an error at the first surface that needs it,
+//!   `plastic2`, `aBSDF`, `antimatter`, ...) is an error at the first surface that needs it,
 //!   naming the primitive. Nothing is skipped without a note: surfaces of `void` are dropped
 //!   with a count in the scene's notes.
 
+pub mod bsdf_xml;
 pub mod cal;
 pub mod data;
 pub mod mesh;
@@ -496,6 +499,85 @@ fn modifier(
                 ext_ior: 1.0,
                 specular_reflectance: Rgb::ONE,
                 specular_transmittance: Rgb::ONE,
+            }))
+        }
+        "BSDF" => {
+            if !pattern.is_empty() {
+                return Err(err("patterns on a BSDF material are not supported".into()));
+            }
+            if !p.integers.is_empty() {
+                return Err(err("expected no integer arguments".into()));
+            }
+            reals(&[0, 3, 6, 9])?;
+            let s = &p.strings;
+            if s.len() < 6 {
+                return Err(err(format!(
+                    "expected at least 6 string arguments (thickness BSDFfile ux uy uz \
+                     funcfile), found {}",
+                    s.len()
+                )));
+            }
+            // Thickness and up vector: expressions in the function file (or rayinit's).
+            let program = files.functions.program(&s[5], &p.location)?;
+            let constant = |text: &str, what: &str| -> Result<f64, SceneError> {
+                let e = cal::parse::parse_expression(text, &p.location)?;
+                let node = program
+                    .compile(&e, &p.location)
+                    .map_err(|e| err(format!("{what} \"{text}\": {e}")))?;
+                if program.reads_channels(&node, &(0..=u8::MAX).collect::<Vec<_>>()) {
+                    return Err(err(format!(
+                        "{what} \"{text}\" depends on the ray; ircache takes constant ones"
+                    )));
+                }
+                let v = program.eval(&node, &cal::eval::Channels::default(), &p.reals);
+                if v.is_finite() {
+                    Ok(v)
+                } else {
+                    Err(err(format!("{what} \"{text}\" is {v}")))
+                }
+            };
+            let thickness = constant(&s[0], "thickness")?;
+            if thickness != 0.0 {
+                return Err(err(format!(
+                    "thickness {thickness}: a BSDF proxy for geometry behind it is not \
+                     supported; give 0"
+                )));
+            }
+            let up = DVec3::new(
+                constant(&s[2], "up vector's x")?,
+                constant(&s[3], "up vector's y")?,
+                constant(&s[4], "up vector's z")?,
+            );
+            let own = xform::parse_plain(&s[6..]).map_err(|e| err(format!("transform: {e}")))?;
+            let up = own.then(&p.transform).vector(up);
+            if up.length() == 0.0 {
+                return Err(err("its up vector is zero".into()));
+            }
+            let path = files.locate(&s[1], "BSDF file", p)?;
+            let data = files
+                .klems(&path)
+                .map_err(|message| SceneError::Referenced {
+                    location: p.location.clone(),
+                    path: path.clone(),
+                    message,
+                })?;
+            let r = &p.reals;
+            let color = |k: usize| {
+                if r.len() >= k + 3 {
+                    rgb(&r[k..])
+                } else {
+                    Rgb::ZERO
+                }
+            };
+            if r.iter().any(|&v| v < 0.0) {
+                return Err(err("negative diffuse reflectance or transmittance".into()));
+            }
+            Modifier::Bsdf(Arc::new(BsdfDesc::Klems {
+                data,
+                up: up.normalize().as_vec3(),
+                reflect_front: color(0),
+                reflect_back: color(3),
+                transmit: color(6),
             }))
         }
         "light" | "glow" | "spotlight" => {

@@ -69,9 +69,10 @@ pub struct FunctionPattern {
 
 /// Files read while patterns are made (each read once per scene).
 pub struct PatternFiles {
-    functions: cal::Loader,
+    pub(super) functions: cal::Loader,
     tables: HashMap<PathBuf, Arc<DataArray>>,
     pictures: HashMap<PathBuf, Arc<[DataArray; 3]>>,
+    klems: HashMap<PathBuf, Arc<crate::klems::KlemsBsdf>>,
 }
 
 impl PatternFiles {
@@ -82,12 +83,18 @@ impl PatternFiles {
             functions: cal::Loader::new(scene_dir),
             tables: HashMap::new(),
             pictures: HashMap::new(),
+            klems: HashMap::new(),
         }
     }
 
     /// Where the `what` file `name` that `p` names is, or an error saying where it was looked
     /// for.
-    fn locate(&self, name: &str, what: &str, p: &Primitive) -> Result<PathBuf, SceneError> {
+    pub(super) fn locate(
+        &self,
+        name: &str,
+        what: &str,
+        p: &Primitive,
+    ) -> Result<PathBuf, SceneError> {
         self.functions.find(name, &p.location).ok_or_else(|| {
             SceneError::at(
                 p.location.clone(),
@@ -98,6 +105,19 @@ impl PatternFiles {
                 ),
             )
         })
+    }
+
+    /// The Klems BSDF at `path`, read once.
+    pub(super) fn klems(
+        &mut self,
+        path: &std::path::Path,
+    ) -> Result<Arc<crate::klems::KlemsBsdf>, String> {
+        if let Some(k) = self.klems.get(path) {
+            return Ok(k.clone());
+        }
+        let k = Arc::new(super::bsdf_xml::read(path)?);
+        self.klems.insert(path.to_path_buf(), k.clone());
+        Ok(k)
     }
 
     fn picture(&mut self, name: &str, p: &Primitive) -> Result<Arc<[DataArray; 3]>, SceneError> {
