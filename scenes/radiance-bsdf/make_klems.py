@@ -13,6 +13,7 @@ deflect.xml  Klems full basis, IncidentDataStructure Columns. Smooth in the patc
                Reflection Back     c (1 + 0.5 cos(phi_o - phi_i)) (with a, b, c below).
 diffuser.xml Klems quarter basis, IncidentDataStructure Rows: a Lambertian diffuser,
              transmission 0.35 / pi both ways, reflection 0.2 / pi on both sides.
+tinted.xml   the diffuser's data as CIE Y, with CIE X = 1.2 Y and CIE Z = 0.6 Y (a warm tint).
 
 Run: python3 make_klems.py (writes both files beside itself).
 """
@@ -75,7 +76,17 @@ def block(direction, basis, structure, f):
     )
 
 
-def document(name, basis, structure, blocks):
+def document(name, basis, structure, channels):
+    """channels: (wavelength name, its WavelengthDataBlocks)."""
+    data = "".join(
+        "<WavelengthData>\n\t<LayerNumber>System</LayerNumber>\n"
+        f'\t<Wavelength unit="Integral">{wavelength}</Wavelength>\n'
+        "\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
+        f"\t<DetectorSpectrum>ASTM E308 1931 {wavelength[-1] if wavelength != 'Visible' else 'Y'}.dsp</DetectorSpectrum>\n"
+        + "".join(blocks)
+        + "</WavelengthData>\n"
+        for wavelength, blocks in channels
+    )
     return (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<WindowElement xmlns="http://windows.lbl.gov" '
@@ -86,12 +97,9 @@ def document(name, basis, structure, blocks):
         "\t\t<DeviceType>Other</DeviceType>\n\t</Material>\n"
         f"\t<DataDefinition>\n\t<IncidentDataStructure>{structure}</IncidentDataStructure>\n"
         + basis_xml(basis)
-        + "\t</DataDefinition>\n<WavelengthData>\n\t<LayerNumber>System</LayerNumber>\n"
-        '\t<Wavelength unit="Integral">Visible</Wavelength>\n'
-        "\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
-        "\t<DetectorSpectrum>ASTM E308 1931 Y.dsp</DetectorSpectrum>\n"
-        + "".join(blocks)
-        + "</WavelengthData>\n</Layer>\n</Optical>\n</WindowElement>\n"
+        + "\t</DataDefinition>\n"
+        + data
+        + "</Layer>\n</Optical>\n</WindowElement>\n"
     )
 
 
@@ -110,13 +118,19 @@ deflect = [
     block("Reflection Back", full, "Columns", lambda i, o: 0.05 * (1 + 0.5 * math.cos(o[1] - i[1]))),
 ]
 with open(os.path.join(here, "deflect.xml"), "w") as f:
-    f.write(document("deflect", full, "Columns", deflect))
+    f.write(document("deflect", full, "Columns", [("Visible", deflect)]))
 quarter = "LBNL/Klems Quarter"
-diffuser = [
-    block("Transmission Front", quarter, "Rows", lambda i, o: 0.35 / math.pi),
-    block("Transmission Back", quarter, "Rows", lambda i, o: 0.35 / math.pi),
-    block("Reflection Front", quarter, "Rows", lambda i, o: 0.2 / math.pi),
-    block("Reflection Back", quarter, "Rows", lambda i, o: 0.2 / math.pi),
-]
+def diffuser(k):
+    return [
+        block("Transmission Front", quarter, "Rows", lambda i, o: k * 0.35 / math.pi),
+        block("Transmission Back", quarter, "Rows", lambda i, o: k * 0.35 / math.pi),
+        block("Reflection Front", quarter, "Rows", lambda i, o: k * 0.2 / math.pi),
+        block("Reflection Back", quarter, "Rows", lambda i, o: k * 0.2 / math.pi),
+    ]
+
+
 with open(os.path.join(here, "diffuser.xml"), "w") as f:
-    f.write(document("diffuser", quarter, "Rows", diffuser))
+    f.write(document("diffuser", quarter, "Rows", [("Visible", diffuser(1))]))
+with open(os.path.join(here, "tinted.xml"), "w") as f:
+    tint = [("Visible", diffuser(1)), ("CIE-X", diffuser(1.2)), ("CIE-Z", diffuser(0.6))]
+    f.write(document("tinted", quarter, "Rows", tint))

@@ -566,54 +566,67 @@ fn a_klems_diffuser_transmits_its_closed_form() {
     // An endless diffuser of the quarter basis (transmittance 0.35 both ways, reflectance 0.2)
     // under a uniform sky L and a sun of irradiance E_s on a horizontal plane, nothing below:
     // under it the irradiance is 0.35 (π L + E_s); above it, looking down, 0.2 (π L + E_s).
+    // The same data tinted by CIE X and Z channels transmits, per channel, the fractions
+    // Radiance 6.0 gives (`rtrace -I -ab 2 -aa 0 -ad 100000`: 6.4994, 3.0094, 2.1101 under a
+    // top of 11.0698).
     let dir = std::env::temp_dir().join(format!("ircache-klems-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let xml = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes/radiance-bsdf/diffuser.xml")
-        .canonicalize()
+    let tinted = [6.4994f32 / 11.0698, 3.0094 / 11.0698, 2.1101 / 11.0698];
+    for (file, below, above) in [
+        ("diffuser.xml", [0.35; 3], [0.2; 3]),
+        ("tinted.xml", tinted, tinted.map(|t| t * 0.2 / 0.35)),
+    ] {
+        let xml = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenes/radiance-bsdf")
+            .join(file)
+            .canonicalize()
+            .unwrap();
+        let path = dir.join("diffuser.rad");
+        std::fs::write(
+            &path,
+            format!(
+                "void glow skyglow\n0\n0\n4 2 2 2 0\nskyglow source sky\n0\n0\n4 0 0 1 180\n\
+                 void light solar\n0\n0\n3 1e5 1e5 1e5\nsolar source sun\n0\n0\n4 0 0.6 0.8 0.5\n\
+                 void BSDF diffuse\n6 0 {} 0 1 0 .\n0\n0\n\
+                 diffuse polygon roof\n0\n0\n12 -500 -500 1 -500 500 1 500 500 1 500 -500 1\n",
+                xml.display()
+            ),
+        )
         .unwrap();
-    let path = dir.join("diffuser.rad");
-    std::fs::write(
-        &path,
-        format!(
-            "void glow skyglow\n0\n0\n4 2 2 2 0\nskyglow source sky\n0\n0\n4 0 0 1 180\n\
-             void light solar\n0\n0\n3 1e5 1e5 1e5\nsolar source sun\n0\n0\n4 0 0.6 0.8 0.5\n\
-             void BSDF diffuse\n6 0 {} 0 1 0 .\n0\n0\n\
-             diffuse polygon roof\n0\n0\n12 -500 -500 1 -500 500 1 500 500 1 500 -500 1\n",
-            xml.display()
-        ),
-    )
-    .unwrap();
-    let desc = ircache_scene::load_scene(&path, &[], &Default::default()).unwrap();
-    let sun: f32 = desc
-        .emitters
-        .iter()
-        .map(|e| match e {
-            EmitterDesc::Directional {
-                irradiance,
-                direction,
-            } => irradiance.r * -direction.z,
-            _ => 0.0,
-        })
-        .sum();
-    assert!(sun > 4.0, "the sun is a directional light: {sun}");
-    let scene = Scene::build(&desc).unwrap();
-    let e = brute_force(
-        &scene,
-        2,
-        &[
-            (Vec3::new(0.0, 0.0, 0.5), Vec3::Z),
-            (Vec3::new(0.0, 0.0, 1.5), -Vec3::Z),
-        ],
-        (131072, 4096),
-        2,
-    );
-    let top = std::f32::consts::PI * 2.0 + sun;
-    for (r, expected) in e.iter().zip([0.35 * top, 0.2 * top]) {
-        let got = (r.direct + r.indirect).g;
-        assert!(
-            (got / expected - 1.0).abs() < 0.01,
-            "{got} against {expected}"
+        let desc = ircache_scene::load_scene(&path, &[], &Default::default()).unwrap();
+        let sun: f32 = desc
+            .emitters
+            .iter()
+            .map(|e| match e {
+                EmitterDesc::Directional {
+                    irradiance,
+                    direction,
+                } => irradiance.r * -direction.z,
+                _ => 0.0,
+            })
+            .sum();
+        assert!(sun > 4.0, "the sun is a directional light: {sun}");
+        let scene = Scene::build(&desc).unwrap();
+        let e = brute_force(
+            &scene,
+            2,
+            &[
+                (Vec3::new(0.0, 0.0, 0.5), Vec3::Z),
+                (Vec3::new(0.0, 0.0, 1.5), -Vec3::Z),
+            ],
+            (131072, 4096),
+            2,
         );
+        let top = std::f32::consts::PI * 2.0 + sun;
+        for (r, fraction) in e.iter().zip([below, above]) {
+            let got = r.direct + r.indirect;
+            for ch in 0..3 {
+                let expected = fraction[ch] * top;
+                assert!(
+                    (got[ch] / expected - 1.0).abs() < 0.01,
+                    "{file}, channel {ch}: {got:?} against {expected}"
+                );
+            }
+        }
     }
 }
