@@ -552,6 +552,15 @@ pub enum WrapMode {
     Clamp,
 }
 
+/// The anisotropy of Radiance's `plastic2` and `metal2` (`aniso.c`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Anisotropy {
+    /// Roughness across `u`.
+    pub roughness_v: f32,
+    /// The world direction of the first roughness (projected onto the surface at each hit).
+    pub u: Vec3,
+}
+
 /// Microfacet normal distribution.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MicrofacetDistribution {
@@ -764,6 +773,8 @@ pub enum BsdfDesc {
         transmitted_specular: f32,
         /// Patterns on the colour (evaluated at each hit).
         pattern: Option<Arc<dyn SurfacePattern>>,
+        /// `plastic2` and `metal2`: a second roughness and the direction of the first.
+        anisotropy: Option<Anisotropy>,
     },
     /// Radiance's `glass`: a thin pane (no refraction offset) of index `ior` whose
     /// `transmissivity` per pass at normal incidence absorbs inside it; reflection and

@@ -757,3 +757,60 @@ fn klems_bsdf_files_load_with_their_sides_and_errors_name_the_place() {
         assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
     }
 }
+
+#[test]
+fn anisotropic_materials_load_with_their_orientation() {
+    let d = dir("aniso");
+    let surface = "m polygon p\n0\n0\n12 0 0 0 1 0 0 1 1 0 0 1 0\n";
+    let u_of = |desc: &SceneDesc| match &*desc.shapes[0].bsdf {
+        BsdfDesc::TwoSided { front, .. } => match &**front {
+            BsdfDesc::Ward {
+                anisotropy: Some(a),
+                roughness,
+                metal,
+                ..
+            } => (a.u, a.roughness_v, *roughness, *metal),
+            other => panic!("{other:?}"),
+        },
+        other => panic!("{other:?}"),
+    };
+    // As written, turned by the transform xform leaves in the strings, and by an !xform.
+    let text = format!("void metal2 m\n4 1 0 0 .\n0\n6 .8 .7 .5 .9 .04 .25\n{surface}");
+    let (u, v, r, metal) = u_of(&load(&d, &[("m.rad", &text)]).unwrap());
+    assert_eq!((u, v, r, metal), (Vec3::X, 0.25, 0.04, true));
+    let text =
+        format!("void plastic2 m\n8 1 0 0 . -i 1 -rz 90\n0\n6 .8 .7 .5 .1 .3 .06\n{surface}");
+    let (u, _, _, metal) = u_of(&load(&d, &[("m.rad", &text)]).unwrap());
+    assert!((u - Vec3::Y).length() < 1e-6 && !metal, "{u}");
+    let inner = format!("void metal2 m\n4 1 0 0 .\n0\n6 .8 .7 .5 .9 .04 .25\n{surface}");
+    let desc = load(&d, &[("n.rad", "!xform -rz 90 i.rad\n"), ("i.rad", &inner)]).unwrap();
+    assert!((u_of(&desc).0 - Vec3::Y).length() < 1e-6);
+    let cases = [
+        (
+            "metal2 m\n4 1 0 0 .\n0\n6 .8 .7 .5 .9 0 .25",
+            "the roughnesses 0 0.25 above 0",
+        ),
+        (
+            "metal2 m\n4 0 0 0 .\n0\n6 .8 .7 .5 .9 .1 .25",
+            "its orientation vector is zero",
+        ),
+        (
+            "metal2 m\n4 Px 0 0 .\n0\n6 .8 .7 .5 .9 .1 .25",
+            "ux \"Px\" depends on the ray",
+        ),
+        (
+            "metal2 m\n3 1 0 0\n0\n6 .8 .7 .5 .9 .1 .25",
+            "expected at least 4 string arguments",
+        ),
+        (
+            "trans2 m\n4 1 0 0 .\n0\n8 .8 .7 .5 .1 .1 .2 .5 .5",
+            "trans2, not rendered by ircache",
+        ),
+    ];
+    for (material, expect) in cases {
+        let e = load(&d, &[("m.rad", &format!("void {material}\n{surface}"))])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
+    }
+}

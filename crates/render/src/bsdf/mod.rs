@@ -641,6 +641,20 @@ impl Bsdf {
         })
     }
 
+    /// True when a lobe depends on the azimuth about the normal (two roughnesses, tabulated
+    /// matrices): the radiance cache's tables, made at one azimuth, do not hold it.
+    #[must_use]
+    pub fn is_anisotropic(&self) -> bool {
+        self.lobes().iter().any(|l| match l {
+            Lobe::RoughConductor(b) => b.distr.alpha_u != b.distr.alpha_v,
+            Lobe::RoughDielectric(b) => b.distr.alpha_u != b.distr.alpha_v,
+            Lobe::Principled(b) => b.anisotropic > 0.0,
+            Lobe::Ward(w) => w.roughness_v != w.roughness,
+            Lobe::Klems(_) => true,
+            _ => false,
+        })
+    }
+
     /// True when the BSDF is purely Lambertian (on both sides, for `twosided`; both models of
     /// a blend).
     #[must_use]
@@ -863,11 +877,14 @@ impl Compiled {
                 metal,
                 transmissivity,
                 transmitted_specular,
+                anisotropy,
                 ..
             } => Compiled::Fixed(Lobe::Ward(Ward {
                 color: *color,
                 specularity: *specularity,
                 roughness: *roughness,
+                roughness_v: anisotropy.map_or(*roughness, |a| a.roughness_v),
+                axis: [1.0, 0.0],
                 metal: *metal,
                 transmissivity: *transmissivity,
                 transmitted_specular: *transmitted_specular,
@@ -1028,22 +1045,32 @@ pub struct Material {
     pattern: Option<Arc<dyn SurfacePattern>>,
     /// A Radiance mixture's weight of the second model at each hit ([`Material::at_hit`]).
     blend_pattern: Option<Arc<dyn SurfacePattern>>,
-    /// A Klems BSDF's up vector (world), which orients its matrices at each hit.
-    klems_up: Option<Vec3>,
+    /// A world direction that orients the model about the normal at each hit.
+    orientation: Option<Orientation>,
+}
+
+/// A world direction that orients a model about the normal ([`Material::at_hit`]).
+#[derive(Clone, Copy, Debug)]
+enum Orientation {
+    /// A Klems BSDF's up vector: its matrices' x axis is `up × n`.
+    KlemsUp(Vec3),
+    /// `plastic2`'s and `metal2`'s `u`: the first roughness lies along its projection.
+    WardU(Vec3),
+}
+
+/// `u` projected onto the tangent plane of `frame` (`aniso.c`'s `getacoords`), as (cos, sin)
+/// of its angle from the frame's first tangent; `None` where `u` is along the normal.
+fn tangent_axis(u: Vec3, frame: &Frame) -> Option<[f32; 2]> {
+    let (c, s) = (u.dot(frame.s), u.dot(frame.t));
+    let len = c.hypot(s);
+    (len > 1e-6 * u.length()).then(|| [c / len, s / len])
 }
 
 /// The Klems matrices' x axis, `up × n`, in `frame` as (cos, sin) of its angle from the frame's
 /// first tangent; the tangent itself where `up` is along the normal (Radiance warns there and
 /// leaves the surface black).
 fn klems_axis(up: Vec3, frame: &Frame) -> [f32; 2] {
-    let x = up.cross(frame.n);
-    let (c, s) = (x.dot(frame.s), x.dot(frame.t));
-    let len = c.hypot(s);
-    if len > 1e-6 * x.length().max(f32::MIN_POSITIVE) && len > 0.0 {
-        [c / len, s / len]
-    } else {
-        [1.0, 0.0]
-    }
+    tangent_axis(up.cross(frame.n), frame).unwrap_or([1.0, 0.0])
 }
 
 /// A perturbation of the shading normal by a texture (normal or bump map), shaded as Mitsuba 3's
@@ -1326,7 +1353,7 @@ impl Material {
                     blend: None,
                     pattern: None,
                     blend_pattern: None,
-                    klems_up: None,
+                    orientation: None,
                 }
             }
             d => Material {
@@ -1337,12 +1364,20 @@ impl Material {
                 blend: None,
                 pattern: None,
                 blend_pattern: None,
-                klems_up: None,
+                orientation: None,
             },
         };
-        if let BsdfDesc::Klems { up, .. } = desc {
-            m.klems_up = Some(*up);
-        }
+        m.orientation = match desc {
+            BsdfDesc::Klems { up, .. } => Some(Orientation::KlemsUp(*up)),
+            BsdfDesc::TwoSided { front, .. } => match front.as_ref() {
+                BsdfDesc::Ward {
+                    anisotropy: Some(a),
+                    ..
+                } => Some(Orientation::WardU(a.u)),
+                _ => None,
+            },
+            _ => None,
+        };
         m.pattern = color_pattern(desc);
         m.blend_pattern = blend_pattern(desc);
         m.blend = blend.map(|(w, second)| (Compiled::new(second), Texture::from_desc(w)));
@@ -1372,8 +1407,31 @@ impl Material {
     #[must_use]
     pub fn at_hit(&self, uv: Vec2, p: Vec3, ng: Vec3, d: Vec3, t: f32, frame: &Frame) -> Bsdf {
         let mut bsdf = self.at(uv);
-        if let (Some(up), Bsdf::Single(Lobe::Klems(k))) = (self.klems_up, &mut bsdf) {
-            k.axis = klems_axis(up, frame);
+        match (self.orientation, &mut bsdf) {
+            (Some(Orientation::KlemsUp(up)), Bsdf::Single(Lobe::Klems(k))) => {
+                k.axis = klems_axis(up, frame);
+            }
+            (
+                Some(Orientation::WardU(u)),
+                Bsdf::TwoSided {
+                    front: Lobe::Ward(f),
+                    back: Lobe::Ward(b),
+                },
+            ) => {
+                let axis = tangent_axis(u, frame);
+                for w in [f, b] {
+                    match axis {
+                        Some(axis) => w.axis = axis,
+                        // u along the normal: Radiance's punt, one rms roughness.
+                        None => {
+                            let rms = (0.5 * (w.roughness.powi(2) + w.roughness_v.powi(2))).sqrt();
+                            w.roughness = rms;
+                            w.roughness_v = rms;
+                        }
+                    }
+                }
+            }
+            _ => {}
         }
         if let Some(pattern) = &self.pattern {
             bsdf.tint(pattern.factor(p, ng, d, t, uv));

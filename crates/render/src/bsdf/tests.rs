@@ -109,7 +109,40 @@ fn ward(color: f32, specularity: f32, roughness: f32, metal: bool) -> BsdfDesc {
         transmissivity: 0.0,
         transmitted_specular: 0.0,
         pattern: None,
+        anisotropy: None,
     })
+}
+
+/// Radiance's `plastic2` or `metal2` as the loader describes it (roughness `au` along the
+/// local x axis, `av` across).
+fn ward_anisotropic(color: f32, specularity: f32, au: f32, av: f32, metal: bool) -> BsdfDesc {
+    twosided(BsdfDesc::Ward {
+        color: Rgb::new(color, color * 0.9, color * 0.8),
+        specularity,
+        roughness: au,
+        metal,
+        transmissivity: 0.0,
+        transmitted_specular: 0.0,
+        pattern: None,
+        anisotropy: Some(ircache_scene::Anisotropy {
+            roughness_v: av,
+            u: Vec3::X,
+        }),
+    })
+}
+
+/// Radiance's `plastic2` or `metal2` (roughness `au` along `axis`, `av` across).
+fn ward2(color: f32, specularity: f32, au: f32, av: f32, metal: bool, axis: [f32; 2]) -> Bsdf {
+    let mut b = mat(ward_anisotropic(color, specularity, au, av, metal));
+    if let Bsdf::TwoSided {
+        front: Lobe::Ward(f),
+        back: Lobe::Ward(k),
+    } = &mut b
+    {
+        f.axis = axis;
+        k.axis = axis;
+    }
+    b
 }
 
 /// Radiance's `trans`, two-sided as the loader makes it.
@@ -122,6 +155,7 @@ fn trans(color: f32, roughness: f32, transmissivity: f32, transmitted_specular: 
         transmissivity,
         transmitted_specular,
         pattern: None,
+        anisotropy: None,
     })
 }
 
@@ -282,6 +316,14 @@ fn all_models() -> Vec<(String, BsdfDesc)> {
         ("radiance trans α=0.4".into(), trans(0.9, 0.4, 0.9, 0.3)),
         ("radiance trans smooth".into(), trans(0.8, 0.0, 0.5, 0.5)),
         ("radiance glass".into(), radiance_glass(0.96, 1.52)),
+        (
+            "radiance metal2 0.04/0.25".into(),
+            ward_anisotropic(0.9, 0.9, 0.04, 0.25, true),
+        ),
+        (
+            "radiance plastic2 0.3/0.06".into(),
+            ward_anisotropic(0.5, 0.1, 0.3, 0.06, false),
+        ),
         ("radiance tinted glass".into(), radiance_glass(0.6, 1.52)),
     ];
     for kind in KINDS {
@@ -1569,5 +1611,43 @@ fn klems_photons_scatter_by_the_transposed_matrix() {
             (forward / quadrature - 1.0).abs() > 0.05,
             "{forward} vs {quadrature}"
         );
+    }
+}
+
+#[test]
+fn chi2_and_closed_forms_of_radiance_anisotropic_ward() {
+    // plastic2 and metal2: agaussamp's half vectors against the density they claim, from both
+    // sides and turned; the lobe with equal roughnesses is the isotropic one; and turning the
+    // axis by 90° swaps the roughnesses.
+    let t = 0.7f32;
+    for (label, b) in [
+        (
+            "metal2",
+            ward2(0.8, 0.9, 0.04, 0.25, true, [t.cos(), t.sin()]),
+        ),
+        ("plastic2", ward2(0.5, 0.1, 0.3, 0.06, false, [1.0, 0.0])),
+    ] {
+        for (theta, phi) in [(20.0, 30.0), (65.0, 250.0), (150.0, 100.0)] {
+            let wo = dir(theta, phi);
+            let domain = Domain::Sphere;
+            run_chi2(&b, wo, domain, &format!("{label} θo={theta}"));
+        }
+    }
+    let iso = mat(ward(0.8, 0.9, 0.1, true));
+    let equal = ward2(0.8, 0.9, 0.1, 0.1 + 1e-7, true, [0.3, 0.954]);
+    let a = ward2(0.8, 0.9, 0.04, 0.25, true, [1.0, 0.0]);
+    let b = ward2(0.8, 0.9, 0.25, 0.04, true, [0.0, 1.0]);
+    let mut rng = Rng::new(3, 4);
+    for _ in 0..500 {
+        let wo = ircache_math::sampling::square_to_uniform_hemisphere(rng.next_2d());
+        let wi = ircache_math::sampling::square_to_uniform_hemisphere(rng.next_2d());
+        // The two formulas round differently in f32 (the isotropic one takes the tangent from
+        // h·h − (h·n)², which cancels near the peak).
+        let (x, y) = (iso.eval(wo, wi).g, equal.eval(wo, wi).g);
+        assert!((x - y).abs() <= 2e-3 * x.max(1e-3), "{x} vs {y}");
+        let (x, y) = (a.eval(wo, wi).g, b.eval(wo, wi).g);
+        assert!((x - y).abs() <= 1e-4 * x.max(1e-3), "{x} vs {y}");
+        let (x, y) = (a.pdf(wo, wi), b.pdf(wo, wi));
+        assert!((x - y).abs() <= 1e-4 * x.max(1e-3), "{x} vs {y}");
     }
 }

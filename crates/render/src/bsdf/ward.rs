@@ -65,15 +65,22 @@ fn mean_fresnel_complement() -> f32 {
     (1.0 - 2.0 * integral) as f32
 }
 
-/// Radiance's `plastic` or `metal` at one surface point.
+/// Radiance's `plastic`, `metal` or `trans` (or `plastic2`, `metal2`) at one surface point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ward {
     /// Colour `c` (the diffuse colour; a metal's specular colour too).
     pub color: Rgb,
     /// Specularity `s` in [0, 1].
     pub specularity: f32,
-    /// Roughness α (the rms facet slope); 0 is a mirror.
+    /// Roughness α (the rms facet slope); 0 is a mirror. Along `axis` for `plastic2` and
+    /// `metal2`.
     pub roughness: f32,
+    /// Roughness across `axis` (`plastic2`, `metal2`); equal to `roughness` for the isotropic
+    /// materials.
+    pub roughness_v: f32,
+    /// The direction of `roughness` in the local frame's tangent plane, as (cos, sin) of its
+    /// angle from the frame's first tangent ([`crate::bsdf::Material::at_hit`] sets it).
+    pub axis: [f32; 2],
     /// `metal` (specular coloured by `c`) rather than `plastic` (white specular).
     pub metal: bool,
     /// `trans`'s transmissivity `t` (0 for plastic and metal).
@@ -114,6 +121,22 @@ const PARTS: [Part; 4] = [
 ];
 
 impl Ward {
+    /// True for `plastic2` and `metal2` with two roughnesses.
+    #[inline]
+    fn anisotropic(&self) -> bool {
+        self.roughness_v != self.roughness
+    }
+
+    /// `((h·u)²/α_u² + (h·v)²/α_v²)`, the tangential part of `h` scaled by the roughnesses
+    /// (`aniso.c`'s ellipse).
+    #[inline]
+    fn ellipse(&self, h: Vec3) -> f32 {
+        let [c, s] = self.axis;
+        let (hu, hv) = (h.x * c + h.y * s, h.y * c - h.x * s);
+        hu * hu / (self.roughness * self.roughness)
+            + hv * hv / (self.roughness_v * self.roughness_v)
+    }
+
     /// True when the specular lobe is a mirror (α² below Radiance's `FTINY`).
     #[must_use]
     pub fn is_mirror(&self) -> bool {
@@ -260,6 +283,12 @@ impl Ward {
         if h.z <= 0.0 {
             return 0.0;
         }
+        if self.anisotropic() {
+            // exp(−((h·u)²/α_u² + (h·v)²/α_v²)/(h·n)²) / (π α_u α_v (h·n)³) (`agaussamp`'s).
+            let c2 = h.z * h.z;
+            return (-self.ellipse(h) / c2).exp()
+                / (PI * self.roughness * self.roughness_v * c2 * h.z);
+        }
         let a2 = self.roughness * self.roughness;
         let c2 = h.z * h.z;
         let tan2 = (1.0 - c2).max(0.0) / c2;
@@ -274,6 +303,13 @@ impl Ward {
             return 0.0;
         }
         let hh = h.dot(h);
+        if self.anisotropic() {
+            // aniso.c's diraniso: exp(−ellipse/(h·n)²) (h·h) / (π α_u α_v (h·n)⁴).
+            let hn2 = hn * hn;
+            return (-self.ellipse(h) / hn2).exp() * hh
+                / (PI * self.roughness * self.roughness_v * hn2 * hn2)
+                * wi.z;
+        }
         let a2 = self.roughness * self.roughness;
         let tan2 = ((hh - hn * hn) / (hn * hn)).max(0.0);
         (-tan2 / a2).exp() * hh / (PI * a2 * hn * hn * hn * hn) * wi.z
@@ -290,6 +326,22 @@ impl Ward {
     }
 
     fn sample_specular_direction(&self, wo: Vec3, u: Vec2) -> Vec3 {
+        if self.anisotropic() {
+            // agaussamp: an azimuth stretched by the roughnesses, then the slope along it.
+            let (au, av) = (self.roughness, self.roughness_v);
+            let phi = 2.0 * PI * u.y;
+            let (cp, sp) = (phi.cos() * au, phi.sin() * av);
+            let norm = 1.0 / (cp * cp + sp * sp).sqrt();
+            let (cp, sp) = (cp * norm, sp * norm);
+            let d = (-(1.0 - u.x).max(f32::MIN_POSITIVE).ln()
+                / (cp * cp / (au * au) + sp * sp / (av * av)))
+                .sqrt();
+            let [c, s] = self.axis;
+            // d (cos p u + sin p v), u = (c, s, 0), v = n × u = (−s, c, 0).
+            let (tu, tv) = (d * cp, d * sp);
+            let h = Vec3::new(tu * c - tv * s, tu * s + tv * c, 1.0).normalize();
+            return h * (2.0 * wo.dot(h)) - wo;
+        }
         let tan = self.roughness * (-(1.0 - u.x).max(f32::MIN_POSITIVE).ln()).sqrt();
         let phi = 2.0 * PI * u.y;
         let h = Vec3::new(tan * phi.cos(), tan * phi.sin(), 1.0).normalize();

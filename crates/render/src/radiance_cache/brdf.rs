@@ -271,8 +271,9 @@ fn energy_kept_with(
 /// traced) or the BSDF has no glossy part.
 #[must_use]
 pub fn order_for(bsdf: &Bsdf, max_order: usize, threshold: f64) -> Option<usize> {
-    // Light through the surface is outside the hemisphere the harmonics cover: traced.
-    if !bsdf.has_glossy() || bsdf.transmits() {
+    // Light through the surface is outside the hemisphere the harmonics cover, and the tables
+    // are made at one azimuth: transmitting and anisotropic lobes are traced.
+    if !bsdf.has_glossy() || bsdf.transmits() || bsdf.is_anisotropic() {
         return None;
     }
     let steps = (ORDER_MAX_THETA_DEGREES / 5.0) as usize;

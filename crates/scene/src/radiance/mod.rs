@@ -12,7 +12,8 @@
 //!   ([`BsdfDesc::Ward`]; a smooth `trans`'s straight transmission is not followed by light
 //!   samples, with a note where a distant light would need it), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
 //!   [`BsdfDesc::Glass`]), `dielectric` without absorption (a smooth interface of its index),
-//!   `BSDF` of zero thickness with the Klems matrices of an XML file ([`bsdf_xml`],
+//!   `plastic2` and `metal2` (`aniso.c`'s anisotropic Gaussian, its orientation vector a
+//!   constant, [`crate::desc::Anisotropy`]), `BSDF` of zero thickness with the Klems matrices of an XML file ([`bsdf_xml`],
 //!   [`BsdfDesc::Klems`]; tensor trees, proxies of non-zero thickness and `aBSDF` are refused).
 //!   Radiance shades both sides of a surface alike, so the opaque ones are `twosided`.
 //! - **Light**: `light` and `glow` surfaces emit their radiance (W sr⁻¹ m⁻², as ircache's RGB) from
@@ -38,7 +39,7 @@
 //!   scene framed from Radiance's default direction (+y, up +z). The picture fits 512 × 512 (or
 //!   `width` × `height`) with square pixels, as rpict.
 //! - Everything else (patterns on mirrors, textures (`texfunc`, `texdata`), `mixtext`,
-//!   `plastic2`, `aBSDF`, `antimatter`, ...) is an error at the first surface that needs it,
+//!   `trans2`, `aBSDF`, `antimatter`, ...) is an error at the first surface that needs it,
 //!   naming the primitive. Nothing is skipped without a note: surfaces of `void` are dropped
 //!   with a count in the scene's notes.
 
@@ -420,12 +421,21 @@ fn modifier(
         && !patterned
         && !matches!(
             p.kind.as_str(),
-            "glow" | "light" | "spotlight" | "plastic" | "metal" | "trans" | "glass"
+            "glow"
+                | "light"
+                | "spotlight"
+                | "plastic"
+                | "metal"
+                | "trans"
+                | "glass"
+                | "plastic2"
+                | "metal2"
         )
     {
         return Err(err(format!(
             "its modifier '{}' is a pattern; ircache reads patterns on plastic, metal, trans, \
-             glass, light, glow and spotlight materials (and on other patterns), not on {}",
+             plastic2, metal2, glass, light, glow and spotlight materials (and on other \
+             patterns), not on {}",
             p.modifier, p.kind
         )));
     }
@@ -456,6 +466,50 @@ fn modifier(
                 transmitted_specular: ts as f32,
                 pattern: (!pattern.is_empty())
                     .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
+                anisotropy: None,
+            }))
+        }
+        "plastic2" | "metal2" => {
+            // aniso.c: ux uy uz funcfile [transform]; r g b specularity u-roughness v-roughness.
+            reals(&[6])?;
+            let (s, r) = (&p.strings, &p.reals);
+            if s.len() < 4 {
+                return Err(err(format!(
+                    "expected at least 4 string arguments (ux uy uz funcfile), found {}",
+                    s.len()
+                )));
+            }
+            if !(0.0..=1.0).contains(&r[3]) || r[4] <= 0.0 || r[5] <= 0.0 {
+                return Err(err(format!(
+                    "specularity {} must be in [0, 1] and the roughnesses {} {} above 0",
+                    r[3], r[4], r[5]
+                )));
+            }
+            let v = constants(
+                files,
+                p,
+                &s[3],
+                &[(&s[0], "ux"), (&s[1], "uy"), (&s[2], "uz")],
+            )?;
+            let own = xform::parse_plain(&s[4..]).map_err(|e| err(format!("transform: {e}")))?;
+            let u = own.then(&p.transform).vector(DVec3::new(v[0], v[1], v[2]));
+            if u.length() == 0.0 {
+                return Err(err("its orientation vector is zero".into()));
+            }
+            Modifier::Bsdf(two_sided(BsdfDesc::Ward {
+                color: rgb(r),
+                specularity: r[3] as f32,
+                roughness: r[4] as f32,
+                metal: p.kind == "metal2",
+                transmissivity: 0.0,
+                transmitted_specular: 0.0,
+                pattern: (!pattern.is_empty())
+                    .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
+                anisotropy: Some(crate::desc::Anisotropy {
+                    // Equal roughnesses are the isotropic model, whatever u.
+                    roughness_v: r[5] as f32,
+                    u: u.normalize().as_vec3(),
+                }),
             }))
         }
         "mirror" => {
@@ -518,36 +572,25 @@ fn modifier(
                 )));
             }
             // Thickness and up vector: expressions in the function file (or rayinit's).
-            let program = files.functions.program(&s[5], &p.location)?;
-            let constant = |text: &str, what: &str| -> Result<f64, SceneError> {
-                let e = cal::parse::parse_expression(text, &p.location)?;
-                let node = program
-                    .compile(&e, &p.location)
-                    .map_err(|e| err(format!("{what} \"{text}\": {e}")))?;
-                if program.reads_channels(&node, &(0..=u8::MAX).collect::<Vec<_>>()) {
-                    return Err(err(format!(
-                        "{what} \"{text}\" depends on the ray; ircache takes constant ones"
-                    )));
-                }
-                let v = program.eval(&node, &cal::eval::Channels::default(), &p.reals);
-                if v.is_finite() {
-                    Ok(v)
-                } else {
-                    Err(err(format!("{what} \"{text}\" is {v}")))
-                }
-            };
-            let thickness = constant(&s[0], "thickness")?;
+            let v = constants(
+                files,
+                p,
+                &s[5],
+                &[
+                    (&s[0], "thickness"),
+                    (&s[2], "up vector's x"),
+                    (&s[3], "up vector's y"),
+                    (&s[4], "up vector's z"),
+                ],
+            )?;
+            let thickness = v[0];
             if thickness != 0.0 {
                 return Err(err(format!(
                     "thickness {thickness}: a BSDF proxy for geometry behind it is not \
                      supported; give 0"
                 )));
             }
-            let up = DVec3::new(
-                constant(&s[2], "up vector's x")?,
-                constant(&s[3], "up vector's y")?,
-                constant(&s[4], "up vector's z")?,
-            );
+            let up = DVec3::new(v[1], v[2], v[3]);
             let own = xform::parse_plain(&s[6..]).map_err(|e| err(format!("transform: {e}")))?;
             let up = own.then(&p.transform).vector(up);
             if up.length() == 0.0 {
@@ -715,6 +758,40 @@ fn modifier(
         other => Modifier::Unsupported(format!("{other}, not rendered by ircache")),
     };
     Ok(m)
+}
+
+/// The values of the constant expressions `texts` (each with what it is, for errors) in the
+/// function file `file` (`.` for `rayinit.cal`'s alone) that material `p` names; an error
+/// where one depends on the ray.
+fn constants(
+    files: &mut PatternFiles,
+    p: &Primitive,
+    file: &str,
+    texts: &[(&str, &str)],
+) -> Result<Vec<f64>, SceneError> {
+    let err = |m: String| SceneError::at(p.location.clone(), format!("{} '{}': {m}", p.kind, p.id));
+    let program = files.functions.program(file, &p.location)?;
+    let every_channel: Vec<u8> = (0..=u8::MAX).collect();
+    texts
+        .iter()
+        .map(|(text, what)| {
+            let e = cal::parse::parse_expression(text, &p.location)?;
+            let node = program
+                .compile(&e, &p.location)
+                .map_err(|e| err(format!("{what} \"{text}\": {e}")))?;
+            if program.reads_channels(&node, &every_channel) {
+                return Err(err(format!(
+                    "{what} \"{text}\" depends on the ray; ircache takes constant ones"
+                )));
+            }
+            let v = program.eval(&node, &cal::eval::Channels::default(), &p.reals);
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(err(format!("{what} \"{text}\" is {v}")))
+            }
+        })
+        .collect()
 }
 
 /// The material a surface uses, aliases and `illum` resolved; `None` for void.
