@@ -199,6 +199,19 @@ pub struct Scene {
     media_location: Option<String>,
 }
 
+/// Radiance's `raynormal`: the shading normal `n` displaced by a texture, normalised, and
+/// mirrored about the ray's direction `d` where the displacement would turn it to the other side
+/// of the ray (Radiance's "fix orientation").
+fn radiance_normal(n: Vec3, displacement: Vec3, d: Vec3) -> Vec3 {
+    let m = (n + displacement).normalize_or(n);
+    let (before, after) = (-d.dot(n), -d.dot(m));
+    if (after > 0.0) != (before > 0.0) {
+        (m + d * (2.0 * after)).normalize_or(n)
+    } else {
+        m
+    }
+}
+
 /// FNV-1a of what light transport depends on: the geometry (positions, indices, normals, uvs),
 /// materials and emitters (their descriptions, with every image's texels, each image once), not
 /// where the files lie.
@@ -620,7 +633,14 @@ impl Scene {
                     None => Vec2::new(b1, b2),
                 };
                 let mut dpdu = p1 - p0;
-                let mut frame = Frame::from_normal_tangent(ns, dpdu);
+                let material = &self.materials[shape.material];
+                let mut frame = match material.radiance_texture() {
+                    Some(t) => Frame::from_normal_tangent(
+                        radiance_normal(ns, t.displacement(p, ns, ray.d, hit.t, uv), ray.d),
+                        dpdu,
+                    ),
+                    None => Frame::from_normal_tangent(ns, dpdu),
+                };
                 if let (Some(perturb), Some(t)) =
                     (self.materials[shape.material].perturbation(), &m.uvs)
                 {
@@ -664,7 +684,10 @@ impl Scene {
                 let uv = sphere_uv(o);
                 let material = &self.materials[shape.material];
                 let perturbation = material.perturbation();
-                let mut frame = Frame::from_z(n);
+                let textured = material
+                    .radiance_texture()
+                    .map(|t| radiance_normal(n, t.displacement(p, n, ray.d, hit.t, uv), ray.d));
+                let mut frame = Frame::from_z(textured.unwrap_or(n));
                 if perturbation.is_some() || !material.is_tangent_free() {
                     // dp/du = 2πR (−y, x, 0) and dp/dv = πR (z cos φ, z sin φ, −sin θ) in the
                     // sphere's frame (Mitsuba's), turned to the world's.
@@ -681,7 +704,7 @@ impl Scene {
                     if dpdu.length_squared() > 0.0 {
                         let shading = match perturbation {
                             Some(perturb) => perturb.normal(uv, n, n, dpdu, dpdv, -ray.d),
-                            None => n,
+                            None => textured.unwrap_or(n),
                         };
                         frame = Frame::from_normal_tangent(shading, dpdu);
                     }

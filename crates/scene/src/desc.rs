@@ -322,6 +322,24 @@ pub trait SurfacePattern: Send + Sync + std::fmt::Debug {
     fn reads_uv(&self) -> bool {
         false
     }
+
+    /// How Radiance's textures (`texfunc`, `texdata`) displace the unit front normal there
+    /// (world coordinates, added to the normal before it is normalised); zero for patterns.
+    fn displacement(
+        &self,
+        _point: Vec3,
+        _normal: Vec3,
+        _direction: Vec3,
+        _distance: f32,
+        _uv: Vec2,
+    ) -> Vec3 {
+        Vec3::ZERO
+    }
+
+    /// True when it holds textures ([`Self::displacement`]).
+    fn perturbs(&self) -> bool {
+        false
+    }
 }
 
 /// The media on the two sides of a shape's surface (indices into [`SceneDesc::media`]); a ray

@@ -246,8 +246,8 @@ fn errors_name_the_place_and_what_was_expected() {
             "void brightfunc f\n2 v my.cal\n0\n0\nf mirror p\n0\n0\n3 .5 .5 .5\n",
             "v = 1;\n",
             "m.rad:5:1: mirror 'p': its modifier 'f' is a pattern; ircache reads patterns on \
-             plastic, metal, trans, glass, light, glow and spotlight materials (and on other \
-             patterns), not on mirror",
+             plastic, metal, trans, plastic2, metal2, glass, light, glow and spotlight \
+             materials (and on other patterns), not on mirror",
         ),
         (
             "void colorpict f\n7 red green blue none.hdr . Px Py\n0\n0\n",

@@ -1400,6 +1400,13 @@ impl Material {
         self.perturbation.as_ref()
     }
 
+    /// Radiance's textures on the material (`texfunc`, `texdata` among its patterns), which
+    /// displace its normal at each hit ([`crate::scene::Scene::interaction`]).
+    #[must_use]
+    pub fn radiance_texture(&self) -> Option<&Arc<dyn SurfacePattern>> {
+        self.pattern.as_ref().filter(|p| p.perturbs())
+    }
+
     /// The BSDF met at a hit: at texture coordinates `uv` and point `p` with unit geometric
     /// normal `ng` (unflipped) and shading `frame`, by a ray along the unit `d`, `t` from its
     /// start. Radiance's patterns multiply the material's colour there, as `normal.c` does, and

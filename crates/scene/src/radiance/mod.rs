@@ -30,7 +30,10 @@
 //!   pictures ([`data`]), on the radiance of `light`, `glow` and `spotlight` (the luminaires
 //!   `ies2rad` makes render as their candela tables say), on the colour of `plastic`, `metal`
 //!   and `trans` (evaluated at each hit) and on what `glass` transmits; `mixfunc`, `mixdata`
-//!   and `mixpict` blend two such materials by their coefficient at each hit.
+//!   and `mixpict` blend two such materials by their coefficient at each hit. Textures
+//!   (`texfunc`, `texdata`) displace the normals of `plastic`, `metal`, `trans`, `plastic2` and
+//!   `metal2` as Radiance's `raynormal` does ([`pattern::Pattern::Texture`]); `noise3`, its
+//!   derivatives and `fnoise3` are the function language's ([`cal::noise`]).
 //! - **Commands**: `!xform` is carried out here, other commands are run (see [`parse`]).
 //! - **Integrator**: the irradiance cache (`irrcache`), as rpict computes, with unbounded bounces
 //!   unless `-ab` or `--max-depth` bounds them.
@@ -38,7 +41,7 @@
 //!   with the scene (`--view`), else `eye`, `target` and `fov` as for OBJ scenes, else the whole
 //!   scene framed from Radiance's default direction (+y, up +z). The picture fits 512 × 512 (or
 //!   `width` × `height`) with square pixels, as rpict.
-//! - Everything else (patterns on mirrors, textures (`texfunc`, `texdata`), `mixtext`,
+//! - Everything else (patterns on mirrors, textures on other materials, `mixtext`,
 //!   `trans2`, `aBSDF`, `antimatter`, ...) is an error at the first surface that needs it,
 //!   naming the primitive. Nothing is skipped without a note: surfaces of `void` are dropped
 //!   with a count in the scene's notes.
@@ -430,6 +433,8 @@ fn modifier(
                 | "glass"
                 | "plastic2"
                 | "metal2"
+                | "texfunc"
+                | "texdata"
         )
     {
         return Err(err(format!(
@@ -437,6 +442,29 @@ fn modifier(
              plastic2, metal2, glass, light, glow and spotlight materials (and on other \
              patterns), not on {}",
             p.modifier, p.kind
+        )));
+    }
+    let textured = chain.iter().any(|l| matches!(l, Pattern::Texture(_)));
+    if textured
+        && !patterned
+        && !matches!(
+            p.kind.as_str(),
+            "plastic"
+                | "metal"
+                | "trans"
+                | "plastic2"
+                | "metal2"
+                | "light"
+                | "glow"
+                | "spotlight"
+                | "texfunc"
+                | "texdata"
+        )
+    {
+        return Err(err(format!(
+            "its modifiers include a texture (texfunc or texdata); ircache perturbs the normals \
+             of plastic, metal, trans, plastic2 and metal2 with them, not of {}",
+            p.kind
         )));
     }
     let pattern = PatternChain { chain, spot: None };
@@ -745,6 +773,12 @@ fn modifier(
                 }),
                 back: None,
             }))
+        }
+        "texfunc" | "texdata" => {
+            let own = Pattern::Texture(Arc::new(FunctionPattern::from_primitive(p, files)?));
+            let mut chain = pattern.chain;
+            chain.push(own);
+            Modifier::Pattern(chain)
         }
         kind if FunctionPattern::is_function_pattern(kind) => {
             let own = match sky::SkyBrightness::from_primitive(p) {

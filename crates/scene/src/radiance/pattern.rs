@@ -35,10 +35,11 @@ enum Kind {
         function: Function,
         coordinates: Vec<Node>,
     },
-    /// `colordata`: a table and a function per channel.
+    /// `colordata` and `texdata`: a table and a function per channel, each function taking
+    /// the values its [`Take`] says.
     ColorData {
         tables: [Arc<DataArray>; 3],
-        functions: [Function; 3],
+        functions: [(Function, Take); 3],
         coordinates: Vec<Node>,
     },
     /// `colorpict`: a picture's channels at (u, v), each through its function, which takes the
@@ -61,10 +62,24 @@ pub struct FunctionPattern {
     args: Vec<f64>,
     /// World to the pattern's coordinates.
     to_pattern: DMat4,
+    /// The pattern's coordinates to world (a texture's displacement goes back through it).
+    from_pattern: DMat4,
     /// The scale of the pattern's transform (object to world).
     scale: f64,
     /// It reads `Lu` or `Lv` (only meshes with (u, v) give them).
     reads_uv: bool,
+}
+
+/// What a data pattern's channel function is called with (`p_data.c`, `t_data.c`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Take {
+    /// The three tables' values (a function of three parameters).
+    All,
+    /// The first table's value: Radiance passes all three to a function of one parameter,
+    /// which reads the first (`texdata`'s functions, and `colordata`'s red one).
+    First,
+    /// Its own table's value (`colordata`'s green and blue functions of fewer parameters).
+    Own,
 }
 
 /// Files read while patterns are made (each read once per scene).
@@ -189,7 +204,8 @@ impl FunctionPattern {
             "brightfunc" => (1, 2),
             "colorfunc" => (3, 4),
             "brightdata" => (2, 4),
-            "colordata" => (6, 8),
+            "colordata" | "texdata" => (6, 8),
+            "texfunc" => (3, 4),
             "colorpict" => (4, 7),
             // The mixture's coefficient of its foreground.
             "mixfunc" => (3, 4),
@@ -217,13 +233,13 @@ impl FunctionPattern {
         };
         let tables_first = match p.kind.as_str() {
             "brightdata" => Some((1, 1)),
-            "colordata" => Some((3, 3)),
+            "colordata" | "texdata" => Some((3, 3)),
             _ => None,
         };
         let (kind, first_transform) = match p.kind.as_str() {
             "brightfunc" => (Kind::Bright(expr(&s[0])?), 2),
             "mixfunc" => (Kind::Bright(expr(&s[2])?), 4),
-            "colorfunc" => (Kind::Color([expr(&s[0])?, expr(&s[1])?, expr(&s[2])?]), 4),
+            "colorfunc" | "texfunc" => (Kind::Color([expr(&s[0])?, expr(&s[1])?, expr(&s[2])?]), 4),
             "colorpict" => {
                 let tables = files.picture(&s[3], p)?;
                 let mut functions = Vec::new();
@@ -278,6 +294,16 @@ impl FunctionPattern {
                         .function(name, 1, &p.location)
                         .map_err(|e| err(e.to_string()))
                 };
+                // A channel function of three parameters takes the three values; one of fewer
+                // takes the first (texdata passes all three to each, as colordata to its red
+                // one) or its own (colordata's green and blue).
+                let channel = |i: usize| -> Result<(Function, Take), SceneError> {
+                    if let Ok(f) = program.function(&s[i], 3, &p.location) {
+                        return Ok((f, Take::All));
+                    }
+                    let own = p.kind == "colordata" && i > 0;
+                    Ok((function(&s[i])?, if own { Take::Own } else { Take::First }))
+                };
                 let kind = if count == 1 {
                     Kind::BrightData {
                         table: tables[0].clone(),
@@ -287,7 +313,7 @@ impl FunctionPattern {
                 } else {
                     Kind::ColorData {
                         tables: [tables[0].clone(), tables[1].clone(), tables[2].clone()],
-                        functions: [function(&s[0])?, function(&s[1])?, function(&s[2])?],
+                        functions: [channel(0)?, channel(1)?, channel(2)?],
                         coordinates,
                     }
                 };
@@ -317,7 +343,7 @@ impl FunctionPattern {
         };
         let functions: Vec<Function> = match &kind {
             Kind::BrightData { function, .. } => vec![*function],
-            Kind::ColorData { functions, .. } => functions.to_vec(),
+            Kind::ColorData { functions, .. } => functions.iter().map(|f| f.0).collect(),
             Kind::Picture { functions, .. } => functions.iter().map(|f| f.0).collect(),
             _ => Vec::new(),
         };
@@ -331,9 +357,19 @@ impl FunctionPattern {
             kind,
             args: p.reals.clone(),
             to_pattern,
+            from_pattern: total.matrix,
             scale: total.scale,
             reads_uv,
         })
+    }
+
+    /// A texture's (`texfunc`, `texdata`) displacement of the normal, in world coordinates:
+    /// its three values turned back from its coordinates and divided by their scale
+    /// (`t_func.c`).
+    #[must_use]
+    pub fn displacement(&self, p: DVec3, n: DVec3, d: DVec3, t: f64, uv: [f64; 2]) -> DVec3 {
+        let v = DVec3::from(self.value(p, n, d, t, uv));
+        self.from_pattern.transform_vector3(v) / self.scale
     }
 
     /// The pattern's value (per channel) for a ray along the unit world direction `d` meeting
@@ -377,7 +413,19 @@ impl FunctionPattern {
                 tables,
                 functions,
                 coordinates,
-            } => [0, 1, 2].map(|i| table(&tables[i], functions[i], coordinates)),
+            } => {
+                let mut x = [0.0; 5];
+                for (x, e) in x.iter_mut().zip(coordinates) {
+                    *x = prog.eval(e, &c, args);
+                }
+                let x = &x[..coordinates.len()];
+                let v = [0, 1, 2].map(|i| tables[i].value(x));
+                [0, 1, 2].map(|i| match functions[i] {
+                    (f, Take::All) => prog.call(f, &v, &c, args),
+                    (f, Take::First) => prog.call(f, &v[..1], &c, args),
+                    (f, Take::Own) => prog.call(f, &v[i..=i], &c, args),
+                })
+            }
             Kind::Picture {
                 tables,
                 functions,
@@ -411,6 +459,8 @@ pub enum Pattern {
     Sky(SkyBrightness),
     /// A function pattern.
     Function(Arc<FunctionPattern>),
+    /// A texture (`texfunc`, `texdata`): it displaces the normal and leaves the colour.
+    Texture(Arc<FunctionPattern>),
 }
 
 impl Pattern {
@@ -418,6 +468,7 @@ impl Pattern {
         match self {
             Pattern::Sky(s) => [s.brightness(d); 3],
             Pattern::Function(f) => f.value(p, n, d, t, uv),
+            Pattern::Texture(_) => [1.0; 3],
         }
     }
 
@@ -426,7 +477,7 @@ impl Pattern {
     pub fn reads_uv(&self) -> bool {
         match self {
             Pattern::Sky(_) => false,
-            Pattern::Function(f) => f.reads_uv,
+            Pattern::Function(f) | Pattern::Texture(f) => f.reads_uv,
         }
     }
 }
@@ -502,6 +553,21 @@ impl PatternChain {
     }
 }
 
+impl PatternChain {
+    /// The sum of its textures' displacements of the normal (Radiance's `r->pert`).
+    #[must_use]
+    pub fn displacement_f64(&self, p: DVec3, n: DVec3, d: DVec3, t: f64, uv: [f64; 2]) -> DVec3 {
+        self.chain
+            .iter()
+            .filter_map(|link| match link {
+                Pattern::Texture(f) => Some(f.displacement(p, n, d, t, uv)),
+                _ => None,
+            })
+            .filter(|v| v.is_finite())
+            .sum()
+    }
+}
+
 impl crate::desc::SurfacePattern for PatternChain {
     fn factor(&self, point: Vec3, normal: Vec3, direction: Vec3, distance: f32, uv: Vec2) -> Rgb {
         let [r, g, b] = self.factor_f64(
@@ -516,5 +582,27 @@ impl crate::desc::SurfacePattern for PatternChain {
 
     fn reads_uv(&self) -> bool {
         self.chain.iter().any(Pattern::reads_uv)
+    }
+
+    fn displacement(
+        &self,
+        point: Vec3,
+        normal: Vec3,
+        direction: Vec3,
+        distance: f32,
+        uv: Vec2,
+    ) -> Vec3 {
+        self.displacement_f64(
+            point.as_dvec3(),
+            normal.as_dvec3(),
+            direction.as_dvec3(),
+            f64::from(distance),
+            [f64::from(uv.x), f64::from(uv.y)],
+        )
+        .as_vec3()
+    }
+
+    fn perturbs(&self) -> bool {
+        self.chain.iter().any(|l| matches!(l, Pattern::Texture(_)))
     }
 }

@@ -154,6 +154,12 @@ pub enum Library {
     Erfc,
     Rand,
     Arg,
+    /// `noise3.c`'s functions ([`super::noise`]).
+    Noise3,
+    Noise3x,
+    Noise3y,
+    Noise3z,
+    Fnoise3,
 }
 
 impl Library {
@@ -181,6 +187,11 @@ impl Library {
             "erfc" => Erfc,
             "rand" => Rand,
             "arg" => Arg,
+            "noise3" => Noise3,
+            "noise3x" => Noise3x,
+            "noise3y" => Noise3y,
+            "noise3z" => Noise3z,
+            "fnoise3" => Fnoise3,
             _ => return None,
         })
     }
@@ -193,6 +204,7 @@ impl Library {
             Select => (2, usize::MAX),
             Min | Max => (1, usize::MAX),
             Atan2 => (2, 2),
+            Noise3 | Noise3x | Noise3y | Noise3z | Fnoise3 => (3, 3),
             _ => (1, 1),
         }
     }
@@ -729,6 +741,11 @@ impl Program {
                     Erfc => 1.0 - erf(a),
                     Rand => rand(a),
                     Arg => ctx.arg(a),
+                    Noise3 => super::noise::perlin(a, num(1), num(2)),
+                    Noise3x => super::noise::partial(a, num(1), num(2), 0),
+                    Noise3y => super::noise::partial(a, num(1), num(2), 1),
+                    Noise3z => super::noise::partial(a, num(1), num(2), 2),
+                    Fnoise3 => super::noise::fractal([a, num(1), num(2)]),
                 }
             }
         }
@@ -830,13 +847,6 @@ fn link(e: &Expr, s: &Scope, at: &SourceLocation) -> Result<Node, SceneError> {
                     )));
                 }
                 Callee::Known(Function::Library(l))
-            } else if matches!(
-                name.as_str(),
-                "noise3" | "noise3x" | "noise3y" | "noise3z" | "fnoise3" | "hermite"
-            ) {
-                return Err(err(format!(
-                    "Radiance's '{name}' is not available in ircache"
-                )));
             } else {
                 return Err(err(format!("undefined function '{name}'")));
             };

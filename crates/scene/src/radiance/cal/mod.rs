@@ -9,6 +9,7 @@
 
 pub mod eval;
 pub mod library;
+pub mod noise;
 pub mod parse;
 
 pub use eval::{Channels, Function, Node, Program};
@@ -290,7 +291,8 @@ mod tests {
         };
         assert!(bad("a = 1;\nb = c + 1;").contains("f.cal:2:1: undefined variable 'c'"));
         assert!(bad("f(x) = x;\nb = f(1, 2);").contains("'f' takes 1 argument(s)"));
-        assert!(bad("b = noise3(1, 2, 3);").contains("not available"));
+        assert!(bad("b = noise4(1, 2, 3);").contains("undefined function 'noise4'"));
+        assert!(bad("b = noise3(1, 2);").contains("'noise3' called with 2 argument(s)"));
         assert!(bad("b = NxP;").contains("textures"));
         let mut loader = Loader::new(Path::new("/nonexistent"));
         let e = loader
