@@ -538,6 +538,26 @@ fn radiance_along(
         .collect()
 }
 
+/// Radiance along the rays of reference file `reference` in folder `dir`, path traced in its
+/// scene `file` at `max_depth` with `samples` a ray, against Radiance's, within `tolerance`.
+fn check_rays(
+    (dir, file, reference): (&str, &str, &str),
+    (max_depth, samples): (i32, u32),
+    tolerance: f32,
+) -> SceneDesc {
+    let desc = scene_file(dir, file);
+    let rays = reference_rays(dir, reference);
+    let along: Vec<(Vec3, Vec3)> = rays.iter().map(|r| (r.0, r.1)).collect();
+    let ours = radiance_along(&desc, &along, max_depth, samples);
+    check(
+        &format!("{file}: radiance along the ray"),
+        &ours,
+        &rays,
+        tolerance,
+    );
+    desc
+}
+
 #[test]
 fn klems_bsdf_skylights_match_radiance() {
     // Two skylights under a sky and a sun: one of an asymmetric Klems matrix (full basis, its
@@ -555,10 +575,8 @@ fn klems_bsdf_skylights_match_radiance() {
         .map(|r| r.direct + r.indirect)
         .collect();
     check("irradiance", &ours, &refs, 0.015);
-    let rays = reference_rays("radiance-bsdf", "reference-rays.txt");
-    let along: Vec<(Vec3, Vec3)> = rays.iter().map(|r| (r.0, r.1)).collect();
-    let ours = radiance_along(&desc, &along, 2, 16384);
-    check("radiance along the ray", &ours, &rays, 0.02);
+    let files = ("radiance-bsdf", "skylight.rad", "reference-rays.txt");
+    check_rays(files, (2, 16384), 0.02);
 }
 
 #[test]
@@ -639,11 +657,8 @@ fn anisotropic_plastic_and_metal_match_radiance() {
     // 1.5 %; turning either orientation moves them by up to 3×), and along one ray in the
     // highlight's tail against a quadrature of aniso.c's formula over the lamp (numpy, 2·10⁶
     // points), where rtrace's source sampling reads 5.7 % high.
-    let desc = scene_file("radiance-bsdf", "brushed.rad");
-    let rays = reference_rays("radiance-bsdf", "reference-brushed.txt");
-    let along: Vec<(Vec3, Vec3)> = rays.iter().map(|r| (r.0, r.1)).collect();
-    let ours = radiance_along(&desc, &along, 2, 32768);
-    check("radiance along the ray", &ours, &rays, 0.025);
+    let files = ("radiance-bsdf", "brushed.rad", "reference-brushed.txt");
+    let desc = check_rays(files, (2, 32768), 0.025);
     let tail = (
         Vec3::new(-2.0, -1.6, 1.1),
         Vec3::new(0.666_417, 0.383_231, -0.639_549).normalize(),
@@ -657,11 +672,8 @@ fn anisotropic_plastic_and_metal_match_radiance() {
 fn noise_functions_are_radiance_s() {
     // A glow panel whose radiance is 2 + noise3, 2 + noise3y/8 and 2 + fnoise3 of its point:
     // what rays see is the functions' values. Radiance prints six digits; these agree to them.
-    let desc = scene_file("radiance-patterns", "noise.rad");
-    let rays = reference_rays("radiance-patterns", "reference-noise.txt");
-    let along: Vec<(Vec3, Vec3)> = rays.iter().map(|r| (r.0, r.1)).collect();
-    let ours = radiance_along(&desc, &along, 1, 1);
-    check("noise", &ours, &rays, 2e-6);
+    let files = ("radiance-patterns", "noise.rad", "reference-noise.txt");
+    check_rays(files, (1, 1), 2e-6);
 }
 
 #[test]
@@ -669,9 +681,10 @@ fn textures_perturb_normals_as_radiance_s() {
     // A texfunc of noise3's gradient (turned by its own -rz 20) and a texdata of three tables
     // over Lambertian floors under a light panel: the radiance they reflect along 24 rays
     // (the textures move it by up to 2.3×). Measured within 0.5 %.
-    let desc = scene_file("radiance-patterns", "textured.rad");
-    let rays = reference_rays("radiance-patterns", "reference-textured.txt");
-    let along: Vec<(Vec3, Vec3)> = rays.iter().map(|r| (r.0, r.1)).collect();
-    let ours = radiance_along(&desc, &along, 2, 4096);
-    check("textured", &ours, &rays, 0.015);
+    let files = (
+        "radiance-patterns",
+        "textured.rad",
+        "reference-textured.txt",
+    );
+    check_rays(files, (2, 4096), 0.015);
 }

@@ -49,7 +49,7 @@ impl AngleBasis {
         let theta: Vec<f64> = lower.iter().copied().chain([90.0]).collect();
         let mut first = vec![0u32];
         for &n in phis {
-            first.push(first.last()? + n);
+            first.push(first.last()?.checked_add(n)?);
         }
         Some(AngleBasis {
             name: name.into(),

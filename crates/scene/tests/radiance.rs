@@ -750,10 +750,14 @@ fn klems_bsdf_files_load_with_their_sides_and_errors_name_the_place() {
             "expected 0 or 3 or 6 or 9 real arguments, found 2",
         ),
     ];
-    for (args, expect) in cases {
-        let e = load(&d, &[("m.rad", &format!("void BSDF w\n{args}\n{surface}"))])
-            .unwrap_err()
-            .to_string();
+    assert_errors(&d, &cases, |args| format!("void BSDF w\n{args}\n{surface}"));
+}
+
+/// Each case's scene (`scene` of its first part) fails to load with a message containing its
+/// second part.
+fn assert_errors(d: &Path, cases: &[(&str, &str)], scene: impl Fn(&str) -> String) {
+    for (part, expect) in cases {
+        let e = load(d, &[("m.rad", &scene(part))]).unwrap_err().to_string();
         assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
     }
 }
@@ -807,10 +811,5 @@ fn anisotropic_materials_load_with_their_orientation() {
             "trans2, not rendered by ircache",
         ),
     ];
-    for (material, expect) in cases {
-        let e = load(&d, &[("m.rad", &format!("void {material}\n{surface}"))])
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains(expect), "{e}\n  expected to contain: {expect}");
-    }
+    assert_errors(&d, &cases, |material| format!("void {material}\n{surface}"));
 }

@@ -161,40 +161,33 @@ pub fn read(path: &Path) -> Result<KlemsBsdf, String> {
             let data = text_of(block, "ScatteringData")
                 .ok_or(format!("{direction}: no <ScatteringData>"))?;
             let (ni, no) = (incident.len(), outgoing.len());
-            let mut values = vec![0f32; ni * no];
-            let mut count = 0;
-            for (k, word) in data
+            // Read first, so that what is allocated is bounded by the file's size.
+            let read = data
                 .split(|c: char| c.is_whitespace() || c == ',')
                 .filter(|w| !w.is_empty())
-                .enumerate()
-            {
-                let v: f32 = word.parse().map_err(|_| {
-                    format!("{direction} ({wavelength}): \"{word}\" is not a number")
-                })?;
-                if k >= ni * no {
-                    return Err(format!(
-                        "{direction} ({wavelength}): more than the {} values of a {no} × {ni} \
-                         matrix",
-                        ni * no
-                    ));
-                }
-                if !v.is_finite() {
-                    return Err(format!("{direction} ({wavelength}): value {word}"));
-                }
-                // Negative values are taken as zero (bsdf_m.c).
+                .map(|word| match word.parse::<f32>() {
+                    Ok(v) if v.is_finite() => Ok(v),
+                    _ => Err(format!(
+                        "{direction} ({wavelength}): \"{word}\" is not a finite number"
+                    )),
+                })
+                .collect::<Result<Vec<f32>, String>>()?;
+            if Some(read.len()) != ni.checked_mul(no) {
+                return Err(format!(
+                    "{direction} ({wavelength}): {} values where a {no} × {ni} matrix has {}",
+                    read.len(),
+                    ni as u128 * no as u128
+                ));
+            }
+            // Negative values are taken as zero (bsdf_m.c).
+            let mut values = vec![0f32; read.len()];
+            for (k, v) in read.into_iter().enumerate() {
                 let index = if incident_rows {
                     (k % no) * ni + k / no
                 } else {
                     k
                 };
                 values[index] = v.max(0.0);
-                count += 1;
-            }
-            if count != ni * no {
-                return Err(format!(
-                    "{direction} ({wavelength}): {count} values where a {no} × {ni} matrix has {}",
-                    ni * no
-                ));
             }
             channels[component as usize][channel] = Some((incident, outgoing, values));
         }

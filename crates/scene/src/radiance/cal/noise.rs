@@ -105,7 +105,8 @@ pub fn partial(x: f64, y: f64, z: f64, axis: usize) -> f64 {
     (f - back) / EPSILON
 }
 
-/// `noise3.c`'s `frand`: a hash of an integer to [−1, 1) (C's `long` arithmetic, wrapping).
+/// `noise3.c`'s `frand`: a hash of an integer to [−1, 1) (C's `long` arithmetic, wrapping, as
+/// everywhere here: points beyond ±4.6·10¹⁵ wrap instead of overflowing).
 fn frand(s: i64) -> f64 {
     let s = (s << 13) ^ s;
     let t = s
@@ -135,7 +136,7 @@ pub fn fractal(x: [f64; 3]) -> f64 {
     let mut v = [0i64; 3];
     for (j, f) in fval.iter_mut().enumerate() {
         for i in 0..3 {
-            v[i] = beg[i] + if j & (1 << i) != 0 { s } else { 0 };
+            v[i] = beg[i].wrapping_add(if j & (1 << i) != 0 { s } else { 0 });
         }
         *f = frand3(v[0], v[1], v[2]);
     }
@@ -147,7 +148,7 @@ pub fn fractal(x: [f64; 3]) -> f64 {
         }
         let mut branch = 0usize;
         for i in 0..3 {
-            v[i] = beg[i] + s;
+            v[i] = beg[i].wrapping_add(s);
             if t[i] > v[i] {
                 branch |= 1 << i;
             }
@@ -156,11 +157,11 @@ pub fn fractal(x: [f64; 3]) -> f64 {
         fval[!branch & 7] = fc;
         for i in 0..3 {
             // Faces.
-            if branch & (1 << i) != 0 {
-                v[i] += s;
+            v[i] = if branch & (1 << i) != 0 {
+                v[i].wrapping_add(s)
             } else {
-                v[i] -= s;
-            }
+                v[i].wrapping_sub(s)
+            };
             let mut sum = 0.0;
             for (j, f) in fval.iter().enumerate() {
                 if !(j ^ branch) & (1 << i) != 0 {
@@ -169,26 +170,26 @@ pub fn fractal(x: [f64; 3]) -> f64 {
             }
             fval[!(branch ^ (1 << i)) & 7] =
                 0.25 * sum + s as f64 * EPSILON * frand3(v[0], v[1], v[2]);
-            v[i] = beg[i] + s;
+            v[i] = beg[i].wrapping_add(s);
         }
         for i in 0..3 {
             // Edges.
             let (j, k) = ((i + 1) % 3, (i + 2) % 3);
             for a in [j, k] {
-                if branch & (1 << a) != 0 {
-                    v[a] += s;
+                v[a] = if branch & (1 << a) != 0 {
+                    v[a].wrapping_add(s)
                 } else {
-                    v[a] -= s;
-                }
+                    v[a].wrapping_sub(s)
+                };
             }
             let f = fval[branch & !(1 << i)] + fval[branch | (1 << i)];
             fval[branch ^ (1 << i)] = 0.5 * f + s as f64 * EPSILON * frand3(v[0], v[1], v[2]);
-            v[j] = beg[j] + s;
-            v[k] = beg[k] + s;
+            v[j] = beg[j].wrapping_add(s);
+            v[k] = beg[k].wrapping_add(s);
         }
         for (i, b) in beg.iter_mut().enumerate() {
             if branch & (1 << i) != 0 {
-                *b += s;
+                *b = b.wrapping_add(s);
             }
         }
     }
