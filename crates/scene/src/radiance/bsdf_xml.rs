@@ -40,7 +40,12 @@ fn text_of(n: Node<'_, '_>, name: &str) -> Option<String> {
 /// Reads the Klems BSDF at `path`; errors are messages for the caller to place.
 pub fn read(path: &Path) -> Result<KlemsBsdf, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read it: {e}"))?;
-    let doc = roxmltree::Document::parse(&text).map_err(|e| format!("not XML: {e}"))?;
+    parse(&text, path)
+}
+
+/// The Klems BSDF in the XML `text` of the file at `path`.
+pub fn parse(text: &str, path: &Path) -> Result<KlemsBsdf, String> {
+    let doc = roxmltree::Document::parse(text).map_err(|e| format!("not XML: {e}"))?;
     let root = doc.root_element();
     let layer = child(root, "Optical")
         .and_then(|o| child(o, "Layer"))
