@@ -122,6 +122,10 @@ pub struct Shape {
     /// A `mask` around its material: paths pass through it where it is not opaque
     /// ([`Material::opacity`]), shadow rays carry 1 − opacity.
     pub masked: bool,
+    /// A smooth Radiance `trans`: light samples of lights no path can hit (distant, point and
+    /// spot lights) pass through it with its straight transmittance, as Radiance's shadow rays
+    /// do; paths take that part as the material's straight lobe, as ever.
+    pub straight_trans: bool,
     /// The media on its two sides (indices into [`Scene::media`]).
     pub media: ircache_scene::MediumInterface,
     /// A bump or normal map with Mitsuba's shadowing function ([`Scene::perturbed_shadowing`]).
@@ -185,6 +189,9 @@ pub struct Scene {
     /// Some shape is a thin sheet or masked ([`Shape::thin_sheet`], [`Shape::masked`]): rays
     /// and shadow rays pass through them.
     pub has_see_through: bool,
+    /// Some shape is a smooth `trans` ([`Shape::straight_trans`]): the light samples of delta
+    /// lights pass through it ([`Scene::delta_shadow_transmittance`]).
+    pub has_straight_trans: bool,
     /// Some surface has a bump or normal map with the shadowing function: without one,
     /// [`Scene::perturbed_shadowing`] answers 1 without looking at the shape.
     pub has_perturbed_shadowing: bool,
@@ -355,6 +362,7 @@ impl Scene {
                 null: matches!(*s.bsdf, ircache_scene::BsdfDesc::Null),
                 thin_sheet: materials[i].thin_sheet().is_some(),
                 masked: materials[i].is_masked(),
+                straight_trans: materials[i].has_straight_transmission(),
                 media: s.media,
                 perturbed_shadowing: materials[i]
                     .perturbation()
@@ -397,6 +405,7 @@ impl Scene {
             content_hash: content_hash(desc),
             has_hittable_emitters,
             has_see_through: shapes.iter().any(|s| s.thin_sheet || s.masked),
+            has_straight_trans: shapes.iter().any(|s| s.straight_trans),
             has_perturbed_shadowing: shapes.iter().any(|s| s.perturbed_shadowing),
             accel,
             shapes,
@@ -503,6 +512,46 @@ impl Scene {
             };
         }
         self.transmittance_through(ray)
+    }
+
+    /// [`Scene::shadow_transmittance`] for the light sample of a light no path can hit (a
+    /// distant, point or spot light): smooth `trans` surfaces pass it too, with their straight
+    /// transmittance at the angle crossed (Radiance's `normal.c` lets shadow rays through them);
+    /// a path that crosses them that way is the material's straight lobe, and cannot reach such
+    /// a light, so nothing is counted twice.
+    #[must_use]
+    pub fn delta_shadow_transmittance(&self, ray: &Ray) -> Rgb {
+        if !self.has_straight_trans {
+            return self.shadow_transmittance(ray);
+        }
+        let end = ray.t_max.is_finite().then(|| ray.o + ray.d * ray.t_max);
+        let mut ray = *ray;
+        let mut tr = Rgb::ONE;
+        for _ in 0..MAX_SHEET_CROSSINGS {
+            let Some(it) = self.intersect(&ray) else {
+                return tr;
+            };
+            let shape = &self.shapes[it.shape as usize];
+            let passed = if shape.straight_trans {
+                self.materials[shape.material]
+                    .straight_transmittance_at(it.uv, it.p, it.ng, ray.d, it.t)
+            } else {
+                self.passed_by(&it, ray.d)
+            };
+            let Some(passed) = passed else {
+                return Rgb::ZERO;
+            };
+            tr *= passed;
+            if tr.is_black() {
+                return tr;
+            }
+            let o = offset_ray_origin(it.p, it.ng, ray.d, self.scale);
+            let Some(next) = ray_on_to(o, ray.d, end) else {
+                return tr;
+            };
+            ray = next;
+        }
+        Rgb::ZERO
     }
 
     #[inline(never)]

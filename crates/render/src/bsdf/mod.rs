@@ -1241,6 +1241,39 @@ impl Material {
         }
     }
 
+    /// True for a smooth Radiance `trans` (straight transmission): light samples from lights
+    /// that paths cannot hit pass through it ([`Material::straight_transmittance_at`]).
+    #[must_use]
+    pub fn has_straight_transmission(&self) -> bool {
+        matches!(&self.front, Compiled::Fixed(Lobe::Ward(w)) if w.straight_transmittance(1.0).is_some())
+    }
+
+    /// What a smooth `trans` passes straight through to a ray along the unit `d` crossing it at
+    /// `p` (unit geometric normal `ng`, texture coordinates `uv`, `t` from the ray's start), its
+    /// patterns applied: `c T t_s` at that angle; `None` for other materials.
+    #[must_use]
+    pub fn straight_transmittance_at(
+        &self,
+        uv: Vec2,
+        p: Vec3,
+        ng: Vec3,
+        d: Vec3,
+        t: f32,
+    ) -> Option<Rgb> {
+        if !self.has_straight_transmission() {
+            return None;
+        }
+        let frame = Frame::from_z(ng);
+        match self.at_hit(uv, p, ng, d, t, &frame) {
+            Bsdf::TwoSided {
+                front: Lobe::Ward(w),
+                ..
+            }
+            | Bsdf::Single(Lobe::Ward(w)) => w.straight_transmittance(ng.dot(d)),
+            _ => None,
+        }
+    }
+
     /// [`Material::thin_sheet`] where a ray along the unit `d` crosses it at the point `p`
     /// (unit geometric normal `ng`, texture coordinates `uv`, `t` from the ray's start): a
     /// Radiance pane's patterns tint what it transmits there (`glass.c`).

@@ -30,9 +30,10 @@
 //! `f_t |cos θ_i| = c T t_s exp(2 (cos γ − 1)/α²) / (π α² (1 − e^{−4/α²}))` (γ from the straight
 //! direction): Radiance's Gaussian, normalised over the sphere and without its factor
 //! `√(|cos θ_i| / cos θ_o)`, which equals 1 along the straight direction and lets a rough `trans`
-//! reflect and transmit 1.2 times what reaches it at grazing views. Light samples stop at a
-//! `trans` surface as at any other; Radiance lets them through its straight part, so a sun
-//! behind a smooth `trans` lights nothing here.
+//! reflect and transmit 1.2 times what reaches it at grazing views. As Radiance's shadow rays,
+//! the light samples of distant, point and spot lights pass a smooth `trans` with its straight
+//! transmittance ([`Ward::straight_transmittance`], `Scene::delta_shadow_transmittance`); those
+//! of area lights and skies stop there, and paths find them through the straight lobe.
 //!
 //! Sampling: each lobe by its share of the albedo seen from `wo`. The specular reflection by
 //! Radiance's own `gaussamp` distribution (`tan δ = α √(−ln u₁)`, φ = 2π u₂, mirrored about `h`),
@@ -135,6 +136,15 @@ impl Ward {
         let (hu, hv) = (h.x * c + h.y * s, h.y * c - h.x * s);
         hu * hu / (self.roughness * self.roughness)
             + hv * hv / (self.roughness_v * self.roughness_v)
+    }
+
+    /// What a smooth `trans` passes straight through at cosine `cos` with its normal,
+    /// `c T t_s` (with its Fresnel estimate at that angle): what Radiance's shadow rays carry
+    /// through it (`normal.c`); `None` for every other material.
+    #[must_use]
+    pub fn straight_transmittance(&self, cos: f32) -> Option<Rgb> {
+        (self.is_mirror() && self.transmissivity * self.transmitted_specular > 0.0)
+            .then(|| self.parts(cos.abs()).specular_transmission)
     }
 
     /// True when the specular lobe is a mirror (α² below Radiance's `FTINY`).

@@ -237,8 +237,12 @@ pub fn sample_lights(
             // Window panes on the way pass what they transmit (`Scene::shadow_transmittance`).
             let mut through_sheets = None;
             if matches!(shadows, Shadows::Traced) {
-                if scene.has_see_through {
-                    let tr = scene.shadow_transmittance(&shadow_ray);
+                if scene.has_see_through || (ls.is_delta && scene.has_straight_trans) {
+                    let tr = if ls.is_delta {
+                        scene.delta_shadow_transmittance(&shadow_ray)
+                    } else {
+                        scene.shadow_transmittance(&shadow_ray)
+                    };
                     if tr.is_black() {
                         continue;
                     }
@@ -272,6 +276,10 @@ pub fn sample_lights(
             }
             match &mut shadows {
                 Shadows::Traced => l += value,
+                // Through smooth `trans` surfaces: traced now, one ray at a time.
+                Shadows::Deferred(..) if ls.is_delta && scene.has_straight_trans => {
+                    l += value * scene.delta_shadow_transmittance(&shadow_ray);
+                }
                 Shadows::Deferred(deferred, beta) => {
                     deferred.rays.push(shadow_ray);
                     deferred.light.push((*beta * value, deferred.owner));

@@ -9,8 +9,8 @@
 //! - **Octrees**: `ircache render scene.oct` reads the scene an octree holds (frozen by
 //!   `oconv -f`) or the scene files it names ([`octree`]).
 //! - **Materials**: `plastic`, `metal` and `trans` as Radiance's isotropic Gaussian model
-//!   ([`BsdfDesc::Ward`]; a smooth `trans`'s straight transmission is not followed by light
-//!   samples, with a note where a distant light would need it), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
+//!   ([`BsdfDesc::Ward`]; a smooth `trans`'s straight transmission passes the light samples of
+//!   distant, point and spot lights, as Radiance's shadow rays), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
 //!   [`BsdfDesc::Glass`]), `dielectric` without absorption (a smooth interface of its index),
 //!   `plastic2` and `metal2` (`aniso.c`'s anisotropic Gaussian, its orientation vector a
 //!   constant, [`crate::desc::Anisotropy`]), `BSDF` of zero thickness with the Klems matrices of an XML file ([`bsdf_xml`],
@@ -180,24 +180,6 @@ pub fn load(path: &Path, camera: &ObjCamera) -> Result<SceneDesc, SceneError> {
         ));
     }
     let emitters = environment(&sources, &mut notes);
-    let smooth_trans = shapes.iter().find(|s| {
-        matches!(&*s.bsdf, BsdfDesc::TwoSided { front, .. } if matches!(**front,
-            BsdfDesc::Ward { roughness, transmissivity, transmitted_specular, .. }
-                if roughness == 0.0 && transmissivity * transmitted_specular > 0.0))
-    });
-    if let Some(s) = smooth_trans {
-        if emitters
-            .iter()
-            .any(|e| matches!(e, EmitterDesc::Directional { .. }))
-        {
-            notes.push(format!(
-                "{}: a smooth 'trans' passes light straight through, which light samples do not \
-                 follow (Radiance's do): a distant light source behind it lights nothing through \
-                 it; give it a roughness, or use glass",
-                s.location
-            ));
-        }
-    }
     if shapes.is_empty() {
         return Err(SceneError::at(
             SourceLocation::start_of(path),
