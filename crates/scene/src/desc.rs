@@ -821,6 +821,21 @@ pub enum BsdfDesc {
         /// Lambertian transmittance added both ways.
         transmit: Rgb,
     },
+    /// Radiance's `BRTDfunc` without non-specular BRTD functions: a mirror reflectance and a
+    /// straight transmittance computed per hit from the ray by the material's expressions,
+    /// plus Lambertian parts. Only produced by the Radiance loader.
+    RadianceBrtd {
+        /// The mirror reflectance at a hit, per channel (a pattern-like function of the ray).
+        reflect: Arc<dyn SurfacePattern>,
+        /// The straight transmittance at a hit.
+        transmit: Arc<dyn SurfacePattern>,
+        /// Lambertian reflectance on the front (the side the normal points to).
+        diffuse_front: Rgb,
+        /// Lambertian reflectance on the back.
+        diffuse_back: Rgb,
+        /// Lambertian transmittance.
+        diffuse_transmit: Rgb,
+    },
     /// No scattering: the invisible boundary of a medium (rays pass straight through).
     Null,
     /// Wavefront MTL material: Lambertian `Kd` plus normalised modified-Phong lobe `Ks`, `Ns`

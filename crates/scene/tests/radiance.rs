@@ -810,6 +810,18 @@ fn anisotropic_materials_load_with_their_orientation() {
             "trans2 m\n4 1 0 0 .\n0\n8 .8 .7 .5 .1 .1 .2 .5 .5",
             "trans2, not rendered by ircache",
         ),
+        (
+            "BRTDfunc m\n10 .1 .1 .1 .5 .5 .5 0 0 Dx .\n0\n9 0 0 0 0 0 0 0 0 0",
+            "non-specular BRTD functions (0 0 Dx) are not supported",
+        ),
+        (
+            "BRTDfunc m\n9 .1 .1 .1 .5 .5 .5 0 0 0\n0\n9 0 0 0 0 0 0 0 0 0",
+            "expected at least 10 string and 9 real arguments, found 9 and 9",
+        ),
+        (
+            "BRTDfunc m\n10 .1 .1 .1 .5 .5 nothing 0 0 0 .\n0\n9 0 0 0 0 0 0 0 0 0",
+            "its coefficients",
+        ),
     ];
     assert_errors(&d, &cases, |material| format!("void {material}\n{surface}"));
 }

@@ -24,6 +24,7 @@
 //! [`principled`], Radiance's [`ward`] and [`klems`] (tabulated `BSDF` files); shared: [`microfacet`]
 //! (Beckmann and GGX, Walter et al. 2007; visible normals, Heitz 2018) and [`fresnel`].
 
+pub mod brtd;
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
@@ -44,6 +45,7 @@ use ircache_math::{Frame, Rgb, Vec2, Vec3};
 use ircache_scene::{BsdfDesc, SurfacePattern};
 use std::sync::Arc;
 
+pub use brtd::Brtd;
 pub use conductor::Conductor;
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
@@ -131,6 +133,8 @@ pub enum Lobe {
     Ward(Ward),
     /// Radiance's `BSDF` with Klems matrices.
     Klems(Klems),
+    /// Radiance's `BRTDfunc` (specular parts and Lambertian ones).
+    Brtd(Brtd),
 }
 
 impl Lobe {
@@ -145,6 +149,7 @@ impl Lobe {
             Lobe::Principled(b) => b.eval(wo, wi),
             Lobe::Ward(b) => b.eval(wo, wi),
             Lobe::Klems(b) => b.eval(wo, wi),
+            Lobe::Brtd(b) => b.eval(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => Rgb::ZERO,
         }
     }
@@ -160,6 +165,7 @@ impl Lobe {
             Lobe::Principled(b) => b.pdf(wo, wi),
             Lobe::Ward(b) => b.pdf(wo, wi),
             Lobe::Klems(b) => b.pdf(wo, wi),
+            Lobe::Brtd(b) => b.pdf(wo, wi),
             Lobe::Conductor(_) | Lobe::Dielectric(_) | Lobe::ThinDielectric(_) => 0.0,
         }
     }
@@ -178,6 +184,7 @@ impl Lobe {
             Lobe::Principled(b) => b.sample(wo, u_lobe, u),
             Lobe::Ward(b) => b.sample(wo, u_lobe, u),
             Lobe::Klems(b) => b.sample(wo, u_lobe, u),
+            Lobe::Brtd(b) => b.sample(wo, u_lobe, u),
         }
     }
 
@@ -623,7 +630,8 @@ impl Bsdf {
             Lobe::Conductor(_)
             | Lobe::Dielectric(_)
             | Lobe::ThinDielectric(_)
-            | Lobe::Plastic(_) => true,
+            | Lobe::Plastic(_)
+            | Lobe::Brtd(_) => true,
             Lobe::Ward(w) => w.has_delta(),
             _ => false,
         })
@@ -637,6 +645,7 @@ impl Bsdf {
             Lobe::Principled(p) => p.transmits(),
             Lobe::Ward(w) => w.transmits(),
             Lobe::Klems(k) => k.transmits(),
+            Lobe::Brtd(_) => true,
             _ => false,
         })
     }
@@ -889,6 +898,18 @@ impl Compiled {
                 transmissivity: *transmissivity,
                 transmitted_specular: *transmitted_specular,
             })),
+            BsdfDesc::RadianceBrtd {
+                diffuse_front,
+                diffuse_back,
+                diffuse_transmit,
+                ..
+            } => Compiled::Fixed(Lobe::Brtd(Brtd {
+                reflect: Rgb::ZERO,
+                transmit: Rgb::ZERO,
+                diffuse_front: *diffuse_front,
+                diffuse_back: *diffuse_back,
+                diffuse_transmit: *diffuse_transmit,
+            })),
             BsdfDesc::Klems {
                 data,
                 reflect_front,
@@ -1047,6 +1068,9 @@ pub struct Material {
     blend_pattern: Option<Arc<dyn SurfacePattern>>,
     /// A world direction that orients the model about the normal at each hit.
     orientation: Option<Orientation>,
+    /// A `BRTDfunc`'s mirror reflectance and straight transmittance, functions of the ray
+    /// evaluated at each hit.
+    brtd: Option<[Arc<dyn SurfacePattern>; 2]>,
 }
 
 /// A world direction that orients a model about the normal ([`Material::at_hit`]).
@@ -1241,14 +1265,16 @@ impl Material {
         }
     }
 
-    /// True for a smooth Radiance `trans` (straight transmission): light samples from lights
-    /// that paths cannot hit pass through it ([`Material::straight_transmittance_at`]).
+    /// True for a smooth Radiance `trans` or a `BRTDfunc` (straight transmission): light
+    /// samples from lights that paths cannot hit pass through it
+    /// ([`Material::straight_transmittance_at`]).
     #[must_use]
     pub fn has_straight_transmission(&self) -> bool {
-        matches!(&self.front, Compiled::Fixed(Lobe::Ward(w)) if w.straight_transmittance(1.0).is_some())
+        self.brtd.is_some()
+            || matches!(&self.front, Compiled::Fixed(Lobe::Ward(w)) if w.straight_transmittance(1.0).is_some())
     }
 
-    /// What a smooth `trans` passes straight through to a ray along the unit `d` crossing it at
+    /// What a smooth `trans` or a `BRTDfunc` passes straight through to a ray along the unit `d` crossing it at
     /// `p` (unit geometric normal `ng`, texture coordinates `uv`, `t` from the ray's start), its
     /// patterns applied: `c T t_s` at that angle; `None` for other materials.
     #[must_use]
@@ -1270,6 +1296,7 @@ impl Material {
                 ..
             }
             | Bsdf::Single(Lobe::Ward(w)) => w.straight_transmittance(ng.dot(d)),
+            Bsdf::Single(Lobe::Brtd(b)) => Some(b.transmit),
             _ => None,
         }
     }
@@ -1387,6 +1414,7 @@ impl Material {
                     pattern: None,
                     blend_pattern: None,
                     orientation: None,
+                    brtd: None,
                 }
             }
             d => Material {
@@ -1398,8 +1426,15 @@ impl Material {
                 pattern: None,
                 blend_pattern: None,
                 orientation: None,
+                brtd: None,
             },
         };
+        if let BsdfDesc::RadianceBrtd {
+            reflect, transmit, ..
+        } = desc
+        {
+            m.brtd = Some([reflect.clone(), transmit.clone()]);
+        }
         m.orientation = match desc {
             BsdfDesc::Klems { up, .. } => Some(Orientation::KlemsUp(*up)),
             BsdfDesc::TwoSided { front, .. } => match front.as_ref() {
@@ -1447,6 +1482,10 @@ impl Material {
     #[must_use]
     pub fn at_hit(&self, uv: Vec2, p: Vec3, ng: Vec3, d: Vec3, t: f32, frame: &Frame) -> Bsdf {
         let mut bsdf = self.at(uv);
+        if let (Some([reflect, transmit]), Bsdf::Single(Lobe::Brtd(b))) = (&self.brtd, &mut bsdf) {
+            b.reflect = reflect.factor(p, ng, d, t, uv);
+            b.transmit = transmit.factor(p, ng, d, t, uv);
+        }
         match (self.orientation, &mut bsdf) {
             (Some(Orientation::KlemsUp(up)), Bsdf::Single(Lobe::Klems(k))) => {
                 k.axis = klems_axis(up, frame);

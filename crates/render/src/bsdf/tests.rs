@@ -1651,3 +1651,57 @@ fn chi2_and_closed_forms_of_radiance_anisotropic_ward() {
         assert!((x - y).abs() <= 1e-4 * x.max(1e-3), "{x} vs {y}");
     }
 }
+
+#[test]
+fn radiance_brtdfunc_parts() {
+    // BRTDfunc's Lambertian parts sampled as they claim (χ², both sides); its deltas chosen
+    // by luminance with their exact weights; what it keeps of a direction's light is
+    // R + T + the Lambertian albedos of that side.
+    let b = Bsdf::Single(Lobe::Brtd(Brtd {
+        reflect: Rgb::new(0.3, 0.2, 0.1),
+        transmit: Rgb::new(0.4, 0.5, 0.6),
+        diffuse_front: Rgb::splat(0.05),
+        diffuse_back: Rgb::splat(0.1),
+        diffuse_transmit: Rgb::new(0.02, 0.03, 0.04),
+    }));
+    for theta in [30.0, 140.0] {
+        let wo = dir(theta, 60.0);
+        let test = ChiSquareTest::sphere().with_samples(200_000);
+        let report = test.run(
+            |u, u_lobe| {
+                let s = b.sample(wo, u_lobe, u)?;
+                (!s.delta).then_some((s.wi, s.pdf))
+            },
+            |wi| b.pdf(wo, wi),
+        );
+        report.assert_ok(ALPHA, CHI2_TESTS, &format!("BRTDfunc θo={theta}"));
+        let (m, s) = albedo(&b, wo, 200_000, 9);
+        let diffuse = if theta < 90.0 { 0.05 } else { 0.1 };
+        let expected = 0.3 + 0.4 + diffuse + 0.02;
+        assert!(
+            (m - expected).abs() < 4.0 * s + 1e-3,
+            "θo={theta}: {m} ± {s} vs {expected}"
+        );
+    }
+    let wo = dir(40.0, 10.0);
+    let mut rng = Rng::new(2, 3);
+    for _ in 0..2000 {
+        let Some(s) = b.sample(wo, rng.next_f32(), rng.next_2d()) else {
+            continue;
+        };
+        if s.delta {
+            let straight = (s.wi + wo).length() < 1e-6;
+            let mirror = (s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-6;
+            assert!(straight || mirror, "{s:?}");
+            let value = if straight {
+                Rgb::new(0.4, 0.5, 0.6)
+            } else {
+                Rgb::new(0.3, 0.2, 0.1)
+            };
+            assert!(
+                (s.weight * s.pdf - value).max_channel().abs() < 1e-5,
+                "{s:?}"
+            );
+        }
+    }
+}

@@ -12,7 +12,8 @@
 //!   ([`BsdfDesc::Ward`]; a smooth `trans`'s straight transmission passes the light samples of
 //!   distant, point and spot lights, as Radiance's shadow rays), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
 //!   [`BsdfDesc::Glass`]), `dielectric` without absorption (a smooth interface of its index),
-//!   `plastic2` and `metal2` (`aniso.c`'s anisotropic Gaussian, its orientation vector a
+//!   `BRTDfunc` without non-specular BRTD functions ([`BsdfDesc::RadianceBrtd`]: coated
+//!   glazings), `plastic2` and `metal2` (`aniso.c`'s anisotropic Gaussian, its orientation vector a
 //!   constant, [`crate::desc::Anisotropy`]), `BSDF` of zero thickness with the Klems matrices of an XML file ([`bsdf_xml`],
 //!   [`BsdfDesc::Klems`]; tensor trees, proxies of non-zero thickness and `aBSDF` are refused).
 //!   Radiance shades both sides of a surface alike, so the opaque ones are `twosided`.
@@ -563,6 +564,60 @@ fn modifier(
                 ext_ior: 1.0,
                 specular_reflectance: Rgb::ONE,
                 specular_transmittance: Rgb::ONE,
+            }))
+        }
+        "BRTDfunc" => {
+            // m_brdf.c: 10+ strings (mirror r g b, straight r g b, BRTD r g b, funcfile,
+            // transform); 9+ reals (diffuse front, back, transmitted; then A10 …).
+            if !pattern.is_empty() {
+                return Err(err("patterns on a BRTDfunc are not supported".into()));
+            }
+            let s = &p.strings;
+            if s.len() < 10 || p.reals.len() < 9 {
+                return Err(err(format!(
+                    "expected at least 10 string and 9 real arguments, found {} and {}",
+                    s.len(),
+                    p.reals.len()
+                )));
+            }
+            let brtd = constants(
+                files,
+                p,
+                &s[9],
+                &[(&s[6], "BRTD r"), (&s[7], "BRTD g"), (&s[8], "BRTD b")],
+            )
+            .ok()
+            .filter(|v| v.iter().all(|&x| x == 0.0));
+            if brtd.is_none() {
+                return Err(err(format!(
+                    "non-specular BRTD functions ({} {} {}) are not supported; give 0 0 0",
+                    s[6], s[7], s[8]
+                )));
+            }
+            // Each triple read as a colorfunc of the same file, transform and arguments.
+            let mut coefficients = |first: usize| -> Result<Arc<dyn SurfacePattern>, SceneError> {
+                let q = Primitive {
+                    kind: "colorfunc".into(),
+                    strings: s[first..first + 3].iter().chain(&s[9..]).cloned().collect(),
+                    ..p.clone()
+                };
+                let f = FunctionPattern::from_primitive(&q, files)
+                    .map_err(|e| err(format!("its coefficients: {e}")))?;
+                Ok(Arc::new(PatternChain {
+                    chain: vec![Pattern::Function(Arc::new(f))],
+                    spot: None,
+                }))
+            };
+            let r = &p.reals;
+            if r[..9].iter().any(|&v| v < 0.0) {
+                return Err(err("negative diffuse reflectance or transmittance".into()));
+            }
+            Modifier::Bsdf(Arc::new(BsdfDesc::RadianceBrtd {
+                reflect: coefficients(0)?,
+                transmit: coefficients(3)?,
+                diffuse_front: rgb(&r[0..3]),
+                diffuse_back: rgb(&r[3..6]),
+                diffuse_transmit: rgb(&r[6..9]),
             }))
         }
         "BSDF" => {
