@@ -558,6 +558,20 @@ fn check_rays(
     desc
 }
 
+/// Irradiance at the points of reference file `reference` in folder `dir` by brute force (two
+/// bounces, 32768 gather rays and 4096 light samples a point, seed `seed`) against Radiance's,
+/// within `tolerance`.
+fn check_irradiance(desc: &SceneDesc, (dir, reference): (&str, &str), seed: u64, tolerance: f32) {
+    let scene = Scene::build(desc).unwrap();
+    let refs = reference_in(dir, reference);
+    let queries: Vec<(Vec3, Vec3)> = refs.iter().map(|r| (r.0, r.1.normalize())).collect();
+    let ours: Vec<Rgb> = brute_force(&scene, 2, &queries, (32768, 4096), seed)
+        .iter()
+        .map(|r| r.direct + r.indirect)
+        .collect();
+    check(&format!("{reference}: irradiance"), &ours, &refs, tolerance);
+}
+
 #[test]
 fn klems_bsdf_skylights_match_radiance() {
     // Two skylights under a sky and a sun: one of an asymmetric Klems matrix (full basis, its
@@ -567,14 +581,12 @@ fn klems_bsdf_skylights_match_radiance() {
     // the up vector by 90° moves the rays' radiance by 0.35–1.03×; swapping a side's
     // matrices, by as much. Measured within 0.5 % (irradiance) and 0.7 % (rays).
     let desc = scene_file("radiance-bsdf", "skylight.rad");
-    let scene = Scene::build(&desc).unwrap();
-    let refs = reference_in("radiance-bsdf", "reference-irradiance.txt");
-    let queries: Vec<(Vec3, Vec3)> = refs.iter().map(|r| (r.0, r.1.normalize())).collect();
-    let ours: Vec<Rgb> = brute_force(&scene, 2, &queries, (32768, 4096), 11)
-        .iter()
-        .map(|r| r.direct + r.indirect)
-        .collect();
-    check("irradiance", &ours, &refs, 0.015);
+    check_irradiance(
+        &desc,
+        ("radiance-bsdf", "reference-irradiance.txt"),
+        11,
+        0.015,
+    );
     let files = ("radiance-bsdf", "skylight.rad", "reference-rays.txt");
     check_rays(files, (2, 16384), 0.02);
 }
@@ -752,12 +764,6 @@ fn a_coated_glazing_of_brtdfunc_matches_radiance() {
     // both sides (within 0.2 %) against rtrace.
     let files = ("radiance-bsdf", "coated.rad", "reference-coated-rays.txt");
     let desc = check_rays(files, (6, 8192), 0.015);
-    let scene = Scene::build(&desc).unwrap();
-    let refs = reference_in("radiance-bsdf", "reference-coated-irradiance.txt");
-    let queries: Vec<(Vec3, Vec3)> = refs.iter().map(|r| (r.0, r.1.normalize())).collect();
-    let ours: Vec<Rgb> = brute_force(&scene, 2, &queries, (32768, 4096), 4)
-        .iter()
-        .map(|r| r.direct + r.indirect)
-        .collect();
-    check("irradiance", &ours, &refs, 0.015);
+    let reference = ("radiance-bsdf", "reference-coated-irradiance.txt");
+    check_irradiance(&desc, reference, 4, 0.015);
 }

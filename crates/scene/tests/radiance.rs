@@ -825,3 +825,35 @@ fn anisotropic_materials_load_with_their_orientation() {
     ];
     assert_errors(&d, &cases, |material| format!("void {material}\n{surface}"));
 }
+
+#[test]
+fn dielectrics_take_radiance_s_indices() {
+    // A dielectric's index at 500 nm by its Hartmann constant (dielectric.c: n + H/500); an
+    // interface's inside (opposite the normal) and outside indices.
+    let d = dir("dielectric");
+    let surface = "m sphere s\n0\n0\n4 0 0 0 1\n";
+    for (material, inside, outside) in [
+        ("dielectric m\n0\n0\n5 1 1 1 1.5 20", 1.54f32, 1.0f32),
+        ("interface m\n0\n0\n8 1 1 1 1.33 1 1 1 1.5", 1.33, 1.5),
+    ] {
+        let desc = load(&d, &[("m.rad", &format!("void {material}\n{surface}"))]).unwrap();
+        let BsdfDesc::Dielectric {
+            int_ior, ext_ior, ..
+        } = *desc.shapes[0].bsdf
+        else {
+            panic!("{:?}", desc.shapes[0].bsdf);
+        };
+        assert!((int_ior - inside).abs() < 1e-6 && (ext_ior - outside).abs() < 1e-6);
+    }
+    let cases = [
+        (
+            "interface m\n0\n0\n8 1 1 1 1.33 .9 1 1 1.5",
+            "transmission per unit length 0.9 1 1",
+        ),
+        (
+            "interface m\n0\n0\n5 1 1 1 1.33 1",
+            "expected 8 real arguments",
+        ),
+    ];
+    assert_errors(&d, &cases, |material| format!("void {material}\n{surface}"));
+}

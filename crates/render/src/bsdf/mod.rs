@@ -1274,9 +1274,10 @@ impl Material {
             || matches!(&self.front, Compiled::Fixed(Lobe::Ward(w)) if w.straight_transmittance(1.0).is_some())
     }
 
-    /// What a smooth `trans` or a `BRTDfunc` passes straight through to a ray along the unit `d` crossing it at
-    /// `p` (unit geometric normal `ng`, texture coordinates `uv`, `t` from the ray's start), its
-    /// patterns applied: `c T t_s` at that angle; `None` for other materials.
+    /// What a smooth `trans` or a `BRTDfunc` passes straight through to a ray along the unit
+    /// `d` crossing it at `p` (unit geometric normal `ng`, texture coordinates `uv`, `t` from
+    /// the ray's start), its patterns applied: `c T t_s` at that angle for `trans`, the
+    /// transmittance its expressions give for `BRTDfunc`; `None` for other materials.
     #[must_use]
     pub fn straight_transmittance_at(
         &self,

@@ -11,7 +11,8 @@
 //! - **Materials**: `plastic`, `metal` and `trans` as Radiance's isotropic Gaussian model
 //!   ([`BsdfDesc::Ward`]; a smooth `trans`'s straight transmission passes the light samples of
 //!   distant, point and spot lights, as Radiance's shadow rays), `mirror` (a perfect mirror of its colour), `glass` (Radiance's thin pane,
-//!   [`BsdfDesc::Glass`]), `dielectric` without absorption (a smooth interface of its index),
+//!   [`BsdfDesc::Glass`]), `dielectric` and `interface` without absorption (a smooth
+//!   interface of their indices, a dielectric's at 500 nm by its Hartmann constant),
 //!   `BRTDfunc` without non-specular BRTD functions ([`BsdfDesc::RadianceBrtd`]: coated
 //!   glazings), `plastic2` and `metal2` (`aniso.c`'s anisotropic Gaussian, its orientation vector a
 //!   constant, [`crate::desc::Anisotropy`]), `BSDF` of zero thickness with the Klems matrices of an XML file ([`bsdf_xml`],
@@ -43,7 +44,7 @@
 //!   scene framed from Radiance's default direction (+y, up +z). The picture fits 512 × 512 (or
 //!   `width` × `height`) with square pixels, as rpict.
 //! - Everything else (patterns on mirrors, textures on other materials, `mixtext`,
-//!   `trans2`, `aBSDF`, `antimatter`, ...) is an error at the first surface that needs it,
+//!   `trans2`, `aBSDF`, `antimatter`, `prism1`, `mist`, ...) is an error at the first surface that needs it,
 //!   naming the primitive. Nothing is skipped without a note: surfaces of `void` are dropped
 //!   with a count in the scene's notes.
 
@@ -549,19 +550,37 @@ fn modifier(
                     .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
             }))
         }
-        "dielectric" => {
-            reals(&[5])?;
+        "dielectric" | "interface" => {
+            // dielectric.c: transmission per unit length and index inside (and, for an
+            // interface, outside); a dielectric's index at 500 nm by its Hartmann constant.
+            let interface = p.kind == "interface";
+            reals(if interface { &[8] } else { &[5] })?;
             let r = &p.reals;
-            if r[..3].iter().any(|&t| t < 0.999) {
+            let media: &[&[f64]] = if interface {
+                &[&r[0..3], &r[4..7]]
+            } else {
+                &[&r[0..3]]
+            };
+            if let Some(t) = media.iter().find(|t| t.iter().any(|&t| t < 0.999)) {
                 return Err(err(format!(
                     "absorption inside a dielectric (transmission per unit length {} {} {}) is \
                      not supported; give 1 1 1",
-                    r[0], r[1], r[2]
+                    t[0], t[1], t[2]
+                )));
+            }
+            let (inside, outside) = if interface {
+                (r[3], r[7])
+            } else {
+                (r[3] + r[4] / 500.0, 1.0)
+            };
+            if !(inside > 0.0 && outside > 0.0) {
+                return Err(err(format!(
+                    "refractive indices {inside} and {outside} must be positive"
                 )));
             }
             Modifier::Bsdf(Arc::new(BsdfDesc::Dielectric {
-                int_ior: r[3] as f32,
-                ext_ior: 1.0,
+                int_ior: inside as f32,
+                ext_ior: outside as f32,
                 specular_reflectance: Rgb::ONE,
                 specular_transmittance: Rgb::ONE,
             }))
