@@ -767,3 +767,11 @@ fn a_coated_glazing_of_brtdfunc_matches_radiance() {
     let reference = ("radiance-bsdf", "reference-coated-irradiance.txt");
     check_irradiance(&desc, reference, 4, 0.015);
 }
+
+#[test]
+fn a_patterned_mirror_reflects_as_radiance_s() {
+    // A mirror floor whose colour a colorfunc stripes, reflecting a glow wall: the radiance
+    // along 12 rays (the pattern's value at the floor times the wall's), to rtrace's digits.
+    let files = ("radiance-patterns", "mirror.rad", "reference-mirror.txt");
+    check_rays(files, (2, 4), 1e-5);
+}

@@ -821,6 +821,14 @@ pub enum BsdfDesc {
         /// Lambertian transmittance added both ways.
         transmit: Rgb,
     },
+    /// Radiance's `mirror`: a perfect mirror of its colour, which patterns multiply at each hit.
+    /// Only produced by the Radiance loader.
+    RadianceMirror {
+        /// The colour.
+        reflectance: Rgb,
+        /// Patterns on the colour.
+        pattern: Option<Arc<dyn SurfacePattern>>,
+    },
     /// Radiance's `BRTDfunc` without non-specular BRTD functions: a mirror reflectance and a
     /// straight transmittance computed per hit from the ray by the material's expressions,
     /// plus Lambertian parts. Only produced by the Radiance loader.

@@ -243,11 +243,11 @@ fn errors_name_the_place_and_what_was_expected() {
     let lamp = "f light l\n0\n0\n3 1 1 1\nl polygon q\n0\n0\n12 0 0 1 1 0 1 1 1 1 0 1 1\n";
     let pattern_cases: [(&str, &str, &str); 9] = [
         (
-            "void brightfunc f\n2 v my.cal\n0\n0\nf mirror p\n0\n0\n3 .5 .5 .5\n",
+            "void brightfunc f\n2 v my.cal\n0\n0\nf dielectric p\n0\n0\n5 1 1 1 1.5 0\n",
             "v = 1;\n",
-            "m.rad:5:1: mirror 'p': its modifier 'f' is a pattern; ircache reads patterns on \
-             plastic, metal, trans, plastic2, metal2, glass, light, glow and spotlight \
-             materials (and on other patterns), not on mirror",
+            "m.rad:5:1: dielectric 'p': its modifier 'f' is a pattern; ircache reads patterns on \
+             plastic, metal, trans, plastic2, metal2, mirror, glass, light, glow and spotlight \
+             materials (and on other patterns), not on dielectric",
         ),
         (
             "void colorpict f\n7 red green blue none.hdr . Px Py\n0\n0\n",

@@ -504,7 +504,9 @@ fn blend_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
 fn color_pattern(desc: &BsdfDesc) -> Option<Arc<dyn SurfacePattern>> {
     match desc {
         BsdfDesc::TwoSided { front, .. } => color_pattern(front),
-        BsdfDesc::Ward { pattern, .. } | BsdfDesc::Glass { pattern, .. } => pattern.clone(),
+        BsdfDesc::Ward { pattern, .. }
+        | BsdfDesc::Glass { pattern, .. }
+        | BsdfDesc::RadianceMirror { pattern, .. } => pattern.clone(),
         _ => None,
     }
 }
@@ -518,12 +520,13 @@ fn tint_pane(t: &mut ThinDielectric, factor: Rgb) {
 }
 
 impl Bsdf {
-    /// Multiplies the colour of its Ward models and what its Radiance panes transmit (not what
-    /// they reflect, as `glass.c`) by `factor`.
+    /// Multiplies the colour of its Ward models and Radiance mirrors and what its Radiance
+    /// panes transmit (not what they reflect, as `glass.c`) by `factor`.
     fn tint(&mut self, factor: Rgb) {
         let tint = |l: &mut Lobe| match l {
             Lobe::Ward(w) => w.color *= factor,
             Lobe::ThinDielectric(t) => tint_pane(t, factor),
+            Lobe::Conductor(c) => c.specular_reflectance *= factor,
             _ => {}
         };
         match self {
@@ -898,6 +901,13 @@ impl Compiled {
                 transmissivity: *transmissivity,
                 transmitted_specular: *transmitted_specular,
             })),
+            BsdfDesc::RadianceMirror { reflectance, .. } => {
+                Compiled::Fixed(Lobe::Conductor(Conductor {
+                    eta: Rgb::ZERO,
+                    k: Rgb::ONE,
+                    specular_reflectance: *reflectance,
+                }))
+            }
             BsdfDesc::RadianceBrtd {
                 diffuse_front,
                 diffuse_back,

@@ -43,7 +43,7 @@
 //!   with the scene (`--view`), else `eye`, `target` and `fov` as for OBJ scenes, else the whole
 //!   scene framed from Radiance's default direction (+y, up +z). The picture fits 512 × 512 (or
 //!   `width` × `height`) with square pixels, as rpict.
-//! - Everything else (patterns on mirrors, textures on other materials, `mixtext`,
+//! - Everything else (textures on other materials, `mixtext`,
 //!   `trans2`, `aBSDF`, `antimatter`, `prism1`, `mist`, ...) is an error at the first surface that needs it,
 //!   naming the primitive. Nothing is skipped without a note: surfaces of `void` are dropped
 //!   with a count in the scene's notes.
@@ -417,13 +417,14 @@ fn modifier(
                 | "glass"
                 | "plastic2"
                 | "metal2"
+                | "mirror"
                 | "texfunc"
                 | "texdata"
         )
     {
         return Err(err(format!(
             "its modifier '{}' is a pattern; ircache reads patterns on plastic, metal, trans, \
-             plastic2, metal2, glass, light, glow and spotlight materials (and on other \
+             plastic2, metal2, mirror, glass, light, glow and spotlight materials (and on other \
              patterns), not on {}",
             p.modifier, p.kind
         )));
@@ -531,10 +532,10 @@ fn modifier(
                     "a mirror's alternate material (for virtual sources) is not supported".into(),
                 ));
             }
-            Modifier::Bsdf(two_sided(BsdfDesc::Conductor {
-                eta: Rgb::ZERO,
-                k: Rgb::ONE,
-                specular_reflectance: rgb(&p.reals),
+            Modifier::Bsdf(two_sided(BsdfDesc::RadianceMirror {
+                reflectance: rgb(&p.reals),
+                pattern: (!pattern.is_empty())
+                    .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
             }))
         }
         "glass" => {
