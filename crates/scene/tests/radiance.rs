@@ -246,8 +246,8 @@ fn errors_name_the_place_and_what_was_expected() {
             "void brightfunc f\n2 v my.cal\n0\n0\nf dielectric p\n0\n0\n5 1 1 1 1.5 0\n",
             "v = 1;\n",
             "m.rad:5:1: dielectric 'p': its modifier 'f' is a pattern; ircache reads patterns on \
-             plastic, metal, trans, plastic2, metal2, mirror, glass, light, glow and spotlight \
-             materials (and on other patterns), not on dielectric",
+             plastic, metal, trans, plastic2, metal2, trans2, mirror, glass, light, glow and \
+             spotlight materials (and on other patterns), not on dielectric",
         ),
         (
             "void colorpict f\n7 red green blue none.hdr . Px Py\n0\n0\n",
@@ -807,8 +807,12 @@ fn anisotropic_materials_load_with_their_orientation() {
             "expected at least 4 string arguments",
         ),
         (
-            "trans2 m\n4 1 0 0 .\n0\n8 .8 .7 .5 .1 .1 .2 .5 .5",
-            "trans2, not rendered by ircache",
+            "trans2 m\n4 1 0 0 .\n0\n8 .8 .7 .5 .1 .1 .2 1.5 .5",
+            "transmissivity 1.5 and transmitted specular 0.5 must be in [0, 1]",
+        ),
+        (
+            "prism1 m\n4 1 0 0 .\n0\n8 .8 .7 .5 .1 .1 .2 1.5 .5",
+            "prism1, not rendered by ircache",
         ),
         (
             "BRTDfunc m\n10 .1 .1 .1 .5 .5 .5 0 0 Dx .\n0\n9 0 0 0 0 0 0 0 0 0",

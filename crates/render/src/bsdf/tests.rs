@@ -131,6 +131,23 @@ fn ward_anisotropic(color: f32, specularity: f32, au: f32, av: f32, metal: bool)
     })
 }
 
+/// Radiance's `trans2` (specularity 0.04, transmissivity 0.7, transmitted specularity 0.6).
+fn trans2(color: f32, au: f32, av: f32) -> BsdfDesc {
+    twosided(BsdfDesc::Ward {
+        color: Rgb::new(color, color * 0.9, color * 0.8),
+        specularity: 0.04,
+        roughness: au,
+        metal: false,
+        transmissivity: 0.7,
+        transmitted_specular: 0.6,
+        pattern: None,
+        anisotropy: Some(ircache_scene::Anisotropy {
+            roughness_v: av,
+            u: Vec3::X,
+        }),
+    })
+}
+
 /// Radiance's `plastic2` or `metal2` (roughness `au` along `axis`, `av` across).
 fn ward2(color: f32, specularity: f32, au: f32, av: f32, metal: bool, axis: [f32; 2]) -> Bsdf {
     let mut b = mat(ward_anisotropic(color, specularity, au, av, metal));
@@ -324,6 +341,7 @@ fn all_models() -> Vec<(String, BsdfDesc)> {
             "radiance plastic2 0.3/0.06".into(),
             ward_anisotropic(0.5, 0.1, 0.3, 0.06, false),
         ),
+        ("radiance trans2 0.05/0.3".into(), trans2(0.8, 0.05, 0.3)),
         ("radiance tinted glass".into(), radiance_glass(0.6, 1.52)),
     ];
     for kind in KINDS {
@@ -1617,15 +1635,25 @@ fn klems_photons_scatter_by_the_transposed_matrix() {
 #[test]
 fn chi2_and_closed_forms_of_radiance_anisotropic_ward() {
     // plastic2 and metal2: agaussamp's half vectors against the density they claim, from both
-    // sides and turned; the lobe with equal roughnesses is the isotropic one; and turning the
-    // axis by 90° swaps the roughnesses.
+    // sides and turned; trans2's transmission likewise; the lobe with equal roughnesses is the
+    // isotropic one; and turning the axis by 90° swaps the roughnesses.
     let t = 0.7f32;
+    let mut turned_trans2 = mat(trans2(0.8, 0.05, 0.3));
+    if let Bsdf::TwoSided {
+        front: Lobe::Ward(f),
+        back: Lobe::Ward(k),
+    } = &mut turned_trans2
+    {
+        f.axis = [t.cos(), t.sin()];
+        k.axis = [t.cos(), t.sin()];
+    }
     for (label, b) in [
         (
             "metal2",
             ward2(0.8, 0.9, 0.04, 0.25, true, [t.cos(), t.sin()]),
         ),
         ("plastic2", ward2(0.5, 0.1, 0.3, 0.06, false, [1.0, 0.0])),
+        ("trans2", turned_trans2),
     ] {
         for (theta, phi) in [(20.0, 30.0), (65.0, 250.0), (150.0, 100.0)] {
             let wo = dir(theta, phi);

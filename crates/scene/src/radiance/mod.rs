@@ -14,7 +14,7 @@
 //!   [`BsdfDesc::Glass`]), `dielectric` and `interface` without absorption (a smooth
 //!   interface of their indices, a dielectric's at 500 nm by its Hartmann constant),
 //!   `BRTDfunc` without non-specular BRTD functions ([`BsdfDesc::RadianceBrtd`]: coated
-//!   glazings), `plastic2` and `metal2` (`aniso.c`'s anisotropic Gaussian, its orientation vector a
+//!   glazings), `plastic2`, `metal2` and `trans2` (`aniso.c`'s anisotropic Gaussian, its orientation vector a
 //!   constant, [`crate::desc::Anisotropy`]), `BSDF` of zero thickness with the Klems matrices of an XML file ([`bsdf_xml`],
 //!   [`BsdfDesc::Klems`]; tensor trees, proxies of non-zero thickness and `aBSDF` are refused).
 //!   Radiance shades both sides of a surface alike, so the opaque ones are `twosided`.
@@ -44,7 +44,7 @@
 //!   scene framed from Radiance's default direction (+y, up +z). The picture fits 512 × 512 (or
 //!   `width` × `height`) with square pixels, as rpict.
 //! - Everything else (textures on other materials, `mixtext`,
-//!   `trans2`, `aBSDF`, `antimatter`, `prism1`, `mist`, ...) is an error at the first surface that needs it,
+//!   `aBSDF`, `antimatter`, `prism1`, `mist`, ...) is an error at the first surface that needs it,
 //!   naming the primitive. Nothing is skipped without a note: surfaces of `void` are dropped
 //!   with a count in the scene's notes.
 
@@ -417,6 +417,7 @@ fn modifier(
                 | "glass"
                 | "plastic2"
                 | "metal2"
+                | "trans2"
                 | "mirror"
                 | "texfunc"
                 | "texdata"
@@ -424,8 +425,8 @@ fn modifier(
     {
         return Err(err(format!(
             "its modifier '{}' is a pattern; ircache reads patterns on plastic, metal, trans, \
-             plastic2, metal2, mirror, glass, light, glow and spotlight materials (and on other \
-             patterns), not on {}",
+             plastic2, metal2, trans2, mirror, glass, light, glow and spotlight materials (and on \
+             other patterns), not on {}",
             p.modifier, p.kind
         )));
     }
@@ -439,6 +440,7 @@ fn modifier(
                 | "trans"
                 | "plastic2"
                 | "metal2"
+                | "trans2"
                 | "light"
                 | "glow"
                 | "spotlight"
@@ -448,7 +450,7 @@ fn modifier(
     {
         return Err(err(format!(
             "its modifiers include a texture (texfunc or texdata); ircache perturbs the normals \
-             of plastic, metal, trans, plastic2 and metal2 with them, not of {}",
+             of plastic, metal, trans, plastic2, metal2 and trans2 with them, not of {}",
             p.kind
         )));
     }
@@ -482,9 +484,11 @@ fn modifier(
                 anisotropy: None,
             }))
         }
-        "plastic2" | "metal2" => {
-            // aniso.c: ux uy uz funcfile [transform]; r g b specularity u-roughness v-roughness.
-            reals(&[6])?;
+        "plastic2" | "metal2" | "trans2" => {
+            // aniso.c: ux uy uz funcfile [transform]; r g b specularity u-roughness v-roughness
+            // (trans2: then transmissivity and transmitted specularity).
+            let trans = p.kind == "trans2";
+            reals(if trans { &[8] } else { &[6] })?;
             let (s, r) = (&p.strings, &p.reals);
             if s.len() < 4 {
                 return Err(err(format!(
@@ -496,6 +500,12 @@ fn modifier(
                 return Err(err(format!(
                     "specularity {} must be in [0, 1] and the roughnesses {} {} above 0",
                     r[3], r[4], r[5]
+                )));
+            }
+            let (t, ts) = if trans { (r[6], r[7]) } else { (0.0, 0.0) };
+            if !(0.0..=1.0).contains(&t) || !(0.0..=1.0).contains(&ts) {
+                return Err(err(format!(
+                    "transmissivity {t} and transmitted specular {ts} must be in [0, 1]"
                 )));
             }
             let v = constants(
@@ -514,8 +524,8 @@ fn modifier(
                 specularity: r[3] as f32,
                 roughness: r[4] as f32,
                 metal: p.kind == "metal2",
-                transmissivity: 0.0,
-                transmitted_specular: 0.0,
+                transmissivity: t as f32,
+                transmitted_specular: ts as f32,
                 pattern: (!pattern.is_empty())
                     .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
                 anisotropy: Some(crate::desc::Anisotropy {
