@@ -472,17 +472,7 @@ fn modifier(
                     "transmissivity {t} and transmitted specular {ts} must be in [0, 1]"
                 )));
             }
-            Modifier::Bsdf(two_sided(BsdfDesc::Ward {
-                color: rgb(r),
-                specularity: r[3] as f32,
-                roughness: r[4] as f32,
-                metal: p.kind == "metal",
-                transmissivity: t as f32,
-                transmitted_specular: ts as f32,
-                pattern: (!pattern.is_empty())
-                    .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
-                anisotropy: None,
-            }))
+            gaussian(r, p.kind == "metal", (t, ts), &pattern, None)
         }
         "plastic2" | "metal2" | "trans2" => {
             // aniso.c: ux uy uz funcfile [transform]; r g b specularity u-roughness v-roughness
@@ -519,21 +509,12 @@ fn modifier(
             if u.length() == 0.0 {
                 return Err(err("its orientation vector is zero".into()));
             }
-            Modifier::Bsdf(two_sided(BsdfDesc::Ward {
-                color: rgb(r),
-                specularity: r[3] as f32,
-                roughness: r[4] as f32,
-                metal: p.kind == "metal2",
-                transmissivity: t as f32,
-                transmitted_specular: ts as f32,
-                pattern: (!pattern.is_empty())
-                    .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
-                anisotropy: Some(crate::desc::Anisotropy {
-                    // Equal roughnesses are the isotropic model, whatever u.
-                    roughness_v: r[5] as f32,
-                    u: u.normalize().as_vec3(),
-                }),
-            }))
+            // Equal roughnesses are the isotropic model, whatever u.
+            let anisotropy = crate::desc::Anisotropy {
+                roughness_v: r[5] as f32,
+                u: u.normalize().as_vec3(),
+            };
+            gaussian(r, p.kind == "metal2", (t, ts), &pattern, Some(anisotropy))
         }
         "mirror" => {
             reals(&[3])?;
@@ -859,6 +840,29 @@ fn modifier(
         other => Modifier::Unsupported(format!("{other}, not rendered by ircache")),
     };
     Ok(m)
+}
+
+/// Radiance's Gaussian material (`normal.c`, `aniso.c`) of colour, specularity and roughness
+/// `r[..5]`, transmissivity and transmitted specularity `(t, ts)`, twosided, its colour under
+/// `pattern`.
+fn gaussian(
+    r: &[f64],
+    metal: bool,
+    (t, ts): (f64, f64),
+    pattern: &PatternChain,
+    anisotropy: Option<crate::desc::Anisotropy>,
+) -> Modifier {
+    Modifier::Bsdf(two_sided(BsdfDesc::Ward {
+        color: rgb(r),
+        specularity: r[3] as f32,
+        roughness: r[4] as f32,
+        metal,
+        transmissivity: t as f32,
+        transmitted_specular: ts as f32,
+        pattern: (!pattern.is_empty())
+            .then(|| Arc::new(pattern.clone()) as Arc<dyn SurfacePattern>),
+        anisotropy,
+    }))
 }
 
 /// The values of the constant expressions `texts` (each with what it is, for errors) in the
