@@ -524,34 +524,19 @@ impl Scene {
         if !self.has_straight_trans {
             return self.shadow_transmittance(ray);
         }
-        let end = ray.t_max.is_finite().then(|| ray.o + ray.d * ray.t_max);
-        let mut ray = *ray;
-        let mut tr = Rgb::ONE;
-        for _ in 0..MAX_SHEET_CROSSINGS {
-            let Some(it) = self.intersect(&ray) else {
-                return tr;
-            };
+        let passes = |it: &Interaction, d: Vec3| {
             let shape = &self.shapes[it.shape as usize];
-            let passed = if shape.straight_trans {
-                self.materials[shape.material]
-                    .straight_transmittance_at(it.uv, it.p, it.ng, ray.d, it.t)
+            if shape.straight_trans {
+                it.bsdf(&self.materials[shape.material], d)
+                    .straight_transmittance(it.ng.dot(d))
             } else {
-                self.passed_by(&it, ray.d)
-            };
-            let Some(passed) = passed else {
-                return Rgb::ZERO;
-            };
-            tr *= passed;
-            if tr.is_black() {
-                return tr;
+                self.passed_by(it, d)
             }
-            let o = offset_ray_origin(it.p, it.ng, ray.d, self.scale);
-            let Some(next) = ray_on_to(o, ray.d, end) else {
-                return tr;
-            };
-            ray = next;
+        };
+        match self.cross(ray, passes) {
+            (None, tr) => tr,
+            (Some(_), _) => Rgb::ZERO,
         }
-        Rgb::ZERO
     }
 
     #[inline(never)]
@@ -571,6 +556,17 @@ impl Scene {
         if !self.has_see_through {
             return (self.intersect(ray), Rgb::ONE);
         }
+        self.cross(ray, |it, d| self.passed_by(it, d))
+    }
+
+    /// The first surface along `ray` that `passes` lets no light through (`None`), with the
+    /// product of what the surfaces before it let through; past [`MAX_SHEET_CROSSINGS`]
+    /// crossings, nothing with zero transmittance.
+    fn cross(
+        &self,
+        ray: &Ray,
+        passes: impl Fn(&Interaction, Vec3) -> Option<Rgb>,
+    ) -> (Option<Interaction>, Rgb) {
         let end = ray.t_max.is_finite().then(|| ray.o + ray.d * ray.t_max);
         let mut ray = *ray;
         let mut tr = Rgb::ONE;
@@ -578,7 +574,7 @@ impl Scene {
             let Some(it) = self.intersect(&ray) else {
                 return (None, tr);
             };
-            let Some(passed) = self.passed_by(&it, ray.d) else {
+            let Some(passed) = passes(&it, ray.d) else {
                 return (Some(it), tr);
             };
             tr *= passed;
@@ -690,9 +686,7 @@ impl Scene {
                     ),
                     None => Frame::from_normal_tangent(ns, dpdu),
                 };
-                if let (Some(perturb), Some(t)) =
-                    (self.materials[shape.material].perturbation(), &m.uvs)
-                {
+                if let (Some(perturb), Some(t)) = (material.perturbation(), &m.uvs) {
                     // dp/du and dp/dv from the triangle's texture coordinates.
                     let (d1, d2) = (t[i0] - t[i2], t[i1] - t[i2]);
                     let (e1, e2) = (p0 - p2, p1 - p2);

@@ -324,20 +324,24 @@ impl Klems {
         if a.z == 0.0 || b.z == 0.0 {
             return 0.0;
         }
-        self.density(a, b)
+        self.blurred_and_density(a, b).1
     }
 
-    fn density(&self, a: Vec3, b: Vec3) -> f32 {
+    /// The BSDF averaged over the jitter grid (as [`Self::blurred`]) and the sampling density
+    /// of `b` (`Y(f(a_k, b)) |cos θᵢ| / A(a_k)` averaged), from one pass over the grid.
+    fn blurred_and_density(&self, a: Vec3, b: Vec3) -> (Rgb, f32) {
         let (n, side) = (JITTER_GRID * JITTER_GRID, self.jitter(a));
-        let mut sum = 0.0;
+        let (mut sum, mut density) = (Rgb::ZERO, 0.0);
         for k in 0..n {
             let ak = Self::jittered(a, side, k);
+            let v = self.value(ak, b);
+            sum += v;
             let total = self.albedo(ak);
             if total > 0.0 {
-                sum += self.value(ak, b).luminance().max(0.0) / total;
+                density += v.luminance().max(0.0) / total;
             }
         }
-        sum * b.z.abs() / n as f32
+        (sum / n as f32, density * b.z.abs() / n as f32)
     }
 
     /// Samples `wi`: a grid point, then a part by its albedo (`u_lobe`, remapped for each
@@ -401,8 +405,9 @@ impl Klems {
             return None;
         }
         let wi = self.in_local_frame(b);
-        let eval = self.blurred(a, b) * b.z.abs();
-        BsdfSample::smooth(wi, self.density(a, b), || eval, 1.0)
+        let (f, pdf) = self.blurred_and_density(a, b);
+        let eval = f * b.z.abs();
+        BsdfSample::smooth(wi, pdf, || eval, 1.0)
     }
 
     /// Samples the direction a photon arriving from `wl` (local frame, towards where it came

@@ -619,6 +619,23 @@ impl Bsdf {
         }
     }
 
+    /// What a smooth Radiance `trans` or a `BRTDfunc` passes straight through to a ray
+    /// crossing it at cosine `cos` with its normal (its patterns applied where the BSDF was
+    /// looked up): `c T t_s` at that angle for `trans`, what its expressions gave for
+    /// `BRTDfunc`; `None` for other models.
+    #[must_use]
+    pub fn straight_transmittance(&self, cos: f32) -> Option<Rgb> {
+        match self {
+            Bsdf::TwoSided {
+                front: Lobe::Ward(w),
+                ..
+            }
+            | Bsdf::Single(Lobe::Ward(w)) => w.straight_transmittance(cos),
+            Bsdf::Single(Lobe::Brtd(b)) => Some(b.transmit),
+            _ => None,
+        }
+    }
+
     /// True when the BSDF has a non-delta component (next-event estimation is worthwhile).
     #[must_use]
     pub fn has_smooth(&self) -> bool {
@@ -1277,39 +1294,11 @@ impl Material {
 
     /// True for a smooth Radiance `trans` or a `BRTDfunc` (straight transmission): light
     /// samples from lights that paths cannot hit pass through it
-    /// ([`Material::straight_transmittance_at`]).
+    /// ([`Bsdf::straight_transmittance`]).
     #[must_use]
     pub fn has_straight_transmission(&self) -> bool {
         self.brtd.is_some()
             || matches!(&self.front, Compiled::Fixed(Lobe::Ward(w)) if w.straight_transmittance(1.0).is_some())
-    }
-
-    /// What a smooth `trans` or a `BRTDfunc` passes straight through to a ray along the unit
-    /// `d` crossing it at `p` (unit geometric normal `ng`, texture coordinates `uv`, `t` from
-    /// the ray's start), its patterns applied: `c T t_s` at that angle for `trans`, the
-    /// transmittance its expressions give for `BRTDfunc`; `None` for other materials.
-    #[must_use]
-    pub fn straight_transmittance_at(
-        &self,
-        uv: Vec2,
-        p: Vec3,
-        ng: Vec3,
-        d: Vec3,
-        t: f32,
-    ) -> Option<Rgb> {
-        if !self.has_straight_transmission() {
-            return None;
-        }
-        let frame = Frame::from_z(ng);
-        match self.at_hit(uv, p, ng, d, t, &frame) {
-            Bsdf::TwoSided {
-                front: Lobe::Ward(w),
-                ..
-            }
-            | Bsdf::Single(Lobe::Ward(w)) => w.straight_transmittance(ng.dot(d)),
-            Bsdf::Single(Lobe::Brtd(b)) => Some(b.transmit),
-            _ => None,
-        }
     }
 
     /// [`Material::thin_sheet`] where a ray along the unit `d` crosses it at the point `p`
