@@ -202,9 +202,11 @@ impl Camera {
     /// near and far planes.
     #[inline]
     fn ray_from_aperture(&self, aperture: Vec3, towards: Vec3) -> Ray {
-        let d_cam = towards.normalize();
-        let d = self.to_world.transform_vector3(d_cam).normalize();
-        let inv_z = 1.0 / d_cam.z;
+        // `to_world` is linear here, so `towards` need not be normalised before it: the
+        // direction's chain has one square root and one division, and the clip distances'
+        // (1 / the unit direction's z) run beside it.
+        let d = self.to_world.transform_vector3(towards).normalize();
+        let inv_z = towards.length() / towards.z;
         Ray {
             o: if aperture == Vec3::ZERO {
                 self.origin

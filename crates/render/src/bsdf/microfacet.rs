@@ -12,6 +12,7 @@
 //! exact expression `1 / (1 + Λ)` with `Λ(a) = (e^{−a²}/(a√π) − erfc a)/2`, so that the claimed
 //! density matches the sampler exactly (Mitsuba uses a rational fit within 0.35 % of it).
 
+use ircache_math::sampling::sin_cos_turn;
 use ircache_math::{sampling, Vec2, Vec3, PI};
 use ircache_scene::MicrofacetDistribution;
 
@@ -125,9 +126,9 @@ impl Microfacet {
         let t2 = vh.cross(t1);
         // Uniform disk sample, squashed onto the visible part of the projected hemisphere.
         let r = u.x.sqrt();
-        let phi = 2.0 * PI * u.y;
-        let p1 = r * phi.cos();
-        let mut p2 = r * phi.sin();
+        let (sin, cos) = sin_cos_turn(u.y);
+        let p1 = r * cos;
+        let mut p2 = r * sin;
         let s = 0.5 * (1.0 + vh.z);
         p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
         let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;

@@ -11,6 +11,7 @@
 
 use super::fresnel::reflect;
 use super::BsdfSample;
+use ircache_math::sampling::sin_cos_turn;
 use ircache_math::{sampling, Frame, Rgb, Vec2, Vec3, INV_PI, PI};
 
 /// A diffuse + normalised Phong material at one surface point.
@@ -94,8 +95,8 @@ impl Phong {
     fn sample_lobe(&self, wo: Vec3, u: Vec2) -> Vec3 {
         let cos_a = u.x.powf(1.0 / (self.exponent + 1.0));
         let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-        let phi = 2.0 * PI * u.y;
-        let local = Vec3::new(sin_a * phi.cos(), sin_a * phi.sin(), cos_a);
+        let (sin, cos) = sin_cos_turn(u.y);
+        let local = Vec3::new(sin_a * cos, sin_a * sin, cos_a);
         Frame::from_z(reflect(wo).normalize()).from_local(local)
     }
 

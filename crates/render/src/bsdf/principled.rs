@@ -29,6 +29,7 @@
 use super::fresnel::{fresnel_dielectric, reflect_about};
 use super::microfacet::Microfacet;
 use super::BsdfSample;
+use ircache_math::sampling::sin_cos_turn;
 use ircache_math::{Rgb, Vec2, Vec3};
 use ircache_scene::MicrofacetDistribution;
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -133,7 +134,7 @@ impl Gtr1 {
         let a2 = self.alpha * self.alpha;
         let cos2 = (1.0 - a2.powf(1.0 - u.y)) / (1.0 - a2);
         let sin = (1.0 - cos2).max(0.0).sqrt();
-        let (s, c) = (2.0 * PI * u.x).sin_cos();
+        let (s, c) = sin_cos_turn(u.x);
         Vec3::new(c * sin, s * sin, cos2.max(0.0).sqrt())
     }
 }

@@ -44,6 +44,7 @@
 
 use super::fresnel::reflect;
 use super::BsdfSample;
+use ircache_math::sampling::sin_cos_turn;
 use ircache_math::{sampling, Rgb, Vec2, Vec3, INV_PI, PI};
 
 /// Radiance's `FRESTHRESH`: the least specularity whose mirror reflection takes the Fresnel
@@ -278,11 +279,8 @@ impl Ward {
                 // A tangent-plane offset from the 2-D Gaussian, then normalised.
                 let (s, a, b) = self.straight_frame(wo);
                 let r = (-(1.0 - u.x).max(f32::MIN_POSITIVE).ln()).sqrt();
-                let phi = 2.0 * PI * u.y;
-                let (x, y) = (
-                    self.roughness * r * phi.cos(),
-                    self.roughness_v * r * phi.sin(),
-                );
+                let (sin, cos) = sin_cos_turn(u.y);
+                let (x, y) = (self.roughness * r * cos, self.roughness_v * r * sin);
                 (s + a * x + b * y).normalize()
             }
             Part::SpecularTransmission => {
@@ -291,10 +289,10 @@ impl Ward {
                 let cos_g = (1.0 + 0.5 * a2 * (1.0 - u.x * norm).max(f32::MIN_POSITIVE).ln())
                     .clamp(-1.0, 1.0);
                 let sin_g = (1.0 - cos_g * cos_g).max(0.0).sqrt();
-                let phi = 2.0 * PI * u.y;
+                let (sin, cos) = sin_cos_turn(u.y);
                 ircache_math::Frame::from_z(-wo).from_local(Vec3::new(
-                    sin_g * phi.cos(),
-                    sin_g * phi.sin(),
+                    sin_g * cos,
+                    sin_g * sin,
                     cos_g,
                 ))
             }
@@ -375,8 +373,8 @@ impl Ward {
         if self.anisotropic() {
             // agaussamp: an azimuth stretched by the roughnesses, then the slope along it.
             let (au, av) = (self.roughness, self.roughness_v);
-            let phi = 2.0 * PI * u.y;
-            let (cp, sp) = (phi.cos() * au, phi.sin() * av);
+            let (sin, cos) = sin_cos_turn(u.y);
+            let (cp, sp) = (cos * au, sin * av);
             let norm = 1.0 / (cp * cp + sp * sp).sqrt();
             let (cp, sp) = (cp * norm, sp * norm);
             let d = (-(1.0 - u.x).max(f32::MIN_POSITIVE).ln()
@@ -389,8 +387,8 @@ impl Ward {
             return h * (2.0 * wo.dot(h)) - wo;
         }
         let tan = self.roughness * (-(1.0 - u.x).max(f32::MIN_POSITIVE).ln()).sqrt();
-        let phi = 2.0 * PI * u.y;
-        let h = Vec3::new(tan * phi.cos(), tan * phi.sin(), 1.0).normalize();
+        let (sin, cos) = sin_cos_turn(u.y);
+        let h = Vec3::new(tan * cos, tan * sin, 1.0).normalize();
         h * (2.0 * wo.dot(h)) - wo
     }
 

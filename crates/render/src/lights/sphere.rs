@@ -17,7 +17,7 @@
 
 use super::EmittedRadiance;
 use super::{is_positive_finite, solid_angle_pdf};
-use ircache_math::sampling::{square_to_cosine_hemisphere, square_to_uniform_sphere};
+use ircache_math::sampling::{sin_cos_turn, square_to_cosine_hemisphere, square_to_uniform_sphere};
 use ircache_math::{Frame, Mat3, Rgb, Vec2, Vec3, PI};
 
 /// An emitting sphere.
@@ -169,10 +169,10 @@ impl SphereLight {
             let cos_t = 1.0 - omc;
             let sin2_t = (omc * (2.0 - omc)).min(sin2_max);
             let sin_t = sin2_t.sqrt();
-            let phi = 2.0 * PI * u.y;
+            let (sin, cos) = sin_cos_turn(u.y);
             let frame = Frame::from_z(to_c / dc);
             let wi = frame
-                .from_local(Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t))
+                .from_local(Vec3::new(sin_t * cos, sin_t * sin, cos_t))
                 .normalize();
             let t = dc * cos_t - (self.radius * self.radius - dc2 * sin2_t).max(0.0).sqrt();
             let p_light = p_ref + wi * t;

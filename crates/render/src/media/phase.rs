@@ -5,6 +5,7 @@
 //! direction), `w` the direction it leaves along; cos θ = d·w, so g > 0 scatters forward.
 //! p(θ) = (1 − g²) / (4π (1 + g² − 2g cos θ)^{3/2}).
 
+use ircache_math::sampling::sin_cos_turn;
 use ircache_math::{Frame, Vec2, Vec3, PI};
 use ircache_scene::PhaseDesc;
 
@@ -69,8 +70,8 @@ impl Phase {
             _ => 1.0 - 2.0 * u.x,
         };
         let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-        let phi = 2.0 * PI * u.y;
-        let local = Vec3::new(sin_theta * phi.cos(), sin_theta * phi.sin(), cos_theta);
+        let (sin, cos) = sin_cos_turn(u.y);
+        let local = Vec3::new(sin_theta * cos, sin_theta * sin, cos_theta);
         let w = Frame::from_z(d).from_local(local).normalize();
         (w, self.eval(d, w))
     }
