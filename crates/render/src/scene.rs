@@ -773,6 +773,18 @@ impl Scene {
     #[inline]
     #[must_use]
     pub fn perturbed_shadowing(&self, it: &Interaction, wi: Vec3) -> f32 {
+        if !self.has_perturbed_shadowing {
+            return 1.0;
+        }
+        self.perturbed_shadowing_at(it, wi)
+    }
+
+    /// [`Scene::perturbed_shadowing`] in a scene with bump or normal maps: out of line, for
+    /// inlined, LLVM computed its terminator term (a division) on every light sample of every
+    /// scene, ahead of the flag's check.
+    #[cold]
+    #[inline(never)]
+    fn perturbed_shadowing_at(&self, it: &Interaction, wi: Vec3) -> f32 {
         self.shadowing_perturbation(it)
             .map_or(1.0, |p| p.shadowing(it.base_n, it.frame.n, wi))
     }

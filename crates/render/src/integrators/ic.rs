@@ -182,12 +182,12 @@ impl IcIntegrator {
     /// light from the cache of their depth where it has records, and continue through the
     /// glossy part of the BSDF. With `deferred`, the first vertex's light samples wait there for
     /// their shadow rays.
-    pub fn li(
+    pub fn li<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
         ray: &Ray,
         first_hit: Option<&Hit>,
-        sampler: &mut dyn Sampler,
+        sampler: &mut S,
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
     ) -> Rgb {
@@ -205,14 +205,14 @@ impl IcIntegrator {
     /// [`IcIntegrator::li`] with the cache `cache` and, for the first vertex, what splatting
     /// found there (`splatted`; where it found nothing, the vertex looks up as any other).
     #[allow(clippy::too_many_arguments)]
-    pub fn li_splatted(
+    pub fn li_splatted<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
         cache: &IrradianceCache,
         ray: &Ray,
         first_hit: Option<&Hit>,
         splatted: Option<Splatted>,
-        sampler: &mut dyn Sampler,
+        sampler: &mut S,
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
     ) -> Rgb {

@@ -169,7 +169,7 @@ pub enum Selection {
 /// shadows instead of the result.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-pub fn sample_lights(
+pub fn sample_lights<S: Sampler + ?Sized>(
     scene: &Scene,
     it: &Interaction,
     bsdf: &Bsdf,
@@ -178,7 +178,7 @@ pub fn sample_lights(
     (strategy, nb): (BsdfStrategy, u32),
     served: EnvironmentServed,
     depth: u32,
-    sampler: &mut dyn Sampler,
+    sampler: &mut S,
     rays: &mut RayCounts,
     mut shadows: Shadows,
 ) -> Rgb {
@@ -187,7 +187,8 @@ pub fn sample_lights(
         return l;
     }
     let (fe, fb) = (ne as f32, nb as f32);
-    let side = (ne as f32).sqrt() as u32;
+    // One sample (every vertex but a first one given more) needs no grid, nor its square root.
+    let side = if ne > 1 { (ne as f32).sqrt() as u32 } else { 1 };
     let grid = ne > 1 && side * side == ne;
     for i in 0..ne {
         sampler.set_dimension(if i == 0 {

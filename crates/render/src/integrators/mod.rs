@@ -206,12 +206,12 @@ impl Integrator {
     /// Radiance arriving along the camera ray `ray`, whose closest hit `first_hit` the caller
     /// traced (camera rays go to Embree in coherent packets; see [`crate::render`]).
     #[inline]
-    pub fn li(
+    pub fn li<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
         ray: &Ray,
         first_hit: Option<&Hit>,
-        sampler: &mut dyn Sampler,
+        sampler: &mut S,
         rays: &mut RayCounts,
     ) -> Rgb {
         self.li_deferring(scene, ray, first_hit, sampler, rays, None)
@@ -220,29 +220,29 @@ impl Integrator {
     /// [`Integrator::li`], the first vertex's light samples leaving their shadow rays to
     /// `deferred` where the integrator can (`path`, `ic`: [`DeferredShadows::resolve`] adds
     /// their light); the others trace them at once.
-    pub fn li_deferring(
+    pub fn li_deferring<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
         ray: &Ray,
         first_hit: Option<&Hit>,
-        sampler: &mut dyn Sampler,
+        sampler: &mut S,
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
     ) -> Rgb {
         match self {
-            Integrator::Direct(d) => d.li(scene, ray, first_hit, sampler, rays),
+            Integrator::Direct(d) => d.li(scene, ray, first_hit, sampler.as_dyn(), rays),
             Integrator::Path(p) => p.li(scene, ray, first_hit, sampler, rays, deferred),
             Integrator::Ic(c) => c.li(scene, ray, first_hit, sampler, rays, deferred),
-            Integrator::VolPath(v) => v.li(scene, ray, first_hit, sampler, rays),
+            Integrator::VolPath(v) => v.li(scene, ray, first_hit, sampler.as_dyn(), rays),
         }
     }
 
     /// Radiance arriving along `ray`, tracing its first hit too.
-    pub fn li_ray(
+    pub fn li_ray<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
         ray: &Ray,
-        sampler: &mut dyn Sampler,
+        sampler: &mut S,
         rays: &mut RayCounts,
     ) -> Rgb {
         rays.camera += 1;

@@ -29,12 +29,12 @@ pub struct PathIntegrator {
 impl PathIntegrator {
     /// Radiance along the camera ray `ray`, whose closest hit `first_hit` the caller traced;
     /// with `deferred`, the first vertex's light samples wait there for their shadow rays.
-    pub fn li(
+    pub fn li<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
         ray: &Ray,
         first_hit: Option<&Hit>,
-        sampler: &mut dyn Sampler,
+        sampler: &mut S,
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
     ) -> Rgb {

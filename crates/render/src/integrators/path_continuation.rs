@@ -182,13 +182,13 @@ impl PathStart {
 
 /// Radiance arriving along `start.ray`, whose first intersection the caller may have traced
 /// already (`first`, which is then used as the first vertex).
-pub fn trace_path(
+pub fn trace_path<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
     scene: &Scene,
     start: PathStart,
     first: Option<Option<Interaction>>,
-    source: &mut dyn IndirectSource,
+    source: &mut I,
     settings: &PathSettings,
-    sampler: &mut dyn Sampler,
+    sampler: &mut S,
     rays: &mut RayCounts,
 ) -> Rgb {
     trace_path_deferring(scene, start, first, source, settings, sampler, rays, None)
@@ -198,13 +198,13 @@ pub fn trace_path(
 /// rays and what they bring to it ([`DeferredShadows::resolve`] adds that later) instead of the
 /// result.
 #[allow(clippy::too_many_arguments)]
-pub fn trace_path_deferring(
+pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
     scene: &Scene,
     start: PathStart,
     first: Option<Option<Interaction>>,
-    source: &mut dyn IndirectSource,
+    source: &mut I,
     settings: &PathSettings,
-    sampler: &mut dyn Sampler,
+    sampler: &mut S,
     rays: &mut RayCounts,
     mut deferred: Option<&mut DeferredShadows>,
 ) -> Rgb {
@@ -310,7 +310,7 @@ pub fn trace_path_deferring(
             if !k.is_black() {
                 if let Some(sp) = &sp {
                     sampler.set_dimension(dims::vertex(depth, dims::CACHE));
-                    if let Some(e) = source.irradiance(scene, sp, depth, sampler, rays) {
+                    if let Some(e) = source.irradiance(scene, sp, depth, sampler.as_dyn(), rays) {
                         // A bump map's shadowing, averaged over the hemisphere: the cache
                         // holds irradiance, not its directions.
                         l += beta * k * e * (INV_PI * scene.perturbed_mean_shadowing(it));
@@ -409,14 +409,14 @@ pub(crate) enum Crossing {
 #[allow(clippy::too_many_arguments)]
 #[cold]
 #[inline(never)]
-pub(crate) fn cross_see_through(
+pub(crate) fn cross_see_through<S: Sampler + ?Sized>(
     scene: &Scene,
     it: &Interaction,
     wo: Vec3,
     (beta, arrival, depth, crossings): (&mut Rgb, &mut Arrival, &mut u32, &mut u32),
     eta: f32,
     settings: &PathSettings,
-    sampler: &mut dyn Sampler,
+    sampler: &mut S,
     rays: &mut RayCounts,
 ) -> Crossing {
     *crossings += 1;
@@ -455,14 +455,14 @@ pub(crate) fn cross_see_through(
 /// the geometric and shading hemispheres disagree (light leaks). Inlined: its sample returned
 /// through memory stalled the caller on store forwarding.
 #[inline(always)]
-pub(crate) fn sample_continuation(
+pub(crate) fn sample_continuation<S: Sampler + ?Sized>(
     scene: &Scene,
     it: &Interaction,
     bsdf: &crate::bsdf::Bsdf,
     wo_local: Vec3,
     strategy: BsdfStrategy,
     depth: u32,
-    sampler: &mut dyn Sampler,
+    sampler: &mut S,
 ) -> Option<(crate::bsdf::BsdfSample, Vec3)> {
     sampler.set_dimension(dims::vertex(depth, dims::BSDF));
     let u_lobe = if bsdf.is_diffuse_only() {
@@ -484,12 +484,12 @@ pub(crate) fn sample_continuation(
 /// Counts the vertex a path just left (`depth` + 1) and plays Russian roulette from `rr_depth`
 /// on with survival min(max(β)·η², 0.95), as Mitsuba 3; false when the path ends (also when
 /// the weight is zero or not finite).
-pub(crate) fn count_and_roulette(
+pub(crate) fn count_and_roulette<S: Sampler + ?Sized>(
     depth: &mut u32,
     beta: &mut Rgb,
     eta: f32,
     rr_depth: u32,
-    sampler: &mut dyn Sampler,
+    sampler: &mut S,
 ) -> bool {
     sampler.set_dimension(dims::vertex(*depth, dims::ROULETTE));
     *depth += 1;

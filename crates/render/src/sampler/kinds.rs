@@ -745,6 +745,11 @@ fn multijitter_pow2(
 
 impl Sampler for PixelSampler<'_> {
     #[inline]
+    fn as_dyn(&mut self) -> &mut dyn Sampler {
+        self
+    }
+
+    #[inline]
     fn next_1d(&mut self) -> f32 {
         let u = match self.batched(self.dim, Form::One) {
             Some((d, lane)) => self.batch.values[d][lane].x,

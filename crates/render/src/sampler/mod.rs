@@ -36,9 +36,19 @@ pub trait Sampler {
     fn skip_1d(&mut self) {
         let _ = self.next_1d();
     }
+
+    /// Itself as a trait object: code generic over the sampler (the path loop, monomorphised
+    /// for the pixel pass's sampler so that its draws inline) hands it on to interfaces that
+    /// take any sampler.
+    fn as_dyn(&mut self) -> &mut dyn Sampler;
 }
 
 impl Sampler for Rng {
+    #[inline]
+    fn as_dyn(&mut self) -> &mut dyn Sampler {
+        self
+    }
+
     #[inline]
     fn next_1d(&mut self) -> f32 {
         self.next_f32()
