@@ -348,7 +348,7 @@ impl Scene {
                 }
             };
             let material = Material::from_desc(&s.bsdf);
-            let flat = matches!(&geometry, ShapeGeometry::Mesh(m) if m.normals.is_none())
+            let flat = matches!(&geometry, ShapeGeometry::Mesh(m) if m.shades_flat())
                 && material.is_tangent_free()
                 && !material.is_textured()
                 && s.emitter_texture.is_none();

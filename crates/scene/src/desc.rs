@@ -500,6 +500,26 @@ pub struct TriangleMesh {
     pub indices: Vec<[u32; 3]>,
 }
 
+impl TriangleMesh {
+    /// True when the mesh shades flat: it has no vertex normals, or each triangle's vertex
+    /// normals all point along its geometric normal (within 10⁻⁶ in cosine), as in a cube with
+    /// vertices per face or a model exported with face normals.
+    #[must_use]
+    pub fn shades_flat(&self) -> bool {
+        let Some(normals) = &self.normals else {
+            return true;
+        };
+        self.indices.iter().all(|&[i0, i1, i2]| {
+            let p = |i: u32| self.positions[i as usize];
+            let face = (p(i1) - p(i0)).cross(p(i2) - p(i0)).normalize_or_zero();
+            face == Vec3::ZERO
+                || [i0, i1, i2]
+                    .iter()
+                    .all(|&i| normals[i as usize].normalize_or_zero().dot(face) >= 1.0 - 1e-6)
+        })
+    }
+}
+
 /// A texture: constant or image-backed.
 #[derive(Clone, Debug)]
 pub enum TextureDesc {

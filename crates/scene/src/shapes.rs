@@ -280,6 +280,22 @@ mod tests {
     }
 
     #[test]
+    fn flat_shading_is_found_from_the_normals() {
+        assert!(rectangle().shades_flat(), "no normals");
+        assert!(cube().shades_flat(), "a normal per face");
+        let mut turned = cube();
+        // One vertex normal tilted by 0.01 rad, then all of them reversed: both shade smooth.
+        let n = turned.normals.as_mut().unwrap();
+        n[0] = (n[0] + Vec3::new(0.01, 0.0, 0.01)).normalize();
+        assert!(!turned.shades_flat());
+        let mut flipped = cube();
+        for n in flipped.normals.as_mut().unwrap() {
+            *n = -*n;
+        }
+        assert!(!flipped.shades_flat());
+    }
+
+    #[test]
     fn disk_area_is_exact() {
         for n in [3, 16, DISK_SEGMENTS] {
             let m = disk(n);
