@@ -1100,7 +1100,15 @@ impl IncidentRadiance for SceneRadiance<'_> {
         let ray = self.scene.spawn_ray(&sp.it, d);
         let hit = self.scene.intersect(&ray)?;
         if !self.scene.has_see_through {
-            return Some(self.incident_at(cache, seed, st, &ray, hit, level, key, rng));
+            // Built here, in the returned `Option`: `Some(incident_at(…))` copied the 184 bytes.
+            let radiance = self.radiance_at(cache, seed, st, &ray, &hit, level, key, rng);
+            return Some(Incident {
+                radiance,
+                distance: hit.t,
+                normal: hit.ng,
+                hit: Some((ray, hit)),
+                escaped: None,
+            });
         }
         Some(self.through_see_through(cache, seed, st, ray, hit, level, key, rng))
     }
@@ -1203,8 +1211,30 @@ impl<'a> SceneRadiance<'a> {
         key: u64,
         rng: &mut Rng,
     ) -> Incident {
+        let radiance = self.radiance_at(cache, seed, st, ray, &hit, level, key, rng);
+        Incident {
+            radiance,
+            distance: hit.t,
+            normal: hit.ng,
+            hit: Some((*ray, hit)),
+            escaped: None,
+        }
+    }
+
+    /// The radiance of [`Self::incident_at`].
+    #[allow(clippy::too_many_arguments)]
+    fn radiance_at(
+        &self,
+        cache: &IrradianceCache,
+        seed: u64,
+        st: &mut WorkState,
+        ray: &Ray,
+        hit: &Interaction,
+        level: u32,
+        key: u64,
+        rng: &mut Rng,
+    ) -> Rgb {
         let ray = *ray;
-        let (distance, normal) = (hit.t, hit.ng);
         let params = &cache.params;
         let settings = PathSettings {
             max_depth: params.max_depth(),
@@ -1232,7 +1262,7 @@ impl<'a> SceneRadiance<'a> {
             trace_path(
                 self.scene,
                 start,
-                Some(Some(hit)),
+                Some(Some(*hit)),
                 &mut source,
                 &settings,
                 rng,
@@ -1241,13 +1271,7 @@ impl<'a> SceneRadiance<'a> {
         };
         st.counts.gather_rays += rays.bounce + rays.gather;
         st.counts.shadow_rays += rays.shadow;
-        Incident {
-            radiance,
-            distance,
-            normal,
-            hit: Some((ray, hit)),
-            escaped: None,
-        }
+        radiance
     }
 }
 
