@@ -6,6 +6,7 @@
 
 use super::{mis_weight, RayCounts};
 use crate::bsdf::{Bsdf, BsdfSample};
+use crate::lights::SharedSetUp;
 use crate::sampler::{dims, Sampler};
 use crate::scene::{Interaction, Scene};
 use ircache_math::{Ray, Rgb, Vec2, Vec3};
@@ -190,6 +191,7 @@ pub fn sample_lights<S: Sampler + ?Sized>(
     // One sample (every vertex but a first one given more) needs no grid, nor its square root.
     let side = if ne > 1 { (ne as f32).sqrt() as u32 } else { 1 };
     let grid = ne > 1 && side * side == ne;
+    let mut shared = SharedSetUp::default();
     for i in 0..ne {
         sampler.set_dimension(if i == 0 {
             dims::vertex(depth, dims::LIGHT)
@@ -212,6 +214,10 @@ pub fn sample_lights<S: Sampler + ?Sized>(
         };
         for light in lights {
             let ls = match selection {
+                // Several samples share a rectangle's set-up; one needs no memo.
+                Selection::Chosen if ne > 1 => {
+                    scene.lights.sample_sharing(it.p, u_sel, u, &mut shared)
+                }
                 Selection::Chosen => scene.lights.sample(it.p, u_sel, u),
                 Selection::EachLight => scene.lights.sample_light(light, 1.0, it.p, u),
             };

@@ -158,14 +158,6 @@ impl MeshLight {
         Some(light)
     }
 
-    /// How `p_ref` samples the light when it is one rectangle (with its normal); `None` for
-    /// other meshes (sampled by area).
-    #[inline]
-    fn seen_from(&self, p_ref: Vec3) -> Option<(Seen, &Rectangle, Vec3)> {
-        let (rect, n) = self.rectangle.as_ref()?;
-        Some((rect.seen_from(p_ref), rect, *n))
-    }
-
     /// True when the light is one flat rectangle (sampled by solid angle where it is near).
     #[must_use]
     pub fn is_rectangle(&self) -> bool {
@@ -255,7 +247,31 @@ impl MeshLight {
     #[inline]
     #[must_use]
     pub fn sample(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb, f32, Vec3)> {
-        if let Some((seen, rect, n)) = self.seen_from(p_ref) {
+        self.sample_seen(p_ref, u, self.rectangle_seen_from(p_ref))
+    }
+
+    /// How `p_ref` samples the light when it is one rectangle ([`Rectangle::seen_from`]; `None`
+    /// for other meshes, sampled by area): what several light samples from one point share
+    /// ([`Self::sample_seen`]).
+    #[inline]
+    #[must_use]
+    pub fn rectangle_seen_from(&self, p_ref: Vec3) -> Option<Seen> {
+        self.rectangle
+            .as_ref()
+            .map(|(rect, _)| rect.seen_from(p_ref))
+    }
+
+    /// [`Self::sample`] with `seen`, [`Self::rectangle_seen_from`] at the same `p_ref`, given.
+    #[inline]
+    #[must_use]
+    pub fn sample_seen(
+        &self,
+        p_ref: Vec3,
+        u: Vec2,
+        seen: Option<Seen>,
+    ) -> Option<(Vec3, f32, Rgb, f32, Vec3)> {
+        if let (Some(seen), Some((rect, n))) = (seen, &self.rectangle) {
+            let n = *n;
             let pdf = seen.solid_angle_pdf();
             match seen {
                 Seen::Spherical(sph) => {
@@ -310,8 +326,8 @@ impl MeshLight {
     #[must_use]
     pub fn pdf(&self, prim: u32, p_ref: Vec3, p_light: Vec3, n_fallback: Vec3) -> f32 {
         if let Some(pdf) = self
-            .seen_from(p_ref)
-            .and_then(|(seen, _, _)| seen.solid_angle_pdf())
+            .rectangle_seen_from(p_ref)
+            .and_then(|seen| seen.solid_angle_pdf())
         {
             return pdf;
         }

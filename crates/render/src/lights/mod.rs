@@ -317,6 +317,13 @@ impl EmittedRadiance {
     }
 }
 
+/// What the light samples from one point share ([`LightSet::sample_sharing`]): how it sees the
+/// rectangle light last sampled from it. Made afresh for each point.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SharedSetUp {
+    rectangle: Option<(usize, Option<rectangle::Seen>)>,
+}
+
 impl LightSet {
     /// Builds the lights of `desc`: one area light per emitting shape (in shape order), then the
     /// other emitters in description order. `scene_center` and `scene_radius` describe the scene's
@@ -478,11 +485,25 @@ impl LightSet {
     #[inline]
     #[must_use]
     pub fn sample(&self, p: Vec3, u_select: f32, u: Vec2) -> Option<LightSample> {
+        self.sample_sharing(p, u_select, u, &mut SharedSetUp::default())
+    }
+
+    /// [`Self::sample`] for one of several samples from the same `p`, which share `shared`: a
+    /// rectangle light's spherical set-up (Ureña's four angles) is made once for them all.
+    #[inline]
+    #[must_use]
+    pub fn sample_sharing(
+        &self,
+        p: Vec3,
+        u_select: f32,
+        u: Vec2,
+        shared: &mut SharedSetUp,
+    ) -> Option<LightSample> {
         if self.lights.is_empty() {
             return None;
         }
         let (idx, sel) = self.select(p, u_select);
-        self.sample_chosen(idx, sel, p, u, true)
+        self.sample_chosen(idx, sel, p, u, true, shared)
     }
 
     /// Samples light `idx` alone with `u`, its densities scaled by `sel` (1 where every light is
@@ -491,7 +512,7 @@ impl LightSet {
     #[inline]
     #[must_use]
     pub fn sample_light(&self, idx: usize, sel: f32, p: Vec3, u: Vec2) -> Option<LightSample> {
-        self.sample_chosen(idx, sel, p, u, false)
+        self.sample_chosen(idx, sel, p, u, false, &mut SharedSetUp::default())
     }
 
     /// Samples light `idx`, chosen with probability `sel`; with `whole_environment`, an
@@ -505,6 +526,7 @@ impl LightSet {
         p: Vec3,
         u: Vec2,
         whole_environment: bool,
+        shared: &mut SharedSetUp,
     ) -> Option<LightSample> {
         let light = idx as u32;
         let own_environment = |wi: Vec3, pdf: f32, radiance: Rgb| {
@@ -538,7 +560,17 @@ impl LightSet {
             normal: Vec3::ZERO,
         };
         match &self.lights[idx] {
-            Light::Mesh(m) => m.sample(p, u).map(area),
+            Light::Mesh(m) => {
+                let seen = match shared.rectangle {
+                    Some((light, seen)) if light == idx => seen,
+                    _ => {
+                        let seen = m.rectangle_seen_from(p);
+                        shared.rectangle = Some((idx, seen));
+                        seen
+                    }
+                };
+                m.sample_seen(p, u, seen).map(area)
+            }
             Light::Sphere(s) => s.sample(p, u).map(area),
             Light::Point(l) => l.sample(p).map(delta),
             Light::Spot(l) => l.sample(p).map(delta),
