@@ -509,11 +509,10 @@ impl TriangleMesh {
         let Some(normals) = &self.normals else {
             return true;
         };
-        self.indices.iter().all(|&[i0, i1, i2]| {
-            let p = |i: u32| self.positions[i as usize];
-            let face = (p(i1) - p(i0)).cross(p(i2) - p(i0)).normalize_or_zero();
+        self.indices.iter().enumerate().all(|(t, corners)| {
+            let face = crate::shapes::triangle_normal(self, t);
             face == Vec3::ZERO
-                || [i0, i1, i2]
+                || corners
                     .iter()
                     .all(|&i| normals[i as usize].normalize_or_zero().dot(face) >= 1.0 - 1e-6)
         })

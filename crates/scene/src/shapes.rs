@@ -284,7 +284,7 @@ mod tests {
         assert!(rectangle().shades_flat(), "no normals");
         assert!(cube().shades_flat(), "a normal per face");
         let mut turned = cube();
-        // One vertex normal tilted by 0.01 rad, then all of them reversed: both shade smooth.
+        // One vertex normal tilted by about 0.01 rad, or all of them reversed: both shade smooth.
         let n = turned.normals.as_mut().unwrap();
         n[0] = (n[0] + Vec3::new(0.01, 0.0, 0.01)).normalize();
         assert!(!turned.shades_flat());

@@ -497,6 +497,19 @@ pub struct Incident {
 }
 
 impl Incident {
+    /// `radiance` arriving along `ray` from the surface `hit` it met.
+    #[inline]
+    #[must_use]
+    pub fn found(radiance: Rgb, ray: Ray, hit: Interaction) -> Incident {
+        Incident {
+            radiance,
+            distance: hit.t,
+            normal: hit.ng,
+            hit: Some((ray, hit)),
+            escaped: None,
+        }
+    }
+
     /// What arrives along a gather ray in direction `d` whose trace gave `found` (`None`: it
     /// escaped): a surface's light, or `Err` with the escaped light's direction and throughput.
     #[inline]
@@ -1102,13 +1115,7 @@ impl IncidentRadiance for SceneRadiance<'_> {
         if !self.scene.has_see_through {
             // Built here, in the returned `Option`: `Some(incident_at(…))` copied the 184 bytes.
             let radiance = self.radiance_at(cache, seed, st, &ray, &hit, level, key, rng);
-            return Some(Incident {
-                radiance,
-                distance: hit.t,
-                normal: hit.ng,
-                hit: Some((ray, hit)),
-                escaped: None,
-            });
+            return Some(Incident::found(radiance, ray, hit));
         }
         Some(self.through_see_through(cache, seed, st, ray, hit, level, key, rng))
     }
@@ -1212,13 +1219,7 @@ impl<'a> SceneRadiance<'a> {
         rng: &mut Rng,
     ) -> Incident {
         let radiance = self.radiance_at(cache, seed, st, ray, &hit, level, key, rng);
-        Incident {
-            radiance,
-            distance: hit.t,
-            normal: hit.ng,
-            hit: Some((*ray, hit)),
-            escaped: None,
-        }
+        Incident::found(radiance, *ray, hit)
     }
 
     /// The radiance of [`Self::incident_at`].
