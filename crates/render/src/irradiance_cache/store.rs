@@ -213,16 +213,24 @@ impl<R: CachedRecord> RecordStore<R> {
     /// Calls `f(record index)` for every record whose validity sphere may hold `p`.
     #[inline]
     pub fn for_each_near(&self, p: Vec3, mut f: impl FnMut(u32)) {
+        // Every level's cell first, then their records: the hash probes, each a likely cache
+        // miss in a large cache, overlap instead of waiting one behind the other's records.
+        let mut cells: [&[u32]; MAX_GRID_LEVEL as usize + 1] = [&[]; MAX_GRID_LEVEL as usize + 1];
+        let mut found = 0;
         let mut used = self.levels_used;
         while used != 0 {
             let level = used.trailing_zeros() as u8;
             used &= used - 1;
             let key = (level, Self::cell_of(p, self.cell_size(level)));
             if let Some(ids) = self.cells.get(&key) {
-                for &id in ids {
-                    if self.may_reach(id, p, 1.0) {
-                        f(id);
-                    }
+                cells[found] = ids;
+                found += 1;
+            }
+        }
+        for ids in &cells[..found] {
+            for &id in *ids {
+                if self.may_reach(id, p, 1.0) {
+                    f(id);
                 }
             }
         }
