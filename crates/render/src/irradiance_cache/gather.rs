@@ -47,8 +47,8 @@ pub struct IrradianceCache {
     pub ambient: Rgb,
     /// Area-weighted mean diffuse albedo (luminance) of the scene's surfaces.
     pub mean_albedo: f32,
-    /// How a pixel's footprint grows from the camera: Tabellion's radius limits are 1.5 and 10
-    /// pixel footprints at a level-0 record; none without a camera view.
+    /// How a pixel's footprint grows from the camera: Tabellion's radius limits are
+    /// `footprint_limits` pixel footprints at a level-0 record; none without a camera view.
     pub pixel_spread: crate::camera::PixelSpread,
     /// Shapes excluded from the cache (003 item 6), by shape index: they get the ambient value
     /// as their indirect light instead of records.
@@ -982,8 +982,8 @@ impl<'a> Gatherer<'a> {
     /// distances its hemisphere saw (the nearest, the harmonic mean, and where known the
     /// Hessian's reach: at the accuracy under the Hessian metric, at CURVATURE_SHARE of it
     /// otherwise) and what else it holds: its radius within the limits (the resolution's, or
-    /// for Tabellion's metric 1.5 and 10 pixel footprints at a record the camera sees, 000 eq.
-    /// 3.60; 003 items 3–4) and Ward's gradient limit. Shared by gathered records and records
+    /// for Tabellion's metric `--footprint-limits` pixel footprints at a record the camera sees,
+    /// 000 eq. 3.60; 003 items 3–4) and Ward's gradient limit. Shared by gathered records and records
     /// from planes.
     pub fn finish_record(
         &self,
@@ -1006,7 +1006,12 @@ impl<'a> Gatherer<'a> {
                             sp.cos_view,
                         )
                     });
-                super::record::tabellion_radius(&[nearest], limits, footprint)
+                super::record::tabellion_radius(
+                    &[nearest],
+                    limits,
+                    footprint,
+                    params.footprint_limits,
+                )
             }
             // ½ λ R² = a E: the second-order error reaches a E at R. The reprojection cannot
             // see visibility change behind nearby occluders: the harmonic mean distance bounds

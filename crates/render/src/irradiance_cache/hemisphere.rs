@@ -51,7 +51,7 @@ impl Stratification {
         let fast = self.azimuthal >= 8;
         let inv_m = 1.0 / self.polar as f32;
         for k in 0..self.azimuthal {
-            let (s0, c0) = (k as f32 * sector).sin_cos();
+            let (s0, c0) = ircache_math::sampling::sin_cos_turn(k as f32 / self.azimuthal as f32);
             for j in 0..self.polar {
                 let u = jitter(j, k);
                 let (sin_t, cos_t) = polar_sin_cos(j, u.x, self.polar, inv_m);
@@ -100,8 +100,8 @@ impl Stratification {
     #[must_use]
     pub fn direction(&self, j: usize, k: usize, u: Vec2) -> Vec3 {
         let (sin_t, cos_t) = polar_sin_cos(j, u.x, self.polar, 1.0 / self.polar as f32);
-        let phi = 2.0 * std::f32::consts::PI * (k as f32 + u.y) / self.azimuthal as f32;
-        let (sp, cp) = phi.sin_cos();
+        let (sp, cp) =
+            ircache_math::sampling::sin_cos_turn((k as f32 + u.y) / self.azimuthal as f32);
         Vec3::new(cp * sin_t, sp * sin_t, cos_t)
     }
 

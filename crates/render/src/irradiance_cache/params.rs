@@ -156,6 +156,9 @@ pub struct IcParams {
     /// Resolution (`-ar`): the smallest record radius is the scene size / resolution (the
     /// smallest spacing that times `a`), the largest 64× that; 0 means no minimum.
     pub resolution: f32,
+    /// Tabellion–Lamorlette's limits on the radius of a record the camera sees, in pixel
+    /// footprints (000 eq. 3.60): smallest and largest.
+    pub footprint_limits: (f32, f32),
     /// Indirect bounces (`-ab`): one cache per bounce level; equals path tracing with
     /// `max_depth` = bounces + 2.
     pub bounces: u32,
@@ -248,6 +251,12 @@ impl Default for IcParams {
             // Radiance's 128 would floor Tabellion's footprint radii at size/256 (4× Sponza's
             // error, measured); the floor stays for records the camera does not see.
             resolution: 1024.0,
+            // Tabellion–Lamorlette's 1.5 and 10, the largest halved by measurement (BENCHMARKS.md,
+            // "Records no larger than five pixels"): where nothing nearby bounds a record it grew
+            // to 10 footprints, and its gather noise showed as blotches 20 pixels across; at 5,
+            // blurred relMSE_trim × time 0.83–0.99× on 11 of 13 scene-depth pairs (Sponza d3
+            // 0.91×), 1.0× on the lamp room and the bump maps, 1.07× on cornell-rough.
+            footprint_limits: (1.5, 5.0),
             bounces: 1,
             ambient_value: Rgb::ZERO,
             gradients: GradientMode::Full,
@@ -510,6 +519,30 @@ pub const PARAMS: &[ParamSpec] = &[
         },
     },
     ParamSpec {
+        name: "footprint_limits",
+        aliases: &[],
+        value: "MIN,MAX",
+        help: "with tabellion, the smallest and largest radius of a record the camera sees, in \
+               pixel footprints (000 eq. 3.60; Tabellion–Lamorlette's 1.5,10)",
+        shapes_records: true,
+        get: |p| format!("{},{}", p.footprint_limits.0, p.footprint_limits.1),
+        set: |p, v| {
+            let parts: Vec<&str> = v
+                .split(|c: char| c == ',' || c.is_whitespace())
+                .filter(|t| !t.is_empty())
+                .collect();
+            let [lo, hi] = parts[..] else {
+                return Err(format!(
+                    "expected two pixel-footprint multiples MIN,MAX, found \"{v}\""
+                ));
+            };
+            let lo = number(lo, 0.0, 1.0e6, "a multiple of the pixel footprint")?;
+            let hi = number(hi, lo, 1.0e6, "a multiple of the pixel footprint at least MIN")?;
+            p.footprint_limits = (lo, hi);
+            Ok(())
+        },
+    },
+    ParamSpec {
         name: "bounces",
         aliases: &["ab"],
         value: "N|-1",
@@ -592,7 +625,7 @@ pub const PARAMS: &[ParamSpec] = &[
         aliases: &[],
         value: "tabellion|ward|hessian",
         help: "how a record's error is measured: Tabellion–Lamorlette (000 eqs. 3.59–3.62, \
-               radii within 1.5–10 pixel footprints), Ward's split sphere (3.10), or a Hessian \
+               radii within --footprint-limits pixel footprints), Ward's split sphere (3.10), or a Hessian \
                radius (½λR² = aE)",
         shapes_records: true,
         get: |p| p.error_metric.name().to_string(),

@@ -41,18 +41,20 @@ pub fn pixel_footprint(spread: crate::camera::PixelSpread, travelled: f32, cos_v
 
 /// Tabellion–Lamorlette's radius (000 eqs. 3.59–3.60): half the nearest of the gather's hit
 /// `distances`, and its limits: half the resolution's `(r_min, r_max)` (so that R/2 ≥ size/(2·ar)
-/// as in Radiance), and at a record the camera sees 1.5 and 10 times its pixel `footprint`.
-/// Returns the radius (not yet limited) and the limits.
+/// as in Radiance), and at a record the camera sees `footprints` (smallest, largest; the
+/// paper's 1.5 and 10) times its pixel `footprint`. Returns the radius (not yet limited) and
+/// the limits.
 #[must_use]
 pub fn tabellion_radius(
     distances: &[f32],
     (r_min, r_max): (f32, f32),
     footprint: Option<f32>,
+    (smallest, largest): (f32, f32),
 ) -> (f32, (f32, f32)) {
     let (mut r_min, mut r_max) = (0.5 * r_min, 0.5 * r_max);
     if let Some(footprint) = footprint {
-        r_min = r_min.max(1.5 * footprint);
-        r_max = r_max.min(10.0 * footprint).max(r_min);
+        r_min = r_min.max(smallest * footprint);
+        r_max = r_max.min(largest * footprint).max(r_min);
     }
     let nearest = distances.iter().copied().fold(f32::INFINITY, f32::min);
     (0.5 * nearest, (r_min, r_max))
@@ -176,7 +178,7 @@ pub enum ErrorMetric {
     Ward,
     /// Tabellion and Lamorlette (000 eqs. 3.59–3.62): ε = κ max(‖x − xᵢ‖/Rᵢ,
     /// √(1 − n·nᵢ)/√(1 − cos 10°)), valid where ε < 1, weight 1 − ε; R is half the closest
-    /// distance clamped to [1.5, 10] pixel footprints; κ = 0.2/a (1 at the default accuracy).
+    /// distance clamped to `footprint_limits` pixel footprints; κ = 0.2/a (1 at the default accuracy).
     /// The cache's default (chosen by measurement, BENCHMARKS.md).
     #[default]
     Tabellion,
@@ -304,6 +306,30 @@ pub fn extrapolate(rec: &Record, p: Vec3, n: Vec3, mode: GradientMode) -> Rgb {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tabellion_radii_keep_within_their_pixel_footprints_and_the_resolutions_limits() {
+        // Footprint 0.01, limits (1.5, 5) footprints: R₋ = 0.015, R₊ = 0.05 where the
+        // resolution's halves (0.001, 0.064) are looser; the resolution's bind where tighter.
+        let (r, (lo, hi)) = tabellion_radius(&[0.3, 0.08], (0.002, 0.128), Some(0.01), (1.5, 5.0));
+        assert_eq!(r, 0.04);
+        assert!(
+            (lo - 0.015).abs() < 1e-7 && (hi - 0.05).abs() < 1e-7,
+            "{lo} {hi}"
+        );
+        let (_, (lo, hi)) = tabellion_radius(&[0.3], (0.04, 0.08), Some(0.01), (1.5, 5.0));
+        assert!(
+            (lo - 0.02).abs() < 1e-7 && (hi - 0.04).abs() < 1e-7,
+            "{lo} {hi}"
+        );
+        // A largest limit below the smallest is lifted to it; no footprint, no pixel limits.
+        let (_, (lo, hi)) = tabellion_radius(&[0.3], (0.002, 0.128), Some(0.01), (3.0, 2.0));
+        assert!((lo - 0.03).abs() < 1e-7 && hi == lo, "{lo} {hi}");
+        assert_eq!(
+            tabellion_radius(&[0.3], (0.002, 0.128), None, (1.5, 5.0)).1,
+            (0.001, 0.064)
+        );
+    }
 
     #[test]
     fn the_gradient_limit_bounds_the_change_predicted_within_reach_for_every_metric() {

@@ -8,7 +8,7 @@
 //! vertex takes its diffuse indirect light from here.
 //!
 //! Records use the error metric asked for, Tabellion's (the default: half the nearest opaque hit
-//! within 1.5–10 pixel footprints, which a camera ray keeps through null boundaries and media)
+//! within `--footprint-limits` pixel footprints, which a camera ray keeps through null boundaries and media)
 //! or Ward's; the Hessian metric's reprojection has no transmittance (NOTES-002 §2.8), so Ward's
 //! stands in for it and [`METRIC_NOTE`] says so.
 //!
@@ -135,11 +135,16 @@ pub fn make_record(
     );
     let grad_r = to_world(&samples.rotational_gradient(), frame.s, frame.t);
     // Radii as the irradiance cache's (000 eq. 3.60 for Tabellion's: half the nearest opaque
-    // hit within 1.5 and 10 pixel footprints); Ward's harmonic mean otherwise.
+    // hit within `--footprint-limits` pixel footprints); Ward's harmonic mean otherwise.
     let limits = params.radius_limits(2.0 * scene.radius);
     let (r, (r_min, r_max)) = if params.error_metric == ErrorMetric::Tabellion {
         let footprint = (site.footprint > 0.0).then_some(site.footprint);
-        tabellion_radius(&samples.distance, limits, footprint)
+        tabellion_radius(
+            &samples.distance,
+            limits,
+            footprint,
+            params.footprint_limits,
+        )
     } else {
         (samples.harmonic_mean_distance(), limits)
     };
