@@ -692,6 +692,7 @@ mod tests {
             ("record_error", "0.5"),
             ("regather_at", "16"),
             ("resolution", "64"),
+            ("footprint_limits", "1,8"),
             ("bounces", "5"),
             ("deeper_bounces", "cache"),
             ("ambient_value", "1,2,3"),
