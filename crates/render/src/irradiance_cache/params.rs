@@ -254,8 +254,8 @@ impl Default for IcParams {
             // Tabellion–Lamorlette's 1.5 and 10, the largest halved by measurement (BENCHMARKS.md,
             // "Records no larger than five pixels"): where nothing nearby bounds a record it grew
             // to 10 footprints, and its gather noise showed as blotches 20 pixels across; at 5,
-            // blurred relMSE_trim × time 0.83–0.99× on 11 of 13 scene-depth pairs (Sponza d3
-            // 0.91×), 1.0× on the lamp room and the bump maps, 1.07× on cornell-rough.
+            // blurred relMSE_trim × time 0.83–0.99× on 10 of 13 scene-depth pairs (Sponza d3
+            // 0.91×), the same error on the lamp room and the bump maps, 1.07× on cornell-rough.
             footprint_limits: (1.5, 5.0),
             bounces: 1,
             ambient_value: Rgb::ZERO,
