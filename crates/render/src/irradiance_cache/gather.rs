@@ -983,8 +983,8 @@ impl<'a> Gatherer<'a> {
     /// Hessian's reach: at the accuracy under the Hessian metric, at CURVATURE_SHARE of it
     /// otherwise) and what else it holds: its radius within the limits (the resolution's, or
     /// for Tabellion's metric `--footprint-limits` pixel footprints at a record the camera sees,
-    /// 000 eq. 3.60; 003 items 3–4) and Ward's gradient limit. Shared by gathered records and records
-    /// from planes.
+    /// 000 eq. 3.60; 003 items 3–4) and Ward's gradient limit. Shared by gathered records and
+    /// records from planes.
     pub fn finish_record(
         &self,
         sp: &ShadingPoint,

@@ -348,6 +348,13 @@ fn number<T: std::str::FromStr + PartialOrd + std::fmt::Display>(
         .ok_or_else(|| format!("expected {what} from {lo} to {hi}, found \"{}\"", v.trim()))
 }
 
+/// The items of a list value, separated by commas or spaces (`1,2,3`, `1 2 3`).
+fn list(v: &str) -> Vec<&str> {
+    v.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .collect()
+}
+
 fn on_off(v: &str) -> Result<bool, String> {
     match v.trim() {
         "on" | "true" | "1" => Ok(true),
@@ -527,17 +534,19 @@ pub const PARAMS: &[ParamSpec] = &[
         shapes_records: true,
         get: |p| format!("{},{}", p.footprint_limits.0, p.footprint_limits.1),
         set: |p, v| {
-            let parts: Vec<&str> = v
-                .split(|c: char| c == ',' || c.is_whitespace())
-                .filter(|t| !t.is_empty())
-                .collect();
+            let parts = list(v);
             let [lo, hi] = parts[..] else {
                 return Err(format!(
                     "expected two pixel-footprint multiples MIN,MAX, found \"{v}\""
                 ));
             };
             let lo = number(lo, 0.0, 1.0e6, "a multiple of the pixel footprint")?;
-            let hi = number(hi, lo, 1.0e6, "a multiple of the pixel footprint at least MIN")?;
+            let hi = number(
+                hi,
+                lo,
+                1.0e6,
+                "a multiple of the pixel footprint at least MIN",
+            )?;
             p.footprint_limits = (lo, hi);
             Ok(())
         },
@@ -590,10 +599,7 @@ pub const PARAMS: &[ParamSpec] = &[
             format!("{},{},{}", c.r, c.g, c.b)
         },
         set: |p, v| {
-            let parts: Vec<&str> = v
-                .split(|c: char| c == ',' || c.is_whitespace())
-                .filter(|t| !t.is_empty())
-                .collect();
+            let parts = list(v);
             let f = |x: &str| number(x, 0.0, f32::MAX, "a radiance");
             p.ambient_value = match parts[..] {
                 [x] => Rgb::splat(f(x)?),
@@ -625,8 +631,8 @@ pub const PARAMS: &[ParamSpec] = &[
         aliases: &[],
         value: "tabellion|ward|hessian",
         help: "how a record's error is measured: Tabellion–Lamorlette (000 eqs. 3.59–3.62, \
-               radii within --footprint-limits pixel footprints), Ward's split sphere (3.10), or a Hessian \
-               radius (½λR² = aE)",
+               radii within --footprint-limits pixel footprints), Ward's split sphere (3.10), or \
+               a Hessian radius (½λR² = aE)",
         shapes_records: true,
         get: |p| p.error_metric.name().to_string(),
         set: |p, v| {

@@ -178,7 +178,8 @@ pub enum ErrorMetric {
     Ward,
     /// Tabellion and Lamorlette (000 eqs. 3.59–3.62): ε = κ max(‖x − xᵢ‖/Rᵢ,
     /// √(1 − n·nᵢ)/√(1 − cos 10°)), valid where ε < 1, weight 1 − ε; R is half the closest
-    /// distance clamped to `footprint_limits` pixel footprints; κ = 0.2/a (1 at the default accuracy).
+    /// distance clamped to `footprint_limits` pixel footprints; κ = 0.2/a (1 at the default
+    /// accuracy).
     /// The cache's default (chosen by measurement, BENCHMARKS.md).
     #[default]
     Tabellion,

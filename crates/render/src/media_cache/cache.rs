@@ -8,9 +8,9 @@
 //! vertex takes its diffuse indirect light from here.
 //!
 //! Records use the error metric asked for, Tabellion's (the default: half the nearest opaque hit
-//! within `--footprint-limits` pixel footprints, which a camera ray keeps through null boundaries and media)
-//! or Ward's; the Hessian metric's reprojection has no transmittance (NOTES-002 §2.8), so Ward's
-//! stands in for it and [`METRIC_NOTE`] says so.
+//! within `--footprint-limits` pixel footprints, which a camera ray keeps through null boundaries
+//! and media) or Ward's; the Hessian metric's reprojection has no transmittance (NOTES-002
+//! §2.8), so Ward's stands in for it and [`METRIC_NOTE`] says so.
 //!
 //! Records are made in a pre-pass over the image's pixel centres, one row at a time: the row's
 //! uncovered first hits are gathered in parallel and inserted in row order, so the cache is the
