@@ -321,7 +321,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         if aov == "photons"
             && !matches!(&integrator, Integrator::Ic(ic)
-                if ic.params.global_photons() > 0 || ic.params.caustic_photons > 0)
+                if ic.params.global_photons() > 0 || ic.params.caustic_photons() > 0)
         {
             bail!("--aov photons needs photon maps: give --photons N or --caustic-photons N");
         }
@@ -639,7 +639,15 @@ fn write_aovs(
                 aov::irradiance_image(scene, &report.cache, settings.width, settings.height)
             }
             "glossy" => aov::glossy_image(scene, &report.cache, settings.width, settings.height),
-            "photons" => aov::photon_image(scene, &report.cache, settings.width, settings.height),
+            "photons" => {
+                if report.cache.photons.is_none() {
+                    bail!(
+                        "--aov photons: this render made no photon maps (no global photons at \
+                         this depth, and no surface in the scene makes caustics): give --photons N"
+                    );
+                }
+                aov::photon_image(scene, &report.cache, settings.width, settings.height)
+            }
             _ => aov::record_overlay(scene, &report.cache, image),
         };
         let stem = output

@@ -13,6 +13,7 @@ use ircache_render::irradiance_cache::IcParams;
 use ircache_render::scene::Scene;
 use ircache_scene::*;
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// A quad from four corners in order, two-sided diffuse of albedo `rho`.
 fn quad(c: [Vec3; 4], rho: f32) -> ShapeDesc {
@@ -667,4 +668,97 @@ fn an_indirect_hot_spot_is_interpolated_within_the_accuracy() {
     // with the curvature bound at a·E instead of a tenth of it 1.027 and 0.24.
     assert!((ratio - 1.0).abs() < 0.02, "mean {ratio}");
     assert!(worst < 0.15, "near the peak {worst}");
+}
+
+/// `ircache irradiance` where light arrives off a mirror (a caustic): a small panel faces up
+/// under a perfect mirror, so at one bounce the floor, and a workplane in the air above it,
+/// receive only the panel's mirror image, whose irradiance Lambert's form factor gives. Points
+/// need not lie on surfaces, so no caustic map serves them even where renders make one: the
+/// gathers keep that light, by default and when a map is asked for.
+#[test]
+fn irradiance_at_points_keeps_the_light_a_mirror_sends() {
+    let (h, le) = (0.15, 10.0);
+    let mirror = Arc::new(BsdfDesc::Conductor {
+        eta: Rgb::splat(0.0),
+        k: Rgb::splat(1.0),
+        specular_reflectance: Rgb::ONE,
+    });
+    let shapes = vec![
+        // Floor (y = 0, up) and mirror (y = 1, down), both 4 × 4.
+        quad(
+            [
+                v(-2., 0., -2.),
+                v(-2., 0., 2.),
+                v(2., 0., 2.),
+                v(2., 0., -2.),
+            ],
+            0.5,
+        ),
+        common::quad(
+            [
+                v(-2., 1., -2.),
+                v(2., 1., -2.),
+                v(2., 1., 2.),
+                v(-2., 1., 2.),
+            ],
+            mirror,
+            None,
+        ),
+        // The panel at y = 0.5, shining up only.
+        common::quad(
+            [v(-h, 0.5, -h), v(-h, 0.5, h), v(h, 0.5, h), v(h, 0.5, -h)],
+            diffuse(Rgb::ZERO),
+            Some(Rgb::splat(le)),
+        ),
+    ];
+    let desc = scene(
+        sensor(v(0.0, 0.9, 3.0), v(0.0, 0.3, 0.0), 50.0, 8, 1),
+        ic_desc(&[]),
+        shapes,
+        vec![],
+    );
+    let scene = Scene::build(&desc).unwrap();
+    // The panel's image in the mirror, at y = 1.5.
+    let image = [v(-h, 1.5, -h), v(h, 1.5, -h), v(h, 1.5, h), v(-h, 1.5, h)];
+    let queries: Vec<(Vec3, Vec3)> = (0..24)
+        .map(|i| {
+            let t = i as f32 / 24.0 * std::f32::consts::TAU;
+            let r = 0.6 + 0.3 * (i % 3) as f32;
+            let y = if i % 2 == 0 { 0.0 } else { 0.3 };
+            (v(r * t.cos(), y, r * t.sin()), Vec3::Y)
+        })
+        .collect();
+    let exact: Vec<f32> = queries
+        .iter()
+        .map(|&(x, n)| le * PI * form_factor(x, n, &image))
+        .collect();
+    // Tolerances about three standard deviations over seeds: the records' mean spreads 1.8 %,
+    // the brute-force gathers' 0.7 %.
+    for (what, method, p, tolerance) in [
+        ("defaults", PointMethod::Cache, params(&[]), 0.06),
+        (
+            "caustic map asked",
+            PointMethod::Cache,
+            params(&[("caustic_photons", "100000")]),
+            0.06,
+        ),
+        (
+            "brute force",
+            PointMethod::BruteForce { samples: 16384 },
+            params(&[]),
+            0.03,
+        ),
+    ] {
+        let (res, _) = irradiance_at_points(&scene, &p, &queries, method, 0, 5);
+        let ratio = res
+            .iter()
+            .zip(&exact)
+            .map(|(r, &e)| f64::from(r.indirect.g / e))
+            .sum::<f64>()
+            / exact.len() as f64;
+        assert!(
+            (ratio - 1.0).abs() < tolerance,
+            "{what}: {ratio} of the exact"
+        );
+    }
 }

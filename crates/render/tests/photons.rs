@@ -386,23 +386,32 @@ fn caustics_through_a_glass_sphere_match_the_path_tracer() {
 
     let mut few = camera;
     few.spp = 64;
-    let what = "caustic map";
-    let params = [("caustic_photons", "200000")];
-    let out = render_desc(
-        &scene(few.clone(), ic(6, &params), shapes.clone(), vec![]),
-        0,
-        1,
-    );
-    let caustic = masked_mean(&out.image, &mask);
-    let mean = masked_mean(&out.image, &vec![true; lum.len()]);
-    assert!(
-        (caustic / path_caustic - 1.0).abs() < 0.08,
-        "{what}: caustic {caustic} against the path tracer's {path_caustic}"
-    );
-    assert!(
-        (mean / path_mean - 1.0).abs() < 0.02,
-        "{what}: mean {mean} against the path tracer's {path_mean}"
-    );
+    // The defaults make a caustic map here (a surface with a delta lobe).
+    for (what, params) in [
+        ("caustic map", vec![("caustic_photons", "200000")]),
+        ("defaults", vec![]),
+    ] {
+        let out = render_desc(
+            &scene(few.clone(), ic(6, &params), shapes.clone(), vec![]),
+            0,
+            1,
+        );
+        let maps = out.cache.as_ref().and_then(|c| c.cache.photons.clone());
+        assert!(
+            maps.is_some_and(|m| m.caustic.is_some()),
+            "{what}: a caustic map"
+        );
+        let caustic = masked_mean(&out.image, &mask);
+        let mean = masked_mean(&out.image, &vec![true; lum.len()]);
+        assert!(
+            (caustic / path_caustic - 1.0).abs() < 0.08,
+            "{what}: caustic {caustic} against the path tracer's {path_caustic}"
+        );
+        assert!(
+            (mean / path_mean - 1.0).abs() < 0.02,
+            "{what}: mean {mean} against the path tracer's {path_mean}"
+        );
+    }
 }
 
 /// A closed diffuse room lit by a small ceiling panel: inward-facing walls, floor and ceiling.
@@ -492,12 +501,20 @@ fn final_gather_and_photon_records_match_the_path_tracer_in_a_room() {
             "photon records",
             vec![("photons", "100000"), ("photon_records", "on")],
         ),
+        // Nothing in the room makes caustics: no map, and a note says so.
+        (
+            "caustic photons asked",
+            vec![("photons", "100000"), ("caustic_photons", "5000")],
+        ),
     ] {
         let out = render_desc(&scene(few.clone(), ic(5, &params), room(), vec![]), 0, 3);
         let cache = out.cache.as_ref().expect("a cache");
         let maps = cache.cache.photons.as_ref().expect("photon maps");
         assert!(maps.global.tree.len() >= 100_000, "{what}: photons stored");
-        if params.len() == 2 {
+        assert!(maps.caustic.is_none(), "{what}: no caustic map");
+        let noted = cache.stats.notes.iter().any(|n| n.contains("stored none"));
+        assert_eq!(noted, what == "caustic photons asked", "{what}: notes");
+        if params.contains(&("photon_records", "on")) {
             assert!(
                 cache.stats.photon_records > 0,
                 "{what}: records from photons"
@@ -613,4 +630,43 @@ fn a_pass_that_keeps_nothing_stops_early() {
     // A map that keeps first hits too fills up and is not cut short.
     let all = PhotonMap::build(&scene, MapKind::All, wanted, 4, 3, None);
     assert!(all.stats.stored >= wanted, "{:?}", all.stats);
+}
+
+/// A sun overhead, a smooth Radiance `trans` roof (straight transmission, a Lambertian
+/// reflection) and a grey floor. The sun's light straight through the roof is direct light:
+/// light samples pass it, as Radiance's shadow rays do. Photons that cross the roof that way
+/// must not land on the floor as one-bounce (global) or caustic photons, or every map would
+/// count the sunlit floor twice; light the floor sends back up and the roof returns is kept.
+#[test]
+fn sunlight_straight_through_a_smooth_trans_is_in_no_photon_map() {
+    let dir = std::env::temp_dir().join(format!("ircache-trans-sun-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("roof.rad");
+    std::fs::write(
+        &path,
+        "void light solar\n0\n0\n3 1e4 1e4 1e4\nsolar source sun\n0\n0\n4 0 0 1 0.5\n\
+         void trans tr\n0\n0\n7 1 1 1 0 0 .6 1\n\
+         tr polygon roof\n0\n0\n12 -5 -5 1 5 -5 1 5 5 1 -5 5 1\n\
+         void plastic grey\n0\n0\n5 .5 .5 .5 0 0\n\
+         grey polygon floor\n0\n0\n12 -5 -5 0 5 -5 0 5 5 0 -5 5 0\n",
+    )
+    .unwrap();
+    let desc = ircache_scene::load_scene(&path, &[], &Default::default()).unwrap();
+    let scene = Scene::build(&desc).unwrap();
+    let global = PhotonMap::build(&scene, MapKind::Global, 20_000, 4, 3, None);
+    let on_floor = |p: &&Photon| p.position.z.abs() < 1e-3;
+    let photons = &global.tree.photons;
+    let first = photons.iter().filter(on_floor).filter(|p| p.bounces == 1);
+    assert_eq!(first.count(), 0, "one-bounce photons on the floor");
+    // The floor's light, sent back down by the roof, is kept (bounce 2 at the floor).
+    assert!(
+        photons.iter().filter(on_floor).any(|p| p.bounces == 2),
+        "no photon the roof returned"
+    );
+    let caustic = PhotonMap::build(&scene, MapKind::Caustic, 20_000, 4, 3, None);
+    assert_eq!(
+        caustic.tree.len(),
+        0,
+        "caustic photons of the sun's direct light"
+    );
 }

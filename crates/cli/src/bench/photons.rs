@@ -3,8 +3,9 @@
 //! On ircache's `scenes/cornell-glass` (cornell-glossy with a glass sphere: a caustic; `-ab 3`
 //! against a `max_depth` 5 reference) and `scenes/lamp-room` (lamps in shades: most light
 //! arrives off a rough-metal bowl and a gold cone; `max_depth` 7), at 256 pixels across: `ic`
-//! without photons, with the cached final gather (`--photons`), with the caustic map too, and
-//! with photon-mapped records (`--photon-records on`), all at 16 spp; then `ic` without photons
+//! without photons, at its defaults, with the cached final gather (`--photons`) without and
+//! with the caustic map, and with photon-mapped records (`--photon-records on`), all at 16 spp;
+//! then `ic` without photons
 //! at 64, 256, … spp and Mitsuba 3 `multijitter` at 16, 64, … spp until each reaches the best
 //! photon variant's error (unblurred and blurred, σ = 2 px), or 20 times its time. Times to
 //! equal error are interpolated between the bracketing renders, never extrapolated. Last, the
@@ -67,6 +68,7 @@ fn cache_line(out: &RenderOutput) -> String {
 pub fn run_all(with_mitsuba: bool) -> Result<()> {
     let own = own_scenes();
     let global = ("photons", "200000");
+    let no_caustics = ("caustic_photons", "0");
     let cases: [(&str, u32, &str, &str, Vec<Variant>); 2] = [
         (
             "cornell-glass",
@@ -74,7 +76,11 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
             "256",
             "256",
             vec![
-                ("ic, final gather (--photons 200000)", vec![global]),
+                ("ic, defaults (100000 photons in each map)", vec![]),
+                (
+                    "ic, final gather (--photons 200000), no caustic map",
+                    vec![global, no_caustics],
+                ),
                 (
                     "ic, final gather and caustic map (200000 each)",
                     vec![global, ("caustic_photons", "200000")],
@@ -95,12 +101,17 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
             "256",
             "192",
             vec![
+                ("ic, defaults (100000 photons in each map)", vec![]),
                 (
-                    "ic, final gather (--photons 300000)",
+                    "ic, final gather (--photons 300000), no caustic map",
+                    vec![("photons", "300000"), no_caustics],
+                ),
+                (
+                    "ic, final gather (--photons 300000), caustic map",
                     vec![("photons", "300000")],
                 ),
                 (
-                    "ic, photon records (--photons 300000)",
+                    "ic, photon records (--photons 300000), caustic map",
                     vec![("photons", "300000"), ("photon_records", "on")],
                 ),
             ],
@@ -120,7 +131,7 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
         let desc = ircache_scene::load_scene(&scene_path, &defines, &ObjCamera::default())?;
         let scene = Scene::build(&desc)?;
         println!("\n{name} ({resx} × {resy}, max_depth {depth})");
-        let no_photons = [("photons", "0")];
+        let no_photons = [("photons", "0"), no_caustics];
         let out = run(&scene, &desc, "ic", 16, &no_photons)?;
         let plain = measure(&out, &reference)?;
         show("ic, no photons", &plain);

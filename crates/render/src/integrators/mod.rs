@@ -273,7 +273,7 @@ fn media_cache_integrator(
         );
     }
     if p.global_photons() > 0
-        || p.caustic_photons > 0
+        || p.caustic_photons.is_some_and(|n| n > 0)
         || p.radiance_cache
         || ic.cache_file.is_some()
     {

@@ -145,6 +145,12 @@ pub const MAX_STORED_LEVELS: u32 = 16;
 /// lowered the blurred error by under 10 % more than 100 000 for 1–11 s more.
 pub const AUTO_PHOTONS: u64 = 100_000;
 
+/// Photons in the caustic map with `--caustic-photons auto`, in scenes with surfaces that make
+/// caustics (delta lobes). Chosen by measurement (BENCHMARKS.md, "Caustics from the caustic map
+/// by default"): on cornell-glass and the lamp room, 30 000 to 300 000 gave the same error
+/// within 3 %; what pays is that the gathers leave those heavy-tailed paths to the map.
+pub const AUTO_CAUSTIC_PHOTONS: u64 = 100_000;
+
 /// Irradiance cache settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct IcParams {
@@ -215,8 +221,9 @@ pub struct IcParams {
     /// Photons in the global map for the cached final gather (`--photons`); 0: off; `None`:
     /// automatic ([`IcParams::global_photons`]).
     pub photons: Option<u64>,
-    /// Photons in the caustic map, read at the pixel (`--caustic-photons`); 0: off.
-    pub caustic_photons: u64,
+    /// Photons in the caustic map, read at the pixel (`--caustic-photons`); 0: off; `None`:
+    /// automatic ([`IcParams::caustic_photons`]).
+    pub caustic_photons: Option<u64>,
     /// Photons per global-map estimate (`--photon-lookup`).
     pub photon_lookup: usize,
     /// Largest lookup radius as a fraction of the scene size (`--photon-radius`).
@@ -284,7 +291,7 @@ impl Default for IcParams {
             radiance_accuracy: 0.3,
             cached_environment: CachedEnvironment::Auto,
             photons: None,
-            caustic_photons: 0,
+            caustic_photons: None,
             // Mitsuba 0.6's photonmapper takes 120 for its global map, Radiance 50.
             photon_lookup: 100,
             photon_radius: 0.05,
@@ -795,14 +802,19 @@ pub const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "caustic_photons",
         aliases: &[],
-        value: "N",
+        value: "N|auto",
         help: "photons in the caustic map (light through glass and off mirrors onto Lambertian \
                surfaces), read at the pixel; the gather then leaves those paths out; 0: caustics \
-               come from the gather",
+               come from the gather; auto: 100000 in scenes with such surfaces (none with \
+               --radiance-cache on)",
         shapes_records: true,
-        get: |p| p.caustic_photons.to_string(),
+        get: |p| p.caustic_photons.map_or("auto".into(), |n| n.to_string()),
         set: |p, v| {
-            p.caustic_photons = number(v, 0, 1_000_000_000, "a number of photons")?;
+            p.caustic_photons = if v.trim() == "auto" {
+                None
+            } else {
+                Some(number(v, 0, 1_000_000_000, "a number of photons or auto")?)
+            };
             Ok(())
         },
     },
@@ -1011,7 +1023,7 @@ impl IcParams {
         if self.photon_records && self.global_photons() == 0 {
             return Err("--photon-records on needs photons: give --photons N".into());
         }
-        if self.caustic_photons > 0 && self.radiance_cache {
+        if self.caustic_photons.is_some_and(|n| n > 0) && self.radiance_cache {
             return Err(
                 "--caustic-photons does not go with --radiance-cache yet: radiance \
                         records would lose the caustics they reflect"
@@ -1034,6 +1046,19 @@ impl IcParams {
             } else {
                 0
             }
+        })
+    }
+
+    /// Photons asked of the caustic map: the count given, or with `auto`
+    /// [`AUTO_CAUSTIC_PHOTONS`] unless radiance records serve (they would lose the caustics they
+    /// reflect). A scene with no surface that makes caustics gets no map either way
+    /// ([`crate::irradiance_cache::prepare::photon_maps`]).
+    #[must_use]
+    pub fn caustic_photons(&self) -> u64 {
+        self.caustic_photons.unwrap_or(if self.radiance_cache {
+            0
+        } else {
+            AUTO_CAUSTIC_PHOTONS
         })
     }
 
@@ -1081,6 +1106,14 @@ mod tests {
         let records = with(&[("bounces", "1"), ("photon_records", "on")]);
         assert_eq!(records.global_photons(), AUTO_PHOTONS);
         assert!(records.check().is_ok());
+        // The caustic map: on unless radiance records serve, where an explicit count is refused.
+        assert_eq!(with(&[]).caustic_photons(), AUTO_CAUSTIC_PHOTONS);
+        let radiance = with(&[("radiance_cache", "on")]);
+        assert_eq!(radiance.caustic_photons(), 0);
+        assert!(radiance.check().is_ok());
+        let asked = with(&[("radiance_cache", "on"), ("caustic_photons", "1000")]);
+        assert!(asked.check().unwrap_err().contains("--radiance-cache"));
+        assert_eq!(with(&[("caustic_photons", "0")]).caustic_photons(), 0);
         let per_level = with(&[("bounces", "3"), ("deeper_bounces", "cache")]);
         assert_eq!(per_level.global_photons(), 0);
         assert!(per_level.check().is_ok());

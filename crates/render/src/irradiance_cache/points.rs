@@ -143,13 +143,27 @@ pub fn irradiance_at_points(
 ) -> (Vec<PointIrradiance>, Option<CacheStats>) {
     let points: Vec<ShadingPoint> = queries.iter().map(|&(p, n)| query_point(p, n)).collect();
     let mut cache = IrradianceCache::new(scene, params);
-    cache.photons = super::prepare::photon_maps(scene, params, seed).map(std::sync::Arc::new);
+    // No caustic map: a query point need not lie on a surface where photons land (a workplane
+    // in the air), so the gathers keep the caustic paths.
+    let without_caustics = IcParams {
+        caustic_photons: Some(0),
+        ..params.clone()
+    };
+    cache.photons =
+        super::prepare::photon_maps(scene, &without_caustics, seed).map(std::sync::Arc::new);
     let stats = match method {
         PointMethod::Cache if params.bounces > 0 => {
             let placed = super::prepare::photon_records(&mut cache);
             let mut stats = fill_for_points(scene, &mut cache, &points, seed);
             stats.photon_records = placed.records;
             stats.notes.extend(super::prepare::photon_note(params));
+            if params.caustic_photons.is_some_and(|n| n > 0) {
+                stats.notes.push(
+                    "--caustic-photons is not used at points (they need not lie on a surface \
+                     where photons land): the gathers trace the caustics"
+                        .into(),
+                );
+            }
             Some(stats)
         }
         _ => None,

@@ -93,6 +93,7 @@ pub fn prepare_cache(
     stats.photon_records = placed.records;
     stats.photon_record_seconds = photon_record_seconds;
     notes.extend(photon_note(&ic.params));
+    notes.extend(caustic_note(&ic.params, cache.photons.as_deref()));
     stats.notes = notes;
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     stats.radiance_records = cache.radiance_records.len();
@@ -184,11 +185,33 @@ pub fn photon_note(params: &super::IcParams) -> Option<String> {
     })
 }
 
+/// What a user should hear when `--caustic-photons N` made no caustic map: no surface that
+/// makes caustics, or none that light reaches (the gathers then keep those paths).
+#[must_use]
+pub fn caustic_note(params: &super::IcParams, maps: Option<&PhotonMaps>) -> Option<String> {
+    let asked = params.caustic_photons.unwrap_or(0);
+    (asked > 0 && maps.is_none_or(|m| m.caustic.is_none())).then(|| {
+        format!(
+            "--caustic-photons {asked} stored none: no surface with a delta lobe (smooth glass, \
+             a mirror, a smooth coating) sends light onto the others, so caustics stay with \
+             the gathers"
+        )
+    })
+}
+
 /// The photon maps `params` ask for (`None` for none): the global map's photons serve vertices
 /// one bounce beyond a record, so they need at most `bounces − 1` bounces of their own.
 #[must_use]
 pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option<PhotonMaps> {
-    if params.global_photons() == 0 && params.caustic_photons == 0 {
+    // No caustic map where no surface makes caustics: the gathers keep every path, as without.
+    let caustic_photons = if params.caustic_photons() > 0
+        && crate::photon_map::trace::caustic_targets(scene).is_empty()
+    {
+        0
+    } else {
+        params.caustic_photons()
+    };
+    if params.global_photons() == 0 && caustic_photons == 0 {
         return None;
     }
     let size = super::gather::scene_size(scene);
@@ -219,7 +242,7 @@ pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option
     let seed = crate::irradiance_cache::gather::mix(seed, 0x7068_6f74_6f6e);
     Some(PhotonMaps::build(
         scene,
-        (photons, params.caustic_photons),
+        (photons, caustic_photons),
         (bounces, gather_bounces),
         (global, caustic),
         seed,

@@ -34,6 +34,9 @@ pub struct EmissionSample {
     /// Flux weight: the emitted flux this one sample stands for (before dividing by the number
     /// of photons).
     pub flux: Rgb,
+    /// From a light no path can hit (point, spot or directional): its light reaches surfaces
+    /// through smooth `trans` by light samples ([`crate::scene::Scene::delta_shadow_transmittance`]).
+    pub from_delta_light: bool,
 }
 
 /// Power of a spot light of intensity `intensity` with Mitsuba's falloff, linear in angle from 1

@@ -619,6 +619,7 @@ impl LightSet {
                 direction,
                 normal: None,
                 flux: flux * area,
+                from_delta_light: false,
             }
         };
         self.emit(u_select, |light| match light {
@@ -629,6 +630,7 @@ impl LightSet {
                     direction,
                     normal: Some(n),
                     flux,
+                    from_delta_light: false,
                 })
             }
             Light::Sphere(s) => {
@@ -638,6 +640,7 @@ impl LightSet {
                     direction,
                     normal: Some(n),
                     flux,
+                    from_delta_light: false,
                 })
             }
             Light::Point(l) => Some(EmissionSample {
@@ -645,6 +648,7 @@ impl LightSet {
                 direction: square_to_uniform_sphere(u_direction),
                 normal: None,
                 flux: l.intensity * (4.0 * std::f32::consts::PI),
+                from_delta_light: false,
             }),
             Light::Spot(l) => {
                 let (origin, direction, flux) = l.sample_emission(u_direction)?;
@@ -653,6 +657,7 @@ impl LightSet {
                     direction,
                     normal: None,
                     flux,
+                    from_delta_light: false,
                 })
             }
             Light::Directional(_) | Light::Constant(_) | Light::Envmap(_) => {
@@ -686,6 +691,7 @@ impl LightSet {
                     direction: w,
                     normal: Some(n),
                     flux: radiance(w) * (cos * area / pdf),
+                    from_delta_light: false,
                 })
             };
         let from_point = |p: Vec3, intensity: &dyn Fn(Vec3) -> Rgb| {
@@ -696,6 +702,7 @@ impl LightSet {
                 direction: w,
                 normal: None,
                 flux: intensity(w) / pdf,
+                from_delta_light: false,
             })
         };
         let distant = |direction: Vec3, radiance_over_pdf: Rgb| {
@@ -705,6 +712,7 @@ impl LightSet {
                 direction,
                 normal: None,
                 flux: radiance_over_pdf / density,
+                from_delta_light: false,
             })
         };
         self.emit(u_select, |light| match light {
@@ -757,10 +765,20 @@ impl LightSet {
         if probability <= 0.0 {
             return None;
         }
-        let sample = sample(&self.lights[index])?;
+        let light = &self.lights[index];
+        let sample = sample(light)?;
         let flux = sample.flux / probability;
-        (!flux.is_black() && flux.to_array().iter().all(|c| c.is_finite()))
-            .then_some(EmissionSample { flux, ..sample })
+        let from_delta_light = matches!(
+            light,
+            Light::Point(_) | Light::Spot(_) | Light::Directional(_)
+        );
+        (!flux.is_black() && flux.to_array().iter().all(|c| c.is_finite())).then_some(
+            EmissionSample {
+                flux,
+                from_delta_light,
+                ..sample
+            },
+        )
     }
 
     /// The light chosen by `u_select` at `p` and its selection probability.

@@ -238,12 +238,15 @@ impl PhotonMaps {
             seed,
             Some(&global_lookup),
         );
-        // Caustics are sharp and seen directly: estimated at the pixel, never precomputed.
-        let caustic = (caustic > 0).then(|| {
-            let bounces = gather_bounces.saturating_add(1);
-            let seed = seed ^ CAUSTIC_SALT;
-            PhotonMap::build(scene, MapKind::Caustic, caustic, bounces, seed, None)
-        });
+        // Caustics are sharp and seen directly: estimated at the pixel, never precomputed. A
+        // map that stored nothing is dropped, so the gathers keep the paths it would serve.
+        let caustic = (caustic > 0)
+            .then(|| {
+                let bounces = gather_bounces.saturating_add(1);
+                let seed = seed ^ CAUSTIC_SALT;
+                PhotonMap::build(scene, MapKind::Caustic, caustic, bounces, seed, None)
+            })
+            .filter(|m| !m.tree.is_empty());
         PhotonMaps {
             global: global_map,
             caustic,

@@ -256,7 +256,8 @@ fn trace_one(
                 caustic: bounces >= 1 && delta_only,
             });
         }
-        if bounces + 1 > max_bounces {
+        // (A smooth `trans` may be crossed without a bounce: decided after sampling.)
+        if bounces + 1 > max_bounces && !shape.straight_trans {
             break;
         }
         let Some(bs) = bsdf.sample_adjoint(wo_local, rng.next_f32(), rng.next_2d()) else {
@@ -266,11 +267,22 @@ fn trace_one(
         if kind == MapKind::Caustic && !bs.delta {
             break;
         }
-        delta_only &= bs.delta;
         let wo = it.frame.from_local(bs.wi);
         if (wo.dot(it.ng) > 0.0) != (bs.wi.z > 0.0) && !bs.delta {
             break;
         }
+        // Light from a point, spot or sun straight through a smooth `trans` is direct light
+        // (light samples pass it, as Radiance's shadow rays do): crossed without a bounce, so
+        // that no map holds it twice.
+        let direct_through = emitted.from_delta_light
+            && bounces == 0
+            && bs.delta
+            && shape.straight_trans
+            && wo.dot(ray.d) > 1.0 - 1e-6;
+        if !direct_through && bounces + 1 > max_bounces {
+            break;
+        }
+        delta_only &= bs.delta;
         // Flux is not scaled by η² across a refraction (radiance is).
         let weight = bs.weight * (bs.eta * bs.eta) * scene.perturbed_shadowing(&it, wo);
         // Russian roulette keeps the flux per photon about even (Jensen §5.2.1).
@@ -279,7 +291,14 @@ fn trace_one(
             break;
         }
         flux = flux * weight / q;
-        bounces += 1;
+        if direct_through {
+            crossings += 1;
+            if crossings > crate::scene::MAX_SHEET_CROSSINGS {
+                break;
+            }
+        } else {
+            bounces += 1;
+        }
         ray = scene.spawn_ray(&it, wo);
     }
     rays
