@@ -321,8 +321,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         }
         if aov == "photons"
             && !matches!(&integrator, Integrator::Ic(ic)
-                if ic.params.global_photons() > 0 || ic.params.caustic_photons() > 0)
+                if ic.params.global_photons() > 0
+                    || ic.params.caustic_photons.is_some_and(|n| n > 0))
         {
+            // (Asked before the render: whether `auto` makes a caustic map depends on the
+            // scene's surfaces, known only once it is built.)
             bail!("--aov photons needs photon maps: give --photons N or --caustic-photons N");
         }
         if !matches!(integrator, Integrator::Ic(_)) {
