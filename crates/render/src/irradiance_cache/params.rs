@@ -146,9 +146,9 @@ pub const MAX_STORED_LEVELS: u32 = 16;
 pub const AUTO_PHOTONS: u64 = 100_000;
 
 /// Photons in the caustic map with `--caustic-photons auto`, in scenes with surfaces that make
-/// caustics (delta lobes). Chosen by measurement (BENCHMARKS.md, "Caustics from the caustic map
-/// by default"): on cornell-glass and the lamp room, 30 000 to 300 000 gave the same error
-/// within 3 %; what pays is that the gathers leave those heavy-tailed paths to the map.
+/// caustics (delta lobes). Chosen by measurement (BENCHMARKS.md, "The caustic map by
+/// default"): on cornell-glass and the lamp room, 30 000 to 300 000 gave the same error within
+/// 3 %; what pays is that the gathers leave those heavy-tailed paths to the map.
 pub const AUTO_CAUSTIC_PHOTONS: u64 = 100_000;
 
 /// Irradiance cache settings.

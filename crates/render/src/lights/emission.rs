@@ -36,6 +36,8 @@ pub struct EmissionSample {
     pub flux: Rgb,
     /// From a light no path can hit (point, spot or directional): its light reaches surfaces
     /// through smooth `trans` by light samples ([`crate::scene::Scene::delta_shadow_transmittance`]).
+    /// Set from the light chosen, where the set picks one; each light's own sampler leaves it
+    /// false.
     pub from_delta_light: bool,
 }
 
