@@ -749,7 +749,10 @@ fn irradiance_at_points_keeps_the_light_a_mirror_sends() {
             0.03,
         ),
     ] {
-        let (res, _) = irradiance_at_points(&scene, &p, &queries, method, 0, 5);
+        let (res, stats) = irradiance_at_points(&scene, &p, &queries, method, 0, 5);
+        // A count asked for and not used is said.
+        let noted = stats.is_some_and(|s| s.notes.iter().any(|n| n.contains("not used at points")));
+        assert_eq!(noted, what == "caustic map asked", "{what}: notes");
         let ratio = res
             .iter()
             .zip(&exact)
