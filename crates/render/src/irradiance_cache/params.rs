@@ -362,6 +362,20 @@ fn list(v: &str) -> Vec<&str> {
         .collect()
 }
 
+/// A photon count or `auto` (`None`).
+fn photons_or_auto(v: &str) -> Result<Option<u64>, String> {
+    if v.trim() == "auto" {
+        Ok(None)
+    } else {
+        number(v, 0, 1_000_000_000, "a number of photons or auto").map(Some)
+    }
+}
+
+/// [`photons_or_auto`]'s text.
+fn photons_text(count: Option<u64>) -> String {
+    count.map_or("auto".into(), |n| n.to_string())
+}
+
 fn on_off(v: &str) -> Result<bool, String> {
     match v.trim() {
         "on" | "true" | "1" => Ok(true),
@@ -789,13 +803,9 @@ pub const PARAMS: &[ParamSpec] = &[
                the surfaces gather rays hit have indirect light of their own (-ab 2 or more \
                with the deeper bounces traced) or with --photon-records on, else none",
         shapes_records: true,
-        get: |p| p.photons.map_or("auto".into(), |n| n.to_string()),
+        get: |p| photons_text(p.photons),
         set: |p, v| {
-            p.photons = if v.trim() == "auto" {
-                None
-            } else {
-                Some(number(v, 0, 1_000_000_000, "a number of photons or auto")?)
-            };
+            p.photons = photons_or_auto(v)?;
             Ok(())
         },
     },
@@ -808,13 +818,9 @@ pub const PARAMS: &[ParamSpec] = &[
                come from the gather; auto: 100000 in scenes with such surfaces (none with \
                --radiance-cache on)",
         shapes_records: true,
-        get: |p| p.caustic_photons.map_or("auto".into(), |n| n.to_string()),
+        get: |p| photons_text(p.caustic_photons),
         set: |p, v| {
-            p.caustic_photons = if v.trim() == "auto" {
-                None
-            } else {
-                Some(number(v, 0, 1_000_000_000, "a number of photons or auto")?)
-            };
+            p.caustic_photons = photons_or_auto(v)?;
             Ok(())
         },
     },

@@ -99,6 +99,14 @@ enum Light {
 }
 
 impl Light {
+    /// A point, spot or directional light: no path can hit it, only light samples reach it.
+    fn is_delta(&self) -> bool {
+        matches!(
+            self,
+            Light::Point(_) | Light::Spot(_) | Light::Directional(_)
+        )
+    }
+
     /// What selection knows of the light (see [`selection`]); `point_radius2` floors the
     /// distance of point and spot lights.
     fn bound(&self, point_radius2: f32) -> LightBound {
@@ -768,14 +776,10 @@ impl LightSet {
         let light = &self.lights[index];
         let sample = sample(light)?;
         let flux = sample.flux / probability;
-        let from_delta_light = matches!(
-            light,
-            Light::Point(_) | Light::Spot(_) | Light::Directional(_)
-        );
         (!flux.is_black() && flux.to_array().iter().all(|c| c.is_finite())).then_some(
             EmissionSample {
                 flux,
-                from_delta_light,
+                from_delta_light: light.is_delta(),
                 ..sample
             },
         )
@@ -938,8 +942,6 @@ impl LightSet {
     /// same whatever the random numbers, up to the choice of light).
     #[must_use]
     pub fn all_delta(&self) -> bool {
-        self.lights
-            .iter()
-            .all(|l| matches!(l, Light::Point(_) | Light::Spot(_) | Light::Directional(_)))
+        self.lights.iter().all(Light::is_delta)
     }
 }
