@@ -295,6 +295,10 @@ impl IndirectSource for PixelLookup<'_> {
     fn ambient(&self) -> Rgb {
         self.cache.ambient
     }
+
+    fn caustics_served(&self) -> bool {
+        self.cache.caustics_served()
+    }
 }
 
 impl PixelLookup<'_> {

@@ -66,7 +66,10 @@ pub trait IndirectSource {
     }
 
     /// True when caustics at the vertices it serves come from elsewhere (a caustic map): a
-    /// gather's paths then leave out emitters reached through delta lobes alone.
+    /// gather's paths then leave out emitters reached through delta lobes alone. The map gives
+    /// irradiance, so where [`Self::glossy`] serves a glossy lobe from such gathers, the path
+    /// goes on through that lobe to trace the caustics it reflects (delta lobes alone onwards,
+    /// counting only the emission they reach).
     fn caustics_served(&self) -> bool {
         false
     }
@@ -135,6 +138,12 @@ pub enum Arrival {
 }
 
 impl Arrival {
+    /// After a delta lobe's sample.
+    #[inline]
+    fn is_delta(&self) -> bool {
+        matches!(self, Arrival::Bsdf { delta: true, .. })
+    }
+
     /// The weight of emission found by this arrival: 1 or 0 for camera rays (emitters shown or
     /// hidden), 0 for gather rays, 1 after a delta lobe, else the power heuristic against the
     /// light samples taken at the vertex left, `light_pdf(that vertex)` being their density.
@@ -226,6 +235,10 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
     // A gather's path while it has left only through delta lobes: the emission it finds is a
     // caustic, which a caustic map serves instead where the source says so.
     let mut caustic_chain = matches!(arrival, Arrival::Gather) && source.caustics_served();
+    // A camera path whose glossy light came from gathers that left the caustics out
+    // ([`IndirectSource::caustics_served`]): on through delta lobes alone, counting only the
+    // emission reached through them.
+    let mut caustics_only = false;
     // Thin sheets met along the path (each crossing draws a dimension of its own).
     let mut crossings = 0u32;
     loop {
@@ -238,8 +251,11 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
         };
         // Borrowed, not moved out: a copy of the whole interaction right after `intersect`
         // wrote it field by field stalled on store forwarding (a tenth of this loop's time).
+        // Emission the path leaves out here: a gather's caustic, or on a caustics-only path
+        // what a non-delta sample finds (the light samples beside it counted that in full).
+        let left_out = caustic_chain || (caustics_only && !arrival.is_delta());
         let Some(it) = &hit else {
-            if scene.lights.has_environment() && !caustic_chain {
+            if scene.lights.has_environment() && !left_out {
                 let w = arrival.emission_weight(|p| scene.lights.pdf_environment(p, ray.d));
                 if w > 0.0 {
                     l += beta * scene.lights.environment_radiance(ray.d) * w;
@@ -249,7 +265,7 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
         };
         let wo = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
-        if let Some(light) = shape.area_light.filter(|_| !caustic_chain) {
+        if let Some(light) = shape.area_light.filter(|_| !left_out) {
             let le = scene
                 .lights
                 .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
@@ -298,7 +314,7 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
         let mut strategy = BsdfStrategy::All;
         let mut all_served = false;
         let mut environment_served = EnvironmentServed::default();
-        if source.serves() && bsdf.has_smooth() {
+        if source.serves() && !caustics_only && bsdf.has_smooth() {
             let k = bsdf.lambertian_albedo(wo_local);
             let indirect = depth + 2 < max_depth;
             let sp = indirect.then(|| {
@@ -341,27 +357,35 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
             1
         };
         let last = depth + 2 >= max_depth;
-        let continues = !all_served
-            && (!last
-                || (scene.has_hittable_emitters && !light_samples_suffice(scene, &bsdf, last)));
-        let shadows = match deferred.as_deref_mut().filter(|_| depth == start.depth) {
-            Some(d) => Shadows::Deferred(d, beta),
-            None => Shadows::Traced,
-        };
-        l += beta
-            * sample_lights(
-                scene,
-                it,
-                &bsdf,
-                wo_local,
-                (ne, Selection::Chosen),
-                (strategy, u32::from(continues)),
-                environment_served,
-                depth,
-                sampler,
-                rays,
-                shadows,
-            );
+        // Served glossy light without its caustics: the path goes on through the glossy lobe
+        // for them alone, and the light samples here count in full.
+        let trace_caustics = all_served && !last && source.caustics_served();
+        let continues = caustics_only
+            || trace_caustics
+            || (!all_served
+                && (!last
+                    || (scene.has_hittable_emitters
+                        && !light_samples_suffice(scene, &bsdf, last))));
+        if !caustics_only {
+            let shadows = match deferred.as_deref_mut().filter(|_| depth == start.depth) {
+                Some(d) => Shadows::Deferred(d, beta),
+                None => Shadows::Traced,
+            };
+            l += beta
+                * sample_lights(
+                    scene,
+                    it,
+                    &bsdf,
+                    wo_local,
+                    (ne, Selection::Chosen),
+                    (strategy, u32::from(continues && !trace_caustics)),
+                    environment_served,
+                    depth,
+                    sampler,
+                    rays,
+                    shadows,
+                );
+        }
         if !continues || (strategy == BsdfStrategy::Glossy && !bsdf.has_glossy()) {
             break;
         }
@@ -372,6 +396,10 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
         else {
             break;
         };
+        if caustics_only && !bs.delta {
+            break;
+        }
+        caustics_only |= trace_caustics;
         beta *= bs.weight;
         eta *= bs.eta;
         caustic_chain &= bs.delta;

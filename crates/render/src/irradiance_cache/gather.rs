@@ -950,13 +950,23 @@ impl<'a> Gatherer<'a> {
             _ => Some(hessian_reach(h, e, CURVATURE_SHARE * params.accuracy)),
         };
         let (ray_variance, radiance) = self.variance_and_radiance(st, sp, h);
-        self.finish_record(
+        let record = self.finish_record(
             sp,
             level,
             (e, grad_t, grad_r),
             (nearest, h.harmonic_mean_distance(), hessian),
             (ray_variance, radiance),
-        )
+        );
+        if let Some(r) = st.radiance.get_mut(radiance as usize) {
+            // Over the distance it serves to at the fallback's twice the accuracy.
+            let reach = record.r
+                * params
+                    .error_metric
+                    .reach_per_radius(params.radiance_accuracy);
+            r.radiance
+                .limit_gradients(f64::from(2.0 * reach), f64::from(params.radiance_accuracy));
+        }
+        record
     }
 
     /// The record a plane's `measure` gives at `sp` (no radiance coefficients; no curvature

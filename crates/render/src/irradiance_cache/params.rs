@@ -814,9 +814,9 @@ pub const PARAMS: &[ParamSpec] = &[
         aliases: &[],
         value: "N|auto",
         help: "photons in the caustic map (light through glass and off mirrors onto Lambertian \
-               surfaces), read at the pixel; the gather then leaves those paths out; 0: caustics \
-               come from the gather; auto: 100000 in scenes with such surfaces (none with \
-               --radiance-cache on)",
+               surfaces), read at the pixel; the gather then leaves those paths out of the \
+               irradiance (radiance records keep them for the glossy lobes); 0: caustics come \
+               from the gather; auto: 100000 in scenes with such surfaces",
         shapes_records: true,
         get: |p| photons_text(p.caustic_photons),
         set: |p, v| {
@@ -1029,13 +1029,6 @@ impl IcParams {
         if self.photon_records && self.global_photons() == 0 {
             return Err("--photon-records on needs photons: give --photons N".into());
         }
-        if self.caustic_photons.is_some_and(|n| n > 0) && self.radiance_cache {
-            return Err(
-                "--caustic-photons does not go with --radiance-cache yet: radiance \
-                        records would lose the caustics they reflect"
-                    .into(),
-            );
-        }
         Ok(())
     }
 
@@ -1055,17 +1048,12 @@ impl IcParams {
         })
     }
 
-    /// Photons asked of the caustic map: the count given, or with `auto`
-    /// [`AUTO_CAUSTIC_PHOTONS`] unless radiance records serve (they would lose the caustics they
-    /// reflect). A scene with no surface that makes caustics gets no map either way
+    /// Photons asked of the caustic map: the count given, or [`AUTO_CAUSTIC_PHOTONS`] with
+    /// `auto`. A scene with no surface that makes caustics gets no map either way
     /// ([`crate::irradiance_cache::prepare::photon_maps`]).
     #[must_use]
     pub fn caustic_photons(&self) -> u64 {
-        self.caustic_photons.unwrap_or(if self.radiance_cache {
-            0
-        } else {
-            AUTO_CAUSTIC_PHOTONS
-        })
+        self.caustic_photons.unwrap_or(AUTO_CAUSTIC_PHOTONS)
     }
 
     /// Whether light beyond the last bounce is an ambient value (`-av` or `-aw`).
@@ -1112,13 +1100,13 @@ mod tests {
         let records = with(&[("bounces", "1"), ("photon_records", "on")]);
         assert_eq!(records.global_photons(), AUTO_PHOTONS);
         assert!(records.check().is_ok());
-        // The caustic map: on unless radiance records serve, where an explicit count is refused.
+        // The caustic map: on, radiance records or not.
         assert_eq!(with(&[]).caustic_photons(), AUTO_CAUSTIC_PHOTONS);
         let radiance = with(&[("radiance_cache", "on")]);
-        assert_eq!(radiance.caustic_photons(), 0);
+        assert_eq!(radiance.caustic_photons(), AUTO_CAUSTIC_PHOTONS);
         assert!(radiance.check().is_ok());
         let asked = with(&[("radiance_cache", "on"), ("caustic_photons", "1000")]);
-        assert!(asked.check().unwrap_err().contains("--radiance-cache"));
+        assert!(asked.check().is_ok());
         assert_eq!(with(&[("caustic_photons", "0")]).caustic_photons(), 0);
         let per_level = with(&[("bounces", "3"), ("deeper_bounces", "cache")]);
         assert_eq!(per_level.global_photons(), 0);

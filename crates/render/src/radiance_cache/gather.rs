@@ -206,6 +206,36 @@ impl RadianceCoefficients {
             gradient_y,
         }
     }
+
+    /// Ward's gradient limit carried to the coefficients (as
+    /// [`crate::irradiance_cache::record::limit_radius_by_gradient`] does for irradiance, here
+    /// by scaling the gradients, since the record's radius is shared): over `reach`, the
+    /// distance the record serves to, per channel, the gradients may not predict a change of
+    /// the coefficient vector larger than `share` of its norm, ‖d·∇λ‖ ≤ share·‖λ‖ (by
+    /// orthonormality the norms of the radiance over the hemisphere). Near a wall the
+    /// high-order coefficients' gradients can be many times the coefficients, and extrapolated
+    /// over a record's reach they made bright streaks of glossy light.
+    pub fn limit_gradients(&mut self, reach: f64, share: f64) {
+        let count = coefficient_count(self.order);
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>();
+        for ch in 0..3 {
+            let span = ch * count..(ch + 1) * count;
+            let c = norm(&self.coefficients[span.clone()]).sqrt();
+            let g = (norm(&self.gradient_x[span.clone()]) + norm(&self.gradient_y[span.clone()]))
+                .sqrt();
+            if g * reach > share * c {
+                let f = if g > 0.0 {
+                    share * c / (g * reach)
+                } else {
+                    0.0
+                };
+                self.gradient_x[span.clone()]
+                    .iter_mut()
+                    .for_each(|v| *v *= f);
+                self.gradient_y[span].iter_mut().for_each(|v| *v *= f);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
