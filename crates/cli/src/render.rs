@@ -7,6 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use ircache_math::Vec3;
 use ircache_render::integrators::ic::PixelPass;
 use ircache_render::integrators::Integrator;
+use ircache_render::irradiance_cache::params::RadianceCaching;
 use ircache_render::render::{render, Adaptive, RenderOutput, RenderSettings};
 use ircache_render::sampler::SamplerKind;
 use ircache_render::scene::Scene;
@@ -97,7 +98,7 @@ pub struct RenderArgs {
     /// Extra images (ic integrator): `irradiance` (interpolated indirect irradiance, written to
     /// NAME-irradiance.exr), `records` (level-0 record positions as red dots over the image, cyan
     /// for records that also hold radiance, NAME-records.exr) and `glossy` (with
-    /// --radiance-cache on: the indirect light the first surface's cached glossy lobe reflects
+    /// with radiance records: the indirect light the first surface's cached glossy lobe reflects
     /// towards the camera, from the radiance records, NAME-glossy.exr) and `photons` (with
     /// --photons or --caustic-photons: the indirect irradiance the photon maps give at the first
     /// diffuse surface, the global map's and the caustic map's, NAME-photons.exr). Repeat or
@@ -331,9 +332,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         if !matches!(integrator, Integrator::Ic(_)) {
             bail!("--aov {aov} needs the ic integrator");
         }
-        if aov == "glossy" && !matches!(&integrator, Integrator::Ic(ic) if ic.params.radiance_cache)
+        if aov == "glossy"
+            && matches!(&integrator, Integrator::Ic(ic) if ic.params.radiance_cache == RadianceCaching::Off)
         {
-            bail!("--aov glossy needs --radiance-cache on (it shows the radiance records)");
+            bail!("--aov glossy needs --radiance-cache auto or on (it shows the radiance records)");
         }
     }
     let gpu = if args.gpu {
@@ -641,7 +643,16 @@ fn write_aovs(
             "irradiance" => {
                 aov::irradiance_image(scene, &report.cache, settings.width, settings.height)
             }
-            "glossy" => aov::glossy_image(scene, &report.cache, settings.width, settings.height),
+            "glossy" => {
+                if report.cache.radiance.is_none() {
+                    bail!(
+                        "--aov glossy: this render cached no glossy lobe (--radiance-cache auto \
+                         caches only lobes that reflect a quarter or more of uniform light, rough \
+                         metals): give --radiance-cache on"
+                    );
+                }
+                aov::glossy_image(scene, &report.cache, settings.width, settings.height)
+            }
             "photons" => {
                 if report.cache.photons.is_none() {
                     bail!(

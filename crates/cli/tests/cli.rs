@@ -818,6 +818,61 @@ fn radiance_cache_renders_reports_and_reuses_its_records() {
     assert!(b["radiance_records"].as_u64().unwrap() >= radiance, "{b}");
 }
 
+/// `--radiance-cache auto`, the default, caches the lobes that reflect much of the light: on
+/// cornell-rough its rough metals (aluminium walls, the tall box) get radiance records; on
+/// cornell-glossy, whose one cacheable lobe is a plastic's coating, there are none.
+#[test]
+fn automatic_radiance_caching_takes_metals_and_leaves_coatings() {
+    let d = temp_dir("radiance-auto");
+    let radiance_records = |scene: &str, stats: &str| -> (u64, String) {
+        let o = ircache(
+            &[
+                "render",
+                scene,
+                "--integrator",
+                "ic",
+                "-ab",
+                "1",
+                "--spp",
+                "1",
+                "--width",
+                "32",
+                "--height",
+                "32",
+                "-o",
+                "x.exr",
+                "--stats",
+                stats,
+                "-q",
+            ],
+            &d,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join(stats)).unwrap()).unwrap();
+        (
+            s["radiance_records"].as_u64().unwrap(),
+            s["cache_params"]["radiance_cache"]
+                .as_str()
+                .unwrap()
+                .to_string(),
+        )
+    };
+    let rough = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/cornell-rough/scene.xml"
+    );
+    let (metals, mode) = radiance_records(rough, "rough.json");
+    assert_eq!(mode, "auto");
+    assert!(metals > 0, "cornell-rough: {metals} radiance records");
+    let glossy = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/scenes/cornell-glossy/scene.xml"
+    );
+    let (coatings, _) = radiance_records(glossy, "glossy.json");
+    assert_eq!(coatings, 0, "cornell-glossy: radiance records");
+}
+
 /// Whether a `--gpu` run found no device and `IRCACHE_GPU_TESTS=skip` lets the test skip
 /// (saying so); otherwise the test goes on and fails on the run's error.
 fn skipped_without_gpu(run: &Output) -> bool {

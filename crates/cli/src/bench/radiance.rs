@@ -1,8 +1,9 @@
 //! `ircache bench --only radiance`: radiance caching (issue 10) by rendering, in the same run.
 //!
 //! For cornell-glossy and ircache's own moderately glossy `scenes/cornell-rough` (`-ab 3`, against
-//! `max_depth` 5 references): `ic --radiance-cache on` at its defaults (16 spp); `ic` with the
-//! same lobes traced at 16, 64, 256, … spp until it reaches that error; ircache's path tracer at 16
+//! `max_depth` 5 references): `ic --radiance-cache on` at its defaults (16 spp), and `auto` (the
+//! default: metals' lobes only); `ic` with the same lobes traced (`off`) at 16, 64, 256, … spp
+//! until it reaches `on`'s error; ircache's path tracer at 16
 //! and 64 spp; Mitsuba 3 `multijitter` at 16, 64, … spp until it reaches the error. Times to
 //! equal error are interpolated between the bracketing renders (log–log), never extrapolated.
 //! Then environment light in the records (`--cached-environment`, `irradiance_cache::environment`)
@@ -51,6 +52,7 @@ pub fn run_all(shared: &Path, with_mitsuba: bool) -> Result<()> {
     ];
     println!("\nRadiance caching (ic -ab 3 against max_depth 5 references; 2 threads, same run)");
     let on = [("radiance_cache", "on")];
+    let off = [("radiance_cache", "off")];
     for (name, scene_path, reference_path) in &cases {
         let reference = ircache_image::read_image(reference_path)
             .with_context(|| format!("reading {}", reference_path.display()))?;
@@ -65,11 +67,17 @@ pub fn run_all(shared: &Path, with_mitsuba: bool) -> Result<()> {
             &format!("ic, radiance cache on, 16 spp ({radiance_records} radiance records)"),
             &cached,
         );
+        let auto = run(&scene, &desc, "ic", 16, &[("radiance_cache", "auto")])?;
+        let auto_records = auto.cache.as_ref().map_or(0, |c| c.stats.radiance_records);
+        show(
+            &format!("ic, radiance cache auto, 16 spp ({auto_records} radiance records)"),
+            &measure(&auto, &reference)?,
+        );
         let cap = 20.0 * cached.seconds;
         let mut traced = Vec::new();
         let mut spp = 16;
         loop {
-            let p = measure(&run(&scene, &desc, "ic", spp, &[])?, &reference)?;
+            let p = measure(&run(&scene, &desc, "ic", spp, &off)?, &reference)?;
             show(&format!("ic, glossy lobes traced, {spp} spp"), &p);
             traced.push(p);
             if p.error <= cached.error || p.seconds > cap || spp >= 1024 {

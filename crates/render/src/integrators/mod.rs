@@ -274,7 +274,7 @@ fn media_cache_integrator(
     }
     if p.global_photons() > 0
         || p.caustic_photons.is_some_and(|n| n > 0)
-        || p.radiance_cache
+        || p.radiance_cache == crate::irradiance_cache::params::RadianceCaching::On
         || ic.cache_file.is_some()
     {
         return refuse("photon maps, radiance caching and cache files are not available there yet");

@@ -53,7 +53,7 @@ pub struct CacheStats {
     pub notes: Vec<String>,
     /// Records gathered again with more rays because their neighbourhood was noisy.
     pub records_regathered: u64,
-    /// Records that also hold their incoming radiance in HSH (`--radiance-cache on`).
+    /// Records that also hold their incoming radiance in HSH (`--radiance-cache auto|on`).
     pub radiance_records: usize,
     /// Seconds spent making radiance caching's tables (BRDFs in HSH, tilt matrices).
     pub radiance_table_seconds: f64,

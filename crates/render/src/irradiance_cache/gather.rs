@@ -53,7 +53,7 @@ pub struct IrradianceCache {
     /// Shapes excluded from the cache (003 item 6), by shape index: they get the ambient value
     /// as their indirect light instead of records.
     pub excluded: Vec<bool>,
-    /// Radiance caching's tables (`--radiance-cache on`).
+    /// Radiance caching's tables (`--radiance-cache auto|on`).
     pub radiance: Option<Arc<RadianceCache>>,
     /// The radiance records' coefficients, indexed by [`Record::radiance`].
     pub radiance_records: Vec<RadianceRecord>,

@@ -62,6 +62,39 @@ pub enum CachedEnvironment {
     Off,
 }
 
+/// Which glossy lobes radiance records serve (`--radiance-cache`, 001 ch. 3); the others are
+/// traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum RadianceCaching {
+    /// Lobes that reflect much of the light: hemispherical glossy albedo at least
+    /// [`AUTO_GLOSSY_ALBEDO`] (rough metals), where the traced lobe's noise is most of a pixel's.
+    /// A plastic's thin coating stays traced: its records cost more rays than its noise.
+    #[default]
+    Auto,
+    /// Every glossy lobe that an order up to `--radiance-order` represents.
+    On,
+    /// None.
+    Off,
+}
+
+/// The least hemispherical glossy albedo of a lobe that `--radiance-cache auto` caches. Measured
+/// (BENCHMARKS.md, "Radiance records for rough metals by default"): rough metals reflect 0.6–0.8
+/// of uniform light through their lobe, rough plastics' coatings 0.07; caching the coatings
+/// took cornell-glossy 1.2–1.3× the time for the same error.
+pub const AUTO_GLOSSY_ALBEDO: f64 = 0.25;
+
+impl RadianceCaching {
+    /// The least hemispherical glossy albedo of a cached lobe; `None`: no radiance records.
+    #[must_use]
+    pub fn min_glossy_albedo(self) -> Option<f64> {
+        match self {
+            RadianceCaching::Auto => Some(AUTO_GLOSSY_ALBEDO),
+            RadianceCaching::On => Some(0.0),
+            RadianceCaching::Off => None,
+        }
+    }
+}
+
 impl Deeper {
     /// Parses `cache` or `traced`.
     pub fn parse(s: &str) -> Result<Deeper, String> {
@@ -207,8 +240,9 @@ pub struct IcParams {
     /// square number): shadow rays are cheaper than pixel samples.
     pub direct_samples: u32,
     /// Radiance records for moderately glossy lobes (`--radiance-cache`, 001 ch. 3): records on
-    /// glossy surfaces also hold their incoming radiance in hemispherical harmonics.
-    pub radiance_cache: bool,
+    /// the surfaces of the lobes it names also hold their incoming radiance in hemispherical
+    /// harmonics.
+    pub radiance_cache: RadianceCaching,
     /// Highest order of radiance records (`--radiance-order`): a glossy lobe is cached when an
     /// order up to this keeps 95 % of its energy, traced otherwise.
     pub radiance_order: usize,
@@ -286,7 +320,7 @@ impl Default for IcParams {
             spatial_order: false,
             neighbour_clamp: false,
             deeper: Deeper::PathTraced,
-            radiance_cache: false,
+            radiance_cache: RadianceCaching::Auto,
             radiance_order: 10,
             radiance_accuracy: 0.3,
             cached_environment: CachedEnvironment::Auto,
@@ -383,6 +417,12 @@ fn on_off(v: &str) -> Result<bool, String> {
         v => Err(format!("expected on or off, found \"{v}\"")),
     }
 }
+
+const RADIANCE_CACHINGS: &[(&str, RadianceCaching)] = &[
+    ("auto", RadianceCaching::Auto),
+    ("on", RadianceCaching::On),
+    ("off", RadianceCaching::Off),
+];
 
 const CACHED_ENVIRONMENTS: &[(&str, CachedEnvironment)] = &[
     ("auto", CachedEnvironment::Auto),
@@ -738,15 +778,16 @@ pub const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "radiance_cache",
         aliases: &[],
-        value: "on|off",
+        value: "auto|on|off",
         help: "radiance caching (001 ch. 3): records on glossy surfaces also hold their \
                incoming radiance in hemispherical harmonics, and glossy lobes that an order up \
                to --radiance-order represents (95 % of their energy) are shaded from them \
-               instead of traced",
+               instead of traced; auto: only lobes that reflect a quarter or more of uniform \
+               light (rough metals, not plastics' coatings)",
         shapes_records: true,
-        get: |p| if p.radiance_cache { "on" } else { "off" }.to_string(),
+        get: |p| name_of(p.radiance_cache, RADIANCE_CACHINGS),
         set: |p, v| {
-            p.radiance_cache = on_off(v)?;
+            p.radiance_cache = choice(v, RADIANCE_CACHINGS)?;
             Ok(())
         },
     },

@@ -115,11 +115,15 @@ pub fn empty_cache(
     pool: &rayon::ThreadPool,
 ) -> Result<IrradianceCache, RenderError> {
     let mut cache = IrradianceCache::new(scene, &ic.params);
-    if ic.params.radiance_cache {
-        cache.radiance = Some(match tables {
+    if let Some(min_albedo) = ic.params.radiance_cache.min_glossy_albedo() {
+        let tables = match tables {
             Some(t) => t.clone(),
-            None => Arc::new(pool.install(|| RadianceCache::new(scene, ic.params.radiance_order))),
-        });
+            None => Arc::new(
+                pool.install(|| RadianceCache::new(scene, ic.params.radiance_order, min_albedo)),
+            ),
+        };
+        // No lobe to cache (`auto` in a scene without rough metals): no tables, as off.
+        cache.radiance = tables.caches_any().then_some(tables);
     }
     cache.excluded = ic.exclusions.resolve(scene).map_err(RenderError::Invalid)?;
     cache.pixel_spread = scene.camera.pixel_spread(width);

@@ -73,9 +73,11 @@ pub struct RadianceCache {
 }
 
 impl RadianceCache {
-    /// The tables for `scene`'s materials up to `max_order` (in parallel, in the caller's pool).
+    /// The tables for `scene`'s materials up to `max_order` whose glossy lobes reflect at least
+    /// `min_albedo` of uniform light ([`brdf::glossy_albedo`]), in
+    /// parallel, in the caller's pool.
     #[must_use]
-    pub fn new(scene: &Scene, max_order: usize) -> RadianceCache {
+    pub fn new(scene: &Scene, max_order: usize, min_albedo: f64) -> RadianceCache {
         let materials: Vec<Option<(Arc<brdf::BrdfCoefficients>, bool)>> = scene
             .materials
             .par_iter()
@@ -90,6 +92,12 @@ impl RadianceCache {
                             ..
                         }
                     );
+                // The albedo first: a lobe it leaves traced needs no order search.
+                if !bsdf.has_glossy()
+                    || (min_albedo > 0.0 && brdf::glossy_albedo(&bsdf) < min_albedo)
+                {
+                    return None;
+                }
                 let order = brdf::order_for(&bsdf, max_order, ENERGY_KEPT)?;
                 let table = brdf::BrdfCoefficients::new(&bsdf, order, ENERGY_SERVED);
                 Some((Arc::new(table), both_sides))
@@ -111,6 +119,12 @@ impl RadianceCache {
             tilts,
             bases: RwLock::new(HashMap::new()),
         }
+    }
+
+    /// Whether any material's glossy lobe is cached.
+    #[must_use]
+    pub fn caches_any(&self) -> bool {
+        self.materials.iter().any(Option::is_some)
     }
 
     /// The BRDF table of material `material` seen from its front (`front`) or back side, if
