@@ -770,34 +770,19 @@ fn radiance_cache_renders_reports_and_reuses_its_records() {
         "/../../scenes/cornell-rough/scene.xml"
     );
     let args = |out: &str, stats: &str| -> Vec<String> {
-        [
-            "render",
+        one_bounce_at_32(
             scene,
-            "--integrator",
-            "ic",
-            "--radiance-cache",
-            "on",
-            "-ab",
-            "1",
-            "--spp",
-            "1",
-            "--width",
-            "32",
-            "--height",
-            "32",
-            "--cache",
-            "rough.icc",
-            "-o",
+            &[
+                "--radiance-cache",
+                "on",
+                "--cache",
+                "rough.icc",
+                "--aov",
+                "glossy",
+            ],
             out,
-            "--stats",
             stats,
-            "--aov",
-            "glossy",
-            "-q",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect()
+        )
     };
     let first = args("a.exr", "a.json");
     let o = ircache(&first.iter().map(String::as_str).collect::<Vec<_>>(), &d);
@@ -818,6 +803,34 @@ fn radiance_cache_renders_reports_and_reuses_its_records() {
     assert!(b["radiance_records"].as_u64().unwrap() >= radiance, "{b}");
 }
 
+/// `ircache render scene` with `ic`, one bounce, 1 spp at 32 × 32, writing `out` and `stats`,
+/// with `extra` arguments.
+fn one_bounce_at_32(scene: &str, extra: &[&str], out: &str, stats: &str) -> Vec<String> {
+    [
+        "render",
+        scene,
+        "--integrator",
+        "ic",
+        "-ab",
+        "1",
+        "--spp",
+        "1",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "-o",
+        out,
+        "--stats",
+        stats,
+        "-q",
+    ]
+    .iter()
+    .chain(extra)
+    .map(|s| s.to_string())
+    .collect()
+}
+
 /// `--radiance-cache auto`, the default, caches the lobes that reflect much of the light: on
 /// cornell-rough its rough metals (aluminium walls, the tall box) get radiance records; on
 /// cornell-glossy, whose one cacheable lobe is a plastic's coating, there are none.
@@ -825,28 +838,8 @@ fn radiance_cache_renders_reports_and_reuses_its_records() {
 fn automatic_radiance_caching_takes_metals_and_leaves_coatings() {
     let d = temp_dir("radiance-auto");
     let radiance_records = |scene: &str, stats: &str| -> (u64, String) {
-        let o = ircache(
-            &[
-                "render",
-                scene,
-                "--integrator",
-                "ic",
-                "-ab",
-                "1",
-                "--spp",
-                "1",
-                "--width",
-                "32",
-                "--height",
-                "32",
-                "-o",
-                "x.exr",
-                "--stats",
-                stats,
-                "-q",
-            ],
-            &d,
-        );
+        let args = one_bounce_at_32(scene, &[], "x.exr", stats);
+        let o = ircache(&args.iter().map(String::as_str).collect::<Vec<_>>(), &d);
         assert!(o.status.success(), "{}", stderr(&o));
         let s: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(d.join(stats)).unwrap()).unwrap();

@@ -355,27 +355,58 @@ fn glass_sphere_over(floor: ShapeDesc, eye: Vec3, target: Vec3) -> (SensorDesc, 
     (camera, vec![floor, sphere, light])
 }
 
-/// The path tracer's image of `desc`, and the pixels of the caustic: floor pixels much brighter
-/// than the floor around them, chosen on an independent render (choosing on the reference
-/// would pick its upward noise).
-fn reference_and_caustic(desc: &SceneDesc) -> (ircache_image::Image, Vec<bool>) {
-    let reference = render_desc(desc, 0, 1);
-    let lum: Vec<f32> = render_desc(desc, 0, 2)
-        .image
-        .pixels
-        .iter()
-        .map(|p| p.luminance())
-        .collect();
-    let mut sorted = lum.clone();
-    sorted.sort_by(f32::total_cmp);
-    let median = sorted[sorted.len() / 2];
-    let mask: Vec<bool> = lum
-        .iter()
-        .map(|&l| l > 2.5 * median && l < 20.0 * median)
-        .collect();
-    let caustic_pixels = mask.iter().filter(|&&m| m).count();
-    assert!(caustic_pixels >= 8, "{caustic_pixels} caustic pixels");
-    (reference.image, mask)
+/// What the path tracer gives in the caustic and over the whole image.
+struct CausticReference {
+    /// The caustic's pixels: floor pixels much brighter than the floor around them, chosen on
+    /// an independent render (choosing on the reference would pick its upward noise).
+    mask: Vec<bool>,
+    /// The reference's mean luminance there.
+    caustic: f64,
+    /// Its mean luminance over the image.
+    mean: f64,
+}
+
+impl CausticReference {
+    /// From the path tracer's renders of `desc`.
+    fn of(desc: &SceneDesc) -> CausticReference {
+        let reference = render_desc(desc, 0, 1).image;
+        let lum: Vec<f32> = render_desc(desc, 0, 2)
+            .image
+            .pixels
+            .iter()
+            .map(|p| p.luminance())
+            .collect();
+        let mut sorted = lum.clone();
+        sorted.sort_by(f32::total_cmp);
+        let median = sorted[sorted.len() / 2];
+        let mask: Vec<bool> = lum
+            .iter()
+            .map(|&l| l > 2.5 * median && l < 20.0 * median)
+            .collect();
+        let caustic_pixels = mask.iter().filter(|&&m| m).count();
+        assert!(caustic_pixels >= 8, "{caustic_pixels} caustic pixels");
+        CausticReference {
+            caustic: masked_mean(&reference, &mask),
+            mean: masked_mean(&reference, &vec![true; mask.len()]),
+            mask,
+        }
+    }
+
+    /// Asserts `image` within 8 % of the reference in the caustic and 2 % over the image.
+    fn assert_matched_by(&self, image: &ircache_image::Image, what: &str) {
+        let caustic = masked_mean(image, &self.mask);
+        let mean = masked_mean(image, &vec![true; self.mask.len()]);
+        assert!(
+            (caustic / self.caustic - 1.0).abs() < 0.08,
+            "{what}: caustic {caustic} against the path tracer's {}",
+            self.caustic
+        );
+        assert!(
+            (mean / self.mean - 1.0).abs() < 0.02,
+            "{what}: mean {mean} against the path tracer's {}",
+            self.mean
+        );
+    }
 }
 
 /// A glass sphere focuses a small spherical light onto a plane. The caustic from the caustic
@@ -389,10 +420,7 @@ fn caustics_through_a_glass_sphere_match_the_path_tracer() {
         Vec3::new(0.0, 2.2, 3.0),
         Vec3::new(-0.3, 0.2, 0.0),
     );
-    let desc = scene(camera.clone(), path(6), shapes.clone(), vec![]);
-    let (reference, mask) = reference_and_caustic(&desc);
-    let path_caustic = masked_mean(&reference, &mask);
-    let path_mean = masked_mean(&reference, &vec![true; mask.len()]);
+    let reference = CausticReference::of(&scene(camera.clone(), path(6), shapes.clone(), vec![]));
 
     let mut few = camera;
     few.spp = 64;
@@ -411,16 +439,7 @@ fn caustics_through_a_glass_sphere_match_the_path_tracer() {
             maps.is_some_and(|m| m.caustic.is_some()),
             "{what}: a caustic map"
         );
-        let caustic = masked_mean(&out.image, &mask);
-        let mean = masked_mean(&out.image, &vec![true; mask.len()]);
-        assert!(
-            (caustic / path_caustic - 1.0).abs() < 0.08,
-            "{what}: caustic {caustic} against the path tracer's {path_caustic}"
-        );
-        assert!(
-            (mean / path_mean - 1.0).abs() < 0.02,
-            "{what}: mean {mean} against the path tracer's {path_mean}"
-        );
+        reference.assert_matched_by(&out.image, what);
     }
 }
 
@@ -448,10 +467,7 @@ fn radiance_records_leave_caustics_to_the_pixel_through_the_glossy_lobe() {
         Vec3::new(-1.5, 3.0, 0.0),
         Vec3::new(-0.35, 0.0, 0.0),
     );
-    let desc = scene(camera.clone(), path(6), shapes.clone(), vec![]);
-    let (reference, mask) = reference_and_caustic(&desc);
-    let path_caustic = masked_mean(&reference, &mask);
-    let path_mean = masked_mean(&reference, &vec![true; mask.len()]);
+    let reference = CausticReference::of(&scene(camera.clone(), path(6), shapes.clone(), vec![]));
 
     let mut fewer = camera;
     fewer.spp = 256;
@@ -470,16 +486,7 @@ fn radiance_records_leave_caustics_to_the_pixel_through_the_glossy_lobe() {
         "{} radiance records",
         cache.radiance_records.len()
     );
-    let caustic = masked_mean(&out.image, &mask);
-    let mean = masked_mean(&out.image, &vec![true; mask.len()]);
-    assert!(
-        (caustic / path_caustic - 1.0).abs() < 0.08,
-        "caustic {caustic} against the path tracer's {path_caustic}"
-    );
-    assert!(
-        (mean / path_mean - 1.0).abs() < 0.02,
-        "mean {mean} against the path tracer's {path_mean}"
-    );
+    reference.assert_matched_by(&out.image, "radiance records");
 }
 
 /// A closed diffuse room lit by a small ceiling panel: inward-facing walls, floor and ceiling.
