@@ -97,8 +97,8 @@ pub struct RenderArgs {
     pub view: Option<String>,
     /// Extra images (ic integrator): `irradiance` (interpolated indirect irradiance, written to
     /// NAME-irradiance.exr), `records` (level-0 record positions as red dots over the image, cyan
-    /// for records that also hold radiance, NAME-records.exr) and `glossy` (with
-    /// with radiance records: the indirect light the first surface's cached glossy lobe reflects
+    /// for records that also hold radiance, NAME-records.exr) and `glossy` (with radiance
+    /// records: the indirect light the first surface's cached glossy lobe reflects
     /// towards the camera, from the radiance records, NAME-glossy.exr) and `photons` (with
     /// --photons or --caustic-photons: the indirect irradiance the photon maps give at the first
     /// diffuse surface, the global map's and the caustic map's, NAME-photons.exr). Repeat or
