@@ -5,7 +5,6 @@
 //! coefficients for the viewing direction.
 
 use super::gather::RadianceCoefficients;
-use ircache_math::harmonics::coefficient_count;
 use ircache_math::harmonics::rotation::TiltTable;
 use ircache_math::{DMat3, DVec3, Frame, Vec3};
 
@@ -80,11 +79,9 @@ impl RadianceRecord {
         tilt: &TiltTable,
         out: &mut Vec<f64>,
     ) -> bool {
-        let n = coefficient_count(self.radiance.order);
         self.extrapolate_into(p, out);
         let rotation = frame.transpose() * self.frame;
-        out.chunks_mut(n)
-            .all(|channel| tilt.rotate_in_place(rotation, channel))
+        tilt.rotate_channels_in_place(rotation, out)
     }
 }
 
@@ -124,7 +121,7 @@ mod tests {
     use super::super::test_room::{gather, room};
     use super::*;
     use crate::irradiance_cache::hemisphere::Stratification;
-    use ircache_math::harmonics::{hsh, quadrature};
+    use ircache_math::harmonics::{coefficient_count, hsh, quadrature};
 
     /// A frame [t b n] with normal `n` and tangent turned by `alpha` about it.
     fn frame(n: DVec3, alpha: f64) -> DMat3 {
