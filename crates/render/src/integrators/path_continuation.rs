@@ -249,11 +249,11 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
             Some(h) => h,
             None => scene.intersect(&ray),
         };
-        // Borrowed, not moved out: a copy of the whole interaction right after `intersect`
-        // wrote it field by field stalled on store forwarding (a tenth of this loop's time).
         // Emission the path leaves out here: a gather's caustic, or on a caustics-only path
         // what a non-delta sample finds (the light samples beside it counted that in full).
         let left_out = caustic_chain || (caustics_only && !arrival.is_delta());
+        // Borrowed, not moved out: a copy of the whole interaction right after `intersect`
+        // wrote it field by field stalled on store forwarding (a tenth of this loop's time).
         let Some(it) = &hit else {
             if scene.lights.has_environment() && !left_out {
                 let w = arrival.emission_weight(|p| scene.lights.pdf_environment(p, ray.d));
