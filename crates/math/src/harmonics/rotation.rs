@@ -268,14 +268,10 @@ impl TiltTable {
         self.rotate_in_place(rotation, &mut v).then_some(v)
     }
 
-    /// [`Self::rotate`] in place; false (and `h` unspecified) beyond the table.
+    /// [`Self::rotate`] in place, for each of the consecutive expansions of this order in `h`
+    /// (one, or a channel each), the angles found once; false (and `h` unspecified) beyond the
+    /// table.
     pub fn rotate_in_place(&self, rotation: DMat3, h: &mut [f64]) -> bool {
-        self.rotate_channels_in_place(rotation, h)
-    }
-
-    /// [`Self::rotate_in_place`] for each of the consecutive expansions in `h` (channels of
-    /// this order), the angles found once.
-    pub fn rotate_channels_in_place(&self, rotation: DMat3, h: &mut [f64]) -> bool {
         let n = coefficient_count(self.order);
         let angles = ZyzAngles::from_matrix(rotation);
         let mut scratch = Vec::with_capacity(n);

@@ -855,9 +855,9 @@ pub const PARAMS: &[ParamSpec] = &[
         aliases: &[],
         value: "N|auto",
         help: "photons in the caustic map (light through glass and off mirrors onto Lambertian \
-               surfaces), read at the pixel; the gather then leaves those paths out of the \
-               irradiance (radiance records keep them for the glossy lobes); 0: caustics come \
-               from the gather; auto: 100000 in scenes with such surfaces",
+               surfaces), read at the pixel; the gathers then leave those paths out (where \
+               radiance records serve a glossy lobe, the pixel traces them through it); 0: \
+               caustics come from the gathers; auto: 100000 in scenes with such surfaces",
         shapes_records: true,
         get: |p| photons_text(p.caustic_photons),
         set: |p, v| {

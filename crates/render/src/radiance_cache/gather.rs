@@ -224,11 +224,8 @@ impl RadianceCoefficients {
             let g = (norm(&self.gradient_x[span.clone()]) + norm(&self.gradient_y[span.clone()]))
                 .sqrt();
             if g * reach > share * c {
-                let f = if g > 0.0 {
-                    share * c / (g * reach)
-                } else {
-                    0.0
-                };
+                // g · reach > 0 here.
+                let f = share * c / (g * reach);
                 self.gradient_x[span.clone()]
                     .iter_mut()
                     .for_each(|v| *v *= f);

@@ -81,7 +81,7 @@ impl RadianceRecord {
     ) -> bool {
         self.extrapolate_into(p, out);
         let rotation = frame.transpose() * self.frame;
-        tilt.rotate_channels_in_place(rotation, out)
+        tilt.rotate_in_place(rotation, out)
     }
 }
 
