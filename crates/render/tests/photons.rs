@@ -9,7 +9,7 @@ use common::*;
 use ircache_math::{Rgb, Rng, Vec3};
 use ircache_render::lights::LightSet;
 use ircache_render::photon_map::records::zone_cells;
-use ircache_render::photon_map::{MapKind, Photon, PhotonMap};
+use ircache_render::photon_map::{MapKind, Photon, PhotonMap, PhotonTag};
 use ircache_render::scene::Scene;
 use ircache_scene::*;
 use std::f32::consts::PI;
@@ -135,7 +135,7 @@ fn emitted_photons_carry_each_lights_power() {
 /// The photons of `map` within `radius` of `p` on the side of `n`.
 fn zone(map: &PhotonMap, p: Vec3, n: Vec3, radius: f32) -> Vec<&Photon> {
     let mut found = Vec::new();
-    let accept = |ph: &Photon| ph.normal.dot(n) > 0.5;
+    let accept = |ph: &PhotonTag| ph.normal.dot(n) > 0.5;
     map.tree.nearest(
         p.to_array(),
         usize::MAX,

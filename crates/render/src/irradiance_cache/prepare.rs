@@ -22,7 +22,12 @@ pub fn prepare_cache(
 ) -> Result<(IrradianceCache, CacheStats), RenderError> {
     let tables_start = std::time::Instant::now();
     let mut cache = empty_cache(scene, ic, settings.width, None, None, settings.seed, pool)?;
-    let radiance_table_seconds = tables_start.elapsed().as_secs_f64();
+    // The photon maps, built alongside, report their own time.
+    let maps_seconds: f64 = cache
+        .photons
+        .as_ref()
+        .map_or(0.0, |m| m.maps().map(|map| map.seconds).sum());
+    let radiance_table_seconds = (tables_start.elapsed().as_secs_f64() - maps_seconds).max(0.0);
     let header = header(scene, ic, settings.width, cache.environment);
     let mut loaded = 0u64;
     let mut notes: Vec<String> = super::environment::auto_note(

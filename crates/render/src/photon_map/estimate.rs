@@ -15,7 +15,7 @@
 
 use super::hull::corrected_area_on_plane;
 use super::kd_tree::{KdTree, Neighbour};
-use super::photon::Photon;
+use super::photon::PhotonTag;
 use crate::lights::is_positive_finite;
 use ircache_math::{Frame, Rgb, Vec3};
 use std::cell::RefCell;
@@ -45,7 +45,7 @@ fn with_disc<T>(
     tree: &KdTree,
     p: Vec3,
     n: Vec3,
-    accept: &dyn Fn(&Photon) -> bool,
+    accept: &dyn Fn(&PhotonTag) -> bool,
     lookup: &Lookup,
     f: impl FnOnce(&[Neighbour], f32, f32) -> T,
 ) -> Option<T> {
@@ -94,7 +94,7 @@ fn covered_area(tree: &KdTree, found: &[Neighbour], p: Vec3, n: Vec3, r2: f32, h
 /// above.
 #[inline]
 #[must_use]
-pub fn same_side(ph: &Photon, n: Vec3) -> bool {
+pub fn same_side(ph: &PhotonTag, n: Vec3) -> bool {
     ph.normal.dot(n) > 0.5 && ph.incoming.dot(n) > 0.0
 }
 
@@ -143,7 +143,7 @@ pub fn irradiance(
     max_bounces: u16,
     lookup: &Lookup,
 ) -> (Rgb, f32) {
-    let accept = |ph: &Photon| ph.bounces <= max_bounces && same_side(ph, n);
+    let accept = |ph: &PhotonTag| ph.bounces() <= max_bounces && same_side(ph, n);
     with_disc(tree, p, n, &accept, lookup, |found, area, r| {
         let sum = found
             .iter()

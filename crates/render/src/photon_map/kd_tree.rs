@@ -3,38 +3,49 @@
 //! in the middle of the range, the halves on either side), so that photons near each other in
 //! space lie near each other in memory; queries walk a compact copy of the same splits in heap
 //! order (node i's children at 2i + 1 and 2i + 2, Jensen's left-balanced tree): the top levels
-//! share cache lines, and a node is 16 bytes, where a descent through the photon array met a
-//! new cache line at every level. Queries take a predicate, so that photons of the wrong side
-//! or bounce count are skipped during the search rather than after it (a k-nearest query that
-//! filters afterwards would come back short).
+//! share cache lines, where a descent through the photon array met a new cache line at every
+//! level. Queries take a predicate, so that photons of the wrong side or bounce count are skipped
+//! during the search rather than after it (a k-nearest query that filters afterwards would come
+//! back short); the predicate reads a compact tag kept in the node beside the position
+//! ([`Located::Tag`]), since reading the item itself cost a second cache miss per candidate
+//! (half the time of a lookup in the precomputed irradiance).
 
-use super::photon::Photon;
+use super::photon::{Photon, PhotonTag};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-/// What a kd-tree holds: anything with a position.
+/// What a kd-tree holds: anything with a position, and a tag that queries filter on.
 pub trait Located: Send {
+    /// What a query's predicate tests (kept in the search node).
+    type Tag: Copy + Default + Send + Sync + std::fmt::Debug;
     /// Its position.
     fn key(&self) -> [f32; 3];
+    /// Its tag.
+    fn tag(&self) -> Self::Tag;
 }
 
 impl Located for Photon {
+    type Tag = PhotonTag;
     #[inline]
     fn key(&self) -> [f32; 3] {
         Photon::key(self)
+    }
+    #[inline]
+    fn tag(&self) -> PhotonTag {
+        PhotonTag::of(self)
     }
 }
 
 /// Items (photons by default) in kd-tree order, and the splits in heap order for queries.
 #[derive(Clone, Debug)]
-pub struct KdTree<T = Photon> {
+pub struct KdTree<T: Located = Photon> {
     /// The items, each range's median in its middle.
     pub photons: Vec<T>,
     /// The search tree: a left-balanced kd-tree over the items' positions, in heap order.
-    nodes: Vec<Node>,
+    nodes: Vec<Node<T::Tag>>,
 }
 
-impl<T> Default for KdTree<T> {
+impl<T: Located> Default for KdTree<T> {
     fn default() -> Self {
         KdTree {
             photons: Vec::new(),
@@ -43,22 +54,23 @@ impl<T> Default for KdTree<T> {
     }
 }
 
-/// A search node: an item's position, and its index in [`KdTree::photons`] with the split
-/// axis in the top two bits.
+/// A search node: an item's position, its index in [`KdTree::photons`] with the split axis in
+/// the top two bits, and its tag.
 #[derive(Clone, Copy, Debug, Default)]
-struct Node {
+struct Node<G> {
     position: [f32; 3],
     index_axis: u32,
+    tag: G,
 }
 
-impl Node {
+impl<G> Node<G> {
     #[inline]
-    fn index(self) -> usize {
+    fn index(&self) -> usize {
         (self.index_axis & INDEX_MASK) as usize
     }
 
     #[inline]
-    fn axis(self) -> usize {
+    fn axis(&self) -> usize {
         (self.index_axis >> 30) as usize
     }
 }
@@ -67,6 +79,9 @@ const INDEX_MASK: u32 = (1 << 30) - 1;
 
 /// Most items a tree holds (the index shares a word with the split axis).
 pub const MAX_ITEMS: usize = INDEX_MASK as usize + 1;
+
+/// Deepest a tree of [`MAX_ITEMS`] goes: the descent's stack of far halves.
+const MAX_DEPTH: usize = 32;
 
 /// A found photon: its index in [`KdTree::photons`] and squared distance.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -101,12 +116,13 @@ impl<T: Located> KdTree<T> {
     pub fn build(mut photons: Vec<T>) -> KdTree<T> {
         photons.truncate(MAX_ITEMS);
         build_range(&mut photons);
-        let mut items: Vec<Node> = photons
+        let mut items: Vec<Node<T::Tag>> = photons
             .iter()
             .enumerate()
             .map(|(i, p)| Node {
                 position: p.key(),
                 index_axis: i as u32,
+                tag: p.tag(),
             })
             .collect();
         let mut nodes = vec![Node::default(); items.len()];
@@ -126,9 +142,9 @@ impl<T: Located> KdTree<T> {
         self.photons.is_empty()
     }
 
-    /// The (at most) `k` photons nearest to `q` within `sqrt(max_distance2)` that `accept`,
-    /// nearest first, into `out` (cleared first).
-    pub fn nearest<A: Fn(&T) -> bool + ?Sized>(
+    /// The (at most) `k` photons nearest to `q` within `sqrt(max_distance2)` whose tags
+    /// `accept`, nearest first, into `out` (cleared first; its allocation is the search's heap).
+    pub fn nearest<A: Fn(&T::Tag) -> bool + ?Sized>(
         &self,
         q: [f32; 3],
         k: usize,
@@ -140,14 +156,13 @@ impl<T: Located> KdTree<T> {
         if k == 0 {
             return;
         }
-        let mut heap = BinaryHeap::with_capacity(k + 1);
-        let mut bound = max_distance2;
-        self.descend(0, q, &mut bound, &mut |index, distance2| {
-            if !accept(&self.photons[index]) {
+        let mut heap = BinaryHeap::from(std::mem::take(out));
+        self.descend(q, max_distance2, |node, distance2| {
+            if !accept(&node.tag) {
                 return None;
             }
             heap.push(Neighbour {
-                index: index as u32,
+                index: node.index() as u32,
                 distance2,
             });
             if heap.len() > k {
@@ -155,59 +170,77 @@ impl<T: Located> KdTree<T> {
             }
             (heap.len() == k).then(|| heap.peek().map_or(distance2, |n| n.distance2))
         });
-        out.extend(heap.into_sorted_vec());
+        *out = heap.into_sorted_vec();
     }
 
-    /// The index of the item nearest to `q` within `sqrt(max_distance2)` that `accept`s (the
-    /// one-neighbour query, without a heap).
+    /// The index of the item nearest to `q` within `sqrt(max_distance2)` whose tag `accept`s
+    /// (the one-neighbour query, without a heap).
     #[must_use]
-    pub fn nearest_one<A: Fn(&T) -> bool + ?Sized>(
+    pub fn nearest_one<A: Fn(&T::Tag) -> bool + ?Sized>(
         &self,
         q: [f32; 3],
         max_distance2: f32,
         accept: &A,
     ) -> Option<usize> {
         let mut best = None;
-        let mut bound = max_distance2;
-        self.descend(0, q, &mut bound, &mut |index, distance2| {
-            accept(&self.photons[index]).then(|| {
-                best = Some(index);
+        self.descend(q, max_distance2, |node, distance2| {
+            accept(&node.tag).then(|| {
+                best = Some(node.index());
                 distance2
             })
         });
         best
     }
 
-    /// Visits the items of the subtree at heap node `i` within `sqrt(bound)` of `q`, nearer
-    /// halves first; `visit` sees each one's index and squared distance and may return a new,
-    /// smaller bound (generic, so that each query's visitor is inlined into its own descent).
-    fn descend<V: FnMut(usize, f32) -> Option<f32>>(
+    /// Visits the nodes within `sqrt(bound)` of `q`, each node on the way down to the leaf on
+    /// its side and the far halves that the shrinking bound still reaches afterwards; `visit`
+    /// sees each node and its squared distance and may return a new, smaller bound (generic,
+    /// so that each query's visitor is inlined into its own descent, which keeps its far halves
+    /// on a stack rather than recursing).
+    #[inline]
+    fn descend<V: FnMut(&Node<T::Tag>, f32) -> Option<f32>>(
         &self,
-        i: usize,
         q: [f32; 3],
-        bound: &mut f32,
-        visit: &mut V,
+        mut bound: f32,
+        mut visit: V,
     ) {
-        let Some(&node) = self.nodes.get(i) else {
-            return;
-        };
-        let p = node.position;
-        let axis = node.axis();
-        let delta = q[axis] - p[axis];
-        let (near, far) = if delta < 0.0 {
-            (2 * i + 1, 2 * i + 2)
-        } else {
-            (2 * i + 2, 2 * i + 1)
-        };
-        self.descend(near, q, bound, visit);
-        let distance2 = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
-        if distance2 < *bound {
-            if let Some(b) = visit(node.index(), distance2) {
-                *bound = b;
+        let mut far_halves = [(0u32, 0f32); MAX_DEPTH];
+        let mut pending = 0usize;
+        let mut i = 0usize;
+        loop {
+            while let Some(node) = self.nodes.get(i) {
+                let p = node.position;
+                let delta = q[node.axis()] - p[node.axis()];
+                let distance2 =
+                    (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+                if distance2 < bound {
+                    if let Some(b) = visit(node, distance2) {
+                        bound = b;
+                    }
+                }
+                let (near, far) = if delta < 0.0 {
+                    (2 * i + 1, 2 * i + 2)
+                } else {
+                    (2 * i + 2, 2 * i + 1)
+                };
+                if far < self.nodes.len() && delta * delta < bound {
+                    far_halves[pending] = (far as u32, delta * delta);
+                    pending += 1;
+                }
+                i = near;
             }
-        }
-        if delta * delta < *bound {
-            self.descend(far, q, bound, visit);
+            // The nearest far half the bound still reaches.
+            loop {
+                if pending == 0 {
+                    return;
+                }
+                pending -= 1;
+                let (far, plane2) = far_halves[pending];
+                if plane2 < bound {
+                    i = far as usize;
+                    break;
+                }
+            }
         }
     }
 }
@@ -242,7 +275,7 @@ fn left_size(n: usize) -> usize {
 
 /// Fills heap node `i` and its subtrees from `items`: the item splitting them along the widest
 /// axis at the rank that keeps the tree left-balanced.
-fn build_heap(items: &mut [Node], nodes: &mut [Node], i: usize) {
+fn build_heap<G: Copy>(items: &mut [Node<G>], nodes: &mut [Node<G>], i: usize) {
     if items.is_empty() {
         return;
     }
@@ -301,7 +334,7 @@ mod tests {
             .collect();
         let tree = KdTree::build(photons.clone());
         assert_eq!(tree.len(), photons.len());
-        let accept = |p: &Photon| p.bounces != 1;
+        let accept = |p: &PhotonTag| p.bounces() != 1;
         let mut out = Vec::new();
         for _ in 0..200 {
             let q = [rng.next_f32(), rng.next_f32() * 0.5, rng.next_f32() * 2.0];
@@ -313,7 +346,7 @@ mod tests {
             tree.nearest(q, 17, max2, &accept, &mut out);
             let mut brute: Vec<f32> = photons
                 .iter()
-                .filter(|p| accept(p))
+                .filter(|p| p.bounces != 1)
                 .map(|p| p.position.distance_squared(Vec3::from(q)))
                 .filter(|&d| d < max2)
                 .collect();
@@ -324,7 +357,9 @@ mod tests {
             for (a, b) in found.iter().zip(&brute) {
                 assert!((a - b).abs() <= 1e-6 * b.max(1e-6), "{a} {b}");
             }
-            assert!(out.iter().all(|n| accept(&tree.photons[n.index as usize])));
+            assert!(out
+                .iter()
+                .all(|n| tree.photons[n.index as usize].bounces != 1));
             let one = tree.nearest_one(q, max2, &accept);
             assert_eq!(one.map(|i| i as u32), out.first().map(|n| n.index));
         }

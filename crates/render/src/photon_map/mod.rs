@@ -24,7 +24,7 @@ pub mod trace;
 
 pub use estimate::Lookup;
 pub use kd_tree::KdTree;
-pub use photon::Photon;
+pub use photon::{PackedUnit, Photon, PhotonTag};
 pub use trace::{trace_photons, MapKind, TraceStats};
 
 use crate::scene::Scene;
@@ -60,9 +60,14 @@ pub struct EstimatePoint {
 }
 
 impl kd_tree::Located for EstimatePoint {
+    type Tag = PackedUnit;
     #[inline]
     fn key(&self) -> [f32; 3] {
         self.position.to_array()
+    }
+    #[inline]
+    fn tag(&self) -> PackedUnit {
+        PackedUnit::new(self.normal)
     }
 }
 
@@ -136,7 +141,7 @@ impl PhotonMap {
     ) -> (Rgb, f32) {
         if let Some(pre) = &self.precomputed {
             let radius2 = lookup.max_radius * lookup.max_radius;
-            let same_side = |e: &EstimatePoint| e.normal.dot(n) > 0.5;
+            let same_side = |normal: &PackedUnit| normal.dot(n) > 0.5;
             if let Some(i) = pre.tree.nearest_one(p.to_array(), radius2, &same_side) {
                 let column = usize::from(max_bounces).min(pre.columns - 1);
                 return (pre.irradiance[i * pre.columns + column], pre.radii[i]);

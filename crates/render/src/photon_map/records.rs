@@ -18,7 +18,7 @@
 use super::estimate::same_side;
 use super::hull::corrected_area_on_plane;
 use super::kd_tree::{KdTree, Neighbour};
-use super::photon::Photon;
+use super::photon::{Photon, PhotonTag};
 use crate::irradiance_cache::hemisphere::{to_world, HemisphereSamples, Stratification};
 use crate::irradiance_cache::record::{ErrorMetric, Record, NO_RADIANCE};
 use crate::irradiance_cache::store::RecordStore;
@@ -161,9 +161,9 @@ pub fn photon_record(
     settings: &PhotonRecordSettings,
     found: &mut Vec<Neighbour>,
 ) -> Option<Record> {
-    let accept = |ph: &Photon| {
-        ph.bounces <= settings.max_bounces
-            && !(settings.without_caustics && ph.caustic)
+    let accept = |ph: &PhotonTag| {
+        ph.bounces() <= settings.max_bounces
+            && !(settings.without_caustics && ph.caustic())
             && same_side(ph, n)
     };
     let (lo, hi) = settings.zone_limits;

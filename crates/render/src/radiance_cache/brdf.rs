@@ -20,7 +20,7 @@
 
 use crate::bsdf::Bsdf;
 use ircache_math::harmonics::hsh::HshBasis;
-use ircache_math::harmonics::{coefficient_count, quadrature, rotate_about_z};
+use ircache_math::harmonics::{band_and_degree, coefficient_count, quadrature, rotate_about_z};
 use ircache_math::{Rgb, Vec3};
 
 /// Outgoing directions tabulated, uniform in cos θo over [0, 1].
@@ -53,44 +53,90 @@ pub struct BrdfCoefficients {
     share: f64,
 }
 
-/// Projections of the glossy lobe at one θo: per channel, the coefficients, ∫ (f cos)² dωi, and
-/// the lobe's share of the cells of a cosine-weighted gather
-/// η = (∫ f cos dωi)² / (π ∫ f² cos dωi) (1 for a constant f).
-fn project_slice(
-    bsdf: &Bsdf,
-    cos_theta_o: f64,
-    rule: &quadrature::Rule,
-    basis_values: &[Vec<f64>],
+/// The projection rule over the incoming hemisphere and, at each node, the basis functions of
+/// degree m ≥ 0. The lobe is tabulated at φo = 0, where an isotropic f_r(ωo, ωi) is even in
+/// φi: its m < 0 (sin |m|φ) coefficients vanish, and the rule needs only the nodes with φi in
+/// (0, π), each weighing twice (a quarter of the work of the whole rule and every function).
+struct Projection {
+    rule: quadrature::Rule,
+    /// The linear indices of the m ≥ 0 coefficients.
+    even: Vec<usize>,
+    /// Per node, the values of those functions.
+    values: Vec<Vec<f64>>,
+    /// Coefficients in all.
     n: usize,
-) -> ([Vec<f64>; 3], [f64; 3], f64) {
-    let (mut first, mut second) = (0.0, 0.0);
-    let sin_theta_o = (1.0 - cos_theta_o * cos_theta_o).max(0.0).sqrt();
-    let wo = Vec3::new(sin_theta_o as f32, 0.0, cos_theta_o as f32);
-    let mut c = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
-    let mut energy = [0.0; 3];
-    for ((d, &w), h) in rule.directions.iter().zip(&rule.weights).zip(basis_values) {
-        let f = bsdf.eval_glossy(wo, d.as_vec3());
-        let y = f64::from(f.g);
-        first += w * y;
-        second += w * y * y / d.z.max(1e-9);
-        for (ch, v) in [f.r, f.g, f.b].into_iter().enumerate() {
-            let v = f64::from(v);
-            if v == 0.0 {
-                continue;
-            }
-            energy[ch] += w * v * v;
-            let wv = w * v;
-            for (ci, hi) in c[ch].iter_mut().zip(h) {
-                *ci += wv * hi;
-            }
+}
+
+impl Projection {
+    fn new(order: usize) -> Projection {
+        let rule = quadrature::hemisphere_fine_mirrored(PROJECTION_NODES);
+        let even: Vec<usize> = (0..coefficient_count(order))
+            .filter(|&i| band_and_degree(i).1 >= 0)
+            .collect();
+        let mut basis = HshBasis::new(order);
+        let values = rule
+            .directions
+            .iter()
+            .map(|&d| {
+                let all = basis.values(d);
+                even.iter().map(|&i| all[i]).collect()
+            })
+            .collect();
+        Projection {
+            rule,
+            even,
+            values,
+            n: coefficient_count(order),
         }
     }
-    let share = if second > 0.0 {
-        (first * first / (std::f64::consts::PI * second)).min(1.0)
-    } else {
-        1.0
-    };
-    (c, energy, share)
+
+    /// Projections of the glossy lobe at one θo: per channel, the coefficients, ∫ (f cos)² dωi,
+    /// and the lobe's share of the cells of a cosine-weighted gather
+    /// η = (∫ f cos dωi)² / (π ∫ f² cos dωi) (1 for a constant f).
+    fn slice(&self, bsdf: &Bsdf, cos_theta_o: f64) -> ([Vec<f64>; 3], [f64; 3], f64) {
+        let (mut first, mut second) = (0.0, 0.0);
+        let sin_theta_o = (1.0 - cos_theta_o * cos_theta_o).max(0.0).sqrt();
+        let wo = Vec3::new(sin_theta_o as f32, 0.0, cos_theta_o as f32);
+        let m = self.even.len();
+        let mut even = [vec![0.0; m], vec![0.0; m], vec![0.0; m]];
+        let mut energy = [0.0; 3];
+        for ((d, &w), h) in self
+            .rule
+            .directions
+            .iter()
+            .zip(&self.rule.weights)
+            .zip(&self.values)
+        {
+            let f = bsdf.eval_glossy(wo, d.as_vec3());
+            let y = f64::from(f.g);
+            first += w * y;
+            second += w * y * y / d.z.max(1e-9);
+            for (ch, v) in [f.r, f.g, f.b].into_iter().enumerate() {
+                let v = f64::from(v);
+                if v == 0.0 {
+                    continue;
+                }
+                energy[ch] += w * v * v;
+                let wv = w * v;
+                for (ci, hi) in even[ch].iter_mut().zip(h) {
+                    *ci += wv * hi;
+                }
+            }
+        }
+        let share = if second > 0.0 {
+            (first * first / (std::f64::consts::PI * second)).min(1.0)
+        } else {
+            1.0
+        };
+        let c = even.map(|channel| {
+            let mut all = vec![0.0; self.n];
+            for (&i, v) in self.even.iter().zip(channel) {
+                all[i] = v;
+            }
+            all
+        });
+        (c, energy, share)
+    }
 }
 
 /// Outgoing angles at which [`glossy_albedo`] measures the directional albedo.
@@ -101,7 +147,8 @@ const ALBEDO_VIEWS: usize = 8;
 /// albedo at cos θo = μ, by the projection rule (Gauss–Legendre in μ).
 #[must_use]
 pub fn glossy_albedo(bsdf: &Bsdf) -> f64 {
-    let rule = quadrature::hemisphere_fine(PROJECTION_NODES);
+    // Even in φi at φo = 0 (see [`Projection`]).
+    let rule = quadrature::hemisphere_fine_mirrored(PROJECTION_NODES);
     quadrature::gauss_legendre(ALBEDO_VIEWS, 0.0, 1.0)
         .into_iter()
         .map(|(mu, w_mu)| {
@@ -118,28 +165,19 @@ pub fn glossy_albedo(bsdf: &Bsdf) -> f64 {
         .sum()
 }
 
-/// The projection rule over the incoming hemisphere and every basis value at its nodes.
-fn rule_and_basis(order: usize) -> (quadrature::Rule, Vec<Vec<f64>>) {
-    let rule = quadrature::hemisphere_fine(PROJECTION_NODES);
-    let mut basis = HshBasis::new(order);
-    let values = rule.directions.iter().map(|&d| basis.values(d)).collect();
-    (rule, values)
-}
-
 impl BrdfCoefficients {
     /// Tabulates `bsdf`'s glossy part (a one-sided or front-side model, seen from above) to
     /// `order`, marking the outgoing directions where it keeps at least `threshold` of the
     /// lobe's energy.
     #[must_use]
     pub fn new(bsdf: &Bsdf, order: usize, threshold: f64) -> BrdfCoefficients {
-        let n = coefficient_count(order);
-        let (rule, values) = rule_and_basis(order);
-        let mut table = Vec::with_capacity(OUTGOING_SAMPLES * 3 * n);
+        let projection = Projection::new(order);
+        let mut table = Vec::with_capacity(OUTGOING_SAMPLES * 3 * projection.n);
         let mut kept = Vec::with_capacity(OUTGOING_SAMPLES);
         let mut share = 1.0;
         for k in 0..OUTGOING_SAMPLES {
             let cos_theta_o = k as f64 / (OUTGOING_SAMPLES - 1) as f64;
-            let (c, energy, eta) = project_slice(bsdf, cos_theta_o, &rule, &values, n);
+            let (c, energy, eta) = projection.slice(bsdf, cos_theta_o);
             // The last sample is the normal view.
             share = eta;
             let total: f64 = energy.iter().sum();
@@ -258,18 +296,22 @@ pub fn clamped(l: [f64; 3]) -> Rgb {
 /// 1 … `max_order` keeps at outgoing angle θo (degrees), the channels summed.
 #[must_use]
 pub fn energy_kept(bsdf: &Bsdf, max_order: usize, theta_o_degrees: f64) -> Vec<f64> {
-    energy_kept_with(bsdf, max_order, theta_o_degrees, &rule_and_basis(max_order))
+    energy_kept_with(
+        bsdf,
+        max_order,
+        theta_o_degrees,
+        &Projection::new(max_order),
+    )
 }
 
-/// [`energy_kept`] with the projection rule and its basis values made once.
+/// [`energy_kept`] with the projection made once.
 fn energy_kept_with(
     bsdf: &Bsdf,
     max_order: usize,
     theta_o_degrees: f64,
-    (rule, values): &(quadrature::Rule, Vec<Vec<f64>>),
+    projection: &Projection,
 ) -> Vec<f64> {
-    let n = coefficient_count(max_order);
-    let (c, energy, _) = project_slice(bsdf, theta_o_degrees.to_radians().cos(), rule, values, n);
+    let (c, energy, _) = projection.slice(bsdf, theta_o_degrees.to_radians().cos());
     let total: f64 = energy.iter().sum();
     (1..=max_order)
         .map(|order| {
@@ -302,10 +344,10 @@ pub fn order_for(bsdf: &Bsdf, max_order: usize, threshold: f64) -> Option<usize>
         return None;
     }
     let steps = (ORDER_MAX_THETA_DEGREES / 5.0) as usize;
-    let rule = rule_and_basis(max_order);
+    let projection = Projection::new(max_order);
     let mut needed = 1;
     for k in 0..=steps {
-        let kept = energy_kept_with(bsdf, max_order, 5.0 * k as f64, &rule);
+        let kept = energy_kept_with(bsdf, max_order, 5.0 * k as f64, &projection);
         needed = needed.max(kept.iter().position(|&e| e >= threshold)? + 1);
     }
     Some(needed)

@@ -78,12 +78,27 @@ impl RadianceCache {
     /// parallel, in the caller's pool.
     #[must_use]
     pub fn new(scene: &Scene, max_order: usize, min_albedo: f64) -> RadianceCache {
-        let materials: Vec<Option<(Arc<brdf::BrdfCoefficients>, bool)>> = scene
+        // Glossy parts are untextured in every model; the texture coordinate is moot.
+        let bsdfs: Vec<Bsdf> = scene
             .materials
+            .iter()
+            .map(|m| m.at(Vec2::splat(0.5)))
+            .collect();
+        // One table per distinct BSDF: a scene's shapes that name one `<bsdf>` each hold a copy
+        // (the lamp room: 7 materials, 2 BSDFs).
+        let mut first_of: HashMap<String, usize> = HashMap::new();
+        let first: Vec<usize> = bsdfs
+            .iter()
+            .enumerate()
+            .map(|(i, b)| *first_of.entry(format!("{b:?}")).or_insert(i))
+            .collect();
+        let tables: Vec<Option<(Arc<brdf::BrdfCoefficients>, bool)>> = bsdfs
             .par_iter()
-            .map(|m| {
-                // Glossy parts are untextured in every model; the texture coordinate is moot.
-                let bsdf = m.at(Vec2::splat(0.5));
+            .enumerate()
+            .map(|(i, bsdf)| {
+                if first[i] != i {
+                    return None;
+                }
                 let both_sides = matches!(bsdf, Bsdf::TwoSided { front, back } if front == back)
                     || matches!(
                         bsdf,
@@ -94,15 +109,16 @@ impl RadianceCache {
                     );
                 // The albedo first: a lobe it leaves traced needs no order search.
                 if !bsdf.has_glossy()
-                    || (min_albedo > 0.0 && brdf::glossy_albedo(&bsdf) < min_albedo)
+                    || (min_albedo > 0.0 && brdf::glossy_albedo(bsdf) < min_albedo)
                 {
                     return None;
                 }
-                let order = brdf::order_for(&bsdf, max_order, ENERGY_KEPT)?;
-                let table = brdf::BrdfCoefficients::new(&bsdf, order, ENERGY_SERVED);
+                let order = brdf::order_for(bsdf, max_order, ENERGY_KEPT)?;
+                let table = brdf::BrdfCoefficients::new(bsdf, order, ENERGY_SERVED);
                 Some((Arc::new(table), both_sides))
             })
             .collect();
+        let materials: Vec<_> = first.iter().map(|&f| tables[f].clone()).collect();
         let mut orders: Vec<usize> = materials.iter().flatten().map(|t| t.0.order()).collect();
         orders.sort_unstable();
         orders.dedup();
