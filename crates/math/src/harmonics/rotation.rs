@@ -219,8 +219,10 @@ impl TiltTable {
             .then_some(out)
     }
 
-    /// [`Self::tilt`] in place, `scratch` its working space; false (and `h` unspecified)
-    /// beyond the table.
+    /// [`Self::tilt`] in place for each of the consecutive expansions of this order in `h` (one,
+    /// or a channel each), `scratch` its working space; false (and `h` unspecified) beyond the
+    /// table. Each row of MR(β) is lerped once and applied to every channel: the table's rows
+    /// are read once per lookup, not once per channel.
     fn tilt_in_place(&self, beta: f64, h: &mut [f64], scratch: &mut Vec<f64>) -> bool {
         let position = beta / self.step;
         let k = position.floor() as usize;
@@ -235,24 +237,33 @@ impl TiltTable {
         } else {
             return false;
         };
+        let n = coefficient_count(self.order);
+        let channels = h.len() / n;
         for (s, set) in self.sets.iter().enumerate() {
-            scratch.clear();
-            scratch.extend(set.iter().map(|&i| h[i]));
             let m = set.len();
+            // The set's coefficients, channel by channel, then room for one lerped row.
+            scratch.clear();
+            for channel in h.chunks(n) {
+                scratch.extend(set.iter().map(|&i| channel[i]));
+            }
+            scratch.resize(channels * m + m, 0.0);
+            let (x, lerped) = scratch.split_at_mut(channels * m);
             let a = &self.blocks[k][s];
             for (r, &i) in set.iter().enumerate() {
-                let row = |matrix: &[f64]| -> f64 {
-                    matrix[r * m..(r + 1) * m]
-                        .iter()
-                        .zip(scratch.iter())
-                        .map(|(x, y)| x * y)
-                        .sum()
+                let ra = &a[r * m..(r + 1) * m];
+                let row: &[f64] = match next {
+                    Some(b) => {
+                        let rb = &b[s][r * m..(r + 1) * m];
+                        for ((o, &va), &vb) in lerped.iter_mut().zip(ra).zip(rb) {
+                            *o = va + t * (vb - va);
+                        }
+                        &*lerped
+                    }
+                    None => ra,
                 };
-                let va = row(a);
-                h[i] = match next {
-                    Some(b) => va + t * (row(&b[s]) - va),
-                    None => va,
-                };
+                for (channel, xc) in h.chunks_mut(n).zip(x.chunks(m)) {
+                    channel[i] = row.iter().zip(xc).map(|(p, q)| p * q).sum();
+                }
             }
         }
         true
@@ -274,19 +285,20 @@ impl TiltTable {
     pub fn rotate_in_place(&self, rotation: DMat3, h: &mut [f64]) -> bool {
         let n = coefficient_count(self.order);
         let angles = ZyzAngles::from_matrix(rotation);
-        let mut scratch = Vec::with_capacity(n);
-        h.chunks_mut(n).all(|channel| {
-            if angles.beta == 0.0 {
-                rotate_about_z(self.order, channel, angles.alpha);
-                return true;
-            }
-            rotate_about_z(self.order, channel, angles.gamma);
-            if !self.tilt_in_place(angles.beta, channel, &mut scratch) {
-                return false;
-            }
-            rotate_about_z(self.order, channel, angles.alpha);
-            true
-        })
+        if angles.beta == 0.0 {
+            h.chunks_mut(n)
+                .for_each(|channel| rotate_about_z(self.order, channel, angles.alpha));
+            return true;
+        }
+        h.chunks_mut(n)
+            .for_each(|channel| rotate_about_z(self.order, channel, angles.gamma));
+        let mut scratch = Vec::with_capacity(h.len() + n);
+        if !self.tilt_in_place(angles.beta, h, &mut scratch) {
+            return false;
+        }
+        h.chunks_mut(n)
+            .for_each(|channel| rotate_about_z(self.order, channel, angles.alpha));
+        true
     }
 }
 
