@@ -287,6 +287,10 @@ pub struct Distribution1D {
     pub cdf: Vec<f32>,
     /// Sum of the weights (0 when all are zero).
     pub integral: f32,
+    /// Per interval `[g/n, (g+1)/n)` of `u`, the last bin whose `cdf` lies at or below its
+    /// start (Chen and Asau's guide table): a sample walks from there, a load or two where a
+    /// binary search over an environment map's row waited on ten.
+    guide: Vec<u32>,
 }
 
 impl Distribution1D {
@@ -314,10 +318,20 @@ impl Distribution1D {
         if let Some(last) = cdf.last_mut() {
             *last = 1.0;
         }
+        let mut guide = Vec::with_capacity(n);
+        let mut i = 0;
+        for g in 0..n {
+            let start = g as f32 / n as f32;
+            while i < n && cdf[i + 1] <= start {
+                i += 1;
+            }
+            guide.push(i as u32);
+        }
         Distribution1D {
             func: func.to_vec(),
             cdf,
             integral,
+            guide,
         }
     }
 
@@ -342,13 +356,7 @@ impl Distribution1D {
     /// Samples a bin: returns (bin, probability, `u` rescaled to [0,1) within the bin).
     #[must_use]
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
-        let n = self.len();
-        // Last index with cdf[i] <= u.
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= u)
-            .saturating_sub(1)
-            .min(n - 1);
+        let i = self.bin(u);
         let p = self.pmf(i);
         let ur = if p > 0.0 {
             ((u - self.cdf[i]) / p).clamp(0.0, 1.0 - f32::EPSILON)
@@ -357,11 +365,57 @@ impl Distribution1D {
         };
         (i, p, ur)
     }
+
+    /// The last bin `i` with `cdf[i] <= u` (the first for `u` below 0 or NaN, the last for `u`
+    /// at or above 1): from the guide table's entry, walked back past rounding and on past the
+    /// bins that start at or below `u`.
+    #[inline]
+    fn bin(&self, u: f32) -> usize {
+        let n = self.len();
+        let g = ((u * n as f32) as usize).min(n - 1);
+        let mut i = self.guide[g] as usize;
+        while i > 0 && !(self.cdf[i] <= u) {
+            i -= 1;
+        }
+        while i < n && self.cdf[i + 1] <= u {
+            i += 1;
+        }
+        i.min(n - 1)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_guide_table_finds_the_bins_a_binary_search_finds() {
+        let mut rng = crate::Rng::new(7, 0);
+        let weights: [&[f32]; 5] = [
+            &[1.0],
+            &[0.0, 0.0, 3.0, 0.0, 1.0, 0.0],
+            &[0.0; 4],
+            &[1e-30, 1.0, 1e-30, 0.0, 5.0, 1e-3, 0.0, 0.0],
+            &[2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 7.0],
+        ];
+        for func in weights {
+            let d = Distribution1D::new(func);
+            let n = d.len();
+            let search = |u: f32| {
+                d.cdf
+                    .partition_point(|&c| c <= u)
+                    .saturating_sub(1)
+                    .min(n - 1)
+            };
+            let mut us: Vec<f32> = d.cdf.clone();
+            us.extend(d.cdf.iter().map(|&c| c.next_down()));
+            us.extend((0..2000).map(|_| rng.next_f32()));
+            us.extend([-1.0, -0.0, 1.0, 2.0, f32::NAN, 1.0f32.next_down()]);
+            for u in us {
+                assert_eq!(d.bin(u), search(u), "u {u} in {func:?}");
+            }
+        }
+    }
 
     #[test]
     fn concentric_round_trip() {
