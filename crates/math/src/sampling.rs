@@ -318,11 +318,13 @@ impl Distribution1D {
         if let Some(last) = cdf.last_mut() {
             *last = 1.0;
         }
-        let mut guide = Vec::with_capacity(n);
+        // No weights at all leave no bin (`cdf` is [1]).
+        let bins = cdf.len() - 1;
+        let mut guide = Vec::with_capacity(bins);
         let mut i = 0;
-        for g in 0..n {
-            let start = g as f32 / n as f32;
-            while i < n && cdf[i + 1] <= start {
+        for g in 0..bins {
+            let start = g as f32 / bins as f32;
+            while i < bins && cdf[i + 1] <= start {
                 i += 1;
             }
             guide.push(i as u32);
@@ -372,9 +374,12 @@ impl Distribution1D {
     #[inline]
     fn bin(&self, u: f32) -> usize {
         let n = self.len();
+        if n == 0 || u.is_nan() {
+            return 0;
+        }
         let g = ((u * n as f32) as usize).min(n - 1);
         let mut i = self.guide[g] as usize;
-        while i > 0 && !(self.cdf[i] <= u) {
+        while i > 0 && self.cdf[i] > u {
             i -= 1;
         }
         while i < n && self.cdf[i + 1] <= u {
@@ -391,6 +396,7 @@ mod tests {
     #[test]
     fn the_guide_table_finds_the_bins_a_binary_search_finds() {
         let mut rng = crate::Rng::new(7, 0);
+        assert_eq!(Distribution1D::new(&[]).len(), 0);
         let weights: [&[f32]; 5] = [
             &[1.0],
             &[0.0, 0.0, 3.0, 0.0, 1.0, 0.0],
