@@ -17,6 +17,7 @@ use super::hsh::HshBasis;
 use super::sh::{rotation_y, ShRotation};
 use super::{coefficient_count, quadrature, rotate_about_z};
 use glam::DMat3;
+use rayon::prelude::*;
 
 /// Euler angles of R = R_z(α) R_y(β) R_z(γ) (NOTES-001 §0).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -99,6 +100,34 @@ pub fn tilt_matrix(order: usize, beta: f64) -> Vec<f64> {
     out
 }
 
+/// [`tilt_matrix`] restricted to each of the parity `sets` (row-major, set × set), computed
+/// alone: the entries between the sets vanish, and half the products are saved.
+fn tilt_blocks(order: usize, beta: f64, sets: &[Vec<usize>; 2]) -> [Vec<f64>; 2] {
+    let rule = quadrature::lune(beta, lune_nodes(order));
+    let n = coefficient_count(order);
+    let inverse = rotation_y(beta).transpose();
+    let mut basis = HshBasis::new(order);
+    let (mut h, mut h_back) = (vec![0.0; n], vec![0.0; n]);
+    let mut blocks = sets.clone().map(|set| vec![0.0; set.len() * set.len()]);
+    let mut back = Vec::with_capacity(n);
+    for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
+        basis.eval(d, &mut h);
+        basis.eval(inverse * d, &mut h_back);
+        for (set, block) in sets.iter().zip(&mut blocks) {
+            let m = set.len();
+            back.clear();
+            back.extend(set.iter().map(|&j| h_back[j]));
+            for (r, &i) in set.iter().enumerate() {
+                let wh = w * h[i];
+                for (o, hb) in block[r * m..(r + 1) * m].iter_mut().zip(&back) {
+                    *o += wh * hb;
+                }
+            }
+        }
+    }
+    blocks
+}
+
 /// The SH route to the same tilt: C R^SH_y(β) Cᵀ with `sh_order` SH bands (NOTES-001 §A.5
 /// method 1): exact as `sh_order` grows, the reference for [`tilt_matrix`].
 #[must_use]
@@ -177,18 +206,11 @@ impl TiltTable {
     pub fn new(order: usize, step: f64, max_beta: f64) -> TiltTable {
         let max_beta = max_beta.clamp(0.0, std::f64::consts::PI);
         let count = (max_beta / step).ceil() as usize + 1;
-        let n = coefficient_count(order);
         let sets = parity_sets(order);
+        // One angle per task (the caller's thread pool): the same blocks, in order.
         let blocks = (0..count)
-            .map(|k| {
-                let dense = tilt_matrix(order, (k as f64 * step).min(std::f64::consts::PI));
-                sets.clone().map(|set| {
-                    set.iter()
-                        .flat_map(|&i| set.iter().map(move |&j| (i, j)))
-                        .map(|(i, j)| dense[i * n + j])
-                        .collect()
-                })
-            })
+            .into_par_iter()
+            .map(|k| tilt_blocks(order, (k as f64 * step).min(std::f64::consts::PI), &sets))
             .collect();
         TiltTable {
             order,

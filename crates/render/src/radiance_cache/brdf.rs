@@ -22,6 +22,7 @@ use crate::bsdf::Bsdf;
 use ircache_math::harmonics::hsh::HshBasis;
 use ircache_math::harmonics::{band_and_degree, coefficient_count, quadrature, rotate_about_z};
 use ircache_math::{Rgb, Vec3};
+use rayon::prelude::*;
 
 /// Outgoing directions tabulated, uniform in cos θo over [0, 1].
 pub const OUTGOING_SAMPLES: usize = 64;
@@ -175,9 +176,12 @@ impl BrdfCoefficients {
         let mut table = Vec::with_capacity(OUTGOING_SAMPLES * 3 * projection.n);
         let mut kept = Vec::with_capacity(OUTGOING_SAMPLES);
         let mut share = 1.0;
-        for k in 0..OUTGOING_SAMPLES {
-            let cos_theta_o = k as f64 / (OUTGOING_SAMPLES - 1) as f64;
-            let (c, energy, eta) = projection.slice(bsdf, cos_theta_o);
+        // One outgoing angle per task (the caller's thread pool), collected in order.
+        let slices: Vec<_> = (0..OUTGOING_SAMPLES)
+            .into_par_iter()
+            .map(|k| projection.slice(bsdf, k as f64 / (OUTGOING_SAMPLES - 1) as f64))
+            .collect();
+        for (c, energy, eta) in slices {
             // The last sample is the normal view.
             share = eta;
             let total: f64 = energy.iter().sum();
