@@ -85,7 +85,8 @@ impl RadianceCache {
             .map(|m| m.at(Vec2::splat(0.5)))
             .collect();
         // One table per distinct BSDF: a scene's shapes that name one `<bsdf>` each hold a copy
-        // (the lamp room: 7 materials, 2 BSDFs).
+        // (the lamp room: 7 materials, 2 BSDFs). Keyed by the Debug text, which prints every
+        // value exactly (`Bsdf` has floats, so no `Hash`).
         let mut first_of: HashMap<String, usize> = HashMap::new();
         let first: Vec<usize> = bsdfs
             .iter()
