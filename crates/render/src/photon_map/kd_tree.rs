@@ -1,14 +1,18 @@
 //! A balanced kd-tree over photons (Jensen, *Realistic Image Synthesis Using Photon Mapping*,
-//! §6.3). The photon array itself is in tree order (the median of a range along its widest axis
-//! in the middle of the range, the halves on either side), so that photons near each other in
-//! space lie near each other in memory; queries walk a compact copy of the same splits in heap
-//! order (node i's children at 2i + 1 and 2i + 2, Jensen's left-balanced tree): the top levels
-//! share cache lines, where a descent through the photon array met a new cache line at every
-//! level. Queries take a predicate, so that photons of the wrong side or bounce count are skipped
+//! §6.3) with buckets for leaves. The photon array itself is in tree order: each range split at
+//! its median along its widest axis, down to leaves of at most [`BUCKET`] photons, each leaf a
+//! contiguous run of the array, so that photons near each other in space lie near each other in
+//! memory. A query walks the splits (8 bytes each, in heap order: node i's children at 2i + 1
+//! and 2i + 2; a tree of 10⁵ photons has 8 191 of them, 64 kB, which stay in cache) and scans the
+//! leaves it reaches, their positions and tags side by side in two arrays in the photons' order:
+//! one run of cache lines per leaf, where a tree with a photon at every node met a new line,
+//! one dependent load after another, at each of its last levels (a fifth of the lamp room's
+//! time went to those loads in the final gather's lookups).
+//!
+//! Queries take a predicate, so that photons of the wrong side or bounce count are skipped
 //! during the search rather than after it (a k-nearest query that filters afterwards would come
-//! back short); the predicate reads a compact tag kept in the node beside the position
-//! ([`Located::Tag`]), since reading the item itself cost a second cache miss per candidate
-//! (half the time of a lookup in the precomputed irradiance).
+//! back short); the predicate reads a compact tag ([`Located::Tag`]) kept beside the positions,
+//! not the photon itself.
 
 use super::photon::{Photon, PhotonTag};
 use std::cmp::Ordering;
@@ -16,7 +20,7 @@ use std::collections::BinaryHeap;
 
 /// What a kd-tree holds: anything with a position, and a tag that queries filter on.
 pub trait Located: Send {
-    /// What a query's predicate tests (kept in the search node).
+    /// What a query's predicate tests (kept beside the positions).
     type Tag: Copy + Default + Send + Sync + std::fmt::Debug;
     /// Its position.
     fn key(&self) -> [f32; 3];
@@ -36,51 +40,49 @@ impl Located for Photon {
     }
 }
 
-/// Items (photons by default) in kd-tree order, and the splits in heap order for queries.
+/// Items (photons by default) in tree order, the splits in heap order, and each leaf's run.
 #[derive(Clone, Debug)]
 pub struct KdTree<T: Located = Photon> {
-    /// The items, each range's median in its middle.
+    /// The items, leaf by leaf.
     pub photons: Vec<T>,
-    /// The search tree: a left-balanced kd-tree over the items' positions, in heap order.
-    nodes: Vec<Node<T::Tag>>,
+    /// The items' positions, in the same order.
+    points: Vec<[f32; 3]>,
+    /// The items' tags, in the same order.
+    tags: Vec<T::Tag>,
+    /// The inner nodes' splits, in heap order (`2^depth − 1` of them).
+    splits: Vec<Split>,
+    /// Where each leaf's run starts in [`Self::photons`] (`2^depth + 1` entries, `depth` the
+    /// levels of splits).
+    leaf_start: Vec<u32>,
 }
 
 impl<T: Located> Default for KdTree<T> {
     fn default() -> Self {
         KdTree {
             photons: Vec::new(),
-            nodes: Vec::new(),
+            points: Vec::new(),
+            tags: Vec::new(),
+            splits: Vec::new(),
+            leaf_start: vec![0, 0],
         }
     }
 }
 
-/// A search node: an item's position, its index in [`KdTree::photons`] with the split axis in
-/// the top two bits, and its tag.
+/// An inner node: items of its left half lie at or below `value` along `axis`, those of its
+/// right half at or above.
 #[derive(Clone, Copy, Debug, Default)]
-struct Node<G> {
-    position: [f32; 3],
-    index_axis: u32,
-    tag: G,
+struct Split {
+    value: f32,
+    axis: u32,
 }
 
-impl<G> Node<G> {
-    #[inline]
-    fn index(&self) -> usize {
-        (self.index_axis & INDEX_MASK) as usize
-    }
+/// Most items a leaf holds.
+pub const BUCKET: usize = 16;
 
-    #[inline]
-    fn axis(&self) -> usize {
-        (self.index_axis >> 30) as usize
-    }
-}
+/// Most items a tree holds (indices are 32-bit).
+pub const MAX_ITEMS: usize = 1 << 31;
 
-const INDEX_MASK: u32 = (1 << 30) - 1;
-
-/// Most items a tree holds (the index shares a word with the split axis).
-pub const MAX_ITEMS: usize = INDEX_MASK as usize + 1;
-
-/// Deepest a tree of [`MAX_ITEMS`] goes: the descent's stack of far halves.
+/// Deepest a tree goes: the descent's stack of far halves.
 const MAX_DEPTH: usize = 32;
 
 /// A found photon: its index in [`KdTree::photons`] and squared distance.
@@ -115,19 +117,26 @@ impl<T: Located> KdTree<T> {
     #[must_use]
     pub fn build(mut photons: Vec<T>) -> KdTree<T> {
         photons.truncate(MAX_ITEMS);
-        build_range(&mut photons);
-        let mut items: Vec<Node<T::Tag>> = photons
-            .iter()
-            .enumerate()
-            .map(|(i, p)| Node {
-                position: p.key(),
-                index_axis: i as u32,
-                tag: p.tag(),
-            })
-            .collect();
-        let mut nodes = vec![Node::default(); items.len()];
-        build_heap(&mut items, &mut nodes, 0);
-        KdTree { photons, nodes }
+        let n = photons.len();
+        // The fewest levels whose leaves hold at most BUCKET (halves differ by one at most).
+        let mut depth = 0u32;
+        while n.div_ceil(1 << depth) > BUCKET {
+            depth += 1;
+        }
+        let mut splits = vec![Split::default(); (1usize << depth) - 1];
+        for (i, split) in build_range(&mut photons, 0, depth) {
+            splits[i] = split;
+        }
+        let mut leaf_start = Vec::with_capacity((1 << depth) + 1);
+        leaf_starts(0, n, depth, &mut leaf_start);
+        leaf_start.push(n as u32);
+        KdTree {
+            points: photons.iter().map(Located::key).collect(),
+            tags: photons.iter().map(Located::tag).collect(),
+            photons,
+            splits,
+            leaf_start,
+        }
     }
 
     /// Number of photons.
@@ -157,12 +166,12 @@ impl<T: Located> KdTree<T> {
             return;
         }
         let mut heap = BinaryHeap::from(std::mem::take(out));
-        self.descend(q, max_distance2, |node, distance2| {
-            if !accept(&node.tag) {
+        self.descend(q, max_distance2, |index, distance2| {
+            if !accept(&self.tags[index]) {
                 return None;
             }
             heap.push(Neighbour {
-                index: node.index() as u32,
+                index: index as u32,
                 distance2,
             });
             if heap.len() > k {
@@ -183,51 +192,59 @@ impl<T: Located> KdTree<T> {
         accept: &A,
     ) -> Option<usize> {
         let mut best = None;
-        self.descend(q, max_distance2, |node, distance2| {
-            accept(&node.tag).then(|| {
-                best = Some(node.index());
+        self.descend(q, max_distance2, |index, distance2| {
+            accept(&self.tags[index]).then(|| {
+                best = Some(index);
                 distance2
             })
         });
         best
     }
 
-    /// Visits the nodes within `sqrt(bound)` of `q`, each node on the way down to the leaf on
-    /// its side and the far halves that the shrinking bound still reaches afterwards; `visit`
-    /// sees each node and its squared distance and may return a new, smaller bound (generic,
-    /// so that each query's visitor is inlined into its own descent, which keeps its far halves
-    /// on a stack rather than recursing).
+    /// Visits the items within `sqrt(bound)` of `q`: down the splits to the leaf on `q`'s side,
+    /// then the far halves that the shrinking bound still reaches; `visit` sees each item's
+    /// index and squared distance and may return a new, smaller bound (generic, so that each
+    /// query's visitor is inlined into its own descent, which keeps its far halves on a stack
+    /// rather than recursing).
     #[inline]
-    fn descend<V: FnMut(&Node<T::Tag>, f32) -> Option<f32>>(
+    fn descend<V: FnMut(usize, f32) -> Option<f32>>(
         &self,
         q: [f32; 3],
         mut bound: f32,
         mut visit: V,
     ) {
+        let inner = self.splits.len();
         let mut far_halves = [(0u32, 0f32); MAX_DEPTH];
         let mut pending = 0usize;
         let mut i = 0usize;
         loop {
-            while let Some(node) = self.nodes.get(i) {
-                let p = node.position;
-                let delta = q[node.axis()] - p[node.axis()];
-                let distance2 =
-                    (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
-                if distance2 < bound {
-                    if let Some(b) = visit(node, distance2) {
-                        bound = b;
-                    }
-                }
+            while i < inner {
+                let split = self.splits[i];
+                let delta = q[split.axis as usize] - split.value;
                 let (near, far) = if delta < 0.0 {
                     (2 * i + 1, 2 * i + 2)
                 } else {
                     (2 * i + 2, 2 * i + 1)
                 };
-                if far < self.nodes.len() && delta * delta < bound {
+                if delta * delta < bound {
                     far_halves[pending] = (far as u32, delta * delta);
                     pending += 1;
                 }
                 i = near;
+            }
+            let leaf = i - inner;
+            let (start, end) = (
+                self.leaf_start[leaf] as usize,
+                self.leaf_start[leaf + 1] as usize,
+            );
+            for (j, p) in self.points[start..end].iter().enumerate() {
+                let distance2 =
+                    (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
+                if distance2 < bound {
+                    if let Some(b) = visit(start + j, distance2) {
+                        bound = b;
+                    }
+                }
             }
             // The nearest far half the bound still reaches.
             loop {
@@ -260,63 +277,94 @@ fn widest_axis(points: impl Iterator<Item = [f32; 3]>) -> usize {
         .unwrap_or(0)
 }
 
-/// The size of the left subtree of a left-balanced (complete) binary tree of `n` nodes.
-fn left_size(n: usize) -> usize {
-    if n <= 1 {
-        return 0;
+/// Splits `photons` (the range of inner node `i`, `levels` levels of splits above its leaves)
+/// at its median along its widest axis, and recurses on the halves `[..mid)` and `[mid..)`;
+/// returns the splits made, by heap index (the halves' nodes interleave in the heap, so each
+/// half returns its own and the caller writes them).
+fn build_range<T: Located>(photons: &mut [T], i: usize, levels: u32) -> Vec<(usize, Split)> {
+    if levels == 0 {
+        return Vec::new();
     }
-    // Levels above the last are full: 2^h − 1 nodes; the last holds the rest, left first.
-    let h = usize::BITS - 1 - n.leading_zeros();
-    let full = (1usize << h) - 1;
-    let last = n - full;
-    let half_last = 1usize << (h - 1);
-    (full - 1) / 2 + last.min(half_last)
-}
-
-/// Fills heap node `i` and its subtrees from `items`: the item splitting them along the widest
-/// axis at the rank that keeps the tree left-balanced.
-fn build_heap<G: Copy>(items: &mut [Node<G>], nodes: &mut [Node<G>], i: usize) {
-    if items.is_empty() {
-        return;
-    }
-    let axis = widest_axis(items.iter().map(|n| n.position));
-    let rank = left_size(items.len());
-    items.select_nth_unstable_by(rank, |a, b| {
-        a.position[axis]
-            .total_cmp(&b.position[axis])
-            .then(a.index_axis.cmp(&b.index_axis))
-    });
-    let mut node = items[rank];
-    node.index_axis = (node.index_axis & INDEX_MASK) | (axis as u32) << 30;
-    nodes[i] = node;
-    let (left, rest) = items.split_at_mut(rank);
-    build_heap(left, nodes, 2 * i + 1);
-    build_heap(&mut rest[1..], nodes, 2 * i + 2);
-}
-
-/// Puts the median along the widest axis of `photons` in the middle and recurses on the halves
-/// (the photons' own order: neighbours in space near in memory).
-fn build_range<T: Located>(photons: &mut [T]) {
-    if photons.len() <= 1 {
-        return;
-    }
-    let axis = widest_axis(photons.iter().map(Located::key));
     let mid = photons.len() / 2;
-    photons.select_nth_unstable_by(mid, |a, b| a.key()[axis].total_cmp(&b.key()[axis]));
-    let (left, rest) = photons.split_at_mut(mid);
-    let right = &mut rest[1..];
-    if left.len() > PARALLEL_BUILD {
-        rayon::join(|| build_range(left), || build_range(right));
-    } else {
-        build_range(left);
-        build_range(right);
+    let axis = widest_axis(photons.iter().map(Located::key));
+    if mid < photons.len() {
+        photons.select_nth_unstable_by(mid, |a, b| a.key()[axis].total_cmp(&b.key()[axis]));
     }
+    let value = photons.get(mid).map_or(0.0, |p| p.key()[axis]);
+    let (left, right) = photons.split_at_mut(mid);
+    let (mut made, right_made) = if left.len() > PARALLEL_BUILD {
+        rayon::join(
+            || build_range(left, 2 * i + 1, levels - 1),
+            || build_range(right, 2 * i + 2, levels - 1),
+        )
+    } else {
+        (
+            build_range(left, 2 * i + 1, levels - 1),
+            build_range(right, 2 * i + 2, levels - 1),
+        )
+    };
+    made.push((
+        i,
+        Split {
+            value,
+            axis: axis as u32,
+        },
+    ));
+    made.extend(right_made);
+    made
+}
+
+/// The start of each leaf's run, left to right, for a range of `n` items at `lo` split `levels`
+/// more times as [`build_range`] splits it.
+fn leaf_starts(lo: usize, n: usize, levels: u32, out: &mut Vec<u32>) {
+    if levels == 0 {
+        out.push(lo as u32);
+        return;
+    }
+    let mid = n / 2;
+    leaf_starts(lo, mid, levels - 1, out);
+    leaf_starts(lo + mid, n - mid, levels - 1, out);
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use ircache_math::{Rgb, Rng, Vec3};
+
+    #[test]
+    fn leaves_hold_at_most_a_bucket_and_every_item_once() {
+        for n in [0usize, 1, 15, 16, 17, 100, 1000, 4097] {
+            let items: Vec<Photon> = (0..n)
+                .map(|i| Photon {
+                    // Many equal coordinates: medians with duplicates on both sides.
+                    position: Vec3::new((i % 7) as f32, (i % 3) as f32, 0.0),
+                    normal: Vec3::Z,
+                    incoming: Vec3::Z,
+                    flux: Rgb::splat(i as f32),
+                    bounces: 0,
+                    distance: 1.0,
+                    caustic: false,
+                })
+                .collect();
+            let tree = KdTree::build(items);
+            assert_eq!(tree.leaf_start.len(), tree.splits.len() + 2);
+            assert_eq!(*tree.leaf_start.last().unwrap() as usize, n);
+            assert!(tree
+                .leaf_start
+                .windows(2)
+                .all(|w| w[1] >= w[0] && (w[1] - w[0]) as usize <= BUCKET));
+            let mut fluxes: Vec<u32> = tree.photons.iter().map(|p| p.flux.r as u32).collect();
+            fluxes.sort_unstable();
+            assert!(fluxes.iter().enumerate().all(|(i, &f)| i as u32 == f));
+            // Every item is found where it lies.
+            let mut out = Vec::new();
+            for p in &tree.photons {
+                tree.nearest(p.key(), 1, f32::INFINITY, &|_: &PhotonTag| true, &mut out);
+                assert_eq!(out.len(), 1);
+                assert_eq!(out[0].distance2, 0.0);
+            }
+        }
+    }
 
     #[test]
     fn nearest_matches_brute_force_with_a_predicate() {
