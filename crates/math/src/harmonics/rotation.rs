@@ -78,41 +78,43 @@ fn lune_nodes(order: usize) -> usize {
     6 * order + 16
 }
 
-/// MR(β), dense, row-major, order² × order².
-#[must_use]
-pub fn tilt_matrix(order: usize, beta: f64) -> Vec<f64> {
+/// Calls `f` with each node's weight w, H(ω) and H(R_y(β)⁻¹ ω) of the lune rule that projects
+/// MR(β): MR(β)_ij = Σ w H_i(ω) H_j(R_y(β)⁻¹ ω).
+fn for_each_lune_node(order: usize, beta: f64, mut f: impl FnMut(f64, &[f64], &[f64])) {
     let rule = quadrature::lune(beta, lune_nodes(order));
     let n = coefficient_count(order);
     let inverse = rotation_y(beta).transpose();
     let mut basis = HshBasis::new(order);
     let (mut h, mut h_back) = (vec![0.0; n], vec![0.0; n]);
-    let mut out = vec![0.0; n * n];
     for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
         basis.eval(d, &mut h);
         basis.eval(inverse * d, &mut h_back);
+        f(w, &h, &h_back);
+    }
+}
+
+/// MR(β), dense, row-major, order² × order².
+#[must_use]
+pub fn tilt_matrix(order: usize, beta: f64) -> Vec<f64> {
+    let n = coefficient_count(order);
+    let mut out = vec![0.0; n * n];
+    for_each_lune_node(order, beta, |w, h, h_back| {
         for i in 0..n {
             let wh = w * h[i];
-            for (o, hb) in out[i * n..(i + 1) * n].iter_mut().zip(&h_back) {
+            for (o, hb) in out[i * n..(i + 1) * n].iter_mut().zip(h_back) {
                 *o += wh * hb;
             }
         }
-    }
+    });
     out
 }
 
 /// [`tilt_matrix`] restricted to each of the parity `sets` (row-major, set × set), computed
 /// alone: the entries between the sets vanish, and half the products are saved.
 fn tilt_blocks(order: usize, beta: f64, sets: &[Vec<usize>; 2]) -> [Vec<f64>; 2] {
-    let rule = quadrature::lune(beta, lune_nodes(order));
-    let n = coefficient_count(order);
-    let inverse = rotation_y(beta).transpose();
-    let mut basis = HshBasis::new(order);
-    let (mut h, mut h_back) = (vec![0.0; n], vec![0.0; n]);
     let mut blocks = sets.clone().map(|set| vec![0.0; set.len() * set.len()]);
-    let mut back = Vec::with_capacity(n);
-    for (&d, &w) in rule.directions.iter().zip(&rule.weights) {
-        basis.eval(d, &mut h);
-        basis.eval(inverse * d, &mut h_back);
+    let mut back = Vec::with_capacity(coefficient_count(order));
+    for_each_lune_node(order, beta, |w, h, h_back| {
         for (set, block) in sets.iter().zip(&mut blocks) {
             let m = set.len();
             back.clear();
@@ -124,7 +126,7 @@ fn tilt_blocks(order: usize, beta: f64, sets: &[Vec<usize>; 2]) -> [Vec<f64>; 2]
                 }
             }
         }
-    }
+    });
     blocks
 }
 

@@ -124,11 +124,13 @@ impl<T: Located> KdTree<T> {
             depth += 1;
         }
         let mut splits = vec![Split::default(); (1usize << depth) - 1];
-        for (i, split) in build_range(&mut photons, 0, depth) {
+        let Built {
+            splits: made,
+            mut leaf_start,
+        } = build_range(&mut photons, 0, 0, depth);
+        for (i, split) in made {
             splits[i] = split;
         }
-        let mut leaf_start = Vec::with_capacity((1 << depth) + 1);
-        leaf_starts(0, n, depth, &mut leaf_start);
         leaf_start.push(n as u32);
         KdTree {
             points: photons.iter().map(Located::key).collect(),
@@ -277,13 +279,23 @@ fn widest_axis(points: impl Iterator<Item = [f32; 3]>) -> usize {
         .unwrap_or(0)
 }
 
-/// Splits `photons` (the range of inner node `i`, `levels` levels of splits above its leaves)
-/// at its median along its widest axis, and recurses on the halves `[..mid)` and `[mid..)`;
-/// returns the splits made, by heap index (the halves' nodes interleave in the heap, so each
-/// half returns its own and the caller writes them).
-fn build_range<T: Located>(photons: &mut [T], i: usize, levels: u32) -> Vec<(usize, Split)> {
+/// What [`build_range`] made of a range: its splits by heap index (the halves' nodes
+/// interleave in the heap, so each half returns its own and the caller writes them), and the
+/// start of each of its leaves' runs, left to right.
+struct Built {
+    splits: Vec<(usize, Split)>,
+    leaf_start: Vec<u32>,
+}
+
+/// Splits `photons` (the range at `offset` in the whole array that inner node `i` covers,
+/// `levels` levels of splits above its leaves) at its median along its widest axis, and
+/// recurses on the halves `[..mid)` and `[mid..)`.
+fn build_range<T: Located>(photons: &mut [T], offset: usize, i: usize, levels: u32) -> Built {
     if levels == 0 {
-        return Vec::new();
+        return Built {
+            splits: Vec::new(),
+            leaf_start: vec![offset as u32],
+        };
     }
     let mid = photons.len() / 2;
     let axis = widest_axis(photons.iter().map(Located::key));
@@ -292,38 +304,27 @@ fn build_range<T: Located>(photons: &mut [T], i: usize, levels: u32) -> Vec<(usi
     }
     let value = photons.get(mid).map_or(0.0, |p| p.key()[axis]);
     let (left, right) = photons.split_at_mut(mid);
-    let (mut made, right_made) = if left.len() > PARALLEL_BUILD {
+    let (mut made, right_made) = if mid > PARALLEL_BUILD {
         rayon::join(
-            || build_range(left, 2 * i + 1, levels - 1),
-            || build_range(right, 2 * i + 2, levels - 1),
+            || build_range(left, offset, 2 * i + 1, levels - 1),
+            || build_range(right, offset + mid, 2 * i + 2, levels - 1),
         )
     } else {
         (
-            build_range(left, 2 * i + 1, levels - 1),
-            build_range(right, 2 * i + 2, levels - 1),
+            build_range(left, offset, 2 * i + 1, levels - 1),
+            build_range(right, offset + mid, 2 * i + 2, levels - 1),
         )
     };
-    made.push((
+    made.splits.push((
         i,
         Split {
             value,
             axis: axis as u32,
         },
     ));
-    made.extend(right_made);
+    made.splits.extend(right_made.splits);
+    made.leaf_start.extend(right_made.leaf_start);
     made
-}
-
-/// The start of each leaf's run, left to right, for a range of `n` items at `lo` split `levels`
-/// more times as [`build_range`] splits it.
-fn leaf_starts(lo: usize, n: usize, levels: u32, out: &mut Vec<u32>) {
-    if levels == 0 {
-        out.push(lo as u32);
-        return;
-    }
-    let mid = n / 2;
-    leaf_starts(lo, mid, levels - 1, out);
-    leaf_starts(lo + mid, n - mid, levels - 1, out);
 }
 
 #[cfg(test)]
