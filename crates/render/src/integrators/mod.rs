@@ -251,9 +251,10 @@ impl Integrator {
     }
 }
 
-/// The `ic` integrator in a scene with media: `volpath` at `max_depth` 3 with the first
-/// surface's diffuse indirect light from records gathered through the media (002; see
-/// [`crate::media_cache::cache`]). What the media cache does not do yet is refused by name.
+/// The `ic` integrator in a scene with media: `volpath` at `max_depth` bounces + 2 with the
+/// first surface's diffuse indirect light from records gathered through the media (002; see
+/// [`crate::media_cache::cache`]), the bounces beyond a record's own path traced from its
+/// gathers. What the media cache does not do yet is refused by name.
 fn media_cache_integrator(
     scene: &Scene,
     ic: &ic::IcIntegrator,
@@ -263,16 +264,18 @@ fn media_cache_integrator(
     let p = &ic.params;
     let refuse = |what: &str| {
         Err(crate::scene::RenderError::Invalid(format!(
-            "in scenes with participating media the irradiance cache serves one indirect bounce \
-             with Ward's records (issue 15, stage 1): {what}"
+            "in scenes with participating media the irradiance cache keeps Ward's records of \
+             the first bounce (issue 15): {what}"
         )))
     };
-    if p.bounces != 1 {
+    if p.bounces > 1 && p.deeper == crate::irradiance_cache::params::Deeper::Cache {
         return refuse(
-            "give max_depth 3 (one bounce), or render deeper light with --integrator volpath",
+            "a cache per bounce (--deeper-bounces cache) is not available there: give \
+             --deeper-bounces traced",
         );
     }
-    if p.global_photons() > 0
+    // Photon maps asked for by count (`auto` makes none here).
+    if p.photons.is_some_and(|n| n > 0)
         || p.caustic_photons.is_some_and(|n| n > 0)
         || p.radiance_cache == crate::irradiance_cache::params::RadianceCaching::On
         || ic.cache_file.is_some()
@@ -282,27 +285,35 @@ fn media_cache_integrator(
     if ic.pixel_pass != ic::PixelPass::Lookup {
         return refuse("splatting is not available there yet");
     }
-    let cache = pool.install(|| {
-        crate::media_cache::cache::MediaCache::build(
-            scene,
-            p,
-            settings.width,
-            settings.height,
-            settings.seed,
-        )
+    if p.uses_ambient() {
+        return refuse(
+            "an ambient value (-av, -aw) is not available there: the deeper bounces are traced",
+        );
+    }
+    // No bounce (`max_depth` 2): direct light alone, no records.
+    let cache = (p.bounces > 0).then(|| {
+        std::sync::Arc::new(pool.install(|| {
+            crate::media_cache::cache::MediaCache::build(
+                scene,
+                p,
+                settings.width,
+                settings.height,
+                settings.seed,
+            )
+        }))
     });
     let mut integrator = volpath::VolPathIntegrator {
-        max_depth: 3,
+        max_depth: i32::try_from(p.bounces.saturating_add(2)).unwrap_or(-1),
         rr_depth: 5,
         hide_emitters: ic.hide_emitters,
-        cache: Some(std::sync::Arc::new(cache)),
+        cache,
         camera_march: (p.media_march > 0).then_some(media_march::CameraMarch {
             points: p.media_march,
         }),
         first_light_samples: p.direct_samples,
         volume_records: None,
     };
-    if p.media_volume_records && p.media_march > 0 {
+    if p.media_volume_records && p.media_march > 0 && p.bounces > 0 {
         let gatherer = volpath::VolPathIntegrator {
             cache: None,
             camera_march: None,

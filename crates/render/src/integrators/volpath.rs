@@ -30,7 +30,7 @@ pub struct VolPathIntegrator {
     /// Hide emitters seen directly by the camera.
     pub hide_emitters: bool,
     /// Records serving the first surface's diffuse indirect light (the `ic` integrator in a
-    /// media scene, `max_depth` 3; see [`crate::media_cache::cache`]).
+    /// media scene; see [`crate::media_cache::cache`]).
     pub cache: Option<std::sync::Arc<crate::media_cache::cache::MediaCache>>,
     /// Camera rays marched through media instead of tracked (the cache's pixel pass; see
     /// [`super::media_march`]); `None`: Mitsuba's `volpath`.

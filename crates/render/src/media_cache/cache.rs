@@ -2,10 +2,12 @@
 //! placed and interpolated as Ward's (002 §7: "the resulting cache point locations are kept
 //! exactly the same"), each gathered through the media with [`super::gradient`] and carrying E =
 //! E_s + E_m, the 002 translational gradient of the chosen form and the rotational gradient of
-//! the total cell radiance. A record's gather sees one bounce: surfaces lit by direct light with
-//! transmittance, the media's single scattering of the lights and their emission. The `ic`
-//! integrator in a media scene is therefore `volpath` at `max_depth` 3 whose first surface
-//! vertex takes its diffuse indirect light from here.
+//! the total cell radiance. A record's gather marches its first bounce: surfaces lit by direct
+//! light with transmittance, the media's single scattering of the lights and their emission;
+//! deeper bounces (`max_depth` above 3) are a `volpath` path per gather ray on from its first
+//! vertex ([`SceneMedium::with_deeper_bounces`]). The `ic` integrator in a media scene is
+//! therefore `volpath` at `max_depth` whose first surface vertex takes its diffuse indirect
+//! light from here.
 //!
 //! Records use the error metric asked for, Tabellion's (the default: half the nearest opaque hit
 //! within `--footprint-limits` pixel footprints, which a camera ray keeps through null boundaries
@@ -108,7 +110,8 @@ pub fn make_record(
     let gradients = params.media_gradient != MediaGradient::None;
     let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
         .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()])
-        .with_gradients(gradients);
+        .with_gradients(gradients)
+        .with_deeper_bounces(params.bounces);
     let d = |v: Vec3| v.as_dvec3();
     let n = strata.azimuthal;
     let layout = params

@@ -56,6 +56,13 @@ pub trait GatherMedium {
     fn source(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3];
     /// Its spatial gradient with `w` fixed, per channel.
     fn source_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3];
+    /// Radiance towards `o` from the bounces beyond the ray's first vertex (a collision in the
+    /// medium or the opaque hit), an unbiased estimate; `None` where the gather sees one bounce.
+    /// It joins the cell's surface radiance: eq. 11's walls differentiate it as the surface's,
+    /// and no transmittance gradient is taken of it.
+    fn deeper(&self, _o: DVec3, _w: DVec3) -> Option<[f64; 3]> {
+        None
+    }
 }
 
 /// March settings (NOTES-002 §2.6).
@@ -354,6 +361,11 @@ fn trace_cell(scene: &dyn GatherMedium, x: DVec3, w: DVec3, march: &March) -> Ce
         // Escaped: the environment, attenuated (its gradient is zero: nothing moves).
         for c in 0..3 {
             cell.surface[c] = tr[c] * radiance[c];
+        }
+    }
+    if let Some(deeper) = scene.deeper(x, w) {
+        for (l, d) in cell.surface.iter_mut().zip(deeper) {
+            *l += d;
         }
     }
     cell

@@ -73,17 +73,15 @@ pub fn media_irradiance_at_points(
                 footprint: 0.0,
             };
             let (indirect, grad_t, grad_r) = match method {
+                // No bounce (`-ab 0`): direct light alone.
+                _ if params.bounces == 0 => (Rgb::ZERO, [Vec3::ZERO; 3], [Vec3::ZERO; 3]),
                 PointMethod::Cache => {
                     let (r, _) = make_record(scene, params, &site, rng.next_u32().into());
                     (r.e, r.grad_t, r.grad_r)
                 }
-                PointMethod::BruteForce { samples } => brute_force(
-                    scene,
-                    &site,
-                    samples,
-                    params.media_light_samples,
-                    seed ^ i as u64,
-                ),
+                PointMethod::BruteForce { samples } => {
+                    brute_force(scene, &site, samples, params, seed ^ i as u64)
+                }
             };
             PointIrradiance {
                 direct,
@@ -95,14 +93,14 @@ pub fn media_irradiance_at_points(
         .collect()
 }
 
-/// A gather of `samples` rays (`light_samples` per hit and march step) and central differences
-/// of it along the tangents, with the same cells' jitter at both points, at a step of 1 % of the
-/// nearest opaque hit.
+/// A gather of `samples` rays (`params`' light samples per hit and march step, its bounces) and
+/// central differences of it along the tangents, with the same cells' jitter at both points, at
+/// a step of 1 % of the nearest opaque hit.
 fn brute_force(
     scene: &Scene,
     site: &RecordSite,
     samples: usize,
-    light_samples: u32,
+    params: &IcParams,
     seed: u64,
 ) -> (Rgb, [Vec3; 3], [Vec3; 3]) {
     let strata = Stratification::from_divisions(samples);
@@ -111,7 +109,9 @@ fn brute_force(
     let origin = offset_ray_origin(site.p, site.ng, site.n, scene.scale).as_dvec3();
     let n = strata.azimuthal;
     let at = |x| {
-        let view = SceneMedium::new(scene, site.medium, false, light_samples).with_gradients(false);
+        let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
+            .with_gradients(false)
+            .with_deeper_bounces(params.bounces);
         let march = March {
             gradients: false,
             ..March::default()

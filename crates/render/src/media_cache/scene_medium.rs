@@ -9,6 +9,12 @@
 //! uses a fixed stream, so that central differences with common random numbers (§3.3) compare
 //! like with like.
 //!
+//! Deeper bounces (`max_depth` above 3, [`SceneMedium::with_deeper_bounces`]) are `volpath`'s
+//! paths on from each gather ray's first vertex: a free flight along the ray to a collision in
+//! the medium or to the opaque hit, then a phase or BSDF sample, with the emitters that sample
+//! meets directly left out (the march's light samples hold them). One path per cell, on a
+//! stream keyed by the cell's direction, as the light samples are.
+//!
 //! The source's gradient comes from the same light samples in closed form, each sample's point
 //! on the light held and its visibility too (§2.7): the phase function's and the geometry's
 //! derivatives, and the optical depth's by the pivot form through homogeneous media, boundaries
@@ -16,15 +22,22 @@
 //! fall back to differences of the whole source.
 
 use super::gradient::{DVec3, GatherMedium};
+use crate::integrators::light_sampling::BsdfStrategy;
+use crate::integrators::path_continuation::{count_and_roulette, sample_continuation, Arrival};
+use crate::integrators::volpath::{PathState, VolPathIntegrator};
 use crate::integrators::RayCounts;
+use crate::irradiance_cache::params::UNBOUNDED;
 use crate::lights::LightSample;
 use crate::media::tracking::{
-    first_opaque, medium_after, transmittance_along, transmittance_with_depth_gradient, OpaqueHit,
-    MAX_CROSSINGS,
+    first_opaque, medium_after, sample_flight, transmittance_along,
+    transmittance_with_depth_gradient, Flight, OpaqueHit, MAX_CROSSINGS,
 };
 use crate::scene::Scene;
 use ircache_math::{offset_ray_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use std::cell::RefCell;
+
+/// The key of the deeper bounces' streams (beside the gather direction's bits).
+const DEEPER_KEY: u64 = 0x6465_6570_6572;
 
 /// A ray traced up to its first opaque hit.
 #[derive(Clone, Debug)]
@@ -37,6 +50,8 @@ struct Traced {
     crossings: Vec<(f64, DVec3)>,
     /// The medium after each crossing (`media[0]` before the first).
     media: Vec<Option<usize>>,
+    /// The opaque hit, if any.
+    opaque: Option<OpaqueHit>,
 }
 
 /// A source evaluated at a point towards a direction: its value and, where the light samples
@@ -68,6 +83,8 @@ pub struct SceneMedium<'a> {
     gradients: bool,
     /// The scene has spot lights, whose falloff the closed-form source gradient leaves out.
     spot_lights: bool,
+    /// The paths of the bounces beyond a gather ray's first vertex (`None`: one bounce).
+    deeper: Option<VolPathIntegrator>,
     /// The last source evaluated: point, direction, value and gradient.
     last_source: RefCell<Option<Source>>,
     last: RefCell<Option<Traced>>,
@@ -118,6 +135,7 @@ impl<'a> SceneMedium<'a> {
             tangents: None,
             gradients: true,
             spot_lights: scene.lights.has_spot_lights(),
+            deeper: None,
             rotation: std::cell::Cell::new(None),
             last_source: RefCell::new(None),
             last: RefCell::new(None),
@@ -139,6 +157,26 @@ impl<'a> SceneMedium<'a> {
     #[must_use]
     pub fn with_gradients(mut self, gradients: bool) -> Self {
         self.gradients = gradients;
+        self
+    }
+
+    /// Gathers `bounces` indirect bounces (`-ab`; [`UNBOUNDED`]: Russian roulette alone): the
+    /// ones beyond the first by a `volpath` path per gather ray (see the module).
+    #[must_use]
+    pub fn with_deeper_bounces(mut self, bounces: u32) -> Self {
+        self.deeper = (bounces > 1).then(|| VolPathIntegrator {
+            max_depth: if bounces == UNBOUNDED {
+                -1
+            } else {
+                i32::try_from(bounces.saturating_add(2)).unwrap_or(-1)
+            },
+            rr_depth: 5,
+            hide_emitters: false,
+            cache: None,
+            camera_march: None,
+            first_light_samples: 1,
+            volume_records: None,
+        });
         self
     }
 
@@ -306,7 +344,109 @@ impl<'a> SceneMedium<'a> {
             radiance,
             crossings,
             media,
+            opaque,
         }
+    }
+
+    /// The light of the bounces beyond the first vertex of the ray from `o` along `w`: one
+    /// `volpath` path from a free flight along the ray (see the module); zero with one bounce.
+    fn deeper_radiance(&self, o: DVec3, w: DVec3) -> Rgb {
+        let Some(integrator) = &self.deeper else {
+            return Rgb::ZERO;
+        };
+        let scene = self.scene;
+        let (s, crossings, media, opaque) = {
+            let t = self.traced(o, w);
+            (t.s, t.crossings.clone(), t.media.clone(), t.opaque)
+        };
+        let mut stream = Rng::keyed(DEEPER_KEY, &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits()]);
+        let mut rng = Rng::new(u64::from(stream.next_u32()), DEEPER_KEY);
+        let mut rays = RayCounts::default();
+        let d = w.as_vec3();
+        let mut beta = Rgb::ONE;
+        let mut depth = 1;
+        let mut start = None;
+        let mut t0 = 0.0f64;
+        for (i, medium) in media.iter().enumerate() {
+            let t1 = crossings.get(i).map_or(s, |c| c.0);
+            if let Some(m) = *medium {
+                let med = &scene.media[m];
+                let origin = (o + w * t0).as_vec3();
+                // The march holds the medium's emission along the ray.
+                let mut emitted = Rgb::ZERO;
+                let flight = sample_flight(
+                    med,
+                    origin,
+                    d,
+                    (t1 - t0) as f32,
+                    &mut beta,
+                    &mut emitted,
+                    &mut rng,
+                );
+                match flight {
+                    Flight::Absorbed => return Rgb::ZERO,
+                    Flight::Passed => {}
+                    Flight::Scattered { t, .. } => {
+                        let p = origin + d * t;
+                        let (wi, _) = med.phase.sample(d, stream.next_2d());
+                        start = Some((Ray::new(p, wi), Some(m), 1.0));
+                        break;
+                    }
+                }
+            }
+            t0 = t1;
+        }
+        let mut arrival = Arrival::Gather;
+        let (ray, medium, eta) = match start {
+            Some(found) => found,
+            None => {
+                let Some(hit) = opaque else {
+                    return Rgb::ZERO;
+                };
+                let it = hit.it;
+                let shape = &scene.shapes[it.shape as usize];
+                let bsdf = it.bsdf(&scene.materials[shape.material], d);
+                let wo_local = it.frame.to_local(-d);
+                let Some((bs, wi)) = sample_continuation(
+                    scene,
+                    &it,
+                    &bsdf,
+                    wo_local,
+                    BsdfStrategy::All,
+                    depth,
+                    &mut stream,
+                ) else {
+                    return Rgb::ZERO;
+                };
+                beta *= bs.weight;
+                // Light samples cannot take what a delta lobe reaches: it counts in full.
+                if bs.delta {
+                    arrival = Arrival::Bsdf {
+                        p: it.p,
+                        pdf: bs.pdf,
+                        delta: true,
+                        light_samples: 0,
+                    };
+                }
+                let beyond = medium_after(shape.media, it.ng, wi, hit.medium);
+                (scene.spawn_ray(&it, wi), beyond, bs.eta)
+            }
+        };
+        if !count_and_roulette(&mut depth, &mut beta, eta, integrator.rr_depth, &mut stream) {
+            return Rgb::ZERO;
+        }
+        let state = PathState {
+            ray,
+            medium,
+            beta,
+            depth,
+            arrival,
+        };
+        let l = integrator.trace(scene, state, None, false, &mut stream, &mut rng, &mut rays);
+        let mut counts = self.rays.borrow_mut();
+        counts.gather += rays.bounce + rays.camera;
+        counts.shadow += rays.shadow;
+        l
     }
 
     /// The medium at distance `t` along the ray.
@@ -503,6 +643,12 @@ impl GatherMedium for SceneMedium<'_> {
     fn surface(&self, o: DVec3, w: DVec3) -> (f64, [f64; 3]) {
         let t = self.traced(o, w);
         (t.s, t.radiance)
+    }
+
+    fn deeper(&self, o: DVec3, w: DVec3) -> Option<[f64; 3]> {
+        self.deeper.as_ref()?;
+        let l = self.deeper_radiance(o, w);
+        Some([l.r, l.g, l.b].map(f64::from))
     }
 
     fn boundaries(&self, o: DVec3, w: DVec3, t_max: f64) -> Vec<(f64, DVec3)> {
