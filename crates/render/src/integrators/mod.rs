@@ -264,31 +264,18 @@ fn media_cache_integrator(
     let p = &ic.params;
     let refuse = |what: &str| {
         Err(crate::scene::RenderError::Invalid(format!(
-            "in scenes with participating media the irradiance cache keeps Ward's records of \
-             the first bounce (issue 15): {what}"
+            "{}: {what}",
+            crate::media_cache::cache::UNAVAILABLE
         )))
     };
-    if p.bounces > 1 && p.deeper == crate::irradiance_cache::params::Deeper::Cache {
-        return refuse(
-            "a cache per bounce (--deeper-bounces cache) is not available there: give \
-             --deeper-bounces traced",
-        );
+    if let Err(what) = crate::media_cache::cache::available(p) {
+        return refuse(what);
     }
-    // Photon maps asked for by count (`auto` makes none here).
-    if p.photons.is_some_and(|n| n > 0)
-        || p.caustic_photons.is_some_and(|n| n > 0)
-        || p.radiance_cache == crate::irradiance_cache::params::RadianceCaching::On
-        || ic.cache_file.is_some()
-    {
-        return refuse("photon maps, radiance caching and cache files are not available there yet");
+    if ic.cache_file.is_some() {
+        return refuse("cache files are not available there yet");
     }
     if ic.pixel_pass != ic::PixelPass::Lookup {
         return refuse("splatting is not available there yet");
-    }
-    if p.uses_ambient() {
-        return refuse(
-            "an ambient value (-av, -aw) is not available there: the deeper bounces are traced",
-        );
     }
     // No bounce (`max_depth` 2): direct light alone, no records.
     let cache = (p.bounces > 0).then(|| {
