@@ -168,14 +168,14 @@ fn race(
         spp = super::next_sample_count(spp);
     }
     let last = series.last().map_or(0.0, |p| p.seconds);
-    // How many times volpath's time to the same error the cache takes (> 1: the cache loses).
-    let ratio = |t: Option<f64>| t.map_or("?".into(), |t| format!("{:.1}", best.seconds / t));
+    // The cache's speed-up: volpath's time to the same error over the cache's (< 1: it loses).
+    let ratio = |t: Option<f64>| t.map_or("?".into(), |t| format!("{:.2}", t / best.seconds));
     let (t, tb) = (
         time_to(&series, best.error, |p| p.error),
         time_to(&series, best.blurred, |p| p.blurred),
     );
     println!(
-        "  volpath to the cache's error: {} (the cache takes {}× that); blurred: {} ({}×)",
+        "  volpath to the cache's error: {} ({}× the cache's time); blurred: {} ({}×)",
         fmt_time(t, last),
         ratio(t),
         fmt_time(tb, last),
