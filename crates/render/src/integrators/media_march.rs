@@ -220,7 +220,7 @@ fn source(
     }
     if scene.samples_lights_in(at.medium) {
         let vertex = Vertex::Medium(at.p, at.d, med.phase);
-        q += c.sigma_s * light_sample_with(scene, &vertex, Some(at.medium), false, u, rng, rays);
+        q += c.sigma_s * light_sample_with(scene, &vertex, Some(at.medium), None, u, rng, rays);
     }
     if max_depth > 2 {
         if let Some(records) = &integrator.volume_records {

@@ -6,6 +6,7 @@
 //! surfaces alike (1: emitters seen directly, 2: direct light); crossing a `null` boundary does
 //! not count. Medium emission (an ircache extension) is gathered along every segment.
 
+use super::light_sampling::BsdfStrategy;
 use super::path_continuation::{
     count_and_roulette, cross_see_through, Arrival, Crossing, PathSettings,
 };
@@ -162,7 +163,14 @@ impl VolPathIntegrator {
                             let vertex = Vertex::Medium(p, ray.d, med.phase);
                             l += beta
                                 * sample_light(
-                                    scene, &vertex, medium, depth, true, sampler, rng, rays,
+                                    scene,
+                                    &vertex,
+                                    medium,
+                                    depth,
+                                    Some(Weighing::ONE),
+                                    sampler,
+                                    rng,
+                                    rays,
                                 );
                         }
                         sampler.set_dimension(dims::vertex(depth, dims::BSDF));
@@ -246,48 +254,64 @@ impl VolPathIntegrator {
             }
             let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
             let wo_local = it.frame.to_local(wo);
-            // The first surface's diffuse indirect light from the media cache, where it serves:
-            // the light samples then stand alone and the path ends.
-            if let Some(cache) = self
-                .cache
-                .as_ref()
-                .filter(|_| depth == 0 && bsdf.is_diffuse_only())
-            {
+            // The first surface's Lambertian indirect light from the media cache, where it
+            // serves; a purely Lambertian surface then ends the path with its light samples
+            // alone, a glossy part goes on by its own samples, the light samples weighed
+            // against them (`path`'s split, [`super::path_continuation`]).
+            let mut strategy = BsdfStrategy::All;
+            let mut light_samples = 1;
+            if let Some(cache) = self.cache.as_ref().filter(|_| depth == 0) {
+                let k = bsdf.lambertian_albedo(wo_local);
                 let sp = ShadingPoint::facing(it, wo);
-                if let Some(e) = cache.irradiance(it.p, sp.n, sp.n_bump) {
+                let served = (!k.is_black())
+                    .then(|| cache.irradiance(it.p, sp.n, sp.n_bump))
+                    .flatten();
+                if let Some(e) = served {
                     let vertex = Vertex::Surface(&it, &bsdf, wo_local);
+                    let glossy = bsdf.has_glossy();
                     // Several light samples here (`--direct-samples`): the lattice shifted by
                     // the sampler's numbers, so the first stays stratified across the pixel.
                     sampler.set_dimension(dims::vertex(depth, dims::LIGHT));
                     let (u_sel, u) = (sampler.next_1d(), sampler.next_2d());
                     let shift = [u_sel, u.x, u.y];
                     let n = self.first_light_samples.max(1);
+                    let weighing = glossy.then_some(Weighing {
+                        strategy: BsdfStrategy::Glossy,
+                        samples: n,
+                    });
                     let mut direct = Rgb::ZERO;
                     for i in 0..n {
                         let u = super::media_march::lattice_point(shift, i);
-                        direct += light_sample_with(scene, &vertex, medium, false, u, rng, rays);
+                        direct += light_sample_with(scene, &vertex, medium, weighing, u, rng, rays);
                     }
                     l += beta * direct / n as f32;
-                    l += beta * bsdf.lambertian_albedo(wo_local) * e * ircache_math::INV_PI;
+                    l += beta * k * e * ircache_math::INV_PI;
+                    if !glossy {
+                        break;
+                    }
+                    strategy = BsdfStrategy::Glossy;
+                    light_samples = n;
+                }
+            }
+            if strategy == BsdfStrategy::All {
+                // Without media, the last light samples stand alone where `path`'s do (a medium
+                // would emit or scatter along the last ray, which must then be traced).
+                let alone = !scene.has_media()
+                    && super::light_sampling::light_samples_suffice(
+                        scene,
+                        &bsdf,
+                        depth + 2 >= max_depth,
+                    );
+                if bsdf.has_smooth() && !scene.lights.is_empty() {
+                    let vertex = Vertex::Surface(&it, &bsdf, wo_local);
+                    let weighing = (!alone).then_some(Weighing::ONE);
+                    l += beta
+                        * sample_light(scene, &vertex, medium, depth, weighing, sampler, rng, rays);
+                }
+                if alone {
                     break;
                 }
             }
-            // Without media, the last light samples stand alone where `path`'s do (a medium
-            // would emit or scatter along the last ray, which must then be traced).
-            let alone = !scene.has_media()
-                && super::light_sampling::light_samples_suffice(
-                    scene,
-                    &bsdf,
-                    depth + 2 >= max_depth,
-                );
-            if bsdf.has_smooth() && !scene.lights.is_empty() {
-                let vertex = Vertex::Surface(&it, &bsdf, wo_local);
-                l += beta * sample_light(scene, &vertex, medium, depth, !alone, sampler, rng, rays);
-            }
-            if alone {
-                break;
-            }
-            let strategy = super::light_sampling::BsdfStrategy::All;
             let Some((bs, wi)) = super::path_continuation::sample_continuation(
                 scene, &it, &bsdf, wo_local, strategy, depth, sampler,
             ) else {
@@ -299,7 +323,7 @@ impl VolPathIntegrator {
                 p: it.p,
                 pdf: bs.pdf,
                 delta: bs.delta,
-                light_samples: 1,
+                light_samples,
             };
             medium = medium_after(shape.media, it.ng, wi, medium);
             ray = scene.spawn_ray(&it, wi);
@@ -311,6 +335,25 @@ impl VolPathIntegrator {
     }
 }
 
+/// How a light sample is weighed against the vertex's own phase or BSDF sample (power
+/// heuristic): the part of the BSDF that sample draws from (a phase function's is the whole)
+/// and the light samples taken beside it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Weighing {
+    /// The part the vertex's sample draws.
+    pub strategy: BsdfStrategy,
+    /// Light samples at the vertex.
+    pub samples: u32,
+}
+
+impl Weighing {
+    /// One light sample beside a sample of the whole BSDF or phase function.
+    pub const ONE: Weighing = Weighing {
+        strategy: BsdfStrategy::All,
+        samples: 1,
+    };
+}
+
 /// One light sample at `vertex` from the sampler's dimensions of vertex `depth`; see
 /// [`light_sample_with`].
 #[allow(clippy::too_many_arguments)]
@@ -319,7 +362,7 @@ fn sample_light(
     vertex: &Vertex,
     medium: Option<usize>,
     depth: u32,
-    mis: bool,
+    weighing: Option<Weighing>,
     sampler: &mut dyn Sampler,
     rng: &mut Rng,
     rays: &mut RayCounts,
@@ -327,18 +370,19 @@ fn sample_light(
     sampler.set_dimension(dims::vertex(depth, dims::LIGHT));
     let u_sel = sampler.next_1d();
     let u = sampler.next_2d();
-    light_sample_with(scene, vertex, medium, mis, (u_sel, u), rng, rays)
+    light_sample_with(scene, vertex, medium, weighing, (u_sel, u), rng, rays)
 }
 
 /// One light sample at `vertex` (in `medium`, on the side the light lies for a surface) drawn
 /// with `u` (light choice, position), with transmittance through media and `null` boundaries,
-/// weighted against the vertex's phase or BSDF sample by the power heuristic (`mis`), or alone
-/// where no such sample follows.
+/// weighted against the vertex's phase or BSDF sample by the power heuristic (`weighing`: where
+/// that sample draws the glossy part alone, the Lambertian part's light counts in full), or
+/// alone where no such sample follows (`None`).
 pub(crate) fn light_sample_with(
     scene: &Scene,
     vertex: &Vertex,
     medium: Option<usize>,
-    mis: bool,
+    weighing: Option<Weighing>,
     (u_sel, u): (f32, Vec2),
     rng: &mut Rng,
     rays: &mut RayCounts,
@@ -353,18 +397,26 @@ pub(crate) fn light_sample_with(
     if ls.pdf <= 0.0 {
         return Rgb::ZERO;
     }
-    let (f, pdf, ray, medium) = match *vertex {
+    let strategy = weighing.map_or(BsdfStrategy::All, |w| w.strategy);
+    // The value, the part of it the vertex's own sample also reaches, and that sample's density.
+    let (f, traced, pdf, ray, medium) = match *vertex {
         Vertex::Surface(it, bsdf, wo) => {
             let wi = it.frame.to_local(ls.wi);
-            let f = bsdf.eval(wo, wi) * scene.perturbed_shadowing(it, ls.wi);
+            let shadowing = scene.perturbed_shadowing(it, ls.wi);
+            let f = bsdf.eval(wo, wi) * shadowing;
             if f.is_black() {
                 return Rgb::ZERO;
             }
+            let traced = match strategy {
+                BsdfStrategy::All => f,
+                BsdfStrategy::Glossy => bsdf.eval_glossy(wo, wi) * shadowing,
+            };
             let shape = &scene.shapes[it.shape as usize];
             let medium = medium_after(shape.media, it.ng, ls.wi, medium);
             (
                 f,
-                bsdf.pdf(wo, wi),
+                traced,
+                strategy.pdf(bsdf, wo, wi),
                 scene.shadow_ray(it, ls.wi, ls.distance),
                 medium,
             )
@@ -372,17 +424,22 @@ pub(crate) fn light_sample_with(
         Vertex::Medium(p, d, phase) => {
             let value = phase.eval(d, ls.wi);
             let ray = scene.shadow_ray_at(p, None, ls.wi, ls.distance);
-            (Rgb::splat(value), value, ray, medium)
+            (Rgb::splat(value), Rgb::splat(value), value, ray, medium)
         }
     };
     let tr = transmittance_along(scene, ray, medium, rng, rays);
     if tr.is_black() {
         return Rgb::ZERO;
     }
-    let w = if ls.is_delta || !mis {
-        1.0
-    } else {
-        mis_weight(ls.pdf, pdf)
+    let (weighted, w) = match weighing {
+        Some(Weighing { samples, .. }) if !ls.is_delta => {
+            let w = mis_weight(samples as f32 * ls.pdf, pdf);
+            match strategy {
+                BsdfStrategy::All => (f, w),
+                BsdfStrategy::Glossy => ((f - traced * (1.0 - w)).max(Rgb::ZERO), 1.0),
+            }
+        }
+        _ => (f, 1.0),
     };
-    f * tr * ls.radiance * (w / ls.pdf)
+    weighted * tr * ls.radiance * (w / ls.pdf)
 }

@@ -6,7 +6,7 @@
 //! light with transmittance, the media's single scattering of the lights and their emission;
 //! deeper bounces (`max_depth` above 3) are a `volpath` path per gather ray on from its first
 //! vertex ([`SceneMedium::with_deeper_bounces`]). The `ic` integrator in a media scene is
-//! therefore `volpath` at `max_depth` whose first surface vertex takes its diffuse indirect
+//! therefore `volpath` at `max_depth` whose first surface vertex takes its Lambertian indirect
 //! light from here.
 //!
 //! Records use the error metric asked for, Tabellion's (the default: half the nearest opaque hit
@@ -208,16 +208,14 @@ pub fn make_record(
 }
 
 /// The first opaque surface a camera ray finds (through null boundaries), as a record site, if
-/// its BSDF is purely diffuse (the only surfaces the cache serves in media).
+/// its BSDF has a Lambertian part seen from the ray's side (the part the cache serves).
 #[must_use]
 pub fn first_site(scene: &Scene, ray: ircache_math::Ray) -> Option<RecordSite> {
     let hit = first_opaque(scene, ray, scene.camera_medium, &mut 0, |_, _, _| {})?;
     let it = hit.it;
     let shape = &scene.shapes[it.shape as usize];
-    if !it
-        .bsdf(&scene.materials[shape.material], ray.d)
-        .is_diffuse_only()
-    {
+    let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
+    if bsdf.lambertian_albedo(it.frame.to_local(-ray.d)).is_black() {
         return None;
     }
     let n = ShadingPoint::facing(it, -ray.d).n;
