@@ -138,7 +138,7 @@ pub fn make_record(
     let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
         .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()])
         .with_gradients(gradients)
-        .with_deeper_bounces(params.bounces);
+        .with_deeper_bounces(params.bounces, params.media_deeper_paths);
     let d = |v: Vec3| v.as_dvec3();
     let n = strata.azimuthal;
     let layout = params

@@ -111,7 +111,7 @@ fn brute_force(
     let at = |x| {
         let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
             .with_gradients(false)
-            .with_deeper_bounces(params.bounces);
+            .with_deeper_bounces(params.bounces, params.media_deeper_paths);
         let march = March {
             gradients: false,
             ..March::default()

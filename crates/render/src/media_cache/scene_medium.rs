@@ -12,8 +12,8 @@
 //! Deeper bounces (`max_depth` above 3, [`SceneMedium::with_deeper_bounces`]) are `volpath`'s
 //! paths on from each gather ray's first vertex: a free flight along the ray to a collision in
 //! the medium or to the opaque hit, then a phase or BSDF sample, with the emitters that sample
-//! meets directly left out (the march's light samples hold them). One path per cell, on a
-//! stream keyed by the cell's direction, as the light samples are.
+//! meets directly left out (the march's light samples hold them). `--media-deeper-paths` paths
+//! per cell, on streams keyed by the cell's direction, as the light samples are.
 //!
 //! The source's gradient comes from the same light samples in closed form, each sample's point
 //! on the light held and its visibility too (§2.7): the phase function's and the geometry's
@@ -85,6 +85,8 @@ pub struct SceneMedium<'a> {
     spot_lights: bool,
     /// The paths of the bounces beyond a gather ray's first vertex (`None`: one bounce).
     deeper: Option<VolPathIntegrator>,
+    /// Such paths per gather ray.
+    deeper_paths: u32,
     /// The last source evaluated: point, direction, value and gradient.
     last_source: RefCell<Option<Source>>,
     last: RefCell<Option<Traced>>,
@@ -136,6 +138,7 @@ impl<'a> SceneMedium<'a> {
             gradients: true,
             spot_lights: scene.lights.has_spot_lights(),
             deeper: None,
+            deeper_paths: 1,
             rotation: std::cell::Cell::new(None),
             last_source: RefCell::new(None),
             last: RefCell::new(None),
@@ -161,9 +164,11 @@ impl<'a> SceneMedium<'a> {
     }
 
     /// Gathers `bounces` indirect bounces (`-ab`; [`UNBOUNDED`]: Russian roulette alone): the
-    /// ones beyond the first by a `volpath` path per gather ray (see the module).
+    /// ones beyond the first by the mean of `paths` `volpath` paths per gather ray (see the
+    /// module).
     #[must_use]
-    pub fn with_deeper_bounces(mut self, bounces: u32) -> Self {
+    pub fn with_deeper_bounces(mut self, bounces: u32, paths: u32) -> Self {
+        self.deeper_paths = paths.max(1);
         self.deeper = (bounces > 1).then(|| VolPathIntegrator {
             max_depth: if bounces == UNBOUNDED {
                 -1
@@ -354,12 +359,24 @@ impl<'a> SceneMedium<'a> {
         let Some(integrator) = &self.deeper else {
             return Rgb::ZERO;
         };
+        let mut sum = Rgb::ZERO;
+        for k in 0..self.deeper_paths {
+            sum += self.deeper_path(integrator, o, w, k);
+        }
+        sum / self.deeper_paths as f32
+    }
+
+    /// One path of [`Self::deeper_radiance`], on stream `k` of the direction.
+    fn deeper_path(&self, integrator: &VolPathIntegrator, o: DVec3, w: DVec3, k: u32) -> Rgb {
         let scene = self.scene;
         let (s, crossings, media, opaque) = {
             let t = self.traced(o, w);
             (t.s, t.crossings.clone(), t.media.clone(), t.opaque)
         };
-        let mut stream = Rng::keyed(DEEPER_KEY, &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits()]);
+        let mut stream = Rng::keyed(
+            DEEPER_KEY,
+            &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits(), u64::from(k)],
+        );
         let mut rng = Rng::new(u64::from(stream.next_u32()), DEEPER_KEY);
         let mut rays = RayCounts::default();
         let d = w.as_vec3();
