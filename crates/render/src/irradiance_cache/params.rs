@@ -998,7 +998,7 @@ pub const PARAMS: &[ParamSpec] = &[
                the bounces beyond its first (max_depth above 3); at max_depth 6, 4 paths lowered \
                the error for the time in homogeneous fog by a third and raised it in smoke by \
                as much",
-        shapes_records: true,
+        shapes_records: false,
         get: |p| p.media_deeper_paths.to_string(),
         set: |p, v| {
             p.media_deeper_paths = number(v, 1u32, 1 << 16, "a number of paths")?;
