@@ -77,13 +77,9 @@ impl Integrator {
                 hide_emitters: desc.hide_emitters,
             })),
             "volpath" => Ok(Integrator::VolPath(volpath::VolPathIntegrator {
-                max_depth: desc.max_depth,
                 rr_depth: desc.rr_depth,
                 hide_emitters: desc.hide_emitters,
-                cache: None,
-                camera_march: None,
-                first_light_samples: 1,
-                volume_records: None,
+                ..volpath::VolPathIntegrator::plain(desc.max_depth)
             })),
             "direct" => Ok(Integrator::Direct(direct::DirectIntegrator {
                 emitter_samples: desc.emitter_samples.max(1),
@@ -290,15 +286,13 @@ fn media_cache_integrator(
         }))
     });
     let mut integrator = volpath::VolPathIntegrator {
-        max_depth: i32::try_from(p.bounces.saturating_add(2)).unwrap_or(-1),
-        rr_depth: 5,
         hide_emitters: ic.hide_emitters,
         cache,
         camera_march: (p.media_march > 0).then_some(media_march::CameraMarch {
             points: p.media_march,
         }),
         first_light_samples: p.direct_samples,
-        volume_records: None,
+        ..volpath::VolPathIntegrator::plain(volpath::VolPathIntegrator::depth_of_bounces(p.bounces))
     };
     if p.media_volume_records && p.media_march > 0 && p.bounces > 0 {
         let gatherer = volpath::VolPathIntegrator {

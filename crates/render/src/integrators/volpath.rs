@@ -66,6 +66,27 @@ pub(crate) struct PathState {
 }
 
 impl VolPathIntegrator {
+    /// Mitsuba 3's `volpath` at `max_depth` (−1: unbounded), Russian roulette from depth 5:
+    /// camera rays tracked, no cache.
+    #[must_use]
+    pub fn plain(max_depth: i32) -> Self {
+        VolPathIntegrator {
+            max_depth,
+            rr_depth: 5,
+            hide_emitters: false,
+            cache: None,
+            camera_march: None,
+            first_light_samples: 1,
+            volume_records: None,
+        }
+    }
+
+    /// The `max_depth` of `bounces` indirect bounces (`-ab` N: N + 2; unbounded: −1).
+    #[must_use]
+    pub fn depth_of_bounces(bounces: u32) -> i32 {
+        i32::try_from(bounces.saturating_add(2)).unwrap_or(-1)
+    }
+
     /// Radiance arriving along the camera ray `ray`, whose closest hit `first_hit` the caller
     /// traced.
     pub fn li(

@@ -26,7 +26,6 @@ use crate::integrators::light_sampling::BsdfStrategy;
 use crate::integrators::path_continuation::{count_and_roulette, sample_continuation, Arrival};
 use crate::integrators::volpath::{PathState, VolPathIntegrator};
 use crate::integrators::RayCounts;
-use crate::irradiance_cache::params::UNBOUNDED;
 use crate::lights::LightSample;
 use crate::media::tracking::{
     first_opaque, medium_after, sample_flight, transmittance_along,
@@ -163,25 +162,14 @@ impl<'a> SceneMedium<'a> {
         self
     }
 
-    /// Gathers `bounces` indirect bounces (`-ab`; [`UNBOUNDED`]: Russian roulette alone): the
+    /// Gathers `bounces` indirect bounces (`-ab`; unbounded: Russian roulette alone): the
     /// ones beyond the first by the mean of `paths` `volpath` paths per gather ray (see the
     /// module).
     #[must_use]
     pub fn with_deeper_bounces(mut self, bounces: u32, paths: u32) -> Self {
         self.deeper_paths = paths.max(1);
-        self.deeper = (bounces > 1).then(|| VolPathIntegrator {
-            max_depth: if bounces == UNBOUNDED {
-                -1
-            } else {
-                i32::try_from(bounces.saturating_add(2)).unwrap_or(-1)
-            },
-            rr_depth: 5,
-            hide_emitters: false,
-            cache: None,
-            camera_march: None,
-            first_light_samples: 1,
-            volume_records: None,
-        });
+        self.deeper = (bounces > 1)
+            .then(|| VolPathIntegrator::plain(VolPathIntegrator::depth_of_bounces(bounces)));
         self
     }
 
@@ -353,8 +341,9 @@ impl<'a> SceneMedium<'a> {
         }
     }
 
-    /// The light of the bounces beyond the first vertex of the ray from `o` along `w`: one
-    /// `volpath` path from a free flight along the ray (see the module); zero with one bounce.
+    /// The light of the bounces beyond the first vertex of the ray from `o` along `w`: the mean
+    /// of `deeper_paths` `volpath` paths from a free flight along the ray (see the module); zero
+    /// with one bounce.
     fn deeper_radiance(&self, o: DVec3, w: DVec3) -> Rgb {
         let Some(integrator) = &self.deeper else {
             return Rgb::ZERO;

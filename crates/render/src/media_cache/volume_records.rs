@@ -418,15 +418,7 @@ mod tests {
         let defines = vec![("max_depth".to_string(), "3".to_string())];
         let desc = ircache_scene::mitsuba::load(path, &defines).expect("cornell-fog loads");
         let scene = Scene::build(&desc).expect("scene");
-        let integrator = VolPathIntegrator {
-            max_depth: 3,
-            rr_depth: 5,
-            hide_emitters: false,
-            cache: None,
-            camera_march: None,
-            first_light_samples: 1,
-            volume_records: None,
-        };
+        let integrator = VolPathIntegrator::plain(3);
         let medium = 0;
         let phase = scene.media[medium].phase;
         for p in [
@@ -472,15 +464,7 @@ mod tests {
         ));
         let desc = ircache_scene::mitsuba::load(path, &[]).expect("smoke-box loads");
         let scene = Scene::build(&desc).expect("scene");
-        let integrator = VolPathIntegrator {
-            max_depth: 3,
-            rr_depth: 5,
-            hide_emitters: false,
-            cache: None,
-            camera_march: None,
-            first_light_samples: 1,
-            volume_records: None,
-        };
+        let integrator = VolPathIntegrator::plain(3);
         let cache = VolumeCache::build(&integrator, &scene, 0.3, 8, 8, 24, 24, 1);
         let records = cache.records();
         assert!(records.len() > 5, "{} records", records.len());
