@@ -127,11 +127,18 @@ impl Grid {
     fn sample(&self, [x, y, z]: [i64; 3]) -> Rgb {
         let g = &*self.desc;
         let [nx, ny, nz] = g.resolution;
-        let (x, y, z) = (
+        self.fetch(
             wrap(x, nx, g.wrap),
             wrap(y, ny, g.wrap),
             wrap(z, nz, g.wrap),
-        );
+        )
+    }
+
+    /// The sample at indices already inside the grid.
+    #[inline]
+    fn fetch(&self, x: usize, y: usize, z: usize) -> Rgb {
+        let g = &*self.desc;
+        let [nx, ny, _] = g.resolution;
         let i = ((z * ny + y) * nx + x) * g.channels;
         if g.channels == 1 {
             Rgb::splat(g.data[i])
@@ -157,14 +164,20 @@ impl Grid {
         let i0 = t.floor();
         let f = t - i0;
         let [x, y, z] = [i0.x as i64, i0.y as i64, i0.z as i64];
+        // Each axis's two indices wrapped once, not once per corner.
+        let g = &*self.desc;
+        let [nx, ny, nz] = g.resolution;
+        let xs = [wrap(x, nx, g.wrap), wrap(x + 1, nx, g.wrap)];
+        let ys = [wrap(y, ny, g.wrap), wrap(y + 1, ny, g.wrap)];
+        let zs = [wrap(z, nz, g.wrap), wrap(z + 1, nz, g.wrap)];
         let mut out = Rgb::ZERO;
-        for corner in 0..8u32 {
+        for corner in 0..8usize {
             let (dx, dy, dz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
             let w = if dx == 1 { f.x } else { 1.0 - f.x }
                 * if dy == 1 { f.y } else { 1.0 - f.y }
                 * if dz == 1 { f.z } else { 1.0 - f.z };
             if w != 0.0 {
-                out += self.sample([x + i64::from(dx), y + i64::from(dy), z + i64::from(dz)]) * w;
+                out += self.fetch(xs[dx], ys[dy], zs[dz]) * w;
             }
         }
         out
