@@ -170,14 +170,29 @@ impl Grid {
         let xs = [wrap(x, nx, g.wrap), wrap(x + 1, nx, g.wrap)];
         let ys = [wrap(y, ny, g.wrap), wrap(y + 1, ny, g.wrap)];
         let zs = [wrap(z, nz, g.wrap), wrap(z + 1, nz, g.wrap)];
-        let mut out = Rgb::ZERO;
-        for corner in 0..8usize {
+        let weight = |corner: usize| {
             let (dx, dy, dz) = (corner & 1, (corner >> 1) & 1, (corner >> 2) & 1);
             let w = if dx == 1 { f.x } else { 1.0 - f.x }
                 * if dy == 1 { f.y } else { 1.0 - f.y }
                 * if dz == 1 { f.z } else { 1.0 - f.z };
+            (w, ((zs[dz] * ny + ys[dy]) * nx + xs[dx]) * g.channels)
+        };
+        if g.channels == 1 {
+            // One channel: the same sums as three equal ones, a third of the work.
+            let mut out = 0.0f32;
+            for corner in 0..8 {
+                let (w, i) = weight(corner);
+                if w != 0.0 {
+                    out += g.data[i] * w;
+                }
+            }
+            return Rgb::splat(out);
+        }
+        let mut out = Rgb::ZERO;
+        for corner in 0..8 {
+            let (w, i) = weight(corner);
             if w != 0.0 {
-                out += self.fetch(xs[dx], ys[dy], zs[dz]) * w;
+                out += Rgb::new(g.data[i], g.data[i + 1], g.data[i + 2]) * w;
             }
         }
         out
