@@ -184,12 +184,7 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         // Through participating media: each point's own gather with 002's gradients (the
         // records' computation), or brute force with finite-difference gradients.
         params.check().map_err(anyhow::Error::msg)?;
-        ircache_render::media_cache::cache::available(&params).map_err(|what| {
-            anyhow::anyhow!(
-                "{}: {what}",
-                ircache_render::media_cache::cache::UNAVAILABLE
-            )
-        })?;
+        ircache_render::media_cache::cache::available(&params).map_err(anyhow::Error::msg)?;
         let results = pool.install(|| {
             ircache_render::media_cache::points::media_irradiance_at_points(
                 &scene,

@@ -259,14 +259,11 @@ fn media_cache_integrator(
 ) -> Result<volpath::VolPathIntegrator, crate::scene::RenderError> {
     let p = &ic.params;
     let refuse = |what: &str| {
-        Err(crate::scene::RenderError::Invalid(format!(
-            "{}: {what}",
-            crate::media_cache::cache::UNAVAILABLE
-        )))
+        Err(crate::scene::RenderError::Invalid(
+            crate::media_cache::cache::unavailable(what),
+        ))
     };
-    if let Err(what) = crate::media_cache::cache::available(p) {
-        return refuse(what);
-    }
+    crate::media_cache::cache::available(p).map_err(crate::scene::RenderError::Invalid)?;
     if ic.cache_file.is_some() {
         return refuse("cache files are not available there yet");
     }

@@ -127,19 +127,25 @@ impl Grid {
     fn sample(&self, [x, y, z]: [i64; 3]) -> Rgb {
         let g = &*self.desc;
         let [nx, ny, nz] = g.resolution;
-        self.fetch(
+        self.value(self.index(
             wrap(x, nx, g.wrap),
             wrap(y, ny, g.wrap),
             wrap(z, nz, g.wrap),
-        )
+        ))
     }
 
-    /// The sample at indices already inside the grid.
+    /// Where the sample at indices already inside the grid starts in `data`.
     #[inline]
-    fn fetch(&self, x: usize, y: usize, z: usize) -> Rgb {
+    fn index(&self, x: usize, y: usize, z: usize) -> usize {
         let g = &*self.desc;
         let [nx, ny, _] = g.resolution;
-        let i = ((z * ny + y) * nx + x) * g.channels;
+        ((z * ny + y) * nx + x) * g.channels
+    }
+
+    /// The sample starting at `data[i]`.
+    #[inline]
+    fn value(&self, i: usize) -> Rgb {
+        let g = &*self.desc;
         if g.channels == 1 {
             Rgb::splat(g.data[i])
         } else {
@@ -175,7 +181,7 @@ impl Grid {
             let w = if dx == 1 { f.x } else { 1.0 - f.x }
                 * if dy == 1 { f.y } else { 1.0 - f.y }
                 * if dz == 1 { f.z } else { 1.0 - f.z };
-            (w, ((zs[dz] * ny + ys[dy]) * nx + xs[dx]) * g.channels)
+            (w, self.index(xs[dx], ys[dy], zs[dz]))
         };
         if g.channels == 1 {
             // One channel: the same sums as three equal ones, a third of the work.
@@ -192,7 +198,7 @@ impl Grid {
         for corner in 0..8 {
             let (w, i) = weight(corner);
             if w != 0.0 {
-                out += Rgb::new(g.data[i], g.data[i + 1], g.data[i + 2]) * w;
+                out += self.value(i) * w;
             }
         }
         out

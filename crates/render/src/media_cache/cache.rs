@@ -76,31 +76,32 @@ pub fn media_metric(asked: ErrorMetric) -> ErrorMetric {
     }
 }
 
-/// What a refusal of [`available`] begins with.
-pub const UNAVAILABLE: &str =
-    "in scenes with participating media the irradiance cache keeps Ward's records of the first bounce (issue 15)";
+/// A refusal of something the cache in media does not do, naming it (`what`).
+#[must_use]
+pub fn unavailable(what: &str) -> String {
+    format!(
+        "in scenes with participating media the irradiance cache keeps Ward's records of the \
+         first bounce (issue 15): {what}"
+    )
+}
 
 /// Refuses by name the cache's settings that records in media do not take yet (`auto` photon
 /// maps and radiance caching make none there).
-pub fn available(params: &IcParams) -> Result<(), &'static str> {
+pub fn available(params: &IcParams) -> Result<(), String> {
     use crate::irradiance_cache::params::{Deeper, RadianceCaching};
-    if params.bounces > 1 && params.deeper == Deeper::Cache {
-        return Err(
-            "a cache per bounce (--deeper-bounces cache) is not available there: give --deeper-bounces traced",
-        );
-    }
-    if params.photons.is_some_and(|n| n > 0) || params.caustic_photons.is_some_and(|n| n > 0) {
-        return Err("photon maps are not available there yet");
-    }
-    if params.radiance_cache == RadianceCaching::On {
-        return Err("radiance caching is not available there yet");
-    }
-    if params.uses_ambient() {
-        return Err(
-            "an ambient value (-av, -aw) is not available there: the deeper bounces are traced",
-        );
-    }
-    Ok(())
+    let what = if params.bounces > 1 && params.deeper == Deeper::Cache {
+        "a cache per bounce (--deeper-bounces cache) is not available there: give --deeper-bounces traced"
+    } else if params.photons.is_some_and(|n| n > 0) || params.caustic_photons.is_some_and(|n| n > 0)
+    {
+        "photon maps are not available there yet"
+    } else if params.radiance_cache == RadianceCaching::On {
+        "radiance caching is not available there yet"
+    } else if params.uses_ambient() {
+        "an ambient value (-av, -aw) is not available there: the deeper bounces are traced"
+    } else {
+        return Ok(());
+    };
+    Err(unavailable(what))
 }
 
 /// Where a record is wanted: a surface point, the normal of the side it serves, the medium on

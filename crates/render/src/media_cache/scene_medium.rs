@@ -342,26 +342,31 @@ impl<'a> SceneMedium<'a> {
     }
 
     /// The light of the bounces beyond the first vertex of the ray from `o` along `w`: the mean
-    /// of `deeper_paths` `volpath` paths from a free flight along the ray (see the module); zero
-    /// with one bounce.
-    fn deeper_radiance(&self, o: DVec3, w: DVec3) -> Rgb {
-        let Some(integrator) = &self.deeper else {
-            return Rgb::ZERO;
-        };
+    /// of `deeper_paths` `volpath` paths from a free flight along the ray (see the module);
+    /// `None` with one bounce.
+    fn deeper_radiance(&self, o: DVec3, w: DVec3) -> Option<Rgb> {
+        let integrator = self.deeper.as_ref()?;
+        let traced = self.traced(o, w);
         let mut sum = Rgb::ZERO;
         for k in 0..self.deeper_paths {
-            sum += self.deeper_path(integrator, o, w, k);
+            sum += self.deeper_path(integrator, &traced, k);
         }
-        sum / self.deeper_paths as f32
+        Some(sum / self.deeper_paths as f32)
     }
 
-    /// One path of [`Self::deeper_radiance`], on stream `k` of the direction.
-    fn deeper_path(&self, integrator: &VolPathIntegrator, o: DVec3, w: DVec3, k: u32) -> Rgb {
+    /// One path of [`Self::deeper_radiance`] along the ray `traced`, on stream `k` of its
+    /// direction.
+    fn deeper_path(&self, integrator: &VolPathIntegrator, traced: &Traced, k: u32) -> Rgb {
         let scene = self.scene;
-        let (s, crossings, media, opaque) = {
-            let t = self.traced(o, w);
-            (t.s, t.crossings.clone(), t.media.clone(), t.opaque)
-        };
+        let Traced {
+            o,
+            w,
+            s,
+            ref crossings,
+            ref media,
+            opaque,
+            ..
+        } = *traced;
         let mut stream = Rng::keyed(
             DEEPER_KEY,
             &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits(), u64::from(k)],
@@ -652,8 +657,7 @@ impl GatherMedium for SceneMedium<'_> {
     }
 
     fn deeper(&self, o: DVec3, w: DVec3) -> Option<[f64; 3]> {
-        self.deeper.as_ref()?;
-        let l = self.deeper_radiance(o, w);
+        let l = self.deeper_radiance(o, w)?;
         Some([l.r, l.g, l.b].map(f64::from))
     }
 
