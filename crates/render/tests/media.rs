@@ -1092,7 +1092,9 @@ fn source_gradient_matches_differences_of_the_source() {
         } else {
             (1024, 1e-3, 0.03)
         };
-        let view = SceneMedium::new(&scene, medium, false, samples);
+        // A view per evaluation: its light samples' tracking streams are keyed by the march
+        // step along the gather direction, the first here, as for receivers a step apart.
+        let view = || SceneMedium::new(&scene, medium, false, samples);
         let directions = [
             DVec3::new(0.0, -1.0, 0.0),
             DVec3::new(0.6, 0.0, 0.8),
@@ -1111,10 +1113,11 @@ fn source_gradient_matches_differences_of_the_source() {
             let mut fd = DVec3::ZERO;
             for &w in group {
                 let o = p - w * t;
-                q += view.source(o, w, t)[1] / n;
-                gradient += view.source_gradient(o, w, t)[1] / n;
+                let at = view();
+                q += at.source(o, w, t)[1] / n;
+                gradient += at.source_gradient(o, w, t)[1] / n;
                 for e in [DVec3::X, DVec3::Y, DVec3::Z] {
-                    let d = view.source(o + e * h, w, t)[1] - view.source(o - e * h, w, t)[1];
+                    let d = view().source(o + e * h, w, t)[1] - view().source(o - e * h, w, t)[1];
                     fd += e * (d / (2.0 * h) / n);
                 }
             }
@@ -1129,4 +1132,71 @@ fn source_gradient_matches_differences_of_the_source() {
             }
         }
     }
+}
+
+/// A gather's march in a grid takes its light samples' transmittance by ratio tracking: each
+/// step's an estimate of its own (streams keyed by the gather direction and the step), so
+/// their mean over the steps converges. Inside the smoke plume under a point light, the mean
+/// source of 4096 steps at one point against σ_s I/r² T/(4π) with T from the density
+/// integrated along the shadow ray by 20 000 midpoints, within 2 %. (One fixed stream for every
+/// step, as before, put the tracking's collisions at the same distances each time: the mean
+/// was that one estimate, and the smoke's ceiling read 3–5 % dark.)
+#[test]
+fn march_light_samples_through_a_grid_converge_to_its_transmittance() {
+    use ircache_math::DVec3;
+    use ircache_render::media_cache::gradient::GatherMedium;
+    use ircache_render::media_cache::scene_medium::{medium_at, SceneMedium};
+    let path = std::path::Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/smoke-box/scene.xml"
+    ));
+    let mut desc = ircache_scene::mitsuba::load(path, &[]).expect("smoke-box loads");
+    for shape in &mut desc.shapes {
+        shape.emitter = None;
+    }
+    let light = Vec3::new(0.1, 1.8, -0.2);
+    let intensity = 3.0f32;
+    desc.emitters.push(EmitterDesc::Point {
+        position: light,
+        intensity: Rgb::splat(intensity),
+    });
+    let scene = Scene::build(&desc).expect("scene");
+    let p = Vec3::new(0.1, 1.0, 0.05);
+    let medium = medium_at(&scene, p, Vec3::Y).expect("the point is in the smoke");
+    let smoke = &scene.media[medium];
+    // The optical depth to the light (the grid's box ends at y = 1.6: clear air beyond).
+    let n = 20_000;
+    let depth: f64 = (0..n)
+        .map(|i| {
+            let x = p + (light - p) * ((i as f32 + 0.5) / n as f32);
+            let inside = x.y <= 1.6;
+            if inside {
+                f64::from(smoke.at(x).sigma_t.g)
+            } else {
+                0.0
+            }
+        })
+        .sum::<f64>()
+        * f64::from((light - p).length())
+        / f64::from(n);
+    let c = smoke.at(p);
+    let r2 = f64::from((light - p).length_squared());
+    let want = f64::from(c.sigma_s.g) * f64::from(intensity) / r2 * (-depth).exp()
+        / (4.0 * std::f64::consts::PI);
+    assert!(
+        (-depth).exp() > 0.05 && (-depth).exp() < 0.95,
+        "the shadow ray's transmittance {} is neither clear nor black",
+        (-depth).exp()
+    );
+    let view = SceneMedium::new(&scene, Some(medium), false, 1);
+    let w = DVec3::new(0.6, 0.0, 0.8);
+    let t = 0.3;
+    let o = p.as_dvec3() - w * t;
+    let steps = 4096;
+    let got = (0..steps).map(|_| view.source(o, w, t)[1]).sum::<f64>() / f64::from(steps);
+    assert!(
+        (got / want - 1.0).abs() < 0.02,
+        "mean source {got} against {want} (T = {})",
+        (-depth).exp()
+    );
 }
