@@ -115,6 +115,25 @@ pub(super) fn fmt_time(t: Option<f64>, cap: f64) -> String {
     t.map_or(format!("> {cap:.0} s"), |t| format!("{t:.1} s"))
 }
 
+/// Prints the times `series` needs to reach `best`'s error and its blurred error (interpolated
+/// by [`time_to`]), each as a multiple of `best`'s time (below 1: `best` loses).
+pub(super) fn print_time_to_error(label: &str, series: &[Point], best: &Point) {
+    let last = series.last().map_or(0.0, |p| p.seconds);
+    let ratio = |t: Option<f64>| t.map_or("?".into(), |t| format!("{:.2}", t / best.seconds));
+    let (t, tb) = (
+        time_to(series, best.error, |p| p.error),
+        time_to(series, best.blurred, |p| p.blurred),
+    );
+    println!(
+        "  {label}: {} ({}× {:.2} s); blurred: {} ({}×)",
+        fmt_time(t, last),
+        ratio(t),
+        best.seconds,
+        fmt_time(tb, last),
+        ratio(tb)
+    );
+}
+
 /// Runs the comparison (`only`: the cases whose name, as "sponza-sun d3", begins with it).
 pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
     let cases = [

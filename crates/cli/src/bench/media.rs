@@ -14,7 +14,7 @@
 //! images from seed 5000). Times to equal error are interpolated between the bracketing renders,
 //! never extrapolated.
 
-use super::cache_vs_path::{fmt_time, measure, measure_image, run, run_seeded, time_to, Point};
+use super::cache_vs_path::{measure, measure_image, print_time_to_error, run, run_seeded, Point};
 use super::mitsuba_render;
 use super::radiance::own_scenes;
 use anyhow::{Context, Result};
@@ -167,19 +167,6 @@ fn race(
         }
         spp = super::next_sample_count(spp);
     }
-    let last = series.last().map_or(0.0, |p| p.seconds);
-    // The cache's speed-up: volpath's time to the same error over the cache's (< 1: it loses).
-    let ratio = |t: Option<f64>| t.map_or("?".into(), |t| format!("{:.2}", t / best.seconds));
-    let (t, tb) = (
-        time_to(&series, best.error, |p| p.error),
-        time_to(&series, best.blurred, |p| p.blurred),
-    );
-    println!(
-        "  volpath to the cache's error: {} ({}× the cache's time); blurred: {} ({}×)",
-        fmt_time(t, last),
-        ratio(t),
-        fmt_time(tb, last),
-        ratio(tb)
-    );
+    print_time_to_error("volpath to the cache's error", &series, best);
     Ok(())
 }

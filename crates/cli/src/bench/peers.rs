@@ -10,7 +10,7 @@
 //! Mitsuba renders more than 64 spp in passes of 64 with different seeds (its memory grows
 //! with the samples of one pass), as the references were made.
 
-use super::cache_vs_path::{error_at, fmt_time, measure, measure_image, run, time_to, Point};
+use super::cache_vs_path::{error_at, measure, measure_image, print_time_to_error, run, Point};
 use super::mitsuba_render;
 use anyhow::{Context, Result};
 use ircache_image::Image;
@@ -175,17 +175,7 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
             ),
             None => println!("  path at equal time: ircache's 64-spp time lies outside Mitsuba's series"),
         }
-        let cap = mi_series.last().map_or(0.0, |p| p.seconds);
-        let t = time_to(&mi_series, ic.error, |p| p.error);
-        let tb = time_to(&mi_series, ic.blurred, |p| p.blurred);
-        println!(
-            "  Mitsuba multijitter to ic's error: {} ({}× ic's {:.2} s); blurred: {} ({}×)",
-            fmt_time(t, cap),
-            t.map_or("?".into(), |t| format!("{:.1}", t / ic.seconds)),
-            ic.seconds,
-            fmt_time(tb, cap),
-            tb.map_or("?".into(), |t| format!("{:.1}", t / ic.seconds)),
-        );
+        print_time_to_error("Mitsuba multijitter to ic's error", &mi_series, &ic);
     }
     Ok(())
 }

@@ -11,7 +11,7 @@
 //! equal error are interpolated between the bracketing renders, never extrapolated. Last, the
 //! time per record: photon records against gathered ones (001 §6.3: 3.71 ms against 2.6 ms).
 
-use super::cache_vs_path::{fmt_time, measure, run, time_to, Point};
+use super::cache_vs_path::{measure, print_time_to_error, run, Point};
 use super::peers::multijitter_series;
 use super::radiance::own_scenes;
 use anyhow::{Context, Result};
@@ -170,19 +170,7 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
             series.push(p);
             spp = super::next_sample_count(spp);
         }
-        let ratio = |t: Option<f64>| t.map_or("?".into(), |t| format!("{:.1}", t / best.seconds));
-        let last = series.last().map_or(0.0, |p| p.seconds);
-        let (t, tb) = (
-            time_to(&series, best.error, |p| p.error),
-            time_to(&series, best.blurred, |p| p.blurred),
-        );
-        println!(
-            "  ic without photons to that error: {} ({}×); blurred: {} ({}×)",
-            fmt_time(t, last),
-            ratio(t),
-            fmt_time(tb, last),
-            ratio(tb)
-        );
+        print_time_to_error("ic without photons to that error", &series, &best);
         if !with_mitsuba {
             continue;
         }
@@ -197,20 +185,7 @@ pub fn run_all(with_mitsuba: bool) -> Result<()> {
             cap,
             &show,
         ) {
-            Ok(mi) => {
-                let last = mi.last().map_or(0.0, |p| p.seconds);
-                let (t, tb) = (
-                    time_to(&mi, best.error, |p| p.error),
-                    time_to(&mi, best.blurred, |p| p.blurred),
-                );
-                println!(
-                    "  Mitsuba multijitter to that error: {} ({}×); blurred: {} ({}×)",
-                    fmt_time(t, last),
-                    ratio(t),
-                    fmt_time(tb, last),
-                    ratio(tb)
-                );
-            }
+            Ok(mi) => print_time_to_error("Mitsuba multijitter to that error", &mi, &best),
             Err(e) => println!("  Mitsuba 3 not measured: {e:#}"),
         }
     }

@@ -11,7 +11,7 @@
 //! thesis's setting: the glossy Cornell box at 1000 × 1000 (001 §4.7.1: 12.2 s with 3,023
 //! irradiance and 869 radiance records on a 2006 GPU).
 
-use super::cache_vs_path::{fmt_time, measure, run, time_to, Point};
+use super::cache_vs_path::{fmt_time, measure, print_time_to_error, run, time_to, Point};
 use super::peers::multijitter_series;
 use anyhow::{Context, Result};
 use ircache_render::scene::Scene;
@@ -118,15 +118,10 @@ pub fn run_all(shared: &Path, with_mitsuba: bool) -> Result<()> {
             }
         };
         if !mi.is_empty() {
-            let last = mi.last().map_or(0.0, |p| p.seconds);
-            let t = time_to(&mi, cached.error, |p| p.error);
-            let tb = time_to(&mi, cached.blurred, |p| p.blurred);
-            println!(
-                "  Mitsuba multijitter to the radiance cache's error: {} ({}×); blurred: {} ({}×)",
-                fmt_time(t, last),
-                t.map_or("?".into(), |t| format!("{:.1}", t / cached.seconds)),
-                fmt_time(tb, last),
-                tb.map_or("?".into(), |t| format!("{:.1}", t / cached.seconds)),
+            print_time_to_error(
+                "Mitsuba multijitter to the radiance cache's error",
+                &mi,
+                &cached,
             );
         }
     }
