@@ -1,18 +1,23 @@
 //! Irradiance and its gradients at given points in scenes with media (`ircache irradiance`):
-//! by one record's gather with 002's gradients (the cache's own computation), or by brute force,
-//! a gather of many rays whose translational gradient is taken by central differences with
-//! common random numbers (NOTES-002 §3.3). The direct part is light sampling with transmittance.
+//! by one record's gather with 002's gradients (the cache's own computation), or by brute force:
+//! the value from `volpath`'s paths over the hemisphere, which share nothing with the records'
+//! march (its steps, transmittance quadrature and light streams), and the translational
+//! gradient by central differences of the march's gather with common random numbers (NOTES-002
+//! §3.3; paths would need far more rays for a difference). The direct part is light sampling
+//! with transmittance.
 
 use super::cache::{make_record, RecordSite};
 use super::gradient::{gather, March};
 use super::scene_medium::{medium_at, SceneMedium};
+use crate::integrators::path_continuation::Arrival;
+use crate::integrators::volpath::{PathState, VolPathIntegrator};
 use crate::integrators::RayCounts;
 use crate::irradiance_cache::hemisphere::{to_world, Stratification};
 use crate::irradiance_cache::points::{PointIrradiance, PointMethod};
 use crate::irradiance_cache::IcParams;
 use crate::media::tracking::transmittance_along;
 use crate::scene::Scene;
-use ircache_math::{offset_ray_origin, Frame, Rgb, Rng, Vec3};
+use ircache_math::{offset_ray_origin, Frame, Ray, Rgb, Rng, Vec3, PI};
 use rayon::prelude::*;
 
 /// Direct irradiance at `p` (normal `n`, in `medium`) from `samples` light samples with
@@ -142,11 +147,41 @@ fn brute_force(
             grad[c] += axis.as_vec3() * ((plus[c] - minus[c]) / (2.0 * h)) as f32;
         }
     }
-    let total = here.total_irradiance();
     let grad_r = to_world(&samples_here.rotational_gradient(), frame.s, frame.t);
-    (
-        Rgb::new(total[0] as f32, total[1] as f32, total[2] as f32),
-        grad,
-        grad_r,
-    )
+    let e = volpath_irradiance(scene, site, origin.as_vec3(), strata, params.bounces, seed);
+    (e, grad, grad_r)
+}
+
+/// E at `origin` by `volpath`: a path along a cosine-weighted direction in each cell of
+/// `strata` (jittered), through `bounces` bounces, the emitters it meets directly left out as
+/// the records' gathers leave them (the medium's emission along it counts, as theirs does).
+fn volpath_irradiance(
+    scene: &Scene,
+    site: &RecordSite,
+    origin: Vec3,
+    strata: Stratification,
+    bounces: u32,
+    seed: u64,
+) -> Rgb {
+    const KEY: u64 = 0x0076_6f6c_7061_7468;
+    let integrator = VolPathIntegrator::plain(VolPathIntegrator::depth_of_bounces(bounces));
+    let frame = Frame::from_z(site.n);
+    let mut rays = RayCounts::default();
+    let mut sum = Rgb::ZERO;
+    for j in 0..strata.polar {
+        for k in 0..strata.azimuthal {
+            let mut stream = Rng::keyed(seed ^ KEY, &[(j * strata.azimuthal + k) as u64]);
+            let w = frame.from_local(strata.direction(j, k, stream.next_2d()));
+            let mut rng = Rng::new(u64::from(stream.next_u32()), KEY);
+            let start = PathState {
+                ray: Ray::new(origin, w),
+                medium: site.medium,
+                beta: Rgb::ONE,
+                depth: 1,
+                arrival: Arrival::Gather,
+            };
+            sum += integrator.trace(scene, start, None, false, &mut stream, &mut rng, &mut rays);
+        }
+    }
+    sum * (PI / strata.cells() as f32)
 }
