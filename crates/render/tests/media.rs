@@ -538,10 +538,6 @@ fn shadow_rays_through_grazing_crossings_reach_the_light() {
 
 /// The shared fog Cornell box at `size`² with `spp` samples and `integrator` at `max_depth`.
 fn cornell_fog(integrator: &str, max_depth: i32, size: u32, spp: u32) -> SceneDesc {
-    let path = std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/cornell-fog/scene.xml"
-    ));
     let defines: Vec<(String, String)> = [
         ("integrator", integrator.to_string()),
         ("max_depth", max_depth.to_string()),
@@ -552,7 +548,7 @@ fn cornell_fog(integrator: &str, max_depth: i32, size: u32, spp: u32) -> SceneDe
     .into_iter()
     .map(|(a, b)| (a.to_string(), b))
     .collect();
-    ircache_scene::mitsuba::load(path, &defines).expect("cornell-fog loads")
+    project_scene("cornell-fog", &defines)
 }
 
 /// The irradiance cache in the fog Cornell box (one bounce, records gathered through the fog
@@ -1059,11 +1055,7 @@ fn source_gradient_matches_differences_of_the_source() {
     ];
     for (label, phase, point, smoke) in cases {
         let mut desc = if smoke {
-            let path = std::path::Path::new(concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/../../scenes/smoke-box/scene.xml"
-            ));
-            ircache_scene::mitsuba::load(path, &[]).expect("smoke-box loads")
+            project_scene("smoke-box", &[])
         } else {
             cornell_fog("volpath", 3, 8, 1)
         };
@@ -1146,11 +1138,7 @@ fn march_light_samples_through_a_grid_converge_to_its_transmittance() {
     use ircache_math::DVec3;
     use ircache_render::media_cache::gradient::GatherMedium;
     use ircache_render::media_cache::scene_medium::{medium_at, SceneMedium};
-    let path = std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/smoke-box/scene.xml"
-    ));
-    let mut desc = ircache_scene::mitsuba::load(path, &[]).expect("smoke-box loads");
+    let mut desc = project_scene("smoke-box", &[]);
     for shape in &mut desc.shapes {
         shape.emitter = None;
     }
@@ -1213,11 +1201,7 @@ fn media_records_agree_with_volpath_paths_in_a_grid() {
     use ircache_render::irradiance_cache::points::PointMethod;
     use ircache_render::irradiance_cache::IcParams;
     use ircache_render::media_cache::points::media_irradiance_at_points;
-    let path = std::path::Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/smoke-box/scene.xml"
-    ));
-    let desc = ircache_scene::mitsuba::load(path, &[]).expect("smoke-box loads");
+    let desc = project_scene("smoke-box", &[]);
     let scene = Scene::build(&desc).expect("scene");
     let down = Vec3::new(0.0, -1.0, 0.0);
     let points = [

@@ -44,6 +44,10 @@ const DEEPER_KEY: u64 = 0x6465_6570_6572;
 /// The step key of light samples at a gather ray's opaque hit.
 const SURFACE_STEP: u32 = u32::MAX;
 
+/// The keys of a light sample's tracking streams: its transmittance, its optical depth.
+const TRANSMITTANCE_STREAM: u64 = 0x006d_6564_6961;
+const DEPTH_STREAM: u64 = 0x0064_6570_7468;
+
 /// A ray traced up to its first opaque hit.
 #[derive(Clone, Debug)]
 struct Traced {
@@ -250,33 +254,14 @@ impl<'a> SceneMedium<'a> {
         }
     }
 
-    /// The transmittance stream of light sample `i` along gather direction `w` at step `step`
-    /// (common random numbers between receivers gathering along `w`).
-    fn transmittance_stream(w: DVec3, step: u32, i: u32) -> Rng {
+    /// The stream of light sample `i` along gather direction `w` at step `step`, for its
+    /// transmittance ([`TRANSMITTANCE_STREAM`]) or, apart, its optical depth's gradient in grids
+    /// ([`DEPTH_STREAM`]): common random numbers between receivers gathering along `w`.
+    fn sample_stream(purpose: u64, w: DVec3, step: u32, i: u32) -> Rng {
+        let key = [w.x, w.y, w.z].map(f64::to_bits);
         Rng::keyed(
-            0x006d_6564_6961,
-            &[
-                w.x.to_bits(),
-                w.y.to_bits(),
-                w.z.to_bits(),
-                u64::from(step),
-                u64::from(i),
-            ],
-        )
-    }
-
-    /// The stream of the same light sample's optical-depth estimates in grids, apart from its
-    /// transmittance's.
-    fn depth_stream(w: DVec3, step: u32, i: u32) -> Rng {
-        Rng::keyed(
-            0x0064_6570_7468,
-            &[
-                w.x.to_bits(),
-                w.y.to_bits(),
-                w.z.to_bits(),
-                u64::from(step),
-                u64::from(i),
-            ],
+            purpose,
+            &[key[0], key[1], key[2], u64::from(step), u64::from(i)],
         )
     }
 
@@ -301,7 +286,7 @@ impl<'a> SceneMedium<'a> {
             let ray = self
                 .scene
                 .shadow_ray_at(p, offset_normal, ls.wi, ls.distance);
-            let mut rng = Self::transmittance_stream(w, step, i);
+            let mut rng = Self::sample_stream(TRANSMITTANCE_STREAM, w, step, i);
             let tr = transmittance_along(self.scene, ray, medium, &mut rng, &mut rays);
             sum += weight * tr * ls.radiance / ls.pdf;
         });
@@ -626,8 +611,8 @@ impl<'a> SceneMedium<'a> {
                 return;
             }
             let ray = self.scene.shadow_ray_at(x, None, ls.wi, ls.distance);
-            let mut rng = Self::transmittance_stream(w, step, i);
-            let mut depth_rng = Self::depth_stream(w, step, i);
+            let mut rng = Self::sample_stream(TRANSMITTANCE_STREAM, w, step, i);
+            let mut depth_rng = Self::sample_stream(DEPTH_STREAM, w, step, i);
             let (tr, depth_gradient) = transmittance_with_depth_gradient(
                 self.scene,
                 ray,
