@@ -743,7 +743,7 @@ impl GatherMedium for SceneMedium<'_> {
         })
     }
 
-    fn step_extent(&self, o: DVec3, w: DVec3, t: f64) -> (f64, f64) {
+    fn step_extent(&self, o: DVec3, w: DVec3, t: f64, budget: f64) -> (f64, f64) {
         let medium = self.medium_along(o, w, t);
         let p = o + w * t;
         let Some(c) = self.coefficients(medium, p) else {
@@ -753,10 +753,18 @@ impl GatherMedium for SceneMedium<'_> {
         let m = &self.scene.media[medium.expect("coefficients imply a medium")];
         let mut extent = (here, f64::INFINITY);
         if !m.homogeneous {
-            // Up to where the ray leaves p's cell of the grid's majorants.
-            m.for_each_segment(p.as_vec3(), w.as_vec3(), 0.0, f32::MAX, |_, end, _| {
-                extent.1 = t + f64::from(end);
-                false
+            // Up to where the optical depth of the grid's local majorants from p reaches the
+            // budget: thin or empty cells are passed in one step, dense ones are not entered
+            // far.
+            let mut depth = 0.0f64;
+            m.for_each_segment(p.as_vec3(), w.as_vec3(), 0.0, f32::MAX, |a, b, majorant| {
+                let (a, b, majorant) = (f64::from(a), f64::from(b), f64::from(majorant));
+                if depth + majorant * (b - a) >= budget {
+                    extent.1 = t + a + (budget - depth) / majorant;
+                    return false;
+                }
+                depth += majorant * (b - a);
+                true
             });
         }
         extent
