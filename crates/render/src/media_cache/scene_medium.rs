@@ -670,7 +670,8 @@ impl<'a> SceneMedium<'a> {
         g
     }
 
-    /// A difference step at `p`: a small fraction of the mean free path, or of the distance.
+    /// A difference step at `p`: a small fraction of the mean free path, or of the distance (at
+    /// least a thousandth of the scene's radius).
     fn step(&self, medium: Option<usize>, p: DVec3, t: f64) -> f64 {
         let sigma = self
             .coefficients(medium, p)
@@ -678,7 +679,7 @@ impl<'a> SceneMedium<'a> {
         let scale = if sigma > 0.0 {
             1.0 / sigma
         } else {
-            t.max(1e-3)
+            t.max(1e-3 * f64::from(self.scene.radius))
         };
         1e-3 * scale.min(t.max(f64::MIN_POSITIVE) + scale)
     }
