@@ -1244,3 +1244,62 @@ fn media_records_agree_with_volpath_paths_in_a_grid() {
         }
     }
 }
+
+/// The pixel pass's march in a grid (`media_march`'s model of the extinction along each camera
+/// ray): the smoke box at `max_depth` 2 (single scattering and direct light, no records) at 32²
+/// against `volpath` at 1 024 spp, both `multijitter`: the mean within 1 %, the blurred relMSE
+/// (σ = 2 px) under 5e-5, and at 64 spp a relMSE_trim under 0.6× `volpath`'s at 64 spp.
+/// (Measured: lum 1.000, blurred 7e-6, 0.48×; points at equal lengths with ratio-tracked
+/// transmittance, before, read 0.69×.)
+#[test]
+fn marched_grid_single_scattering_agrees_with_volpath() {
+    let scene = |integrator: &str, spp: u32| {
+        let defines: Vec<(String, String)> = [
+            ("integrator", integrator),
+            ("max_depth", "2"),
+            ("resx", "32"),
+            ("resy", "32"),
+            ("sampler", "multijitter"),
+        ]
+        .into_iter()
+        .map(|(a, b)| (a.to_string(), b.to_string()))
+        .chain([("spp".to_string(), spp.to_string())])
+        .collect();
+        project_scene("smoke-box", &defines)
+    };
+    let reference = render_desc(&scene("volpath", 1024), 2, 1).image;
+    let compare = |image: &ircache_image::Image, blur: bool| {
+        if blur {
+            ircache_image::compare::compare(
+                &ircache_image::blur::gaussian_blur(image, 2.0),
+                &ircache_image::blur::gaussian_blur(&reference, 2.0),
+            )
+        } else {
+            ircache_image::compare::compare(image, &reference)
+        }
+        .expect("same size")
+    };
+    let marched = render_desc(&scene("irrcache", 64), 2, 3).image;
+    let tracked = render_desc(&scene("volpath", 64), 2, 3).image;
+    let (m, mb, t) = (
+        compare(&marched, false),
+        compare(&marched, true),
+        compare(&tracked, false),
+    );
+    assert!(
+        (m.lum_ratio - 1.0).abs() < 0.01,
+        "luminance ratio {}",
+        m.lum_ratio
+    );
+    assert!(
+        mb.rel_mse_trim < 5e-5,
+        "blurred relMSE_trim {}",
+        mb.rel_mse_trim
+    );
+    assert!(
+        m.rel_mse_trim < 0.6 * t.rel_mse_trim,
+        "marched {} against volpath {}",
+        m.rel_mse_trim,
+        t.rel_mse_trim
+    );
+}

@@ -6,22 +6,27 @@
 //!
 //! - **single scattering and emission**, ∫ T(0,t) [σ_s ∫ f_p L_direct dω + σ_a L_e] dt, by
 //!   stratified quadrature: `points` distances per segment, one in each stratum of equal
-//!   scattering probability (the inverse of 1 − T̄ in homogeneous media; equal lengths with
-//!   ratio-tracked transmittance in grids), each with a light sample from a randomly shifted
-//!   rank-1 lattice (unbiased for a random shift: Cranley–Patterson);
-//! - **the surface behind**, weighted by the transmittance T(0,s) (closed form, or ratio
-//!   tracking) instead of a survival test, shaded as `volpath` shades it (direct light and the
+//!   scattering probability (the inverse of 1 − T̄ in homogeneous media; in grids under a
+//!   piecewise-constant model of the extinction along the ray, so that the points fall in the
+//!   smoke, not in the air around it), each with a light sample from a randomly shifted rank-1
+//!   lattice (unbiased for a random shift: Cranley–Patterson);
+//! - **the surface behind**, weighted by the transmittance T(0,s) (closed form, or the grid
+//!   model's) instead of a survival test, shaded as `volpath` shades it (direct light and the
 //!   media cache's records);
 //! - **the in-scattered indirect light**, ∫ T σ_s ∫ f_p L_indirect dω dt, by one delta-tracking
 //!   collision per camera sample whose phase-sampled path leaves out the emitters it reaches
 //!   directly (the quadrature's light samples hold them).
 //!
-//! The three are unbiased and their sum converges to `volpath` (tested against it).
+//! In homogeneous media the three are unbiased and their sum converges to `volpath` (tested
+//! against it). In grids the transmittance is the model's: the optical depth by midpoints of
+//! pieces of a quarter of the local majorants' optical depth, whose error is second order in
+//! the piece (the smoke plume's single scattering within 0.02 % of `volpath`'s mean, blocks within
+//! 0.7 %; ratio tracking from point to point, before, had twice the noise).
 
 use super::path_continuation::{count_and_roulette, Arrival};
 use super::volpath::{light_sample_with, PathState, Vertex, VolPathIntegrator};
 use super::RayCounts;
-use crate::media::tracking::{medium_after, sample_flight, transmittance, Flight, MAX_CROSSINGS};
+use crate::media::tracking::{medium_after, sample_flight, Flight, MAX_CROSSINGS};
 use crate::media::Medium;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
@@ -168,8 +173,7 @@ fn march_segment(
 ) -> (Rgb, Rgb) {
     let med = &scene.media[medium];
     let mut jitter = Rng::new(u64::from(rng.next_u32()), 0x6a69_7474);
-    let (quadrature, segment) =
-        quadrature_points(med, ray, t_hit, points, || jitter.next_f32(), rng);
+    let (quadrature, segment) = quadrature_points(med, ray, t_hit, points, || jitter.next_f32());
     let shift = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
     let mut sum = Rgb::ZERO;
     for (i, &(t, weight)) in quadrature.iter().enumerate() {
@@ -283,16 +287,15 @@ pub(crate) fn indirect_arrival(p: Vec3, pdf: f32, sample_emitters: bool) -> Arri
 /// The quadrature of a medium segment of `ray` up to `t_hit`: distances with weights
 /// T(t₀, t)/(n pdf(t)) (`jitter` places each in its stratum), and the segment's transmittance.
 /// Homogeneous media: one distance per stratum of equal scattering probability under the
-/// channels' mean extinction σ̄, pdf = σ̄ e^{−σ̄ s}/(1 − e^{−σ̄ L}); grids: equal lengths, T
-/// ratio-tracked from point to point with `rng`. `points` strata where the segment is opaque,
-/// fewer where it scatters little ([`strata`]).
+/// channels' mean extinction σ̄, pdf = σ̄ e^{−σ̄ s}/(1 − e^{−σ̄ L}); grids: the same under a
+/// piecewise-constant model of σ̄ ([`grid_quadrature`]). `points` strata where the segment is
+/// opaque, fewer where it scatters little ([`strata`]).
 pub(crate) fn quadrature_points(
     med: &Medium,
     ray: &Ray,
     t_hit: f32,
     points: u32,
     mut jitter: impl FnMut() -> f32,
-    rng: &mut Rng,
 ) -> (Vec<(f32, Rgb)>, Rgb) {
     let Some((t0, t1)) = med.clip(ray.o, ray.d, t_hit) else {
         return (Vec::new(), Rgb::ONE);
@@ -322,22 +325,85 @@ pub(crate) fn quadrature_points(
     if !length.is_finite() {
         return (Vec::new(), Rgb::ONE);
     }
-    let n = strata(points, -(-med.majorant * length).exp_m1());
-    let step = length / n as f32;
-    let mut out = Vec::with_capacity(n as usize);
-    let mut tr = Rgb::ONE;
-    let mut at = t0;
-    for i in 0..n {
-        let t = t0 + (i as f32 + jitter()) * step;
-        tr *= transmittance(med, ray.at(at), ray.d, t - at, rng);
-        at = t;
-        if tr.is_black() {
-            return (out, Rgb::ZERO);
+    grid_quadrature(med, ray, (t0, t1), points, jitter)
+}
+
+/// Majorant optical depth per piece of a grid's extinction model along a ray (0.5: the smoke
+/// plume's blurred error against `volpath` 1.7× this one's; 0.25 costs 4 % more time).
+const MODEL_DEPTH: f32 = 0.25;
+
+/// One piece of a grid's extinction along a ray: constant σ_t (its midpoint's) on `[a, b)`, and
+/// the rate points are drawn at there.
+#[derive(Clone, Copy)]
+struct Piece {
+    a: f32,
+    b: f32,
+    sigma: Rgb,
+    rate: f32,
+}
+
+/// [`quadrature_points`] in a grid: the extinction along `[t0, t1]` modelled piecewise constant
+/// (its value at the midpoint of pieces of majorant optical depth [`MODEL_DEPTH`], none in empty
+/// majorant cells), points drawn in strata of equal probability under that model (so they fall
+/// where the medium scatters and light still reaches, not in the air around a plume), and
+/// weighted with the model's transmittance.
+fn grid_quadrature(
+    med: &Medium,
+    ray: &Ray,
+    (t0, t1): (f32, f32),
+    points: u32,
+    mut jitter: impl FnMut() -> f32,
+) -> (Vec<(f32, Rgb)>, Rgb) {
+    let mut pieces: Vec<Piece> = Vec::new();
+    med.for_each_segment(ray.o, ray.d, t0, t1, |a, b, majorant| {
+        if majorant > 0.0 {
+            let k = ((majorant * (b - a) / MODEL_DEPTH).ceil() as usize).clamp(1, 64);
+            let h = (b - a) / k as f32;
+            for i in 0..k {
+                let (pa, pb) = (a + i as f32 * h, a + (i + 1) as f32 * h);
+                let sigma = med.at(ray.at(0.5 * (pa + pb))).sigma_t;
+                // A floor on the rate: a piece whose midpoint is clear may hold smoke.
+                let rate = sigma.mean().max(0.05 * majorant);
+                pieces.push(Piece {
+                    a: pa,
+                    b: pb,
+                    sigma,
+                    rate,
+                });
+            }
         }
-        out.push((t, tr * step));
+        true
+    });
+    // Cumulative rate Λ and optical depth τ at each piece's start.
+    let mut starts = Vec::with_capacity(pieces.len());
+    let (mut big_lambda, mut tau) = (0.0f32, Rgb::ZERO);
+    for piece in &pieces {
+        starts.push((big_lambda, tau));
+        let len = piece.b - piece.a;
+        big_lambda += piece.rate * len;
+        tau += piece.sigma * len;
     }
-    tr *= transmittance(med, ray.at(at), ray.d, t1 - at, rng);
-    (out, tr)
+    let segment = (tau * -1.0).exp();
+    let mass = -(-big_lambda).exp_m1();
+    if pieces.is_empty() || mass <= 0.0 {
+        return (Vec::new(), segment);
+    }
+    let n = strata(points, mass);
+    let mut out = Vec::with_capacity(n as usize);
+    let mut j = 0;
+    for i in 0..n {
+        let u = ((i as f32 + jitter()) / n as f32 * mass).min(mass * (1.0 - f32::EPSILON));
+        let target = -(-u).ln_1p();
+        while j + 1 < pieces.len() && starts[j + 1].0 <= target {
+            j += 1;
+        }
+        let (piece, (lambda_a, tau_a)) = (pieces[j], starts[j]);
+        let t = (piece.a + (target - lambda_a) / piece.rate).min(piece.b);
+        let pdf = piece.rate * (-target).exp() / mass;
+        let transmittance = (tau_a + piece.sigma * (t - piece.a)).map(|x| (-x).exp());
+        out.push((t, transmittance / (n as f32 * pdf)));
+    }
+    (out, segment)
 }
 
 /// Points for a segment whose scattering probability is `mass`: one per 1/`points` of it, at
@@ -378,10 +444,10 @@ mod tests {
         })
     }
 
-    /// The mean over jitters of the quadrature's weights is ∫ T dt per channel (the weights
-    /// are unbiased), and the segment's transmittance is T(L): a homogeneous medium with
-    /// different extinctions per channel (closed form (1 − e^{−σL})/σ), a thin one, and a
-    /// grid whose extinction rises along the ray (∫ e^{−τ(t)} dt by fine midpoint sums).
+    /// The mean over jitters of the quadrature's weights is ∫ T dt per channel, and the
+    /// segment's transmittance is T(L): a homogeneous medium with different extinctions per
+    /// channel (closed form (1 − e^{−σL})/σ), a thin one, and a grid whose extinction rises
+    /// along the ray (∫ e^{−τ(t)} dt by fine midpoint sums; the grid's model within 1 %).
     #[test]
     fn quadrature_weights_integrate_the_transmittance() {
         let ray = Ray::new(Vec3::ZERO, Vec3::X);
@@ -393,7 +459,7 @@ mod tests {
             for _ in 0..runs {
                 let mut jitter = Rng::new(u64::from(rng.next_u32()), 1);
                 let (points, segment) =
-                    quadrature_points(&med, &ray, length, 8, || jitter.next_f32(), &mut rng);
+                    quadrature_points(&med, &ray, length, 8, || jitter.next_f32());
                 let expected = (sigma * -length).exp();
                 assert!((0..3).all(|c| (segment[c] - expected[c]).abs() < 1e-6));
                 for (_, w) in points {
@@ -443,8 +509,7 @@ mod tests {
         let (mut sum, mut segment_sum) = (0.0f64, 0.0f64);
         for _ in 0..runs {
             let mut jitter = Rng::new(u64::from(rng.next_u32()), 2);
-            let (points, segment) =
-                quadrature_points(&med, &ray, 5.0, 8, || jitter.next_f32(), &mut rng);
+            let (points, segment) = quadrature_points(&med, &ray, 5.0, 8, || jitter.next_f32());
             segment_sum += f64::from(segment.g);
             sum += points.iter().map(|&(_, w)| f64::from(w.g)).sum::<f64>();
         }

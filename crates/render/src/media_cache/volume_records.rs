@@ -369,14 +369,12 @@ fn local_linear(serving: &[(Vec3, f32, Rgb)]) -> Option<Rgb> {
 /// Calls `f(point, medium)` at the middle of each quadrature stratum of `ray`'s medium segments
 /// (through null boundaries, up to the first opaque surface), as the pixel pass places them.
 fn for_each_quadrature_point(scene: &Scene, ray: Ray, points: u32, mut f: impl FnMut(Vec3, usize)) {
-    let mut rng = Rng::new(0, 0x7072_6570);
     let mut visit = |o: Vec3, t_end: f32, medium: Option<usize>| {
         let Some(m) = medium else {
             return;
         };
         let segment = Ray::new(o, ray.d);
-        let (quadrature, _) =
-            quadrature_points(&scene.media[m], &segment, t_end, points, || 0.5, &mut rng);
+        let (quadrature, _) = quadrature_points(&scene.media[m], &segment, t_end, points, || 0.5);
         // Points where nothing scatters need no record (the march adds no in-scattering there).
         for (t, _) in quadrature {
             let p = segment.at(t);
