@@ -11,7 +11,8 @@
 //!
 //! Records are placed by a pre-pass along camera rays at the pixel pass's own quadrature points
 //! (one row at a time, gathered in parallel, inserted in row order: the same cache at any
-//! thread count), with Ward's radius R = the harmonic mean distance of the gather's first hits
+//! thread count), with Ward's radius R = the harmonic mean of the gather directions' reaches
+//! (the first hit, or in a grid nearer, where its optical depth reaches 4: [`optical_reach`])
 //! bounded to [scene size/64, scene size/4], serving within a·R (ε = distance/(a·R) ≤ 1) through
 //! a local linear fit with weights 1 − ε (they carry no gradients); a record serves only its
 //! own medium. Bands 0–2 hold the light's direction well enough: band 3 moved the image by
@@ -23,7 +24,7 @@ use crate::integrators::RayCounts;
 use crate::irradiance_cache::record::{CachedRecord, ErrorMetric};
 use crate::irradiance_cache::store::RecordStore;
 use crate::media::tracking::first_opaque;
-use crate::media::Phase;
+use crate::media::{Medium, Phase};
 use crate::scene::Scene;
 use ircache_math::harmonics::sh::ShBasis;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3, PI};
@@ -39,7 +40,7 @@ const ORDER: usize = 3;
 pub struct VolumeRecord {
     /// Position.
     pub p: Vec3,
-    /// Ward's radius (the harmonic mean distance of the gather's hits, bounded).
+    /// Ward's radius (the harmonic mean of the gather directions' reaches, bounded).
     pub r: f32,
     /// The medium it lies in.
     pub medium: usize,
@@ -141,8 +142,14 @@ pub fn gather(
             let ray = Ray::new(p, w);
             rays.bounce += 1;
             let hit = scene.accel.intersect(&ray);
-            if let Some(h) = &hit {
-                inverse_distances += 1.0 / f64::from(h.t.max(f32::MIN_POSITIVE));
+            let reach = optical_reach(
+                &scene.media[medium],
+                p,
+                w,
+                hit.as_ref().map_or(f32::INFINITY, |h| h.t),
+            );
+            if reach.is_finite() {
+                inverse_distances += 1.0 / f64::from(reach.max(f32::MIN_POSITIVE));
             }
             let start = PathState {
                 ray,
@@ -181,6 +188,37 @@ pub fn gather(
         radiance: sum.map(|s| s * solid_angle),
     };
     (record, rays.bounce + rays.shadow + rays.gather)
+}
+
+/// Majorant optical depth at which a gather direction's reach ends (see [`optical_reach`]).
+const REACH_DEPTH: f32 = 4.0;
+
+/// How far a record's gather direction `w` from `p` reaches for Ward's radius: to its first
+/// hit at `t_hit`, or, in a grid, sooner, where the optical depth of its local majorants
+/// reaches [`REACH_DEPTH`]. Inside a dense plume the in-scattered light changes with the
+/// density's structure within a few mean free paths, as it does near a wall (smoke box: blurred
+/// relMSE_trim 3.5e-4 → 8.3e-5 with 2.0× the records; depths 2 / 3 / 6 read 7.5e-5 / 7.9e-5 /
+/// 1.2e-4 with 6.1× / 2.9× / 1.4× the records). In a homogeneous medium the light varies with
+/// the geometry alone, which the hits hold (its boundaries among them): the same cap raised a
+/// fog four times the fog box's density by 30 % in blurred error over six seeds.
+fn optical_reach(medium: &Medium, p: Vec3, w: Vec3, t_hit: f32) -> f32 {
+    let mut reach = t_hit;
+    if medium.homogeneous {
+        return reach;
+    }
+    let Some((a, b)) = medium.clip(p, w, t_hit) else {
+        return reach;
+    };
+    let mut depth = 0.0f32;
+    medium.for_each_segment(p, w, a, b, |s0, s1, majorant| {
+        if depth + majorant * (s1 - s0) >= REACH_DEPTH {
+            reach = reach.min(s0 + (REACH_DEPTH - depth) / majorant);
+            return false;
+        }
+        depth += majorant * (s1 - s0);
+        true
+    });
+    reach
 }
 
 impl VolumeCache {
@@ -402,6 +440,82 @@ mod tests {
     use crate::media::phase::henyey_greenstein;
     use ircache_math::harmonics::quadrature;
 
+    /// The project's scene `scenes/NAME/scene.xml` with `defines`, built.
+    fn project_scene(name: &str, defines: &[(String, String)]) -> Scene {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenes")
+            .join(name)
+            .join("scene.xml");
+        let desc = ircache_scene::mitsuba::load(&path, defines).expect("the scene loads");
+        Scene::build(&desc).expect("the scene builds")
+    }
+
+    /// A gather direction's reach for the radius ([`optical_reach`]): the first hit in the
+    /// homogeneous fog; in the smoke grid never past the hit, never short of [`REACH_DEPTH`] over
+    /// the grid's largest extinction, with the density integrated up to it (fine midpoints)
+    /// at most [`REACH_DEPTH`] (the majorants bound it), and from inside the plume short of
+    /// the walls in some directions.
+    #[test]
+    fn reaches_end_at_hits_or_at_an_optical_depth_in_grids() {
+        let directions = [
+            Vec3::X,
+            Vec3::NEG_X,
+            Vec3::Y,
+            Vec3::NEG_Y,
+            Vec3::Z,
+            Vec3::NEG_Z,
+            Vec3::new(0.6, 0.0, 0.8),
+            Vec3::new(0.0, -0.6, 0.8),
+        ];
+        let fog = project_scene("cornell-fog", &[]);
+        for w in directions {
+            let p = Vec3::new(0.1, 1.0, 0.0);
+            let t_hit = fog
+                .accel
+                .intersect(&Ray::new(p, w))
+                .expect("the room is closed")
+                .t;
+            assert_eq!(optical_reach(&fog.media[0], p, w, t_hit), t_hit);
+        }
+        let smoke = project_scene("smoke-box", &[]);
+        let medium = &smoke.media[0];
+        let p = Vec3::new(0.1, 1.0, 0.05);
+        let mut short = 0;
+        for w in directions {
+            let t_hit = smoke.accel.intersect(&Ray::new(p, w)).expect("closed").t;
+            let reach = optical_reach(medium, p, w, t_hit);
+            assert!(reach <= t_hit, "{w}: reach {reach} past the hit {t_hit}");
+            assert!(
+                reach >= (REACH_DEPTH / medium.majorant).min(t_hit) * (1.0 - 1e-4),
+                "{w}: reach {reach} short of depth {REACH_DEPTH} at the largest extinction"
+            );
+            let n = 20_000;
+            let depth: f32 = (0..n)
+                .map(|i| {
+                    let x = p + w * (reach * (i as f32 + 0.5) / n as f32);
+                    let inside = medium
+                        .bounds
+                        .is_some_and(|(lo, hi)| x.cmpge(lo).all() && x.cmple(hi).all());
+                    if inside {
+                        medium.at(x).sigma_t.max_channel()
+                    } else {
+                        0.0
+                    }
+                })
+                .sum::<f32>()
+                * reach
+                / n as f32;
+            assert!(
+                depth <= REACH_DEPTH * 1.01,
+                "{w}: optical depth {depth} to the reach"
+            );
+            if reach < 0.99 * t_hit {
+                short += 1;
+            }
+        }
+        assert!(short >= 2, "only {short} reaches end in the smoke");
+    }
+
     /// A record gathered in the fog Cornell box predicts the in-scattered indirect light at its
     /// own position: against the mean of phase-sampled paths from there (the pixel pass's
     /// estimator where no record serves), within 2 % (three times the paths' standard error),
@@ -409,13 +523,7 @@ mod tests {
     #[test]
     fn a_record_predicts_the_in_scattered_light_of_paths() {
         use crate::integrators::media_march::{in_scattered_by_path, MarchPoint};
-        let path = std::path::Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/cornell-fog/scene.xml"
-        ));
-        let defines = vec![("max_depth".to_string(), "3".to_string())];
-        let desc = ircache_scene::mitsuba::load(path, &defines).expect("cornell-fog loads");
-        let scene = Scene::build(&desc).expect("scene");
+        let scene = project_scene("cornell-fog", &[("max_depth".to_string(), "3".to_string())]);
         let integrator = VolPathIntegrator::plain(3);
         let medium = 0;
         let phase = scene.media[medium].phase;
@@ -456,12 +564,7 @@ mod tests {
     /// (before: 15 128 records at 128², 606 after, the image unchanged in the plume).
     #[test]
     fn records_sit_only_where_the_medium_scatters() {
-        let path = std::path::Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/smoke-box/scene.xml"
-        ));
-        let desc = ircache_scene::mitsuba::load(path, &[]).expect("smoke-box loads");
-        let scene = Scene::build(&desc).expect("scene");
+        let scene = project_scene("smoke-box", &[]);
         let integrator = VolPathIntegrator::plain(3);
         let cache = VolumeCache::build(&integrator, &scene, 0.3, 8, 8, 24, 24, 1);
         let records = cache.records();
