@@ -551,6 +551,32 @@ fn cornell_fog(integrator: &str, max_depth: i32, size: u32, spp: u32) -> SceneDe
     project_scene("cornell-fog", &defines)
 }
 
+/// `desc` with string parameters added to its integrator.
+fn with_params(mut desc: SceneDesc, params: &[(&str, &str)]) -> SceneDesc {
+    for (key, value) in params {
+        desc.integrator
+            .extra
+            .push(((*key).into(), ParamValue::String((*value).into()), here()));
+    }
+    desc
+}
+
+/// `image` against `reference` as it is and after a blur of σ = 2 pixels (where blotches, leaks
+/// and bias show).
+fn against(
+    image: &ircache_image::Image,
+    reference: &ircache_image::Image,
+) -> (
+    ircache_image::compare::Metrics,
+    ircache_image::compare::Metrics,
+) {
+    let blur = |i| ircache_image::blur::gaussian_blur(i, 2.0);
+    (
+        ircache_image::compare::compare(image, reference).expect("same size"),
+        ircache_image::compare::compare(&blur(image), &blur(reference)).expect("same size"),
+    )
+}
+
 /// The irradiance cache in the fog Cornell box (one bounce, records gathered through the fog
 /// with 002's gradients) agrees with volpath at `max_depth` 3: the same mean luminance within
 /// 1.5 % and, after a 2-pixel blur (blotches, leaks, bias), a relMSE below 2e-3, for every
@@ -558,34 +584,24 @@ fn cornell_fog(integrator: &str, max_depth: i32, size: u32, spp: u32) -> SceneDe
 #[test]
 fn media_cache_agrees_with_volpath_at_one_bounce() {
     let reference = render_desc(&cornell_fog("volpath", 3, 32, 1024), 2, 1).image;
-    let blurred_reference = ircache_image::blur::gaussian_blur(&reference, 2.0);
     for gradient in ["corrected", "none"] {
-        let mut desc = cornell_fog("irrcache", 3, 32, 64);
-        desc.integrator.extra.push((
-            "media_gradient".into(),
-            ParamValue::String(gradient.into()),
-            here(),
-        ));
         // Ward's records, as 002 places them (Tabellion's, the default, span ten pixel
         // footprints: coarse at 32², +1.8 % here, +0.2 % at 128²).
-        desc.integrator.extra.push((
-            "error_metric".into(),
-            ParamValue::String("ward".into()),
-            here(),
-        ));
+        let desc = with_params(
+            cornell_fog("irrcache", 3, 32, 64),
+            &[("media_gradient", gradient), ("error_metric", "ward")],
+        );
         let out = render_desc(&desc, 2, 2);
         assert!(
             out.media_cache.is_some_and(|s| s.records > 20),
             "{gradient}: records were made"
         );
-        let m = ircache_image::compare::compare(&out.image, &reference).expect("same size");
+        let (m, mb) = against(&out.image, &reference);
         assert!(
             (m.lum_ratio - 1.0).abs() < 0.015,
             "{gradient}: luminance ratio {}",
             m.lum_ratio
         );
-        let blurred = ircache_image::blur::gaussian_blur(&out.image, 2.0);
-        let mb = ircache_image::compare::compare(&blurred, &blurred_reference).expect("same size");
         assert!(
             mb.rel_mse < 2e-3,
             "{gradient}: blurred relMSE {}",
@@ -671,26 +687,16 @@ fn media_records_gather_every_bounce_of_an_emitting_medium() {
 fn media_cache_follows_deeper_bounces() {
     for depth in [5, -1] {
         let reference = render_desc(&cornell_fog("volpath", depth, 32, 1024), 2, 1).image;
-        let blurred_reference = ircache_image::blur::gaussian_blur(&reference, 2.0);
-        let with_ward = |mut desc: SceneDesc| {
-            // Ward's records, as in the one-bounce test (Tabellion's are coarse at 32²).
-            desc.integrator.extra.push((
-                "error_metric".into(),
-                ParamValue::String("ward".into()),
-                here(),
-            ));
-            desc
-        };
+        // Ward's records, as in the one-bounce test (Tabellion's are coarse at 32²).
+        let with_ward = |desc: SceneDesc| with_params(desc, &[("error_metric", "ward")]);
         let desc = with_ward(cornell_fog("irrcache", depth, 32, 64));
         let out = render_desc(&desc, 2, 2);
-        let m = ircache_image::compare::compare(&out.image, &reference).expect("same size");
+        let (m, mb) = against(&out.image, &reference);
         assert!(
             (m.lum_ratio - 1.0).abs() < 0.02,
             "max_depth {depth}: luminance ratio {}",
             m.lum_ratio
         );
-        let blurred = ircache_image::blur::gaussian_blur(&out.image, 2.0);
-        let mb = ircache_image::compare::compare(&blurred, &blurred_reference).expect("same size");
         assert!(
             mb.rel_mse < 1e-3,
             "max_depth {depth}: blurred relMSE {}",
@@ -711,12 +717,10 @@ fn media_cache_follows_deeper_bounces() {
             );
         }
     }
-    let mut per_bounce = cornell_fog("irrcache", 5, 8, 1);
-    per_bounce.integrator.extra.push((
-        "deeper_bounces".into(),
-        ParamValue::String("cache".into()),
-        here(),
-    ));
+    let per_bounce = with_params(
+        cornell_fog("irrcache", 5, 8, 1),
+        &[("deeper_bounces", "cache")],
+    );
     let scene = Scene::build(&per_bounce).expect("scene");
     let settings =
         ircache_render::render::RenderSettings::from_desc(&per_bounce, 1, 1).expect("settings");
@@ -763,12 +767,10 @@ fn media_cache_serves_the_lambertian_part_of_glossy_surfaces() {
     };
     let reference_desc = glossy(cornell_fog("volpath", 4, 32, 1024));
     let reference = render_desc(&reference_desc, 2, 1).image;
-    let mut desc = glossy(cornell_fog("irrcache", 4, 32, 64));
-    desc.integrator.extra.push((
-        "error_metric".into(),
-        ParamValue::String("ward".into()),
-        here(),
-    ));
+    let desc = with_params(
+        glossy(cornell_fog("irrcache", 4, 32, 64)),
+        &[("error_metric", "ward")],
+    );
     let scene = Scene::build(&desc).expect("scene");
     let params = ircache_render::integrators::ic::IcIntegrator::from_desc(&desc.integrator)
         .expect("ic")
@@ -784,18 +786,12 @@ fn media_cache_serves_the_lambertian_part_of_glossy_surfaces() {
         "{on_floor} records on the rough plastic floor"
     );
     let out = render_desc(&desc, 2, 2);
-    let m = ircache_image::compare::compare(&out.image, &reference).expect("same size");
+    let (m, mb) = against(&out.image, &reference);
     assert!(
         (m.lum_ratio - 1.0).abs() < 0.02,
         "luminance ratio {}",
         m.lum_ratio
     );
-    let blurred = ircache_image::blur::gaussian_blur(&out.image, 2.0);
-    let mb = ircache_image::compare::compare(
-        &blurred,
-        &ircache_image::blur::gaussian_blur(&reference, 2.0),
-    )
-    .expect("same size");
     assert!(mb.rel_mse < 1e-3, "blurred relMSE {}", mb.rel_mse);
 }
 
@@ -809,18 +805,12 @@ fn media_cache_serves_the_lambertian_part_of_glossy_surfaces() {
 fn marched_camera_rays_and_volumetric_records_agree_with_volpath() {
     let reference = render_desc(&cornell_fog("volpath", 3, 32, 1024), 2, 1).image;
     let run = |extra: &[(&str, &str)], threads: usize| {
-        let mut desc = cornell_fog("irrcache", 3, 32, 64);
-        for (k, v) in extra {
-            desc.integrator
-                .extra
-                .push(((*k).into(), ParamValue::String((*v).into()), here()));
-        }
-        desc.integrator.extra.push((
-            "media_gradient".into(),
-            ParamValue::String("none".into()),
-            here(),
-        ));
-        render_desc(&desc, threads, 3)
+        let desc = with_params(cornell_fog("irrcache", 3, 32, 64), extra);
+        render_desc(
+            &with_params(desc, &[("media_gradient", "none")]),
+            threads,
+            3,
+        )
     };
     let error = |out: &ircache_render::render::RenderOutput| {
         ircache_image::compare::compare(&out.image, &reference).expect("same size")
@@ -1268,24 +1258,9 @@ fn marched_grid_single_scattering_agrees_with_volpath() {
         project_scene("smoke-box", &defines)
     };
     let reference = render_desc(&scene("volpath", 1024), 2, 1).image;
-    let compare = |image: &ircache_image::Image, blur: bool| {
-        if blur {
-            ircache_image::compare::compare(
-                &ircache_image::blur::gaussian_blur(image, 2.0),
-                &ircache_image::blur::gaussian_blur(&reference, 2.0),
-            )
-        } else {
-            ircache_image::compare::compare(image, &reference)
-        }
-        .expect("same size")
-    };
     let marched = render_desc(&scene("irrcache", 64), 2, 3).image;
     let tracked = render_desc(&scene("volpath", 64), 2, 3).image;
-    let (m, mb, t) = (
-        compare(&marched, false),
-        compare(&marched, true),
-        compare(&tracked, false),
-    );
+    let ((m, mb), (t, _)) = (against(&marched, &reference), against(&tracked, &reference));
     assert!(
         (m.lum_ratio - 1.0).abs() < 0.01,
         "luminance ratio {}",
