@@ -332,14 +332,16 @@ pub(crate) fn quadrature_points(
 /// plume's blurred error against `volpath` 1.7× this one's; 0.25 costs 4 % more time).
 const MODEL_DEPTH: f32 = 0.25;
 
-/// One piece of a grid's extinction along a ray: constant σ_t (its midpoint's) on `[a, b)`, and
-/// the rate points are drawn at there.
+/// One piece of a grid's extinction along a ray: constant σ_t (its midpoint's) on `[a, b)`, the
+/// rate points are drawn at there, and the cumulative rate Λ and optical depth τ at `a`.
 #[derive(Clone, Copy)]
 struct Piece {
     a: f32,
     b: f32,
     sigma: Rgb,
     rate: f32,
+    big_lambda: f32,
+    tau: Rgb,
 }
 
 /// [`quadrature_points`] in a grid: the extinction along `[t0, t1]` modelled piecewise constant
@@ -355,6 +357,7 @@ fn grid_quadrature(
     mut jitter: impl FnMut() -> f32,
 ) -> (Vec<(f32, Rgb)>, Rgb) {
     let mut pieces: Vec<Piece> = Vec::new();
+    let (mut big_lambda, mut tau) = (0.0f32, Rgb::ZERO);
     med.for_each_segment(ray.o, ray.d, t0, t1, |a, b, majorant| {
         if majorant > 0.0 {
             let k = ((majorant * (b - a) / MODEL_DEPTH).ceil() as usize).clamp(1, 64);
@@ -369,20 +372,15 @@ fn grid_quadrature(
                     b: pb,
                     sigma,
                     rate,
+                    big_lambda,
+                    tau,
                 });
+                big_lambda += rate * (pb - pa);
+                tau += sigma * (pb - pa);
             }
         }
         true
     });
-    // Cumulative rate Λ and optical depth τ at each piece's start.
-    let mut starts = Vec::with_capacity(pieces.len());
-    let (mut big_lambda, mut tau) = (0.0f32, Rgb::ZERO);
-    for piece in &pieces {
-        starts.push((big_lambda, tau));
-        let len = piece.b - piece.a;
-        big_lambda += piece.rate * len;
-        tau += piece.sigma * len;
-    }
     let segment = (tau * -1.0).exp();
     let mass = -(-big_lambda).exp_m1();
     if pieces.is_empty() || mass <= 0.0 {
@@ -394,13 +392,13 @@ fn grid_quadrature(
     for i in 0..n {
         let u = ((i as f32 + jitter()) / n as f32 * mass).min(mass * (1.0 - f32::EPSILON));
         let target = -(-u).ln_1p();
-        while j + 1 < pieces.len() && starts[j + 1].0 <= target {
+        while j + 1 < pieces.len() && pieces[j + 1].big_lambda <= target {
             j += 1;
         }
-        let (piece, (lambda_a, tau_a)) = (pieces[j], starts[j]);
-        let t = (piece.a + (target - lambda_a) / piece.rate).min(piece.b);
+        let piece = pieces[j];
+        let t = (piece.a + (target - piece.big_lambda) / piece.rate).min(piece.b);
         let pdf = piece.rate * (-target).exp() / mass;
-        let transmittance = (tau_a + piece.sigma * (t - piece.a)).map(|x| (-x).exp());
+        let transmittance = (piece.tau + piece.sigma * (t - piece.a)).map(|x| (-x).exp());
         out.push((t, transmittance / (n as f32 * pdf)));
     }
     (out, segment)

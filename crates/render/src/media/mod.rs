@@ -135,6 +135,30 @@ impl Medium {
         }
     }
 
+    /// Where along `o + t d`, from `t0`, the optical depth of the medium's majorants (local ones
+    /// in grids) reaches `depth`; `None` where it does not before `t1`.
+    #[must_use]
+    pub fn majorant_depth_reached(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t0: f32,
+        t1: f32,
+        depth: f64,
+    ) -> Option<f64> {
+        let (mut sum, mut reached) = (0.0f64, None);
+        self.for_each_segment(o, d, t0, t1, |a, b, majorant| {
+            let (a, b, majorant) = (f64::from(a), f64::from(b), f64::from(majorant));
+            if sum + majorant * (b - a) >= depth {
+                reached = Some(a + (depth - sum) / majorant);
+                return false;
+            }
+            sum += majorant * (b - a);
+            true
+        });
+        reached
+    }
+
     /// The normal (an axis) of the face of the medium's box nearest `p`, where a ray crossing
     /// the box there enters or leaves it; zero for a medium without a box.
     #[must_use]

@@ -57,8 +57,7 @@ pub trait GatherMedium {
     /// majorants from `t` reaches `budget`, so that a step begun in thin or empty smoke does
     /// not stride over a dense part and read it at one midpoint (the smoke box's ceiling read
     /// 1–4 % dark). By default σ_t at `t`, unbounded.
-    fn step_extent(&self, o: DVec3, w: DVec3, t: f64, budget: f64) -> (f64, f64) {
-        let _ = budget;
+    fn step_extent(&self, o: DVec3, w: DVec3, t: f64, _budget: f64) -> (f64, f64) {
         let sigma = self.sigma_t(o, w, t);
         (sigma.iter().copied().fold(0.0f64, f64::max), f64::INFINITY)
     }

@@ -148,24 +148,33 @@ fn brute_force(
         }
     }
     let grad_r = to_world(&samples_here.rotational_gradient(), frame.s, frame.t);
-    let e = volpath_irradiance(scene, site, origin.as_vec3(), strata, params.bounces, seed);
+    let e = volpath_irradiance(
+        scene,
+        site.medium,
+        origin.as_vec3(),
+        frame,
+        strata,
+        params.bounces,
+        seed,
+    );
     (e, grad, grad_r)
 }
 
-/// E at `origin` by `volpath`: a path along a cosine-weighted direction in each cell of
-/// `strata` (jittered), through `bounces` bounces, the emitters it meets directly left out as
-/// the records' gathers leave them (the medium's emission along it counts, as theirs does).
+/// E at `origin` (in `medium`, around `frame`'s normal) by `volpath`: a path along a
+/// cosine-weighted direction in each cell of `strata` (jittered), through `bounces` bounces, the
+/// emitters it meets directly left out as the records' gathers leave them (the medium's
+/// emission along it counts, as theirs does).
 fn volpath_irradiance(
     scene: &Scene,
-    site: &RecordSite,
+    medium: Option<usize>,
     origin: Vec3,
+    frame: Frame,
     strata: Stratification,
     bounces: u32,
     seed: u64,
 ) -> Rgb {
     const KEY: u64 = 0x0076_6f6c_7061_7468;
     let integrator = VolPathIntegrator::plain(VolPathIntegrator::depth_of_bounces(bounces));
-    let frame = Frame::from_z(site.n);
     let mut rays = RayCounts::default();
     let mut sum = Rgb::ZERO;
     for j in 0..strata.polar {
@@ -175,7 +184,7 @@ fn volpath_irradiance(
             let mut rng = Rng::new(u64::from(stream.next_u32()), KEY);
             let start = PathState {
                 ray: Ray::new(origin, w),
-                medium: site.medium,
+                medium,
                 beta: Rgb::ONE,
                 depth: 1,
                 arrival: Arrival::Gather,

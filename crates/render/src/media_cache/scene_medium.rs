@@ -752,23 +752,13 @@ impl GatherMedium for SceneMedium<'_> {
         };
         let here = f64::from(c.sigma_t.max_channel());
         let m = &self.scene.media[medium.expect("coefficients imply a medium")];
-        let mut extent = (here, f64::INFINITY);
-        if !m.homogeneous {
-            // Up to where the optical depth of the grid's local majorants from p reaches the
-            // budget: thin or empty cells are passed in one step, dense ones are not entered
-            // far.
-            let mut depth = 0.0f64;
-            m.for_each_segment(p.as_vec3(), w.as_vec3(), 0.0, f32::MAX, |a, b, majorant| {
-                let (a, b, majorant) = (f64::from(a), f64::from(b), f64::from(majorant));
-                if depth + majorant * (b - a) >= budget {
-                    extent.1 = t + a + (budget - depth) / majorant;
-                    return false;
-                }
-                depth += majorant * (b - a);
-                true
-            });
+        if m.homogeneous {
+            return (here, f64::INFINITY);
         }
-        extent
+        // Up to where the optical depth of the grid's local majorants from p reaches the budget:
+        // thin or empty cells are passed in one step, dense ones are not entered far.
+        let reached = m.majorant_depth_reached(p.as_vec3(), w.as_vec3(), 0.0, f32::MAX, budget);
+        (here, reached.map_or(f64::INFINITY, |s| t + s))
     }
 
     fn sigma_t_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3] {
