@@ -17,19 +17,27 @@
 //!   collision per camera sample whose phase-sampled path leaves out the emitters it reaches
 //!   directly (the quadrature's light samples hold them).
 //!
+//! The camera path is a camera ray until its first surface with a part that is not a delta lobe:
+//! at smooth glass and mirrors the march goes on along the lobe the sampler picks (its weight
+//! in the throughput, the vertices beyond one deeper each), so that fog seen through glass or in
+//! a mirror is marched as fog seen directly (scenes/glass-in-fog: relMSE_trim −10 %, blurred
+//! −27 %, same time). Beyond such a vertex the records' depth is no longer the path's: the
+//! volumetric records give way to one tracked collision, and the surface behind is `volpath`'s.
+//!
 //! In homogeneous media the three are unbiased and their sum converges to `volpath` (tested
 //! against it). In grids the transmittance is the model's: the optical depth by midpoints of
 //! pieces of a quarter of the local majorants' optical depth, whose error is second order in
 //! the piece (the smoke plume's single scattering within 0.02 % of `volpath`'s mean, blocks within
 //! 0.7 %; ratio tracking from point to point, before, had twice the noise).
 
-use super::path_continuation::{count_and_roulette, Arrival};
+use super::light_sampling::BsdfStrategy;
+use super::path_continuation::{count_and_roulette, sample_continuation, Arrival};
 use super::volpath::{light_sample_with, PathState, Vertex, VolPathIntegrator};
 use super::RayCounts;
 use crate::media::tracking::{medium_after, sample_flight, Flight, MAX_CROSSINGS};
 use crate::media::Medium;
 use crate::sampler::Sampler;
-use crate::scene::Scene;
+use crate::scene::{Interaction, Scene};
 use ircache_embree::Hit;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 
@@ -70,14 +78,20 @@ pub(crate) fn li(
     let mut ray = *ray;
     let mut hit = first_hit.copied();
     let mut medium = scene.camera_medium;
-    // Transmittance from the camera to the current segment's start.
+    let mut arrival = arrival;
+    // Smooth glass and mirrors passed so far: the depth of the segment's scattering vertices.
+    let mut depth = 0u32;
+    // Transmittance (times the delta lobes' weights) from the camera to the current segment.
     let mut tr = Rgb::ONE;
     // The delta-tracking walk that finds the in-scattered indirect light's collision.
     let mut collision_beta = Rgb::ONE;
     let mut collision: Option<MarchPoint> = None;
-    // (The volumetric records serve it at the quadrature's points instead, where they exist.)
+    // (The volumetric records serve it at the quadrature's points instead, where they exist:
+    // before the first delta vertex only, as their paths are those of depth 1.)
     let mut tracking = max_depth > 2 && integrator.volume_records.is_none();
-    for _ in 0..MAX_CROSSINGS {
+    let mut walk_begun = tracking;
+    let mut crossings = 0u32;
+    loop {
         let t_hit = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
         if let Some(m) = medium {
             let med = &scene.media[m];
@@ -88,7 +102,7 @@ pub(crate) fn li(
                 &ray,
                 t_hit,
                 march.points,
-                max_depth,
+                (depth, max_depth),
                 rng,
                 rays,
             );
@@ -111,6 +125,7 @@ pub(crate) fn li(
                             p: ray.at(t),
                             d: ray.d,
                             medium: m,
+                            depth,
                         });
                         tracking = false;
                     }
@@ -124,13 +139,44 @@ pub(crate) fn li(
         let Some(h) = hit else {
             break;
         };
-        let shape = &scene.shapes[h.geom_id as usize];
-        if !shape.null {
+        crossings += 1;
+        if crossings > MAX_CROSSINGS {
             break;
         }
+        let shape = &scene.shapes[h.geom_id as usize];
         let it = scene.interaction(&ray, &h);
-        medium = medium_after(shape.media, it.ng, ray.d, medium);
-        ray = scene.spawn_ray(&it, ray.d);
+        let next = if shape.null {
+            ray.d
+        } else {
+            match delta_continuation(integrator, scene, &it, ray.d, (depth, max_depth), sampler) {
+                Continuation::Surface => break,
+                Continuation::Ends => {
+                    tr = Rgb::ZERO;
+                    break;
+                }
+                Continuation::Along(wi, weight, pdf) => {
+                    tr *= weight;
+                    collision_beta *= weight;
+                    arrival = Arrival::Bsdf {
+                        p: it.p,
+                        pdf,
+                        delta: true,
+                        light_samples: 0,
+                    };
+                    depth += 1;
+                    // Past the first delta vertex the records' depth is not the path's: from
+                    // there the in-scattered indirect light is tracked to one collision, the
+                    // walk weighted by the transmittance so far.
+                    if !walk_begun && depth + 2 < max_depth {
+                        (tracking, walk_begun) = (true, true);
+                        collision_beta = tr;
+                    }
+                    wi
+                }
+            }
+        };
+        medium = medium_after(shape.media, it.ng, next, medium);
+        ray = scene.spawn_ray(&it, next);
         rays.bounce += 1;
         hit = scene.accel.intersect(&ray);
     }
@@ -141,7 +187,7 @@ pub(crate) fn li(
             ray,
             medium,
             beta: tr,
-            depth: 0,
+            depth,
             arrival,
         };
         l += integrator.trace(scene, start, Some(hit), true, sampler, rng, rays);
@@ -156,6 +202,56 @@ pub(crate) fn li(
     l
 }
 
+/// What a camera ray's march does at an opaque surface.
+enum Continuation {
+    /// The surface is shaded there (by `volpath`'s loop, the records' where they serve).
+    Surface,
+    /// Along a delta lobe's sample: direction, weight, density.
+    Along(Vec3, Rgb, f32),
+    /// Nothing goes on (no sample).
+    Ends,
+}
+
+/// At a surface of only delta lobes (smooth glass, a mirror) that emits nothing, the march
+/// goes on along the lobe the sampler picks, as `volpath`'s path would, so that the fog seen in
+/// glass or a mirror is marched too (vertex `depth` of at most `max_depth`, before Russian
+/// roulette begins: `volpath`'s own loop takes over from there).
+fn delta_continuation(
+    integrator: &VolPathIntegrator,
+    scene: &Scene,
+    it: &Interaction,
+    d: Vec3,
+    (depth, max_depth): (u32, u32),
+    sampler: &mut dyn Sampler,
+) -> Continuation {
+    let shape = &scene.shapes[it.shape as usize];
+    if shape.area_light.is_some()
+        || (scene.has_see_through && (shape.thin_sheet || shape.masked))
+        || depth + 2 > max_depth
+        || depth + 1 >= integrator.rr_depth
+    {
+        return Continuation::Surface;
+    }
+    let bsdf = it.bsdf(&scene.materials[shape.material], d);
+    if bsdf.has_smooth() {
+        return Continuation::Surface;
+    }
+    let wo_local = it.frame.to_local(-d);
+    match sample_continuation(
+        scene,
+        it,
+        &bsdf,
+        wo_local,
+        BsdfStrategy::All,
+        depth,
+        sampler,
+    ) {
+        Some((bs, wi)) if bs.delta => Continuation::Along(wi, bs.weight, bs.pdf),
+        Some(_) => Continuation::Surface,
+        None => Continuation::Ends,
+    }
+}
+
 /// The light `medium` sends towards the camera along `ray` up to `t_hit` (from the segment's
 /// start, without the transmittance before it) and the segment's transmittance: the quadrature
 /// of [`quadrature_points`], each point's source from [`source`].
@@ -167,7 +263,7 @@ fn march_segment(
     ray: &Ray,
     t_hit: f32,
     points: u32,
-    max_depth: u32,
+    (depth, max_depth): (u32, u32),
     rng: &mut Rng,
     rays: &mut RayCounts,
 ) -> (Rgb, Rgb) {
@@ -182,6 +278,7 @@ fn march_segment(
             p: ray.at(t),
             d: ray.d,
             medium,
+            depth,
         };
         sum += weight * source(integrator, scene, &at, max_depth, u, rng, rays);
     }
@@ -196,6 +293,8 @@ pub(crate) struct MarchPoint {
     pub d: Vec3,
     /// The medium there.
     pub medium: usize,
+    /// Its depth as a path vertex (0 on the camera ray; one more past each delta vertex).
+    pub depth: u32,
 }
 
 /// The light a point of its medium sends back along the camera ray per unit length: emission σ_a L_e,
@@ -219,15 +318,16 @@ fn source(
     } else {
         Rgb::ZERO
     };
-    if c.sigma_s.is_black() || max_depth < 2 {
+    if c.sigma_s.is_black() || at.depth + 2 > max_depth {
         return q;
     }
     if scene.samples_lights_in(at.medium) {
         let vertex = Vertex::Medium(at.p, at.d, med.phase);
         q += c.sigma_s * light_sample_with(scene, &vertex, Some(at.medium), None, u, rng, rays);
     }
-    if max_depth > 2 {
-        if let Some(records) = &integrator.volume_records {
+    if at.depth + 2 < max_depth {
+        // Beyond a delta vertex the caller tracks the indirect light to one collision.
+        if let Some(records) = integrator.volume_records.as_ref().filter(|_| at.depth == 0) {
             let indirect = records
                 .in_scattered(at.p, at.medium, at.d, med.phase)
                 .unwrap_or_else(|| {
@@ -255,7 +355,7 @@ pub(crate) fn in_scattered_by_path(
     let phase = scene.media[at.medium].phase;
     let (w, pdf) = phase.sample(at.d, stream.next_2d());
     let mut beta = Rgb::ONE;
-    let mut depth = 0;
+    let mut depth = at.depth;
     if !count_and_roulette(&mut depth, &mut beta, 1.0, integrator.rr_depth, &mut stream) {
         return Rgb::ZERO;
     }

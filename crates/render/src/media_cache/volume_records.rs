@@ -525,7 +525,12 @@ mod tests {
             let (record, _) = gather(&integrator, &scene, p, medium, 8192, 7);
             for d in [Vec3::X, Vec3::NEG_Y, Vec3::Z] {
                 let predicted = record.in_scattered(&scattering_weights(d, phase)).g;
-                let at = MarchPoint { p, d, medium };
+                let at = MarchPoint {
+                    p,
+                    d,
+                    medium,
+                    depth: 0,
+                };
                 let n = 40_000;
                 let (mut sum, mut sum2) = (0.0f64, 0.0f64);
                 let mut rng = Rng::new(11, 12);
