@@ -536,8 +536,8 @@ fn shadow_rays_through_grazing_crossings_reach_the_light() {
     }
 }
 
-/// The shared fog Cornell box at `size`² with `spp` samples and `integrator` at `max_depth`.
-fn cornell_fog(integrator: &str, max_depth: i32, size: u32, spp: u32) -> SceneDesc {
+/// The project's scene `name` at `size`² with `spp` samples and `integrator` at `max_depth`.
+fn fog_scene(name: &str, integrator: &str, max_depth: i32, size: u32, spp: u32) -> SceneDesc {
     let defines: Vec<(String, String)> = [
         ("integrator", integrator.to_string()),
         ("max_depth", max_depth.to_string()),
@@ -548,7 +548,12 @@ fn cornell_fog(integrator: &str, max_depth: i32, size: u32, spp: u32) -> SceneDe
     .into_iter()
     .map(|(a, b)| (a.to_string(), b))
     .collect();
-    project_scene("cornell-fog", &defines)
+    project_scene(name, &defines)
+}
+
+/// The shared fog Cornell box at `size`² with `spp` samples and `integrator` at `max_depth`.
+fn cornell_fog(integrator: &str, max_depth: i32, size: u32, spp: u32) -> SceneDesc {
+    fog_scene("cornell-fog", integrator, max_depth, size, spp)
 }
 
 /// `desc` with string parameters added to its integrator.
@@ -855,17 +860,7 @@ fn marched_camera_rays_and_volumetric_records_agree_with_volpath() {
 /// `scenes/glass-in-fog` (the fog box with a glass sphere and a gold one) at `max_depth`
 /// `depth`, `size`² and `spp`.
 fn glass_in_fog(integrator: &str, depth: i32, size: u32, spp: u32) -> SceneDesc {
-    let defines: Vec<(String, String)> = [
-        ("integrator", integrator.to_string()),
-        ("max_depth", depth.to_string()),
-        ("resx", size.to_string()),
-        ("resy", size.to_string()),
-        ("spp", spp.to_string()),
-    ]
-    .into_iter()
-    .map(|(a, b)| (a.to_string(), b))
-    .collect();
-    project_scene("glass-in-fog", &defines)
+    fog_scene("glass-in-fog", integrator, depth, size, spp)
 }
 
 /// The pixel pass's march goes on through smooth glass (`media_march`'s delta continuation):
