@@ -788,3 +788,17 @@ fn bad_wavelength_spectra() {
         assert_error(&err, &path, 5, 33, message);
     }
 }
+
+/// A root element that is not `<scene>` is refused at its place; an ircache animation file
+/// given where a scene is expected is named as one, with the command that renders it.
+#[test]
+fn root_element_must_be_a_scene() {
+    let (err, path) = load_err("root", "<shapes version=\"3.0.0\"/>\n");
+    assert_error(&err, &path, 1, 1, "root element <shapes> must be <scene");
+    assert!(!err.contains("animate"), "{err}");
+    let (err, path) = load_err(
+        "animation-root",
+        "<animation version=\"1\" scene=\"scene.xml\" frames=\"4\"/>\n",
+    );
+    assert_error(&err, &path, 1, 1, "ircache animate");
+}

@@ -126,10 +126,16 @@ pub(crate) fn read_scene(path: &Path, defines: &[(String, String)]) -> Result<El
     let root = doc.root_element();
     let root_loc = location_of(&file, &doc, &text, root.range().start);
     if root.tag_name().name() != "scene" {
+        // An ircache animation names its scene and frames: `ircache animate` renders it.
+        let hint = if root.tag_name().name() == "animation" {
+            " (this is an animation file: render its frames with `ircache animate`)"
+        } else {
+            ""
+        };
         return Err(SceneError::at(
             root_loc,
             format!(
-                "root element <{}> must be <scene version=\"3.0.0\">",
+                "root element <{}> must be <scene version=\"3.0.0\">{hint}",
                 root.tag_name().name()
             ),
         ));
