@@ -536,7 +536,8 @@ fn shadow_rays_through_grazing_crossings_reach_the_light() {
     }
 }
 
-/// The project's scene `name` at `size`² with `spp` samples and `integrator` at `max_depth`.
+/// The project's media scene `name` at `size`² with `spp` samples and `integrator` at
+/// `max_depth`.
 fn fog_scene(name: &str, integrator: &str, max_depth: i32, size: u32, spp: u32) -> SceneDesc {
     let defines: Vec<(String, String)> = [
         ("integrator", integrator.to_string()),
@@ -1329,18 +1330,9 @@ fn media_records_agree_with_volpath_paths_in_a_grid() {
 #[test]
 fn marched_grid_single_scattering_agrees_with_volpath() {
     let scene = |integrator: &str, spp: u32| {
-        let defines: Vec<(String, String)> = [
-            ("integrator", integrator),
-            ("max_depth", "2"),
-            ("resx", "32"),
-            ("resy", "32"),
-            ("sampler", "multijitter"),
-        ]
-        .into_iter()
-        .map(|(a, b)| (a.to_string(), b.to_string()))
-        .chain([("spp".to_string(), spp.to_string())])
-        .collect();
-        project_scene("smoke-box", &defines)
+        let mut desc = fog_scene("smoke-box", integrator, 2, 32, spp);
+        desc.sensor.sampler = "multijitter".into();
+        desc
     };
     let reference = render_desc(&scene("volpath", 1024), 2, 1).image;
     let marched = render_desc(&scene("irrcache", 64), 2, 3).image;
