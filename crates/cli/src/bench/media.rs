@@ -9,8 +9,8 @@
 //! media-blind default reads off the table. (2) The cache at its defaults on `cornell-fog`,
 //! `smoke-box` and `glass-in-fog` (glass and gold spheres in the fog) at their own `max_depth`
 //! 6 (the bounces beyond the first traced from the gathers) against `volpath` the same way,
-//! each against a reference of its own. (3) `volpath` at `max_depth` 6 (`multijitter`) against Mitsuba 3's `volpath` (`multijitter`) at equal spp,
-//! both against a Mitsuba reference of 4096 spp made here (seeds 0–63; the compared Mitsuba
+//! each against a reference of its own. (3) `volpath` at `max_depth` 6 (`multijitter`) against
+//! Mitsuba 3's `volpath` (`multijitter`) at equal spp, both against a Mitsuba reference of 4096 spp made here (seeds 0–63; the compared Mitsuba
 //! images from seed 5000). Times to equal error are interpolated between the bracketing renders,
 //! never extrapolated.
 
