@@ -7,11 +7,12 @@
 //! blurred, σ = 2 px); the reference is `volpath` at 4096 spp made here on a seed of its own;
 //! the records' pre-pass times and rays are printed, so the gradient's overhead over the
 //! media-blind default reads off the table. (2) The cache at its defaults on `cornell-fog`,
-//! `smoke-box` and `glass-in-fog` (glass and gold spheres in the fog) at their own `max_depth`
-//! 6 (the bounces beyond the first traced from the gathers) against `volpath` the same way,
-//! each against a reference of its own. (3) `volpath` at `max_depth` 6 (`multijitter`) against
-//! Mitsuba 3's `volpath` (`multijitter`) at equal spp, both against a Mitsuba reference of 4096 spp made here (seeds 0–63; the compared Mitsuba
-//! images from seed 5000). Times to equal error are interpolated between the bracketing renders,
+//! `smoke-box` and `glass-in-fog` (glass and gold spheres in the fog) at their own `max_depth` 6
+//! (the bounces beyond the first traced from the gathers) against `volpath` the same way, each
+//! against a reference of its own. (3) `volpath` at `max_depth` 6 (`multijitter`) against Mitsuba
+//! 3's `volpath` (`multijitter`) at equal spp, both against a Mitsuba reference of 4096 spp made
+//! here (seeds 0–63; the compared Mitsuba images from seed 5000). Times to equal error are
+//! interpolated between the bracketing renders,
 //! never extrapolated.
 
 use super::cache_vs_path::{measure, measure_image, print_time_to_error, run, run_seeded, Point};
