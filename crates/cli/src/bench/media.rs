@@ -12,8 +12,7 @@
 //! against a reference of its own. (3) `volpath` at `max_depth` 6 (`multijitter`) against Mitsuba
 //! 3's `volpath` (`multijitter`) at equal spp, both against a Mitsuba reference of 4096 spp made
 //! here (seeds 0–63; the compared Mitsuba images from seed 5000). Times to equal error are
-//! interpolated between the bracketing renders,
-//! never extrapolated.
+//! interpolated between the bracketing renders, never extrapolated.
 
 use super::cache_vs_path::{measure, measure_image, print_time_to_error, run, run_seeded, Point};
 use super::mitsuba_render;
