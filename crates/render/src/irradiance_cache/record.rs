@@ -44,6 +44,14 @@ pub fn pixel_footprint(spread: crate::camera::PixelSpread, travelled: f32, cos_v
 /// as in Radiance), and at a record the camera sees `footprints` (smallest, largest; the
 /// paper's 1.5 and 10) times its pixel `footprint`. Returns the radius (not yet limited) and
 /// the limits.
+///
+/// A record whose gather touches another surface (its nearest hit closer than
+/// [`CONTACT_SHARE`] of the smallest footprint radius) sits on the edge where two surfaces
+/// meet, often a rounding error beyond it: its hemisphere then sees the far side of the
+/// adjoining wall, and its irradiance is that of the outside (0 in a closed room). Raised to
+/// the footprint floor it would serve a band of pixels along every such edge (the cube-in-box
+/// floor along the right wall: a 3 × 5-pixel patch 25 % dark at 128²), so it keeps only the
+/// resolution's floor.
 #[must_use]
 pub fn tabellion_radius(
     distances: &[f32],
@@ -52,13 +60,22 @@ pub fn tabellion_radius(
     (smallest, largest): (f32, f32),
 ) -> (f32, (f32, f32)) {
     let (mut r_min, mut r_max) = (0.5 * r_min, 0.5 * r_max);
+    let nearest = distances.iter().copied().fold(f32::INFINITY, f32::min);
     if let Some(footprint) = footprint {
-        r_min = r_min.max(smallest * footprint);
+        let floor = smallest * footprint;
+        if 0.5 * nearest >= CONTACT_SHARE * floor {
+            r_min = r_min.max(floor);
+        }
         r_max = r_max.min(largest * footprint).max(r_min);
     }
-    let nearest = distances.iter().copied().fold(f32::INFINITY, f32::min);
     (0.5 * nearest, (r_min, r_max))
 }
+
+/// The share of the footprint floor below which a record's nearest hit counts as a contact
+/// ([`tabellion_radius`]): a thousandth, far below any pixel sample's distance from an edge
+/// that the pixel resolves, far above rounding errors (relative to the footprint, so
+/// scale-free).
+pub const CONTACT_SHARE: f32 = 1.0e-3;
 
 /// Ward's gradient limit on a record's radius (003 item 4): within the distance at which the
 /// record serves, its translational gradient may not predict a change larger than `a·E` (a the
@@ -330,6 +347,19 @@ mod tests {
             tabellion_radius(&[0.3], (0.002, 0.128), None, (1.5, 5.0)).1,
             (0.001, 0.064)
         );
+    }
+
+    #[test]
+    fn a_record_touching_another_surface_keeps_only_the_resolutions_floor() {
+        // Footprint 0.01: the floor is 0.015; a nearest hit of 2e-5 (R 1e-5 < 1.5e-5) is a
+        // contact, one of 4e-5 (R 2e-5) is not.
+        let (r, (lo, hi)) = tabellion_radius(&[0.3, 2e-5], (0.002, 0.128), Some(0.01), (1.5, 5.0));
+        assert!(
+            (r - 1e-5).abs() < 1e-9 && lo == 0.001 && (hi - 0.05).abs() < 1e-7,
+            "{r} {lo} {hi}"
+        );
+        let (_, (lo, _)) = tabellion_radius(&[0.3, 4e-5], (0.002, 0.128), Some(0.01), (1.5, 5.0));
+        assert!((lo - 0.015).abs() < 1e-7, "{lo}");
     }
 
     #[test]
