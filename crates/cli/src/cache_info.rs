@@ -46,6 +46,9 @@ pub fn run(cmd: &CacheCommand) -> Result<()> {
         "  records          {} (per bounce level: {per_level:?}; {radiance} with radiance)",
         c.records.len()
     );
+    if !c.volume.is_empty() {
+        println!("  volumetric       {} records (in media)", c.volume.len());
+    }
     if c.torn_bytes > 0 {
         println!(
             "  torn tail        {} bytes after the last intact record (cut off when the file is next written)",

@@ -468,8 +468,9 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
     );
     if let Some(st) = &out.media_cache {
         eprintln!(
-            "media cache: {} records, {:.1} M gather rays, {:.1} M shadow rays, {:.1} M march steps; pre-pass {:.2} s",
+            "media cache: {} records ({} from the cache file), {:.1} M gather rays, {:.1} M shadow rays, {:.1} M march steps; pre-pass {:.2} s",
             st.records,
+            st.loaded,
             st.gather_rays as f64 * 1e-6,
             st.shadow_rays as f64 * 1e-6,
             st.march_steps as f64 * 1e-6,
@@ -478,11 +479,24 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
         if st.metric_replaced {
             eprintln!("note: {}", ircache_render::media_cache::cache::METRIC_NOTE);
         }
+        if st.other_view {
+            eprintln!(
+                "note: {}",
+                ircache_render::irradiance_cache::file::OTHER_VIEW_NOTE
+            );
+        }
+        if st.damaged > 0 {
+            eprintln!(
+                "note: the cache file held {} damaged records (skipped)",
+                st.damaged
+            );
+        }
     }
     if let Some(st) = &out.volume_records {
         eprintln!(
-            "volumetric records: {} records, {:.1} M rays; pre-pass {:.2} s",
+            "volumetric records: {} records ({} from the cache file), {:.1} M rays; pre-pass {:.2} s",
             st.records,
+            st.loaded,
             st.rays as f64 * 1e-6,
             st.seconds
         );
@@ -623,6 +637,30 @@ fn write_stats(
                 }),
             );
         }
+    }
+    if let (Some(a), Some(st)) = (json.as_object_mut(), &out.media_cache) {
+        a.insert(
+            "media_cache".into(),
+            serde_json::json!({
+                "records_computed": st.records,
+                "records_loaded": st.loaded,
+                "gather_rays": st.gather_rays,
+                "shadow_rays": st.shadow_rays,
+                "march_steps": st.march_steps,
+                "seconds": st.seconds,
+            }),
+        );
+    }
+    if let (Some(a), Some(st)) = (json.as_object_mut(), &out.volume_records) {
+        a.insert(
+            "volume_records".into(),
+            serde_json::json!({
+                "records_computed": st.records,
+                "records_loaded": st.loaded,
+                "rays": st.rays,
+                "seconds": st.seconds,
+            }),
+        );
     }
     std::fs::write(path, serde_json::to_string_pretty(&json)? + "\n")
         .with_context(|| format!("{}: cannot write statistics", path.display()))

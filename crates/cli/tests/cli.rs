@@ -509,6 +509,87 @@ fn cache_file_is_reused_across_runs_and_views_and_refused_when_stale() {
     );
 }
 
+/// In media, the surface records and the volumetric records go to the cache file and come
+/// back from it: a second render gathers nothing and gives the same image; other media
+/// settings are refused.
+#[test]
+fn cache_file_holds_the_records_of_a_media_scene() {
+    let d = temp_dir("cache-file-media");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/cornell-fog/scene.xml"
+    );
+    let render = |out: &str, extra: &[&str]| {
+        let stats = format!("{out}.json");
+        let mut args = vec![
+            "render",
+            scene,
+            "--integrator",
+            "ic",
+            "--spp",
+            "2",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--media-divisions",
+            "32",
+            "--media-volume-divisions",
+            "16",
+            "--cache",
+            "fog.icc",
+            "-o",
+            out,
+            "--stats",
+            &stats,
+            "-q",
+        ];
+        args.extend_from_slice(extra);
+        ircache(&args, &d)
+    };
+    let o = render("a.exr", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let first = stats_of(&d, "a.exr.json");
+    let (surface, volume) = (
+        first["media_cache"]["records_computed"].as_u64().unwrap(),
+        first["volume_records"]["records_computed"]
+            .as_u64()
+            .unwrap(),
+    );
+    assert!(surface > 10 && volume > 10, "{surface} {volume}");
+    let o = render("b.exr", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let again = stats_of(&d, "b.exr.json");
+    assert_eq!(
+        again["media_cache"]["records_loaded"].as_u64().unwrap(),
+        surface
+    );
+    assert_eq!(
+        again["volume_records"]["records_loaded"].as_u64().unwrap(),
+        volume
+    );
+    assert_eq!(again["media_cache"]["records_computed"], 0);
+    assert_eq!(again["volume_records"]["records_computed"], 0);
+    assert_eq!(
+        std::fs::read(d.join("a.exr")).unwrap(),
+        std::fs::read(d.join("b.exr")).unwrap()
+    );
+    let o = ircache(&["cache", "info", "fog.icc"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        info.contains(&format!("volumetric       {volume} records")),
+        "{info}"
+    );
+    let o = render("x.exr", &["--media-deeper-paths", "2"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("media_deeper_paths 4 (now 2)"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 #[test]
 fn four_processes_share_one_cache_file_on_disjoint_tiles() {
     let d = temp_dir("shared-cache");

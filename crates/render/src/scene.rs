@@ -220,8 +220,8 @@ fn radiance_normal(n: Vec3, displacement: Vec3, d: Vec3) -> Vec3 {
 }
 
 /// FNV-1a of what light transport depends on: the geometry (positions, indices, normals, uvs),
-/// materials and emitters (their descriptions, with every image's texels, each image once), not
-/// where the files lie.
+/// materials and emitters (their descriptions, with every image's texels, each image once), the
+/// media and which shapes and camera they fill, not where the files lie.
 fn content_hash(desc: &SceneDesc) -> u64 {
     use crate::irradiance_cache::file::Fnv;
     use std::fmt::Write;
@@ -257,8 +257,8 @@ fn content_hash(desc: &SceneDesc) -> u64 {
         }
         let _ = write!(
             h,
-            "{:?}{:?}{:?}{:?}",
-            s.bsdf, s.emitter, s.emitter_texture, s.emitter_pattern
+            "{:?}{:?}{:?}{:?}{:?}",
+            s.bsdf, s.emitter, s.emitter_texture, s.emitter_pattern, s.media
         );
         let mut hash_image = |b: &std::sync::Arc<ircache_scene::BitmapDesc>| {
             if !images.contains(&std::sync::Arc::as_ptr(b)) {
@@ -277,7 +277,7 @@ fn content_hash(desc: &SceneDesc) -> u64 {
             hash_image(b);
         }
     }
-    let _ = write!(h, "{:?}", desc.emitters);
+    let _ = write!(h, "{:?}{:?}", desc.emitters, desc.sensor.medium);
     for m in &desc.media {
         let _ = write!(
             h,

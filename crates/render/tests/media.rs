@@ -781,7 +781,14 @@ fn media_cache_serves_the_lambertian_part_of_glossy_surfaces() {
     let params = ircache_render::integrators::ic::IcIntegrator::from_desc(&desc.integrator)
         .expect("ic")
         .params;
-    let cache = ircache_render::media_cache::cache::MediaCache::build(&scene, &params, 32, 32, 2);
+    let cache = ircache_render::media_cache::cache::MediaCache::build(
+        &scene,
+        &params,
+        32,
+        32,
+        2,
+        Vec::new(),
+    );
     let on_floor = cache
         .records()
         .iter()
@@ -992,7 +999,14 @@ fn interpolation_errors(size: u32, reference_divisions: usize) -> Vec<(&'static 
             media_gradient: form,
             ..IcParams::default()
         };
-        let cache = MediaCache::build(&scene, &params, size as usize / 2, size as usize / 2, 3);
+        let cache = MediaCache::build(
+            &scene,
+            &params,
+            size as usize / 2,
+            size as usize / 2,
+            3,
+            Vec::new(),
+        );
         let (mut sum, mut n) = (0.0f64, 0usize);
         for (s, r) in sites.iter().zip(&reference) {
             if let Some(e) = cache.irradiance(s.p, s.n, s.n) {

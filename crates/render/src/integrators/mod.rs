@@ -264,24 +264,55 @@ fn media_cache_integrator(
         ))
     };
     crate::media_cache::cache::available(p).map_err(crate::scene::RenderError::Invalid)?;
-    if ic.cache_file.is_some() {
-        return refuse("cache files are not available there yet");
-    }
     if ic.pixel_pass != ic::PixelPass::Lookup {
         return refuse("splatting is not available there yet");
     }
+    // The cache file's records first (surface and volumetric), the pre-passes' new ones
+    // appended after them.
+    let mut file = None;
+    let (mut surface, mut volume, mut notes) = (Vec::new(), Vec::new(), (false, 0));
+    if let Some(path) = &ic.cache_file {
+        let header =
+            crate::irradiance_cache::prepare::header(scene, ic, settings.width, Default::default());
+        let (f, contents) =
+            crate::irradiance_cache::file::CacheFile::open(path, &header, ic.force_reuse)?;
+        notes = (
+            contents.header.view_note(&header).is_some(),
+            contents.damaged,
+        );
+        // A media scene's file holds first-bounce records without radiance alone.
+        surface = contents.records.into_iter().map(|(r, _)| r).collect();
+        // A forced file of another scene may name media this one lacks.
+        volume = contents
+            .volume
+            .into_iter()
+            .filter(|v| v.medium < scene.media.len())
+            .collect();
+        file = Some(f);
+    }
     // No bounce (`max_depth` 2): direct light alone, no records.
     let cache = (p.bounces > 0).then(|| {
-        std::sync::Arc::new(pool.install(|| {
+        let mut cache = pool.install(|| {
             crate::media_cache::cache::MediaCache::build(
                 scene,
                 p,
                 settings.width,
                 settings.height,
                 settings.seed,
+                std::mem::take(&mut surface),
             )
-        }))
+        });
+        (cache.stats.other_view, cache.stats.damaged) = notes;
+        cache
     });
+    if let (Some(f), Some(cache)) = (file.as_mut(), &cache) {
+        let new: Vec<_> = cache.records()[cache.stats.loaded..]
+            .iter()
+            .map(|&r| (r, None))
+            .collect();
+        f.append(&new)?;
+    }
+    let cache = cache.map(std::sync::Arc::new);
     let mut integrator = volpath::VolPathIntegrator {
         hide_emitters: ic.hide_emitters,
         cache,
@@ -307,8 +338,12 @@ fn media_cache_integrator(
                 settings.width,
                 settings.height,
                 settings.seed,
+                volume,
             )
         });
+        if let Some(f) = file.as_mut() {
+            f.append_volume(&records.records()[records.stats.loaded..])?;
+        }
         integrator.volume_records = Some(std::sync::Arc::new(records));
     }
     Ok(integrator)

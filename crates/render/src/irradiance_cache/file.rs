@@ -15,9 +15,14 @@
 //!   0xFE, 1 byte zero, the slot's number (u16), 29 f32 (the first slot's first two: the order
 //!   and the count of values; then coefficients, x and y gradients, 3 × order² each), checksum.
 //!   A record whose continuation is incomplete or damaged is skipped with it.
+//! - in scenes with media, volumetric records (`media_cache::volume_records`): a slot tagged
+//!   0xFD, 1 byte zero, 2 bytes zero, with position, radius, medium index and the first 24 of
+//!   the 27 spherical-harmonic values (9 coefficients × 3 channels), then one continuation slot
+//!   (number 0) with the last 3. The media cache's surface records are ordinary records.
 
 use super::params::{IcParams, PARAMS};
 use super::record::{Record, NO_RADIANCE};
+use crate::media_cache::volume_records::{VolumeRecord, COEFFICIENTS};
 use crate::radiance_cache::gather::RadianceCoefficients;
 use ircache_math::{Rgb, Vec3};
 use std::fs::{File, OpenOptions};
@@ -27,7 +32,7 @@ use std::path::{Path, PathBuf};
 /// Bytes that open every cache file.
 pub const MAGIC: &[u8; 8] = b"IRCACHE\0";
 /// The format version this build reads and writes.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 /// Header size in bytes.
 pub const HEADER_BYTES: usize = 1024;
 /// Record size in bytes (payload and checksum).
@@ -35,6 +40,8 @@ pub const RECORD_BYTES: usize = 128;
 const PAYLOAD_BYTES: usize = RECORD_BYTES - 8;
 /// First byte of a radiance continuation slot (levels are far below).
 const CONTINUATION: u8 = 0xFE;
+/// First byte of a volumetric record's slot.
+const VOLUME: u8 = 0xFD;
 /// Values a slot holds (a record's or a continuation's), after its 4 bytes of tags.
 const SLOT_FLOATS: usize = 29;
 
@@ -109,6 +116,10 @@ impl std::fmt::Write for Fnv {
         Ok(())
     }
 }
+
+/// What a user hears when a cache file's records were sized for another view.
+pub const OTHER_VIEW_NOTE: &str = "the cache file's records were made for another view \
+     (camera or film width): their radii keep that view's pixel footprints";
 
 /// What a header holds.
 #[derive(Clone, Debug, PartialEq)]
@@ -225,11 +236,7 @@ impl Header {
     /// A note when the file's records were sized for another view than `other`'s.
     #[must_use]
     pub fn view_note(&self, other: &Header) -> Option<String> {
-        (self.view_hash != other.view_hash).then(|| {
-            "the cache file's records were made for another view (camera or film width): \
-             their radii keep that view's pixel footprints"
-                .to_string()
-        })
+        (self.view_hash != other.view_hash).then(|| OTHER_VIEW_NOTE.to_string())
     }
 }
 
@@ -320,6 +327,43 @@ fn decode_radiance(slots: &[u8]) -> Option<(RadianceCoefficients, usize)> {
     ))
 }
 
+/// A volumetric record's two slots.
+fn encode_volume(v: &VolumeRecord) -> Vec<u8> {
+    let mut values = Vec::with_capacity(5 + 3 * COEFFICIENTS);
+    values.extend_from_slice(&v.p.to_array());
+    values.push(v.r);
+    values.push(v.medium as f32);
+    for c in &v.radiance {
+        values.extend_from_slice(&c.to_array());
+    }
+    let mut out = write_slot([VOLUME, 0, 0, 0], &values[..SLOT_FLOATS]).to_vec();
+    out.extend_from_slice(&write_slot([CONTINUATION, 0, 0, 0], &values[SLOT_FLOATS..]));
+    out
+}
+
+/// A volumetric record from the start of `slots`; `None` when it is not one, is damaged or
+/// lacks its continuation.
+fn decode_volume(slots: &[u8]) -> Option<VolumeRecord> {
+    if slots.first() != Some(&VOLUME) {
+        return None;
+    }
+    let first = read_slot(slots.get(..RECORD_BYTES)?)?;
+    let rest = decode_continuation(slots.get(RECORD_BYTES..2 * RECORD_BYTES)?, 0)?;
+    let values: Vec<f32> = first.iter().chain(&rest).copied().collect();
+    let medium = values[4];
+    if medium < 0.0 || medium.fract() != 0.0 {
+        return None;
+    }
+    Some(VolumeRecord {
+        p: Vec3::new(values[0], values[1], values[2]),
+        r: values[3],
+        medium: medium as usize,
+        radiance: std::array::from_fn(|i| {
+            Rgb::new(values[5 + 3 * i], values[6 + 3 * i], values[7 + 3 * i])
+        }),
+    })
+}
+
 fn encode_record(r: &Record, with_radiance: bool) -> [u8; RECORD_BYTES] {
     let mut floats = Vec::with_capacity(SLOT_FLOATS);
     for v in [r.p, r.n] {
@@ -337,7 +381,7 @@ fn encode_record(r: &Record, with_radiance: bool) -> [u8; RECORD_BYTES] {
 /// A record from its bytes and whether radiance follows; `None` when the checksum fails, a
 /// value is not finite, or the slot is a continuation.
 fn decode_record(b: &[u8]) -> Option<(Record, bool)> {
-    if b.first() == Some(&CONTINUATION) {
+    if matches!(b.first(), Some(&CONTINUATION | &VOLUME)) {
         return None;
     }
     let f = read_slot(b)?;
@@ -363,6 +407,8 @@ pub struct Contents {
     pub header: Header,
     /// Every complete, intact record, in file order (with its radiance where it has some).
     pub records: Vec<Stored>,
+    /// Every complete, intact volumetric record, in file order.
+    pub volume: Vec<VolumeRecord>,
     /// Damaged slots (records and their radiance continuations) between intact records
     /// (skipped).
     pub damaged: u64,
@@ -401,6 +447,7 @@ pub fn read(path: &Path) -> Result<Contents, CacheFileError> {
     Ok(Contents {
         header,
         records: scan.records,
+        volume: scan.volume,
         damaged: scan.damaged,
         torn_bytes: (bytes.len() - HEADER_BYTES - scan.end) as u64,
     })
@@ -410,6 +457,8 @@ pub fn read(path: &Path) -> Result<Contents, CacheFileError> {
 struct Scan {
     /// Every intact record, in order.
     records: Vec<Stored>,
+    /// Every intact volumetric record, in order.
+    volume: Vec<VolumeRecord>,
     /// Damaged slots followed by an intact one (skipped).
     damaged: u64,
     /// Bytes up to the end of the last intact record (what follows is a torn tail).
@@ -422,6 +471,7 @@ struct Scan {
 fn scan_records(bytes: &[u8]) -> Scan {
     let mut scan = Scan {
         records: Vec::new(),
+        volume: Vec::new(),
         damaged: 0,
         end: 0,
     };
@@ -430,6 +480,14 @@ fn scan_records(bytes: &[u8]) -> Scan {
     let mut i = 0;
     while i < slots {
         let slot = &bytes[i * RECORD_BYTES..(i + 1) * RECORD_BYTES];
+        if let Some(v) = decode_volume(&bytes[i * RECORD_BYTES..slots * RECORD_BYTES]) {
+            scan.volume.push(v);
+            scan.damaged += bad_run;
+            bad_run = 0;
+            i += 2;
+            scan.end = i * RECORD_BYTES;
+            continue;
+        }
         let decoded = decode_record(slot).and_then(|(r, with_radiance)| {
             if with_radiance {
                 let rest = &bytes[(i + 1) * RECORD_BYTES..slots * RECORD_BYTES];
@@ -517,6 +575,7 @@ impl CacheFile {
             Contents {
                 header: header.clone(),
                 records: Vec::new(),
+                volume: Vec::new(),
                 damaged: 0,
                 torn_bytes: 0,
             }
@@ -571,6 +630,19 @@ impl CacheFile {
     /// Appends `records` (flushed to the disk before the lock is released) and returns the
     /// records others appended since this process last looked, which come before them.
     pub fn append(&mut self, records: &[Stored]) -> Result<Vec<Stored>, CacheFileError> {
+        let buf: Vec<u8> = records.iter().flat_map(encode_stored).collect();
+        self.append_bytes(&buf)
+    }
+
+    /// Appends volumetric records, as [`Self::append`] (the records others appended since are
+    /// returned, the volumetric ones among them left out: a media scene's pre-passes run before
+    /// its pixels, and read the file first).
+    pub fn append_volume(&mut self, records: &[VolumeRecord]) -> Result<(), CacheFileError> {
+        let buf: Vec<u8> = records.iter().flat_map(encode_volume).collect();
+        self.append_bytes(&buf).map(|_| ())
+    }
+
+    fn append_bytes(&mut self, buf: &[u8]) -> Result<Vec<Stored>, CacheFileError> {
         self.file.lock().map_err(self.io())?;
         let guard = Locked(&self.file);
         let (others, end, len) = self.read_tail()?;
@@ -578,13 +650,9 @@ impl CacheFile {
             // What follows the last intact record is the remnant of a crashed write.
             self.file.set_len(end).map_err(self.io())?;
         }
-        let mut buf = Vec::with_capacity(records.len() * RECORD_BYTES);
-        for r in records {
-            buf.extend_from_slice(&encode_stored(r));
-        }
         let mut f = &self.file;
         f.seek(SeekFrom::Start(end)).map_err(self.io())?;
-        f.write_all(&buf)
+        f.write_all(buf)
             .and_then(|()| f.sync_data())
             .map_err(self.io())?;
         drop(guard);
@@ -712,6 +780,11 @@ mod tests {
             ("photon_lookup", "50"),
             ("photon_radius", "0.1"),
             ("photon_records", "on"),
+            ("media_gradient", "corrected"),
+            ("media_light_samples", "3"),
+            ("media_volume_divisions", "64"),
+            ("media_deeper_paths", "2"),
+            ("media_divisions", "256"),
         ];
         for spec in crate::irradiance_cache::params::PARAMS {
             let listed = changed.iter().find(|(n, _)| *n == spec.name);
@@ -770,6 +843,41 @@ mod tests {
         let mut expect = recs[..4].to_vec();
         expect.push(stored(7));
         assert_eq!(read(&cut).unwrap().records, expect);
+    }
+
+    /// Volumetric records between ordinary ones come back whole and in order; one whose
+    /// continuation is damaged is skipped with it, and the records around it stay.
+    #[test]
+    fn volumetric_records_round_trip_and_are_checked_with_their_continuation() {
+        let path = temp("volume");
+        let _ = std::fs::remove_file(&path);
+        let volume = |i: usize| VolumeRecord {
+            p: Vec3::new(i as f32, 0.5, -2.0),
+            r: 0.25 * (i + 1) as f32,
+            medium: i % 2,
+            radiance: std::array::from_fn(|k| Rgb::new(k as f32, -0.5 * k as f32, i as f32)),
+        };
+        let recs: Vec<Stored> = (0..3).map(|i| (record(i), None)).collect();
+        let vols: Vec<VolumeRecord> = (0..3).map(volume).collect();
+        let (mut f, _) = CacheFile::open(&path, &header(), false).unwrap();
+        f.append(&recs[..2]).unwrap();
+        f.append_volume(&vols).unwrap();
+        f.append(&recs[2..]).unwrap();
+        drop(f);
+        let c = read(&path).unwrap();
+        assert_eq!(
+            (c.records.as_slice(), c.volume.as_slice()),
+            (&recs[..], &vols[..])
+        );
+        // The second volumetric record's continuation (slots: 2 records, 2 per volume record).
+        let mut bad = std::fs::read(&path).unwrap();
+        bad[HEADER_BYTES + 5 * RECORD_BYTES + 8] ^= 1;
+        std::fs::write(&path, &bad).unwrap();
+        let c = read(&path).unwrap();
+        assert_eq!(c.records, recs);
+        assert_eq!(c.volume, [vols[0], vols[2]]);
+        // Its first slot is skipped as damage; its continuation, alone, is too.
+        assert_eq!(c.damaged, 2);
     }
 
     #[test]

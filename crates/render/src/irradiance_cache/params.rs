@@ -922,7 +922,7 @@ pub const PARAMS: &[ParamSpec] = &[
                form: absorption, visibility of the medium's light, the radial and interface \
                terms; for studying gradients), paper (002's Algorithm 1 read literally), \
                jdzj08 (absorption terms only)",
-        shapes_records: false,
+        shapes_records: true,
         get: |p| name_of(p.media_gradient, MEDIA_GRADIENTS),
         set: |p, v| {
             p.media_gradient = choice(v, MEDIA_GRADIENTS)?;
@@ -937,8 +937,7 @@ pub const PARAMS: &[ParamSpec] = &[
                step of a record's gather (its single scattering, whose samples the gradient's \
                source term differentiates): more cost more, and steady the gradients near \
                lights",
-        // Media records are never saved in cache files (refused in media scenes).
-        shapes_records: false,
+        shapes_records: true,
         get: |p| p.media_light_samples.to_string(),
         set: |p, v| {
             p.media_light_samples = number(v, 1u32, 1024, "a number of light samples")?;
@@ -983,7 +982,7 @@ pub const PARAMS: &[ParamSpec] = &[
         help: "in scenes with participating media, paths a volumetric record gathers over the \
                sphere (their noise is the fog's low-frequency error; they cost a tenth of a \
                surface record's rays through fog)",
-        shapes_records: false,
+        shapes_records: true,
         get: |p| p.media_volume_divisions.to_string(),
         set: |p, v| {
             p.media_volume_divisions = number(v, 8u32, 1 << 20, "a number of paths")?;
@@ -998,7 +997,7 @@ pub const PARAMS: &[ParamSpec] = &[
                the bounces beyond its first (max_depth above 3): their noise is the fog's \
                blotches; at max_depth 6, 4 paths against 1 took 1.17x the time for 0.6x the \
                error in the fog box at 256x256, and 1.6x the time for 0.87x in a dense smoke",
-        shapes_records: false,
+        shapes_records: true,
         get: |p| p.media_deeper_paths.to_string(),
         set: |p, v| {
             p.media_deeper_paths = number(v, 1u32, 1 << 16, "a number of paths")?;
@@ -1011,7 +1010,7 @@ pub const PARAMS: &[ParamSpec] = &[
         value: "N",
         help: "in scenes with participating media, gather rays per surface record, split as \
                --divisions (which stays the clear scenes'): each ray marches through the medium",
-        shapes_records: false,
+        shapes_records: true,
         get: |p| p.media_divisions.to_string(),
         set: |p, v| {
             p.media_divisions = number(v, 4, 1_000_000, "a whole number of divisions")?;

@@ -40,6 +40,13 @@ use std::time::Instant;
 pub struct MediaCacheStats {
     /// Records made.
     pub records: usize,
+    /// Records read from a cache file before the pre-pass.
+    pub loaded: usize,
+    /// The cache file's records were made for another view (their radii keep its pixel
+    /// footprints: [`crate::irradiance_cache::file::Header::view_note`]).
+    pub other_view: bool,
+    /// Damaged slots the cache file held (skipped).
+    pub damaged: u64,
     /// Gather rays (to the first opaque hit, through null boundaries).
     pub gather_rays: u64,
     /// Shadow rays of the gathers (surface hits' direct light, single scattering).
@@ -248,7 +255,8 @@ impl MediaCache {
     }
 
     /// Fills the cache from the first hits of camera rays through the centres of a
-    /// `width` × `height` image (run inside a rayon pool).
+    /// `width` × `height` image (run inside a rayon pool), after the records `loaded` (from a
+    /// cache file), which come first in [`Self::records`].
     #[must_use]
     pub fn build(
         scene: &Scene,
@@ -256,9 +264,14 @@ impl MediaCache {
         width: usize,
         height: usize,
         seed: u64,
+        loaded: Vec<Record>,
     ) -> MediaCache {
         let start = Instant::now();
         let mut cache = MediaCache::new(scene, params);
+        cache.stats.loaded = loaded.len();
+        for record in loaded {
+            cache.store.insert(record);
+        }
         let pixel_spread = scene.camera.pixel_spread(width);
         // Sites of one row closer than this (and facing alike) share a record.
         let spacing = params

@@ -95,6 +95,8 @@ impl VolumeRecord {
 pub struct VolumeCacheStats {
     /// Records made.
     pub records: usize,
+    /// Records read from a cache file before the pre-pass.
+    pub loaded: usize,
     /// Rays traced by their gathers (every kind).
     pub rays: u64,
     /// Seconds of the pre-pass.
@@ -287,7 +289,8 @@ impl VolumeCache {
 
     /// Fills the cache at the quadrature points (`points` a segment, each at its stratum's
     /// middle) of camera rays through the centres of a `width` × `height` image, gathering
-    /// with `divisions` paths of `integrator` (run inside a rayon pool).
+    /// with `divisions` paths of `integrator` (run inside a rayon pool), after the records
+    /// `loaded` (from a cache file), which come first in [`Self::records`].
     #[allow(clippy::too_many_arguments)]
     #[must_use]
     pub fn build(
@@ -299,9 +302,14 @@ impl VolumeCache {
         width: usize,
         height: usize,
         seed: u64,
+        loaded: Vec<VolumeRecord>,
     ) -> VolumeCache {
         let start = Instant::now();
         let mut cache = VolumeCache::new(scene, accuracy);
+        cache.stats.loaded = loaded.len();
+        for record in loaded {
+            cache.store.insert(record);
+        }
         // A point closer than this to one already wanted in its row waits for that record.
         let spacing = accuracy * 2.0 * scene.radius / 64.0;
         for y in 0..height {
@@ -561,7 +569,7 @@ mod tests {
     fn records_sit_only_where_the_medium_scatters() {
         let scene = project_scene("smoke-box", &[]);
         let integrator = VolPathIntegrator::plain(3);
-        let cache = VolumeCache::build(&integrator, &scene, 0.3, 8, 8, 24, 24, 1);
+        let cache = VolumeCache::build(&integrator, &scene, 0.3, 8, 8, 24, 24, 1, Vec::new());
         let records = cache.records();
         assert!(records.len() > 5, "{} records", records.len());
         for r in records {
