@@ -128,7 +128,7 @@ pub struct Shape {
     pub straight_trans: bool,
     /// The media on its two sides (indices into [`Scene::media`]).
     pub media: ircache_scene::MediumInterface,
-    /// A bump or normal map with Mitsuba's shadowing function ([`Scene::perturbed_shadowing`]).
+    /// A bump or normal map ([`Scene::perturbed_shadowing`]).
     pub perturbed_shadowing: bool,
 }
 
@@ -364,9 +364,7 @@ impl Scene {
                 masked: materials[i].is_masked(),
                 straight_trans: materials[i].has_straight_transmission(),
                 media: s.media,
-                perturbed_shadowing: materials[i]
-                    .perturbation()
-                    .is_some_and(|p| p.shading.shadowing),
+                perturbed_shadowing: materials[i].perturbation().is_some(),
             });
         }
         let accel = builder.build()?;
@@ -766,10 +764,13 @@ impl Scene {
         }
     }
 
-    /// The factor by which a bump or normal map's shadowing function (Mitsuba's default,
-    /// [`crate::bsdf::Perturbation::shadowing`]) scales the BSDF at `it` for light along the
-    /// world direction `wi`: 1 on other surfaces. Applied to BSDF values and sample weights,
-    /// never to densities.
+    /// The factor by which a bump or normal map scales the BSDF at `it` for light along the
+    /// world direction `wi`, as Mitsuba's perturbed BSDFs: 0 where `wi` and the perturbed
+    /// frame lie on different sides of the unperturbed surface, else the shadowing function
+    /// (Mitsuba's default, [`crate::bsdf::Perturbation::shadowing`]); 1 on other surfaces.
+    /// Applied to BSDF values and sample weights, never to densities. Light samples lacked the
+    /// side test that BSDF samples had: on `scenes/bumps` under a sky, `path` read 3.6 %
+    /// and light samples alone 8 % above Mitsuba on the bumped ground.
     #[inline]
     #[must_use]
     pub fn perturbed_shadowing(&self, it: &Interaction, wi: Vec3) -> f32 {
@@ -785,17 +786,24 @@ impl Scene {
     #[cold]
     #[inline(never)]
     fn perturbed_shadowing_at(&self, it: &Interaction, wi: Vec3) -> f32 {
-        self.shadowing_perturbation(it)
-            .map_or(1.0, |p| p.shadowing(it.base_n, it.frame.n, wi))
+        let Some(p) = self.shadowing_perturbation(it) else {
+            return 1.0;
+        };
+        // Mitsuba's perturbed BSDFs answer 0 where the light and the perturbed frame lie on
+        // different sides of the unperturbed surface.
+        if wi.dot(it.base_n) * wi.dot(it.frame.n) <= 0.0 {
+            return 0.0;
+        }
+        p.shadowing(it.base_n, it.frame.n, wi)
     }
 
-    /// [`Scene::perturbed_shadowing`] averaged over light from the whole hemisphere (cosine-
-    /// weighted): the factor for a Lambertian part served by a cache's irradiance.
+    /// The factor for a Lambertian part served by a cache's irradiance at a perturbed `it`
+    /// ([`crate::bsdf::Perturbation::lambertian_share`]); 1 on other surfaces.
     #[inline]
     #[must_use]
-    pub fn perturbed_mean_shadowing(&self, it: &Interaction) -> f32 {
+    pub fn perturbed_lambertian_share(&self, it: &Interaction) -> f32 {
         self.shadowing_perturbation(it)
-            .map_or(1.0, |p| p.mean_shadowing(it.base_n, it.frame.n))
+            .map_or(1.0, |p| p.lambertian_share(it.base_n, it.frame.n))
     }
 
     /// The bump or normal map at `it` when it has the shadowing function; scenes without one

@@ -1132,25 +1132,50 @@ pub struct Perturbation {
     pub map: PerturbationMap,
     /// The shadowing function and the flipping of normals that face away.
     pub shading: ircache_scene::PerturbedShading,
-    /// [`mean_shadowing_table`], where the shadowing function is on.
-    mean_shadowing: Option<[f32; MEAN_SHADOWING_SAMPLES]>,
+    /// [`lambertian_share_table`], where the shadowing function is on.
+    lambertian_share: Option<[f32; LAMBERTIAN_SHARE_SAMPLES]>,
 }
 
-/// Samples of [`mean_shadowing_table`] over α ∈ [0, 1] (the mean's slope is steepest near 0).
-const MEAN_SHADOWING_SAMPLES: usize = 65;
+/// Samples of [`lambertian_share_table`] over the tilt's cosine in [0, 1].
+const LAMBERTIAN_SHARE_SAMPLES: usize = 129;
 
-/// The cosine-weighted mean of Estevez et al.'s shadowing over the hemisphere about the
-/// unperturbed normal, `2∫₀¹ G(μ) μ dμ = 4∫₀¹ μ² / (μ + √(μ²(1 − α²) + α²)) dμ`, tabulated
-/// over α (what a Lambertian surface's cached irradiance loses to it under uniform light).
-fn mean_shadowing_table() -> [f32; MEAN_SHADOWING_SAMPLES] {
-    let nodes = ircache_math::harmonics::quadrature::gauss_legendre(48, 0.0, 1.0);
+/// ∫₀^2π max(0, a cos φ + b) dφ for a ≥ 0: the azimuthal integral of a tilted cosine lobe
+/// (2πb where the lobe covers the whole circle, 0 where it misses it).
+fn clipped_cosine_circle(a: f64, b: f64) -> f64 {
+    if a <= b.abs() {
+        return if b > 0.0 {
+            2.0 * std::f64::consts::PI * b
+        } else {
+            0.0
+        };
+    }
+    2.0 * (a * a - b * b).sqrt() + 2.0 * b * (-b / a).acos()
+}
+
+/// [`Perturbation::lambertian_share`] with Estevez et al.'s shadowing, tabulated over the
+/// tilt's cosine: (1/π)∫ G(μ) max(0, n_p·ω) dω over the hemisphere of the unperturbed normal,
+/// μ = cos θ from it, α² = min(tan²β / 8, 1), by Gauss–Legendre in μ with the azimuth in closed
+/// form ([`clipped_cosine_circle`]).
+fn lambertian_share_table() -> [f32; LAMBERTIAN_SHARE_SAMPLES] {
+    let nodes = ircache_math::harmonics::quadrature::gauss_legendre(96, 0.0, 1.0);
     std::array::from_fn(|i| {
-        let alpha = i as f64 / (MEAN_SHADOWING_SAMPLES - 1) as f64;
-        let a = alpha * alpha;
+        let cos_b = i as f64 / (LAMBERTIAN_SHARE_SAMPLES - 1) as f64;
+        let sin_b = (1.0 - cos_b * cos_b).max(0.0).sqrt();
+        let alpha2 = if cos_b > 0.0 {
+            (0.125 * sin_b * sin_b / (cos_b * cos_b)).min(1.0)
+        } else {
+            1.0
+        };
         nodes
             .iter()
-            .map(|&(mu, w)| w * 4.0 * mu * mu / (mu + (mu * mu * (1.0 - a) + a).sqrt()))
+            .map(|&(mu, w)| {
+                let sin_t = (1.0 - mu * mu).max(0.0).sqrt();
+                let tan2 = sin_t * sin_t / (mu * mu);
+                let g = 2.0 / (1.0 + (1.0 + alpha2 * tan2).sqrt());
+                w * g * clipped_cosine_circle(sin_b * sin_t, cos_b * mu)
+            })
             .sum::<f64>() as f32
+            / std::f32::consts::PI
     })
 }
 
@@ -1184,7 +1209,7 @@ impl Perturbation {
         Perturbation {
             map,
             shading,
-            mean_shadowing: shading.shadowing.then(mean_shadowing_table),
+            lambertian_share: shading.shadowing.then(lambertian_share_table),
         }
     }
 
@@ -1240,15 +1265,20 @@ impl Perturbation {
         out
     }
 
-    /// The mean of [`Self::shadowing`] over light from the whole hemisphere about `n`, weighted
-    /// by its cosine: the factor for a Lambertian part whose irradiance comes from a cache (the
-    /// exact one under uniform light); 1 where the shadowing function is off.
+    /// The share of a Lambertian lobe about the perturbed normal `n_p` that light arriving
+    /// evenly over the hemisphere of the unperturbed `n` reaches: (1/π)∫ S(ω) max(0, n_p·ω) dω
+    /// over that hemisphere, S [`Self::shadowing`] (Mitsuba's perturbed BSDFs are 0 for light
+    /// from the other side of `n`). The factor for a Lambertian part whose irradiance, held
+    /// for `n` and turned to `n_p` by its rotational gradient to first order, comes from a
+    /// cache: exact under uniform light. Without the shadowing function (1 + cos β)/2, β the
+    /// tilt; with it, tabulated over cos β. 1 without a tilt.
     #[must_use]
-    pub fn mean_shadowing(&self, n: Vec3, n_p: Vec3) -> f32 {
-        let Some(table) = &self.mean_shadowing else {
-            return 1.0;
+    pub fn lambertian_share(&self, n: Vec3, n_p: Vec3) -> f32 {
+        let cos_b = n.dot(n_p).clamp(0.0, 1.0);
+        let Some(table) = &self.lambertian_share else {
+            return 0.5 * (1.0 + cos_b);
         };
-        let x = terminator_alpha2(n, n_p).sqrt() * (table.len() - 1) as f32;
+        let x = cos_b * (table.len() - 1) as f32;
         let i = (x as usize).min(table.len() - 2);
         let f = x - i as f32;
         table[i] * (1.0 - f) + table[i + 1] * f

@@ -1499,27 +1499,50 @@ fn perturbed_shading_follows_mitsuba() {
         (flipped - Vec3::new(-tilt.x, 0.0, tilt.z)).length() < 1e-5,
         "{flipped}"
     );
-    // The cosine-weighted mean of the shadowing, against a fine midpoint sum of the same
-    // integral: 1 unperturbed, below 1 perturbed, and ≥ the shadowing at any angle's minimum.
+    // The Lambertian share under uniform light, against a midpoint sum over the hemisphere of
+    // n of S(ω) max(0, n_p·ω)/π (θ and φ on a grid, nothing in closed form): 1 untilted,
+    // (1 + cos β)/2 without the shadowing function, below that with it.
     for tilt_deg in [0.0f32, 20.0, 45.0, 70.0] {
         let n_p = Vec3::new(
             tilt_deg.to_radians().sin(),
             0.0,
             tilt_deg.to_radians().cos(),
         );
-        let steps = 20_000;
-        let mut sum = 0.0f64;
-        for i in 0..steps {
-            let mu = (i as f32 + 0.5) / steps as f32;
-            let wi = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-            sum += f64::from(on.shadowing(n, n_p, wi) * mu) * 2.0 / f64::from(steps);
+        let (steps_t, steps_p) = (600, 1200);
+        let (mut sum_on, mut sum_off) = (0.0f64, 0.0f64);
+        for i in 0..steps_t {
+            let theta = (i as f64 + 0.5) / steps_t as f64 * std::f64::consts::FRAC_PI_2;
+            for j in 0..steps_p {
+                let phi = (j as f64 + 0.5) / steps_p as f64 * std::f64::consts::TAU;
+                let w = Vec3::new(
+                    (theta.sin() * phi.cos()) as f32,
+                    (theta.sin() * phi.sin()) as f32,
+                    theta.cos() as f32,
+                );
+                let lobe = f64::from(n_p.dot(w).max(0.0));
+                let area = theta.sin()
+                    * (std::f64::consts::FRAC_PI_2 / steps_t as f64)
+                    * (std::f64::consts::TAU / steps_p as f64);
+                sum_on += f64::from(on.shadowing(n, n_p, w)) * lobe * area;
+                sum_off += lobe * area;
+            }
         }
-        let mean = on.mean_shadowing(n, n_p);
-        assert!(
-            (f64::from(mean) - sum).abs() < 2e-3,
-            "{tilt_deg}°: {mean} against {sum}"
+        let (sum_on, sum_off) = (
+            sum_on / std::f64::consts::PI,
+            sum_off / std::f64::consts::PI,
         );
-        assert_eq!(off.mean_shadowing(n, n_p), 1.0);
+        let (share_on, share_off) = (on.lambertian_share(n, n_p), off.lambertian_share(n, n_p));
+        assert!(
+            (f64::from(share_on) - sum_on).abs() < 2e-3,
+            "{tilt_deg}°: {share_on} against {sum_on}"
+        );
+        assert!(
+            (f64::from(share_off) - sum_off).abs() < 2e-3,
+            "{tilt_deg}°: {share_off} against {sum_off}"
+        );
+        let half = 0.5 * (1.0 + tilt_deg.to_radians().cos());
+        assert!((share_off - half).abs() < 1e-6, "{share_off} {half}");
+        assert!(share_on <= share_off + 1e-6);
     }
     // Seen from +x the same normal faces the viewer and stays.
     let front = Vec3::new(-viewer.x, 0.0, viewer.z);

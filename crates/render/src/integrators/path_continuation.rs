@@ -329,7 +329,7 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
                     if let Some(e) = source.irradiance(scene, sp, depth, sampler.as_dyn(), rays) {
                         // A bump map's shadowing, averaged over the hemisphere: the cache
                         // holds irradiance, not its directions.
-                        l += beta * k * e * (INV_PI * scene.perturbed_mean_shadowing(it));
+                        l += beta * k * e * (INV_PI * scene.perturbed_lambertian_share(it));
                         strategy = BsdfStrategy::Glossy;
                         lambertian_served = true;
                         if source.irradiance_holds_environment(sp) {
