@@ -280,8 +280,14 @@ fn media_cache_integrator(
             contents.header.view_note(&header).is_some(),
             contents.damaged,
         );
-        // A media scene's file holds first-bounce records without radiance alone.
-        surface = contents.records.into_iter().map(|(r, _)| r).collect();
+        // A media scene's file holds first-bounce records without radiance alone (a forced
+        // file of another scene may hold others).
+        surface = contents
+            .records
+            .into_iter()
+            .filter(|(r, c)| r.level == 0 && c.is_none())
+            .map(|(r, _)| r)
+            .collect();
         // A forced file of another scene may name media this one lacks.
         volume = contents
             .volume

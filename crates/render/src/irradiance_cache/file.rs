@@ -634,9 +634,8 @@ impl CacheFile {
         self.append_bytes(&buf)
     }
 
-    /// Appends volumetric records, as [`Self::append`] (the records others appended since are
-    /// returned, the volumetric ones among them left out: a media scene's pre-passes run before
-    /// its pixels, and read the file first).
+    /// Appends volumetric records, as [`Self::append`]; what others appended since is not read
+    /// back (a media scene's pre-passes read the file once, before they start).
     pub fn append_volume(&mut self, records: &[VolumeRecord]) -> Result<(), CacheFileError> {
         let buf: Vec<u8> = records.iter().flat_map(encode_volume).collect();
         self.append_bytes(&buf).map(|_| ())
