@@ -129,7 +129,7 @@ pub struct Shape {
     /// The media on its two sides (indices into [`Scene::media`]).
     pub media: ircache_scene::MediumInterface,
     /// A bump or normal map ([`Scene::perturbed_shadowing`]).
-    pub perturbed_shadowing: bool,
+    pub perturbed: bool,
 }
 
 /// A ray–surface intersection.
@@ -192,9 +192,9 @@ pub struct Scene {
     /// Some shape is a smooth `trans` ([`Shape::straight_trans`]): the light samples of delta
     /// lights pass through it ([`Scene::delta_shadow_transmittance`]).
     pub has_straight_trans: bool,
-    /// Some surface has a bump or normal map with the shadowing function: without one,
-    /// [`Scene::perturbed_shadowing`] answers 1 without looking at the shape.
-    pub has_perturbed_shadowing: bool,
+    /// Some surface has a bump or normal map: without one, [`Scene::perturbed_shadowing`]
+    /// answers 1 without looking at the shape.
+    pub has_perturbed: bool,
     /// Content hash of what light transport depends on (geometry, materials, emitters; not the
     /// camera, not where the files are): a cache file records it.
     pub content_hash: u64,
@@ -364,7 +364,7 @@ impl Scene {
                 masked: materials[i].is_masked(),
                 straight_trans: materials[i].has_straight_transmission(),
                 media: s.media,
-                perturbed_shadowing: materials[i].perturbation().is_some(),
+                perturbed: materials[i].perturbation().is_some(),
             });
         }
         let accel = builder.build()?;
@@ -404,7 +404,7 @@ impl Scene {
             has_hittable_emitters,
             has_see_through: shapes.iter().any(|s| s.thin_sheet || s.masked),
             has_straight_trans: shapes.iter().any(|s| s.straight_trans),
-            has_perturbed_shadowing: shapes.iter().any(|s| s.perturbed_shadowing),
+            has_perturbed: shapes.iter().any(|s| s.perturbed),
             accel,
             shapes,
             materials,
@@ -774,7 +774,7 @@ impl Scene {
     #[inline]
     #[must_use]
     pub fn perturbed_shadowing(&self, it: &Interaction, wi: Vec3) -> f32 {
-        if !self.has_perturbed_shadowing {
+        if !self.has_perturbed {
             return 1.0;
         }
         self.perturbed_shadowing_at(it, wi)
@@ -786,7 +786,7 @@ impl Scene {
     #[cold]
     #[inline(never)]
     fn perturbed_shadowing_at(&self, it: &Interaction, wi: Vec3) -> f32 {
-        let Some(p) = self.shadowing_perturbation(it) else {
+        let Some(p) = self.perturbation_at(it) else {
             return 1.0;
         };
         // Mitsuba's perturbed BSDFs answer 0 where the light and the perturbed frame lie on
@@ -802,19 +802,19 @@ impl Scene {
     #[inline]
     #[must_use]
     pub fn perturbed_lambertian_share(&self, it: &Interaction) -> f32 {
-        self.shadowing_perturbation(it)
+        self.perturbation_at(it)
             .map_or(1.0, |p| p.lambertian_share(it.base_n, it.frame.n))
     }
 
-    /// The bump or normal map at `it` when it has the shadowing function; scenes without one
-    /// answer from a flag, without looking at the shape.
+    /// The bump or normal map at `it`; scenes without one answer from a flag, without looking
+    /// at the shape.
     #[inline]
-    fn shadowing_perturbation(&self, it: &Interaction) -> Option<&crate::bsdf::Perturbation> {
-        if !self.has_perturbed_shadowing {
+    fn perturbation_at(&self, it: &Interaction) -> Option<&crate::bsdf::Perturbation> {
+        if !self.has_perturbed {
             return None;
         }
         let shape = &self.shapes[it.shape as usize];
-        if !shape.perturbed_shadowing {
+        if !shape.perturbed {
             return None;
         }
         self.materials[shape.material].perturbation()

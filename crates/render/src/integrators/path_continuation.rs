@@ -327,8 +327,9 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
                 if let Some(sp) = &sp {
                     sampler.set_dimension(dims::vertex(depth, dims::CACHE));
                     if let Some(e) = source.irradiance(scene, sp, depth, sampler.as_dyn(), rays) {
-                        // A bump map's shadowing, averaged over the hemisphere: the cache
-                        // holds irradiance, not its directions.
+                        // On a bump or normal map, the share of the perturbed lobe that light
+                        // from above the surface reaches: the cache holds irradiance, not its
+                        // directions.
                         l += beta * k * e * (INV_PI * scene.perturbed_lambertian_share(it));
                         strategy = BsdfStrategy::Glossy;
                         lambertian_served = true;
