@@ -397,7 +397,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     };
     let out = render(&scene, &integrator, &settings, &|n| bar.set_position(n))?;
     // What the loaders and the cache changed is said even with --quiet.
-    let cache_notes = out.cache.iter().flat_map(|c| c.stats.notes.iter());
+    let cache_notes = out
+        .cache
+        .iter()
+        .flat_map(|c| c.stats.notes.iter())
+        .chain(out.media_cache.iter().flat_map(|st| st.notes.iter()));
     for note in desc.notes.iter().chain(cache_notes) {
         eprintln!("note: {note}");
     }
@@ -478,18 +482,6 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
         );
         if st.metric_replaced {
             eprintln!("note: {}", ircache_render::media_cache::cache::METRIC_NOTE);
-        }
-        if st.other_view {
-            eprintln!(
-                "note: {}",
-                ircache_render::irradiance_cache::file::OTHER_VIEW_NOTE
-            );
-        }
-        if st.damaged > 0 {
-            eprintln!(
-                "note: the cache file held {} damaged records (skipped)",
-                st.damaged
-            );
         }
     }
     if let Some(st) = &out.volume_records {

@@ -356,7 +356,7 @@ pub fn render(
         }
         _ => None,
     };
-    let media_cache = integrator.media_cache().map(|c| c.stats);
+    let media_cache = integrator.media_cache().map(|c| c.stats.clone());
     if let Some(st) = &media_cache {
         rays.gather += st.gather_rays;
         rays.shadow += st.shadow_rays;

@@ -270,16 +270,13 @@ fn media_cache_integrator(
     // The cache file's records first (surface and volumetric), the pre-passes' new ones
     // appended after them.
     let mut file = None;
-    let (mut surface, mut volume, mut notes) = (Vec::new(), Vec::new(), (false, 0));
+    let (mut surface, mut volume, mut notes) = (Vec::new(), Vec::new(), Vec::new());
     if let Some(path) = &ic.cache_file {
         let header =
             crate::irradiance_cache::prepare::header(scene, ic, settings.width, Default::default());
         let (f, contents) =
             crate::irradiance_cache::file::CacheFile::open(path, &header, ic.force_reuse)?;
-        notes = (
-            contents.header.view_note(&header).is_some(),
-            contents.damaged,
-        );
+        notes = contents.notes(path, &header);
         // A media scene's file holds first-bounce records without radiance alone (a forced
         // file of another scene may hold others).
         surface = contents
@@ -297,7 +294,7 @@ fn media_cache_integrator(
         file = Some(f);
     }
     // No bounce (`max_depth` 2): direct light alone, no records.
-    let cache = (p.bounces > 0).then(|| {
+    let cache = if p.bounces > 0 {
         let mut cache = pool.install(|| {
             crate::media_cache::cache::MediaCache::build(
                 scene,
@@ -305,20 +302,21 @@ fn media_cache_integrator(
                 settings.width,
                 settings.height,
                 settings.seed,
-                std::mem::take(&mut surface),
+                surface,
             )
         });
-        (cache.stats.other_view, cache.stats.damaged) = notes;
-        cache
-    });
-    if let (Some(f), Some(cache)) = (file.as_mut(), &cache) {
-        let new: Vec<_> = cache.records()[cache.stats.loaded..]
-            .iter()
-            .map(|&r| (r, None))
-            .collect();
-        f.append(&new)?;
-    }
-    let cache = cache.map(std::sync::Arc::new);
+        cache.stats.notes = notes;
+        if let Some(f) = file.as_mut() {
+            let new: Vec<_> = cache.records()[cache.stats.loaded..]
+                .iter()
+                .map(|&r| (r, None))
+                .collect();
+            f.append(&new)?;
+        }
+        Some(std::sync::Arc::new(cache))
+    } else {
+        None
+    };
     let mut integrator = volpath::VolPathIntegrator {
         hide_emitters: ic.hide_emitters,
         cache,

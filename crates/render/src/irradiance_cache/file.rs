@@ -117,10 +117,6 @@ impl std::fmt::Write for Fnv {
     }
 }
 
-/// What a user hears when a cache file's records were sized for another view.
-pub const OTHER_VIEW_NOTE: &str = "the cache file's records were made for another view \
-     (camera or film width): their radii keep that view's pixel footprints";
-
 /// What a header holds.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Header {
@@ -236,7 +232,11 @@ impl Header {
     /// A note when the file's records were sized for another view than `other`'s.
     #[must_use]
     pub fn view_note(&self, other: &Header) -> Option<String> {
-        (self.view_hash != other.view_hash).then(|| OTHER_VIEW_NOTE.to_string())
+        (self.view_hash != other.view_hash).then(|| {
+            "the cache file's records were made for another view (camera or film width): \
+             their radii keep that view's pixel footprints"
+                .to_string()
+        })
     }
 }
 
@@ -414,6 +414,23 @@ pub struct Contents {
     pub damaged: u64,
     /// Bytes after the last intact record (a torn tail or damage), ignored.
     pub torn_bytes: u64,
+}
+
+impl Contents {
+    /// What a user should hear of the file at `path`, opened for `header`: records sized for
+    /// another view ([`Header::view_note`]), damaged records skipped.
+    #[must_use]
+    pub fn notes(&self, path: &Path, header: &Header) -> Vec<String> {
+        let mut notes: Vec<String> = self.header.view_note(header).into_iter().collect();
+        if self.damaged > 0 {
+            notes.push(format!(
+                "{}: {} damaged records skipped",
+                path.display(),
+                self.damaged
+            ));
+        }
+        notes
+    }
 }
 
 /// Reads a cache file.

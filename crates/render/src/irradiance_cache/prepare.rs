@@ -41,14 +41,7 @@ pub fn prepare_cache(
         None => None,
         Some(path) => {
             let (f, contents) = CacheFile::open(path, &header, ic.force_reuse)?;
-            notes.extend(contents.header.view_note(&header));
-            if contents.damaged > 0 {
-                notes.push(format!(
-                    "{}: {} damaged records skipped",
-                    path.display(),
-                    contents.damaged
-                ));
-            }
+            notes.extend(contents.notes(path, &header));
             for stored in contents.records {
                 if cache.insert_stored(stored) {
                     loaded += 1;

@@ -36,17 +36,15 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 /// What building the cache did.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct MediaCacheStats {
     /// Records made.
     pub records: usize,
     /// Records read from a cache file before the pre-pass.
     pub loaded: usize,
-    /// The cache file's records were made for another view (their radii keep its pixel
-    /// footprints: [`crate::irradiance_cache::file::Header::view_note`]).
-    pub other_view: bool,
-    /// Damaged slots the cache file held (skipped).
-    pub damaged: u64,
+    /// What a user should hear of the cache file
+    /// ([`crate::irradiance_cache::file::Contents::notes`]).
+    pub notes: Vec<String>,
     /// Gather rays (to the first opaque hit, through null boundaries).
     pub gather_rays: u64,
     /// Shadow rays of the gathers (surface hits' direct light, single scattering).
