@@ -15,7 +15,7 @@
 mod common;
 use common::{emitting_shape, light_scene};
 use ircache_math::{Frame, Mat4, Rgb, Vec2, Vec3};
-use ircache_render::lights::LightSet;
+use ircache_render::lights::{LightSet, Receiver};
 use ircache_render::testing::ChiSquareTest;
 use ircache_scene::*;
 use std::path::PathBuf;
@@ -127,10 +127,11 @@ impl View {
     }
 }
 
-/// Runs the χ² test of the set's sampling from `p` against `pdf(world dir)`, in `view`.
+/// Runs the χ² test of the set's sampling at `p` (a point or a [`Receiver`]) against
+/// `pdf(world dir)`, in `view`.
 fn run(
     lights: &LightSet,
-    p: Vec3,
+    p: impl Into<Receiver> + Copy,
     view: &View,
     test: ChiSquareTest,
     pdf: impl Fn(Vec3) -> f32,
@@ -432,17 +433,31 @@ fn env_rotation() -> Mat4 {
 }
 
 /// `delta`: the index of a delta light among the emitters, whose selections carry no density.
+/// From a point, and from a reflecting surface there (the constant emitter's samples then
+/// cosine-weighted over its hemisphere).
 fn env_case(emitters: Vec<EmitterDesc>, label: &str, delta: Option<u32>) {
+    let p = Vec3::new(0.3, 0.1, -0.2);
+    env_case_at(emitters.clone(), Receiver::point(p), label, delta);
+    let n = Vec3::new(0.3, -0.8, 0.5).normalize();
+    env_case_at(
+        emitters,
+        Receiver::reflecting(p, n),
+        &format!("{label}, at a reflecting surface"),
+        delta,
+    );
+}
+
+fn env_case_at(emitters: Vec<EmitterDesc>, at: Receiver, label: &str, delta: Option<u32>) {
     let d = light_scene(vec![], emitters);
     let lights = LightSet::new(&d, Vec3::ZERO, 1.0);
     assert!(lights.has_environment());
-    let p = Vec3::new(0.3, 0.1, -0.2);
+    let p = at.p;
     let r = run(
         &lights,
-        p,
+        at,
         &View::new(Vec3::Z, 1.0),
         ChiSquareTest::sphere().with_bins(36, 48),
-        |w| lights.pdf_environment(p, w),
+        |w| lights.pdf_environment(at, w),
     );
     r.assert_ok(ALPHA, TESTS, label);
     let delta_share = delta.map_or(0.0, |i| f64::from(lights.selection_probability(p, i)));

@@ -7,7 +7,7 @@ mod common;
 use common::{emitting_shape, light_scene};
 use ircache_image::Image;
 use ircache_math::{Frame, Mat4, Rgb, Rng, Vec2, Vec3, PI};
-use ircache_render::lights::{LightSample, LightSet};
+use ircache_render::lights::{LightSample, LightSet, Receiver};
 use ircache_scene::*;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -629,6 +629,48 @@ fn envmap_uses_mitsubas_lat_long_mapping() {
         assert_eq!(ls.radiance, lights.environment_radiance(ls.wi));
         assert_eq!(ls.pdf, lights.pdf_environment(Vec3::ZERO, ls.wi));
     }
+}
+
+/// At a surface that only reflects, a constant sky's samples are cosine-weighted over the
+/// hemisphere it faces, so each one alone estimates its irradiance E = πL exactly: a Lambertian
+/// surface under an open sky has no noise from them. From a point (uniform on the sphere, as
+/// Mitsuba samples it) the same estimates spread from 0 to 4πL.
+#[test]
+fn constant_sky_samples_at_a_reflecting_surface_are_exact() {
+    let radiance = 0.8;
+    let lights = LightSet::new(
+        &light_scene(
+            vec![],
+            vec![EmitterDesc::Constant {
+                radiance: Rgb::splat(radiance),
+            }],
+        ),
+        Vec3::ZERO,
+        1.0,
+    );
+    let p = Vec3::new(0.2, -0.1, 0.4);
+    let n = Vec3::new(-0.6, 0.3, 0.7).normalize();
+    let estimate = |ls: &LightSample| ls.radiance.g * n.dot(ls.wi).max(0.0) / ls.pdf;
+    let mut rng = Rng::new(5, 1);
+    let (mut low, mut high) = (f32::INFINITY, 0.0f32);
+    for _ in 0..10_000 {
+        let (u_sel, u) = (rng.next_f32(), rng.next_2d());
+        let ls = lights
+            .sample(Receiver::reflecting(p, n), u_sel, u)
+            .expect("a sample of the sky");
+        let e = estimate(&ls);
+        assert!(
+            (e - PI * radiance).abs() <= 1e-4 * PI * radiance,
+            "{e} against πL = {}",
+            PI * radiance
+        );
+        assert_eq!(ls.pdf, lights.pdf_environment(Receiver::reflecting(p, n), ls.wi));
+        if let Some(ls) = lights.sample(p, u_sel, u) {
+            low = low.min(estimate(&ls));
+            high = high.max(estimate(&ls));
+        }
+    }
+    assert!(low == 0.0 && high > 3.9 * PI * radiance, "from a point: {low} to {high}");
 }
 
 #[test]

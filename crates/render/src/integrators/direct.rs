@@ -5,7 +5,8 @@
 //! [`light_samples_suffice`]) they stand alone, as in `path`.
 
 use super::light_sampling::{
-    light_samples_suffice, sample_lights, BsdfStrategy, EnvironmentServed, Selection, Shadows,
+    light_samples_suffice, receiver, sample_lights, BsdfStrategy, EnvironmentServed, Selection,
+    Shadows,
 };
 use super::{mis_weight, RayCounts};
 use crate::bsdf::Bsdf;
@@ -99,7 +100,7 @@ pub fn estimate_direct(
         Shadows::Traced,
     );
     let (fe, fb) = (ne as f32, nb as f32);
-    let p_ref = it.p;
+    let at = receiver(it, bsdf, wo_local);
     for i in 0..nb {
         sampler.set_dimension(if i == 0 {
             dims::vertex(0, dims::BSDF)
@@ -127,7 +128,7 @@ pub fn estimate_direct(
                     let w = if bs.delta {
                         1.0 / fb
                     } else {
-                        mis_weight(fb * bs.pdf, fe * scene.lights.pdf_environment(p_ref, wi)) / fb
+                        mis_weight(fb * bs.pdf, fe * scene.lights.pdf_environment(at, wi)) / fb
                     };
                     l += bs.weight * le * w;
                 }
@@ -151,7 +152,7 @@ pub fn estimate_direct(
                         let pdf_l = scene.lights.pdf_area(
                             light,
                             hit_it.prim,
-                            p_ref,
+                            at.p,
                             hit_it.p,
                             hit_it.frame.n,
                         );

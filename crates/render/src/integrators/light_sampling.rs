@@ -6,7 +6,7 @@
 
 use super::{mis_weight, RayCounts};
 use crate::bsdf::{Bsdf, BsdfSample};
-use crate::lights::SharedSetUp;
+use crate::lights::{Receiver, SharedSetUp};
 use crate::sampler::{dims, Sampler};
 use crate::scene::{Interaction, Scene};
 use ircache_math::{Ray, Rgb, Vec2, Vec3};
@@ -66,6 +66,21 @@ impl DeferredShadows {
 #[must_use]
 pub fn light_samples_suffice(scene: &Scene, bsdf: &Bsdf, last: bool) -> bool {
     last && bsdf.is_diffuse_only() && scene.lights.samples_diffuse_well()
+}
+
+/// The vertex `it` as its light samples see it, viewed from `wo` (local frame): a surface that
+/// reflects only, towards the side of `wo`, unless its BSDF transmits (then a point: light
+/// from either side counts). An environment's samples keep to the hemisphere a reflecting
+/// receiver faces ([`Receiver`]); a BSDF sample leaving the vertex must be weighed against the
+/// same receiver.
+#[inline]
+#[must_use]
+pub fn receiver(it: &Interaction, bsdf: &Bsdf, wo: Vec3) -> Receiver {
+    if bsdf.transmits() {
+        Receiver::point(it.p)
+    } else {
+        Receiver::reflecting(it.p, it.frame.n * 1.0f32.copysign(wo.z))
+    }
 }
 
 /// Where a light sample's shadow ray is traced.
@@ -192,6 +207,7 @@ pub fn sample_lights<S: Sampler + ?Sized>(
     let side = if ne > 1 { (ne as f32).sqrt() as u32 } else { 1 };
     let grid = ne > 1 && side * side == ne;
     let mut shared = SharedSetUp::default();
+    let at = receiver(it, bsdf, wo);
     for i in 0..ne {
         sampler.set_dimension(if i == 0 {
             dims::vertex(depth, dims::LIGHT)
@@ -216,10 +232,10 @@ pub fn sample_lights<S: Sampler + ?Sized>(
             let ls = match selection {
                 // Several samples share a rectangle's set-up; one needs no memo.
                 Selection::Chosen if ne > 1 => {
-                    scene.lights.sample_sharing(it.p, u_sel, u, &mut shared)
+                    scene.lights.sample_sharing(at, u_sel, u, &mut shared)
                 }
-                Selection::Chosen => scene.lights.sample(it.p, u_sel, u),
-                Selection::EachLight => scene.lights.sample_light(light, 1.0, it.p, u),
+                Selection::Chosen => scene.lights.sample(at, u_sel, u),
+                Selection::EachLight => scene.lights.sample_light(light, 1.0, at, u),
             };
             let Some(ls) = ls else {
                 continue;

@@ -158,7 +158,7 @@ pub(crate) fn li(
                     tr *= weight;
                     collision_beta *= weight;
                     arrival = Arrival::Bsdf {
-                        p: it.p,
+                        from: it.p.into(),
                         pdf,
                         delta: true,
                         light_samples: 0,
@@ -376,7 +376,7 @@ pub(crate) fn indirect_arrival(p: Vec3, pdf: f32, sample_emitters: bool) -> Arri
         Arrival::Gather
     } else {
         Arrival::Bsdf {
-            p,
+            from: p.into(),
             pdf,
             delta: false,
             light_samples: 0,

@@ -12,9 +12,10 @@
 //! only. Where it declines, the whole BSDF is sampled, as in path tracing.
 
 use super::light_sampling::{
-    light_samples_suffice, sample_lights, BsdfStrategy, DeferredShadows, EnvironmentServed,
-    Selection, Shadows,
+    light_samples_suffice, receiver, sample_lights, BsdfStrategy, DeferredShadows,
+    EnvironmentServed, Selection, Shadows,
 };
+use crate::lights::Receiver;
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::environment::HeldEnvironment;
 use crate::irradiance_cache::gather::ShadingPoint;
@@ -123,11 +124,11 @@ pub enum Arrival {
     },
     /// A cache's gather ray: emission is left out (the direct term samples the lights).
     Gather,
-    /// A BSDF sample from `p` with density `pdf` (`delta` for a delta lobe), made beside
+    /// A BSDF sample from `from` with density `pdf` (`delta` for a delta lobe), made beside
     /// `light_samples` light samples: emission is weighted by MIS.
     Bsdf {
-        /// The vertex the sample left.
-        p: Vec3,
+        /// The vertex the sample left, as its light samples saw it.
+        from: Receiver,
         /// Its density.
         pdf: f32,
         /// From a delta lobe.
@@ -148,17 +149,17 @@ impl Arrival {
     /// hidden), 0 for gather rays, 1 after a delta lobe, else the power heuristic against the
     /// light samples taken at the vertex left, `light_pdf(that vertex)` being their density.
     #[inline]
-    pub(crate) fn emission_weight(&self, light_pdf: impl FnOnce(Vec3) -> f32) -> f32 {
+    pub(crate) fn emission_weight(&self, light_pdf: impl FnOnce(Receiver) -> f32) -> f32 {
         match *self {
             Arrival::Camera { hide_emitters } => f32::from(u8::from(!hide_emitters)),
             Arrival::Gather => 0.0,
             Arrival::Bsdf { delta: true, .. } => 1.0,
             Arrival::Bsdf {
-                p,
+                from,
                 pdf,
                 light_samples,
                 ..
-            } => mis_weight(pdf, light_samples as f32 * light_pdf(p)),
+            } => mis_weight(pdf, light_samples as f32 * light_pdf(from)),
         }
     }
 }
@@ -270,8 +271,8 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
                 .lights
                 .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
             if !le.is_black() {
-                let w = arrival.emission_weight(|p| {
-                    scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n)
+                let w = arrival.emission_weight(|from| {
+                    scene.lights.pdf_area(light, it.prim, from.p, it.p, it.frame.n)
                 });
                 if w > 0.0 {
                     l += beta * le * w;
@@ -405,7 +406,7 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
         eta *= bs.eta;
         caustic_chain &= bs.delta;
         arrival = Arrival::Bsdf {
-            p: it.p,
+            from: receiver(it, &bsdf, wo_local),
             pdf: bs.pdf,
             delta: bs.delta,
             light_samples: ne,
@@ -466,7 +467,7 @@ pub(crate) fn cross_see_through<S: Sampler + ?Sized>(
     }
     *beta *= passage.weight;
     *arrival = Arrival::Bsdf {
-        p: it.p,
+        from: it.p.into(),
         pdf: passage.prob,
         delta: true,
         light_samples: 0,

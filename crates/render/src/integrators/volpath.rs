@@ -198,7 +198,7 @@ impl VolPathIntegrator {
                         sampler.skip_1d();
                         let (w, pdf) = med.phase.sample(ray.d, sampler.next_2d());
                         arrival = Arrival::Bsdf {
-                            p,
+                            from: p.into(),
                             pdf,
                             delta: false,
                             light_samples: u32::from(sample_emitters),
@@ -264,8 +264,8 @@ impl VolPathIntegrator {
                     .lights
                     .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
                 if !le.is_black() {
-                    let w = arrival.emission_weight(|p| {
-                        scene.lights.pdf_area(light, it.prim, p, it.p, it.frame.n)
+                    let w = arrival.emission_weight(|from| {
+                        scene.lights.pdf_area(light, it.prim, from.p, it.p, it.frame.n)
                     });
                     l += beta * le * w;
                 }
@@ -341,7 +341,7 @@ impl VolPathIntegrator {
             beta *= bs.weight;
             eta *= bs.eta;
             arrival = Arrival::Bsdf {
-                p: it.p,
+                from: it.p.into(),
                 pdf: bs.pdf,
                 delta: bs.delta,
                 light_samples,

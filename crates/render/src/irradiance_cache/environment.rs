@@ -53,9 +53,8 @@ pub const MAX_RELATIVE_VARIANCE: f64 = 4.0;
 /// Radiance's ambient rays find the sky through `glass`. Measured (BENCHMARKS.md, blurred
 /// relMSE_trim of `all` against `glossy`, two seeds): the interior of `scenes/radiance-office`
 /// (visibility 0.03) 0.47×, `sunlit-window` (0.41, its glazed roof) 0.25×; `bumps` (0.72) 1.43×,
-/// `sky-glossy` (0.83) 1.2×. `bumps` reads 0.49× since its bumped surfaces' cached share was
-/// corrected (BENCHMARKS.md, sixteenth session): between 0.72 and 0.83 two scenes cannot place
-/// the threshold, so it stays.
+/// `sky-glossy` (0.83) 1.2×. Since a `constant` sky's samples are cosine-weighted at reflecting
+/// surfaces (`lights::Receiver`; seventeenth session): `sunlit-window` 0.71×, `bumps` 3.1×.
 pub const MIN_VISIBILITY_FOR_LIGHT_SAMPLES: f64 = 0.5;
 
 /// Camera rays and light samples [`environment_visibility`] spends.

@@ -1,8 +1,13 @@
 //! Environment lights: Mitsuba 3's `constant` and `envmap` emitters (infinitely distant).
 //!
 //! # `constant`
-//! The same radiance from every direction, sampled uniformly on the sphere (density `1/(4π)`),
-//! as Mitsuba's `constant` emitter does.
+//! The same radiance from every direction. From a point without a surface (in a medium, or for
+//! photons) it is sampled uniformly on the sphere (density `1/(4π)`), as Mitsuba's `constant`
+//! emitter does. For a surface that only reflects ([`super::Receiver`]) half the sphere lies
+//! behind it and the rest arrives weighted by its cosine, so there the samples are
+//! cosine-weighted over the hemisphere facing the viewer (density `cos θ/π`): a Lambertian
+//! surface under an open sky then gets its exact irradiance from each sample, where uniform
+//! samples of the sphere leave half their samples black and the rest spread by `4 cos θ`.
 //!
 //! # `envmap`: Mitsuba 3's latitude–longitude mapping (src/emitters/envmap.cpp, 3.6+ with the
 //! half-texel shift; the references are rendered with Mitsuba 3.9.1)
@@ -37,10 +42,12 @@
 //! corner luminances are all zero only when its bilinear radiance is zero). This differs from
 //! Mitsuba's bilinear `Hierarchical2D` warp only in variance, not in the rendered expectation.
 
-use super::is_positive_finite;
+use super::{is_positive_finite, Receiver};
 use ircache_image::Image;
-use ircache_math::sampling::{square_to_uniform_sphere, Distribution1D, UNIFORM_SPHERE_PDF};
-use ircache_math::{Mat3, Mat4, Rgb, Vec2, Vec3, PI};
+use ircache_math::sampling::{
+    square_to_cosine_hemisphere, square_to_uniform_sphere, Distribution1D, UNIFORM_SPHERE_PDF,
+};
+use ircache_math::{Frame, Mat3, Mat4, Rgb, Vec2, Vec3, INV_PI, PI};
 
 /// Mitsuba's `constant` emitter.
 #[derive(Clone, Copy, Debug)]
@@ -62,6 +69,27 @@ impl ConstantLight {
     #[must_use]
     pub fn pdf(&self) -> f32 {
         UNIFORM_SPHERE_PDF
+    }
+
+    /// A direction for the light arriving at `receiver`: cosine-weighted over the hemisphere of
+    /// its normal where it has one, else uniform on the sphere.
+    #[inline]
+    #[must_use]
+    pub fn sample_at(&self, receiver: &Receiver, u: Vec2) -> Vec3 {
+        match receiver.normal {
+            Some(n) => Frame::from_z(n).from_local(square_to_cosine_hemisphere(u)),
+            None => self.sample(u),
+        }
+    }
+
+    /// Solid-angle density with which [`ConstantLight::sample_at`] draws `dir` at `receiver`.
+    #[inline]
+    #[must_use]
+    pub fn pdf_at(&self, receiver: &Receiver, dir: Vec3) -> f32 {
+        match receiver.normal {
+            Some(n) => n.dot(dir).max(0.0) * INV_PI,
+            None => UNIFORM_SPHERE_PDF,
+        }
     }
 }
 

@@ -325,6 +325,42 @@ impl EmittedRadiance {
     }
 }
 
+/// The point whose incident light the samples estimate: a point in space (in a medium, a
+/// photon's), or a surface that only reflects, with its unit normal on the viewer's side. A
+/// `constant` environment's samples then keep to that hemisphere, cosine-weighted (see
+/// [`environment`]); the density of a direction ([`LightSet::pdf_environment`]) depends on the
+/// receiver as the samples do, so MIS weights agree on both sides.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Receiver {
+    /// Position.
+    pub p: Vec3,
+    /// Unit normal on the side light is reflected to, for a surface that transmits nothing.
+    pub normal: Option<Vec3>,
+}
+
+impl Receiver {
+    /// A point without a surface.
+    #[inline]
+    #[must_use]
+    pub fn point(p: Vec3) -> Receiver {
+        Receiver { p, normal: None }
+    }
+
+    /// A surface at `p` that reflects only to the side of the unit normal `n`.
+    #[inline]
+    #[must_use]
+    pub fn reflecting(p: Vec3, n: Vec3) -> Receiver {
+        Receiver { p, normal: Some(n) }
+    }
+}
+
+impl From<Vec3> for Receiver {
+    #[inline]
+    fn from(p: Vec3) -> Receiver {
+        Receiver::point(p)
+    }
+}
+
 /// What the light samples from one point share ([`LightSet::sample_sharing`]): how it sees the
 /// rectangle light last sampled from it. Made afresh for each point.
 #[derive(Clone, Copy, Debug, Default)]
@@ -487,13 +523,13 @@ impl LightSet {
         (self.scene_center, self.scene_radius)
     }
 
-    /// Next-event estimation from the reference point `p`: selects a light uniformly with
-    /// `u_select` and samples it with `u`. `None` when the sample cannot contribute (see the module
-    /// documentation) or the set is empty.
+    /// Next-event estimation at the receiver `at` (a point, or a [`Receiver`]): selects a light
+    /// with `u_select` and samples it with `u`. `None` when the sample cannot contribute (see
+    /// the module documentation) or the set is empty.
     #[inline]
     #[must_use]
-    pub fn sample(&self, p: Vec3, u_select: f32, u: Vec2) -> Option<LightSample> {
-        self.sample_sharing(p, u_select, u, &mut SharedSetUp::default())
+    pub fn sample(&self, at: impl Into<Receiver>, u_select: f32, u: Vec2) -> Option<LightSample> {
+        self.sample_sharing(at, u_select, u, &mut SharedSetUp::default())
     }
 
     /// [`Self::sample`] for one of several samples from the same `p`, which share `shared`: a
@@ -502,7 +538,7 @@ impl LightSet {
     #[must_use]
     pub fn sample_sharing(
         &self,
-        p: Vec3,
+        at: impl Into<Receiver>,
         u_select: f32,
         u: Vec2,
         shared: &mut SharedSetUp,
@@ -510,8 +546,9 @@ impl LightSet {
         if self.lights.is_empty() {
             return None;
         }
-        let (idx, sel) = self.select(p, u_select);
-        self.sample_chosen(idx, sel, p, u, true, shared)
+        let at = at.into();
+        let (idx, sel) = self.select(at.p, u_select);
+        self.sample_chosen(idx, sel, at, u, true, shared)
     }
 
     /// Samples light `idx` alone with `u`, its densities scaled by `sel` (1 where every light is
@@ -519,8 +556,14 @@ impl LightSet {
     /// not the whole environment's.
     #[inline]
     #[must_use]
-    pub fn sample_light(&self, idx: usize, sel: f32, p: Vec3, u: Vec2) -> Option<LightSample> {
-        self.sample_chosen(idx, sel, p, u, false, &mut SharedSetUp::default())
+    pub fn sample_light(
+        &self,
+        idx: usize,
+        sel: f32,
+        at: impl Into<Receiver>,
+        u: Vec2,
+    ) -> Option<LightSample> {
+        self.sample_chosen(idx, sel, at.into(), u, false, &mut SharedSetUp::default())
     }
 
     /// Samples light `idx`, chosen with probability `sel`; with `whole_environment`, an
@@ -531,12 +574,13 @@ impl LightSet {
         &self,
         idx: usize,
         sel: f32,
-        p: Vec3,
+        at: Receiver,
         u: Vec2,
         whole_environment: bool,
         shared: &mut SharedSetUp,
     ) -> Option<LightSample> {
         let light = idx as u32;
+        let p = at.p;
         let own_environment = |wi: Vec3, pdf: f32, radiance: Rgb| {
             (is_positive_finite(pdf * sel) && !radiance.is_black()).then_some(LightSample {
                 wi,
@@ -586,12 +630,15 @@ impl LightSet {
                 (!l.irradiance.is_black()).then(|| delta((l.wi, f32::INFINITY, l.irradiance)))
             }
             Light::Constant(c) if whole_environment => {
-                self.environment_sample(p, c.sample(u), light)
+                self.environment_sample(at, c.sample_at(&at, u), light)
             }
             Light::Envmap(e) if whole_environment => {
-                self.environment_sample(p, e.sample(u)?, light)
+                self.environment_sample(at, e.sample(u)?, light)
             }
-            Light::Constant(c) => own_environment(c.sample(u), c.pdf(), c.radiance),
+            Light::Constant(c) => {
+                let wi = c.sample_at(&at, u);
+                own_environment(wi, c.pdf_at(&at, wi), c.radiance)
+            }
             Light::Envmap(e) => {
                 let wi = e.sample(u)?;
                 own_environment(wi, e.pdf(wi), e.eval(wi))
@@ -800,8 +847,8 @@ impl LightSet {
 
     /// A sample of the environment along `wi` with the total radiance and mixture density.
     #[inline]
-    fn environment_sample(&self, p: Vec3, wi: Vec3, light: u32) -> Option<LightSample> {
-        let pdf = self.pdf_environment(p, wi);
+    fn environment_sample(&self, at: Receiver, wi: Vec3, light: u32) -> Option<LightSample> {
+        let pdf = self.pdf_environment(at, wi);
         let radiance = self.environment_radiance(wi);
         if !is_positive_finite(pdf) || radiance.is_black() {
             return None;
@@ -879,19 +926,20 @@ impl LightSet {
         l
     }
 
-    /// Solid-angle density (including selection) with which [`LightSet::sample`] at `p` produces
-    /// the environment direction `dir`: `Σ_env P(env | p) p_env(dir)`.
+    /// Solid-angle density (including selection) with which [`LightSet::sample`] at the
+    /// receiver `at` produces the environment direction `dir`: `Σ_env P(env | p) p_env(dir)`.
     #[inline]
     #[must_use]
-    pub fn pdf_environment(&self, p: Vec3, dir: Vec3) -> f32 {
+    pub fn pdf_environment(&self, at: impl Into<Receiver>, dir: Vec3) -> f32 {
+        let at = at.into();
         let mut pdf = 0.0;
         for &i in &self.env_lights {
             let own = match &self.lights[i as usize] {
-                Light::Constant(c) => c.pdf(),
+                Light::Constant(c) => c.pdf_at(&at, dir),
                 Light::Envmap(e) => e.pdf(dir),
                 _ => 0.0,
             };
-            pdf += own * self.selection_probability(p, i);
+            pdf += own * self.selection_probability(at.p, i);
         }
         pdf
     }

@@ -466,7 +466,7 @@ impl<'a> SceneMedium<'a> {
                 // Light samples cannot take what a delta lobe reaches: it counts in full.
                 if bs.delta {
                     arrival = Arrival::Bsdf {
-                        p: it.p,
+                        from: it.p.into(),
                         pdf: bs.pdf,
                         delta: true,
                         light_samples: 0,
