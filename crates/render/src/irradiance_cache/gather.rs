@@ -1144,11 +1144,12 @@ impl<'a> SceneRadiance<'a> {
     /// A gather ray crosses window panes and masks' open parts as paths do (through with the
     /// pane's transmittance, mirrored with its reflectance, chosen at random by their shares),
     /// so that the sky beyond a window is in records that hold the environment, as Radiance's
-    /// ambient rays find it through `glass`, and light a pane mirrors counts at the record's own
-    /// bounce (the path from the pane counted the mirroring as one more, and lost it at the
-    /// last). What it then finds is reported at its true distance while it went straight, at
-    /// the first pane's where it was mirrored; if it escapes, as escaped with the throughput of
-    /// the crossings.
+    /// ambient rays find it through `glass`. What it finds straight through is reported at its
+    /// true distance; if it escapes, as escaped with the throughput of the crossings. A pane
+    /// that mirrors it is a vertex of the path, one bounce deeper, as `path` counts it; the path
+    /// goes on from there and the emitters and sky it finds count in full, as after any delta
+    /// lobe (light samples cross panes only straight, so nothing else finds them; where a
+    /// caustic map serves, it holds them). It is reported at the first pane's distance.
     #[allow(clippy::too_many_arguments)]
     #[inline(never)]
     fn through_see_through(
@@ -1163,29 +1164,57 @@ impl<'a> SceneRadiance<'a> {
         rng: &mut Rng,
     ) -> Incident {
         let first = (hit.t, hit.ng);
-        let (mut tau, mut straight, mut travelled) = (Rgb::ONE, true, 0.0f32);
+        let (mut tau, mut travelled) = (Rgb::ONE, 0.0f32);
         for _ in 0..crate::scene::MAX_SHEET_CROSSINGS {
             let shape = &self.scene.shapes[hit.shape as usize];
             let next = if shape.masked || shape.thin_sheet {
-                self.scene
-                    .see_through(&hit, -ray.d, rng.next_f32())
-                    .map(|p| (p.d, p.weight))
+                self.scene.see_through(&hit, -ray.d, rng.next_f32())
             } else {
                 None
             };
-            let Some((d, w)) = next else {
+            if let Some(passage) = next.filter(|p| p.reflected) {
+                st.counts.gather_rays += 1;
+                // The pane is the vertex at depth level + 1; what the mirrored path finds is at
+                // level + 2, within the depth as the path tracer's rule has it.
+                let depth = level + 2;
+                let radiance = if depth < cache.params.max_depth() {
+                    let arrival = if cache.caustics_served() {
+                        Arrival::Gather
+                    } else {
+                        Arrival::Bsdf {
+                            from: hit.p.into(),
+                            pdf: passage.prob,
+                            delta: true,
+                            light_samples: 0,
+                        }
+                    };
+                    let mirrored = self.scene.spawn_ray(&hit, passage.d);
+                    let start = PathStart {
+                        ray: mirrored,
+                        depth,
+                        beta: tau * passage.weight,
+                        arrival,
+                    };
+                    self.trace_from(cache, seed, st, start, None, level, key, rng)
+                } else {
+                    Rgb::ZERO
+                };
+                return Incident {
+                    radiance,
+                    distance: first.0,
+                    normal: first.1,
+                    hit: None,
+                    escaped: None,
+                };
+            }
+            let Some((d, w)) = next.map(|p| (p.d, p.weight)) else {
                 let mut inc = self.incident_at(cache, seed, st, &ray, hit, level, key, rng);
                 inc.radiance *= tau;
-                if straight {
-                    inc.distance += travelled;
-                } else {
-                    (inc.distance, inc.normal) = first;
-                }
+                inc.distance += travelled;
                 return inc;
             };
             st.counts.gather_rays += 1;
             tau *= w;
-            straight &= d == ray.d;
             travelled += hit.t;
             ray = self.scene.spawn_ray(&hit, d);
             match self.scene.intersect(&ray) {
@@ -1250,7 +1279,29 @@ impl<'a> SceneRadiance<'a> {
         key: u64,
         rng: &mut Rng,
     ) -> Rgb {
-        let ray = *ray;
+        let start = PathStart {
+            ray: *ray,
+            depth: level + 1,
+            beta: Rgb::ONE,
+            arrival: Arrival::Gather,
+        };
+        self.trace_from(cache, seed, st, start, Some(Some(*hit)), level, key, rng)
+    }
+
+    /// The light a gather's path from `start` brings (its first hit `first`, as
+    /// [`trace_path`] takes it), for a record at bounce `level`.
+    #[allow(clippy::too_many_arguments)]
+    fn trace_from(
+        &self,
+        cache: &IrradianceCache,
+        seed: u64,
+        st: &mut WorkState,
+        start: PathStart,
+        first: Option<Option<Interaction>>,
+        level: u32,
+        key: u64,
+        rng: &mut Rng,
+    ) -> Rgb {
         let params = &cache.params;
         let settings = PathSettings {
             max_depth: params.max_depth(),
@@ -1258,12 +1309,6 @@ impl<'a> SceneRadiance<'a> {
             // and each path's throughput is already a reflectance.
             rr_depth: level + 2,
             first_light_samples: 1,
-        };
-        let start = PathStart {
-            ray,
-            depth: level + 1,
-            beta: Rgb::ONE,
-            arrival: Arrival::Gather,
         };
         let mut rays = RayCounts::default();
         let gatherer = Gatherer::new(self, cache, seed);
@@ -1278,7 +1323,7 @@ impl<'a> SceneRadiance<'a> {
             trace_path(
                 self.scene,
                 start,
-                Some(Some(*hit)),
+                first,
                 &mut source,
                 &settings,
                 rng,
