@@ -187,7 +187,8 @@ fn records_hold_a_sky_seen_through_a_pane() {
     use ircache_render::irradiance_cache::IcParams;
     // A floor under a pane and a constant sky L: the gathers cross the pane, so the records
     // hold the sky through it and the pane's reflection of the floor. Over infinite planes, at
-    // one bounce, E = π L T̄ (1 + ρ R̄), T̄ and R̄ = 1 − T̄ the pane's cosine-weighted means.
+    // one bounce, E = π L T̄; at two, E = π L T̄ (1 + ρ R̄), T̄ and R̄ = 1 − T̄ the pane's
+    // cosine-weighted means: the pane that mirrors the floor is a bounce, as `path` counts it.
     let sky = 0.8f32;
     let desc = scene(
         sensor(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, 40.0, 4, 1),
@@ -209,17 +210,25 @@ fn records_hold_a_sky_seen_through_a_pane() {
             sheet_transmittance(mu) * 2.0 * mu / n as f64
         })
         .sum();
-    let expected =
-        std::f64::consts::PI * f64::from(sky) * t_mean * (1.0 + f64::from(RHO) * (1.0 - t_mean));
+    let direct = std::f64::consts::PI * f64::from(sky) * t_mean;
     let queries = [
         (Vec3::new(0.0, 1e-3, 0.0), Vec3::Y),
         (Vec3::new(3.0, 1e-3, -2.0), Vec3::Y),
     ];
-    // Held (all), or left to light samples through the pane (off): the same light, and the
-    // floor light the pane mirrors back counts at the records' bounce either way.
-    for mode in [CachedEnvironment::All, CachedEnvironment::Off] {
+    // Held (all), or left to light samples through the pane (off): the same light.
+    for (mode, bounces) in [
+        (CachedEnvironment::All, 1),
+        (CachedEnvironment::Off, 1),
+        (CachedEnvironment::All, 2),
+        (CachedEnvironment::Off, 2),
+    ] {
+        let expected = if bounces == 1 {
+            direct
+        } else {
+            direct * (1.0 + f64::from(RHO) * (1.0 - t_mean))
+        };
         let params = IcParams {
-            bounces: 1,
+            bounces,
             cached_environment: mode,
             photons: Some(0),
             ..IcParams::default()
@@ -234,7 +243,52 @@ fn records_hold_a_sky_seen_through_a_pane() {
             let got = f64::from((r.direct + r.indirect).g);
             assert!(
                 (got / expected - 1.0).abs() < 0.02,
-                "{mode:?}: {got} against {expected}"
+                "{mode:?}, {bounces} bounces: {got} against {expected}"
+            );
+        }
+    }
+}
+
+/// A pane over open ground under a constant sky L: every direction from a point below it brings
+/// L, straight from the sky below the horizon, through the pane (T) or mirrored by it (R' =
+/// 1 − T) from the sky below, so E = π L whatever the receiver's tilt. The mirrored sky is
+/// found by the gathers alone (light samples cross a pane only straight): where records leave
+/// the sky to light samples (`off`) it was lost, E = 0.84 π L for a vertical receiver.
+#[test]
+fn records_keep_the_sky_a_pane_mirrors() {
+    use ircache_render::irradiance_cache::params::CachedEnvironment;
+    use ircache_render::irradiance_cache::points::{irradiance_at_points, PointMethod};
+    use ircache_render::irradiance_cache::IcParams;
+    let sky = 0.8f32;
+    let desc = scene(
+        sensor(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, 40.0, 4, 1),
+        common::path(3),
+        vec![pane(1.0)],
+        vec![EmitterDesc::Constant {
+            radiance: Rgb::splat(sky),
+        }],
+    );
+    let built = Scene::build(&desc).expect("scene builds");
+    let queries = [
+        (Vec3::ZERO, Vec3::Z),
+        (Vec3::new(1.0, 0.2, 0.0), Vec3::new(1.0, 1.0, 0.0).normalize()),
+    ];
+    for mode in [CachedEnvironment::All, CachedEnvironment::Off] {
+        let params = IcParams {
+            bounces: 1,
+            cached_environment: mode,
+            divisions: 8192,
+            photons: Some(0),
+            ..IcParams::default()
+        };
+        let (results, _) =
+            irradiance_at_points(&built, &params, &queries, PointMethod::Cache, 4096, 3);
+        for (r, q) in results.iter().zip(&queries) {
+            let got = (r.direct + r.indirect).g;
+            assert!(
+                (got / (PI * sky) - 1.0).abs() < 0.02,
+                "{mode:?} at {q:?}: {got} against πL = {}",
+                PI * sky
             );
         }
     }
