@@ -54,7 +54,8 @@ pub const MAX_RELATIVE_VARIANCE: f64 = 4.0;
 /// relMSE_trim of `all` against `glossy`, two seeds): the interior of `scenes/radiance-office`
 /// (visibility 0.03) 0.47×, `sunlit-window` (0.41, its glazed roof) 0.25×; `bumps` (0.72) 1.43×,
 /// `sky-glossy` (0.83) 1.2×. Since a `constant` sky's samples are cosine-weighted at reflecting
-/// surfaces (`lights::Receiver`; seventeenth session): `sunlit-window` 0.71×, `bumps` 3.1×.
+/// surfaces (`lights::Receiver`) and the sky a pane mirrors is in the gathers (seventeenth
+/// session): `sunlit-window` 0.42×, `bumps` 3.1×.
 pub const MIN_VISIBILITY_FOR_LIGHT_SAMPLES: f64 = 0.5;
 
 /// Camera rays and light samples [`environment_visibility`] spends.
