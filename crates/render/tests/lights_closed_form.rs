@@ -664,13 +664,19 @@ fn constant_sky_samples_at_a_reflecting_surface_are_exact() {
             "{e} against πL = {}",
             PI * radiance
         );
-        assert_eq!(ls.pdf, lights.pdf_environment(Receiver::reflecting(p, n), ls.wi));
+        assert_eq!(
+            ls.pdf,
+            lights.pdf_environment(Receiver::reflecting(p, n), ls.wi)
+        );
         if let Some(ls) = lights.sample(p, u_sel, u) {
             low = low.min(estimate(&ls));
             high = high.max(estimate(&ls));
         }
     }
-    assert!(low == 0.0 && high > 3.9 * PI * radiance, "from a point: {low} to {high}");
+    assert!(
+        low == 0.0 && high > 3.9 * PI * radiance,
+        "from a point: {low} to {high}"
+    );
 }
 
 #[test]

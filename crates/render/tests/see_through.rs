@@ -271,7 +271,10 @@ fn records_keep_the_sky_a_pane_mirrors() {
     let built = Scene::build(&desc).expect("scene builds");
     let queries = [
         (Vec3::ZERO, Vec3::Z),
-        (Vec3::new(1.0, 0.2, 0.0), Vec3::new(1.0, 1.0, 0.0).normalize()),
+        (
+            Vec3::new(1.0, 0.2, 0.0),
+            Vec3::new(1.0, 1.0, 0.0).normalize(),
+        ),
     ];
     for mode in [CachedEnvironment::All, CachedEnvironment::Off] {
         let params = IcParams {

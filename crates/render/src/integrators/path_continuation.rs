@@ -15,10 +15,10 @@ use super::light_sampling::{
     light_samples_suffice, receiver, sample_lights, BsdfStrategy, DeferredShadows,
     EnvironmentServed, Selection, Shadows,
 };
-use crate::lights::Receiver;
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::environment::HeldEnvironment;
 use crate::irradiance_cache::gather::ShadingPoint;
+use crate::lights::Receiver;
 use crate::sampler::{dims, Sampler};
 use crate::scene::{Interaction, Scene};
 use ircache_math::{Ray, Rgb, Vec3, INV_PI};
@@ -272,7 +272,9 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
                 .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
             if !le.is_black() {
                 let w = arrival.emission_weight(|from| {
-                    scene.lights.pdf_area(light, it.prim, from.p, it.p, it.frame.n)
+                    scene
+                        .lights
+                        .pdf_area(light, it.prim, from.p, it.p, it.frame.n)
                 });
                 if w > 0.0 {
                     l += beta * le * w;

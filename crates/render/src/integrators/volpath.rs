@@ -265,7 +265,9 @@ impl VolPathIntegrator {
                     .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
                 if !le.is_black() {
                     let w = arrival.emission_weight(|from| {
-                        scene.lights.pdf_area(light, it.prim, from.p, it.p, it.frame.n)
+                        scene
+                            .lights
+                            .pdf_area(light, it.prim, from.p, it.p, it.frame.n)
                     });
                     l += beta * le * w;
                 }
