@@ -179,6 +179,19 @@ fn an_area_light_behind_a_pane_matches_its_quadrature() {
     }
 }
 
+/// `shapes` under a `constant` sky of radiance `sky`.
+fn under_a_constant_sky(shapes: Vec<ShapeDesc>, sky: f32) -> Scene {
+    let desc = scene(
+        sensor(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, 40.0, 4, 1),
+        common::path(3),
+        shapes,
+        vec![EmitterDesc::Constant {
+            radiance: Rgb::splat(sky),
+        }],
+    );
+    Scene::build(&desc).expect("scene builds")
+}
+
 #[test]
 fn records_hold_a_sky_seen_through_a_pane() {
     use ircache_render::irradiance_cache::environment::{held_environment, HeldEnvironment};
@@ -190,15 +203,7 @@ fn records_hold_a_sky_seen_through_a_pane() {
     // one bounce, E = π L T̄; at two, E = π L T̄ (1 + ρ R̄), T̄ and R̄ = 1 − T̄ the pane's
     // cosine-weighted means: the pane that mirrors the floor is a bounce, as `path` counts it.
     let sky = 0.8f32;
-    let desc = scene(
-        sensor(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, 40.0, 4, 1),
-        common::path(3),
-        vec![floor(), pane(1.0)],
-        vec![EmitterDesc::Constant {
-            radiance: Rgb::splat(sky),
-        }],
-    );
-    let built = Scene::build(&desc).expect("scene builds");
+    let built = under_a_constant_sky(vec![floor(), pane(1.0)], sky);
     assert_eq!(
         held_environment(&built, CachedEnvironment::All),
         HeldEnvironment::All
@@ -260,15 +265,7 @@ fn records_keep_the_sky_a_pane_mirrors() {
     use ircache_render::irradiance_cache::points::{irradiance_at_points, PointMethod};
     use ircache_render::irradiance_cache::IcParams;
     let sky = 0.8f32;
-    let desc = scene(
-        sensor(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, 40.0, 4, 1),
-        common::path(3),
-        vec![pane(1.0)],
-        vec![EmitterDesc::Constant {
-            radiance: Rgb::splat(sky),
-        }],
-    );
-    let built = Scene::build(&desc).expect("scene builds");
+    let built = under_a_constant_sky(vec![pane(1.0)], sky);
     let queries = [
         (Vec3::ZERO, Vec3::Z),
         (
