@@ -699,7 +699,9 @@ fn sub_stratum_seeds(seed: u32) -> (u32, u32) {
 }
 
 /// Kensler's multi-jittered point (2013, listing 5): stratum (p mod m, p div m), the sub-strata
-/// `(sx, sy)` of the permuted other coordinate, jittered within.
+/// `(sx, sy)` of the permuted other coordinate, jittered within. The divisions by m and k are
+/// multiplications by their reciprocals, which a batch's loop computes once (four divisions a
+/// sample were a chain of their latencies); exact on power-of-two grids.
 #[inline]
 fn multijitter_point(
     grid: Grid,
@@ -707,10 +709,10 @@ fn multijitter_point(
     (sx, sy): (u32, u32),
     (jx, jy): (f32, f32),
 ) -> Vec2 {
-    let (m, k) = (grid.a as f32, grid.b as f32);
+    let (inv_m, inv_k) = (1.0 / grid.a as f32, 1.0 / grid.b as f32);
     Vec2::new(
-        (p_mod_m as f32 + (sy as f32 + jx) / k) / m,
-        (p_div_m as f32 + (sx as f32 + jy) / m) / k,
+        (p_mod_m as f32 + (sy as f32 + jx) * inv_k) * inv_m,
+        (p_div_m as f32 + (sx as f32 + jy) * inv_m) * inv_k,
     )
     .min(Vec2::splat(ONE_MINUS_EPSILON))
 }
@@ -731,9 +733,6 @@ fn multijitter_pow2(
     let (seed_x, seed_y) = sub_stratum_seeds(seed);
     let (wn, wm, wk) = (spp - 1, grid.a - 1, grid.b - 1);
     let log2_m = grid.a.trailing_zeros();
-    // Dividing by a power of two is multiplying by its exact reciprocal: the same bits as
-    // `multijitter_point`'s divisions, without their latency (two a coordinate, a chain).
-    let (inv_m, inv_k) = (1.0 / grid.a as f32, 1.0 / grid.b as f32);
     for (lane, v) in values.iter_mut().enumerate() {
         let index = first.wrapping_add(lane as u32);
         let p = permute_pow2(index & wn, wn, seed);
@@ -741,12 +740,8 @@ fn multijitter_pow2(
         let sx = permute_pow2(p_mod_m, wm, seed_x);
         let sy = permute_pow2(p_div_m, wk, seed_y);
         let h = hash64(pixel_seed, u64::from(index) << 32 | u64::from(dim));
-        let (jx, jy) = (to_unit(h as u32), to_unit((h >> 32) as u32));
-        *v = Vec2::new(
-            (p_mod_m as f32 + (sy as f32 + jx) * inv_k) * inv_m,
-            (p_div_m as f32 + (sx as f32 + jy) * inv_m) * inv_k,
-        )
-        .min(Vec2::splat(ONE_MINUS_EPSILON));
+        let jitter = (to_unit(h as u32), to_unit((h >> 32) as u32));
+        *v = multijitter_point(grid, (p_mod_m, p_div_m), (sx, sy), jitter);
     }
 }
 
