@@ -1174,31 +1174,25 @@ impl<'a> SceneRadiance<'a> {
             };
             if let Some(passage) = next.filter(|p| p.reflected) {
                 st.counts.gather_rays += 1;
-                // The pane is the vertex at depth level + 1; what the mirrored path finds is at
-                // level + 2, within the depth as the path tracer's rule has it.
-                let depth = level + 2;
-                let radiance = if depth < cache.params.max_depth() {
-                    let arrival = if cache.caustics_served() {
-                        Arrival::Gather
-                    } else {
-                        Arrival::Bsdf {
-                            from: hit.p.into(),
-                            pdf: passage.prob,
-                            delta: true,
-                            light_samples: 0,
-                        }
-                    };
-                    let mirrored = self.scene.spawn_ray(&hit, passage.d);
-                    let start = PathStart {
-                        ray: mirrored,
-                        depth,
-                        beta: tau * passage.weight,
-                        arrival,
-                    };
-                    self.trace_from(cache, seed, st, start, None, level, key, rng)
+                // The pane is the vertex at depth level + 1; the mirrored path goes on from
+                // level + 2, where the path loop's own depth rule ends it at `max_depth`.
+                let arrival = if cache.caustics_served() {
+                    Arrival::Gather
                 } else {
-                    Rgb::ZERO
+                    Arrival::Bsdf {
+                        from: hit.p.into(),
+                        pdf: passage.prob,
+                        delta: true,
+                        light_samples: 0,
+                    }
                 };
+                let start = PathStart {
+                    ray: self.scene.spawn_ray(&hit, passage.d),
+                    depth: level + 2,
+                    beta: tau * passage.weight,
+                    arrival,
+                };
+                let radiance = self.trace_from(cache, seed, st, start, None, level, key, rng);
                 return Incident {
                     radiance,
                     distance: first.0,
