@@ -223,14 +223,10 @@ impl Rectangle {
         // The normals of the planes through p and each edge, v00 × v10, v10 × v11, v11 × v01
         // and v01 × v00 over the corners v_ij = (x_i, y_j, z0): each has a zero component and
         // the edge's length as a positive factor (Ureña et al. 2013, Algorithm 1).
-        let unit = |v: Vec3| {
-            let len2 = v.length_squared();
-            (len2 > 0.0 && len2.is_finite()).then(|| v / len2.sqrt())
-        };
-        let n0 = unit(Vec3::new(0.0, z0, -y0))?;
-        let n1 = unit(Vec3::new(-z0, 0.0, x1))?;
-        let n2 = unit(Vec3::new(0.0, -z0, y1))?;
-        let n3 = unit(Vec3::new(z0, 0.0, -x0))?;
+        let n0 = Vec3::new(0.0, z0, -y0).try_normalize()?;
+        let n1 = Vec3::new(-z0, 0.0, x1).try_normalize()?;
+        let n2 = Vec3::new(0.0, -z0, y1).try_normalize()?;
+        let n3 = Vec3::new(z0, 0.0, -x0).try_normalize()?;
         let g0 = angle_between(-n0, n1);
         let g1 = angle_between(-n1, n2);
         let g2 = angle_between(-n2, n3);

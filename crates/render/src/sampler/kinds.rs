@@ -700,8 +700,8 @@ fn sub_stratum_seeds(seed: u32) -> (u32, u32) {
 
 /// Kensler's multi-jittered point (2013, listing 5): stratum (p mod m, p div m), the sub-strata
 /// `(sx, sy)` of the permuted other coordinate, jittered within. The divisions by m and k are
-/// multiplications by their reciprocals, which a batch's loop computes once (four divisions a
-/// sample were a chain of their latencies); exact on power-of-two grids.
+/// multiplications by their reciprocals, exact on power-of-two grids (the reciprocals are
+/// loop-invariant in a batch; no speed change was measured, BENCHMARKS.md).
 #[inline]
 fn multijitter_point(
     grid: Grid,
