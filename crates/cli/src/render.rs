@@ -483,6 +483,9 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
         if st.metric_replaced {
             eprintln!("note: {}", ircache_render::media_cache::cache::METRIC_NOTE);
         }
+        if let Some(map) = &st.caustic_map {
+            eprintln!("{map}");
+        }
     }
     if let Some(st) = &out.volume_records {
         eprintln!(
@@ -640,6 +643,12 @@ fn write_stats(
                 "shadow_rays": st.shadow_rays,
                 "march_steps": st.march_steps,
                 "seconds": st.seconds,
+                "caustic_map": st.caustic_map.map(|m| serde_json::json!({
+                    "stored": m.stats.stored,
+                    "emitted": m.stats.emitted,
+                    "rays": m.stats.rays,
+                    "seconds": m.seconds,
+                })),
             }),
         );
     }

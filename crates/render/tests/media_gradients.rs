@@ -499,7 +499,8 @@ mod in_scenes {
     //! (NOTES-002 §3.3, scene F4: an emissive medium around black occluders).
     use super::*;
     use ircache_math::{Mat4, Rgb, Rng, Vec3};
-    use ircache_render::media_cache::scene_medium::{medium_at, SceneMedium};
+    use ircache_render::media::tracking::medium_at;
+    use ircache_render::media_cache::scene_medium::SceneMedium;
     use ircache_render::scene::Scene;
     use ircache_scene::*;
     use std::path::PathBuf;

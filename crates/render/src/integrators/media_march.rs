@@ -189,6 +189,7 @@ pub(crate) fn li(
             beta: tr,
             depth,
             arrival,
+            caustic_chain: false,
         };
         l += integrator.trace(scene, start, Some(hit), true, sampler, rng, rays);
     }
@@ -365,6 +366,7 @@ pub(crate) fn in_scattered_by_path(
         beta,
         depth,
         arrival: indirect_arrival(at.p, pdf, scene.samples_lights_in(at.medium)),
+        caustic_chain: false,
     };
     integrator.trace(scene, start, None, false, &mut stream, rng, rays)
 }

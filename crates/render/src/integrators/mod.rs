@@ -293,19 +293,28 @@ fn media_cache_integrator(
             .collect();
         file = Some(f);
     }
+    // Caustics from photons, where a surface makes them (see `VolPathIntegrator::trace`).
+    let caustics = pool
+        .install(|| crate::irradiance_cache::prepare::media_caustic_map(scene, p, settings.seed))
+        .map(std::sync::Arc::new);
+    notes.extend(crate::irradiance_cache::prepare::caustic_note(
+        p,
+        caustics.is_some(),
+    ));
     // No bounce (`max_depth` 2): direct light alone, no records.
     let cache = if p.bounces > 0 {
         let mut cache = pool.install(|| {
             crate::media_cache::cache::MediaCache::build(
                 scene,
                 p,
-                settings.width,
-                settings.height,
+                (settings.width, settings.height),
                 settings.seed,
                 surface,
+                caustics.as_ref(),
             )
         });
         cache.stats.notes = notes;
+        cache.stats.caustic_map = caustics.as_ref().map(|c| c.map.summary());
         if let Some(f) = file.as_mut() {
             let new: Vec<_> = cache.records()[cache.stats.loaded..]
                 .iter()
@@ -324,12 +333,14 @@ fn media_cache_integrator(
             points: p.media_march,
         }),
         first_light_samples: p.direct_samples,
+        caustics,
         ..volpath::VolPathIntegrator::plain(volpath::VolPathIntegrator::depth_of_bounces(p.bounces))
     };
     if p.media_volume_records && p.media_march > 0 && p.bounces > 0 {
         let gatherer = volpath::VolPathIntegrator {
             cache: None,
             camera_march: None,
+            caustics: None,
             ..integrator.clone()
         };
         let records = pool.install(|| {

@@ -40,6 +40,8 @@ pub struct VolPathIntegrator {
     pub first_light_samples: u32,
     /// Volumetric records serving the in-scattered indirect light at the march's points.
     pub volume_records: Option<std::sync::Arc<crate::media_cache::volume_records::VolumeCache>>,
+    /// Caustics at the paths' Lambertian surfaces from photons (see [`Self::trace`]).
+    pub caustics: Option<std::sync::Arc<crate::photon_map::CausticMap>>,
 }
 
 /// Where a light sample is taken.
@@ -63,6 +65,9 @@ pub(crate) struct PathState {
     pub depth: u32,
     /// How it arrives there (the weight of emission found).
     pub arrival: Arrival,
+    /// It left a Lambertian vertex whose caustics a caustic map served, through delta lobes
+    /// alone since, and has not scattered in a medium: the emission it finds is left out.
+    pub caustic_chain: bool,
 }
 
 impl VolPathIntegrator {
@@ -78,6 +83,7 @@ impl VolPathIntegrator {
             camera_march: None,
             first_light_samples: 1,
             volume_records: None,
+            caustics: None,
         }
     }
 
@@ -113,6 +119,7 @@ impl VolPathIntegrator {
             beta: Rgb::ONE,
             depth: 0,
             arrival,
+            caustic_chain: false,
         };
         self.trace(
             scene,
@@ -125,6 +132,19 @@ impl VolPathIntegrator {
         )
     }
 
+    /// Caustic irradiance at the surface `it` on the side of `n` from photons that a path
+    /// whose vertex there has depth `depth` may take (b bounces end a path of depth + b + 2
+    /// vertices); zero without a caustic map.
+    fn caustic_irradiance(&self, it: &Interaction, n: Vec3, depth: u32) -> Rgb {
+        let bounces = self.depth_limit().saturating_sub(depth + 2);
+        match &self.caustics {
+            Some(c) if bounces > 0 => {
+                c.irradiance(it.p, n, crate::photon_map::bounce_limit(bounces))
+            }
+            _ => Rgb::ZERO,
+        }
+    }
+
     /// The largest depth as a count (−1: unbounded).
     pub(crate) fn depth_limit(&self) -> u32 {
         u32::try_from(self.max_depth).unwrap_or(u32::MAX)
@@ -133,6 +153,12 @@ impl VolPathIntegrator {
     /// Radiance arriving along `start.ray`, whose closest hit the caller may have traced
     /// (`first`); with `skip_first_medium` the medium before that hit is left out (the caller
     /// accounted for it: [`super::media_march`]).
+    ///
+    /// With a caustic map, a vertex whose BSDF is Lambertian alone (or whose Lambertian part
+    /// the media cache serves) takes its caustics from the map, photons that reached it through
+    /// delta lobes alone without scattering in a medium (Jensen's split; see
+    /// [`crate::photon_map::trace`]), and the path on from it leaves out the emission it finds
+    /// in the same way; any other vertex, and a scattering in a medium, ends that rule.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn trace(
         &self,
@@ -151,6 +177,7 @@ impl VolPathIntegrator {
             mut beta,
             mut depth,
             mut arrival,
+            mut caustic_chain,
         } = start;
         let mut l = Rgb::ZERO;
         let mut eta = 1.0f32;
@@ -178,6 +205,7 @@ impl VolPathIntegrator {
                     Flight::Absorbed => break,
                     Flight::Passed => {}
                     Flight::Scattered { t, .. } => {
+                        caustic_chain = false;
                         let p = ray.at(t);
                         let sample_emitters = scene.samples_lights_in(m);
                         if depth + 1 < max_depth && sample_emitters {
@@ -212,7 +240,7 @@ impl VolPathIntegrator {
                 }
             }
             let Some(hit) = hit else {
-                if scene.lights.has_environment() {
+                if scene.lights.has_environment() && !caustic_chain {
                     let w = arrival.emission_weight(|p| scene.lights.pdf_environment(p, ray.d));
                     if w > 0.0 {
                         l += beta * scene.lights.environment_radiance(ray.d) * w;
@@ -259,7 +287,7 @@ impl VolPathIntegrator {
                 }
             }
             let wo = -ray.d;
-            if let Some(light) = shape.area_light {
+            if let Some(light) = shape.area_light.filter(|_| !caustic_chain) {
                 let le = scene
                     .lights
                     .area_radiance(light, it.p, it.frame.n, it.uv, wo, it.t);
@@ -308,13 +336,22 @@ impl VolPathIntegrator {
                         direct += light_sample_with(scene, &vertex, medium, weighing, u, rng, rays);
                     }
                     l += beta * direct / n as f32;
-                    l += beta * k * e * ircache_math::INV_PI;
+                    let caustic = self.caustic_irradiance(&it, sp.n, depth);
+                    l += beta * k * (e + caustic) * ircache_math::INV_PI;
                     if !glossy {
                         break;
                     }
                     strategy = BsdfStrategy::Glossy;
                     light_samples = n;
                 }
+            }
+            // Caustics from the map at a Lambertian vertex the cache did not serve.
+            let mut caustics_served = false;
+            if strategy == BsdfStrategy::All && self.caustics.is_some() && bsdf.is_diffuse_only() {
+                let k = bsdf.lambertian_albedo(wo_local);
+                let n = ShadingPoint::facing(it, wo).n;
+                l += beta * k * self.caustic_irradiance(&it, n, depth) * ircache_math::INV_PI;
+                caustics_served = true;
             }
             if strategy == BsdfStrategy::All {
                 // Without media, the last light samples stand alone where `path`'s do (a medium
@@ -342,6 +379,7 @@ impl VolPathIntegrator {
             };
             beta *= bs.weight;
             eta *= bs.eta;
+            caustic_chain = caustics_served || (caustic_chain && bs.delta);
             arrival = Arrival::Bsdf {
                 from: it.p.into(),
                 pdf: bs.pdf,

@@ -91,7 +91,8 @@ pub fn prepare_cache(
     stats.photon_records = placed.records;
     stats.photon_record_seconds = photon_record_seconds;
     notes.extend(photon_note(&ic.params));
-    notes.extend(caustic_note(&ic.params, cache.photons.as_deref()));
+    let made = cache.photons.as_ref().is_some_and(|m| m.caustic.is_some());
+    notes.extend(caustic_note(&ic.params, made));
     stats.notes = notes;
     stats.records_per_level = cache.levels.iter().map(|s| s.len()).collect();
     stats.radiance_records = cache.radiance_records.len();
@@ -190,9 +191,9 @@ pub fn photon_note(params: &super::IcParams) -> Option<String> {
 /// What a user should hear when `--caustic-photons N` made no caustic map: no surface that
 /// makes caustics, or none that light reaches (the gathers then keep those paths).
 #[must_use]
-pub fn caustic_note(params: &super::IcParams, maps: Option<&PhotonMaps>) -> Option<String> {
+pub fn caustic_note(params: &super::IcParams, made: bool) -> Option<String> {
     let asked = params.caustic_photons.unwrap_or(0);
-    (asked > 0 && maps.is_none_or(|m| m.caustic.is_none())).then(|| {
+    (asked > 0 && !made).then(|| {
         format!(
             "--caustic-photons {asked} stored none: no surface with a delta lobe (smooth glass, \
              a mirror, a smooth coating) sends light onto the others, so caustics stay with \
@@ -216,18 +217,7 @@ pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option
     if params.global_photons() == 0 && caustic_photons == 0 {
         return None;
     }
-    let size = super::gather::scene_size(scene);
-    let radius = params.photon_radius * size;
-    let global = Lookup {
-        count: params.photon_lookup,
-        max_radius: radius,
-        hull: true,
-    };
-    let caustic = Lookup {
-        count: (params.photon_lookup / 2).max(1),
-        max_radius: radius * 0.25,
-        hull: false,
-    };
+    let (global, caustic) = photon_lookups(scene, params);
     // Gather hits, one bounce beyond the camera's surfaces, take photons of up to `bounces − 1`
     // bounces; photon records at the camera's surfaces up to `bounces`.
     let gather_bounces = bounce_limit(params.bounces.saturating_sub(1));
@@ -241,14 +231,63 @@ pub fn photon_maps(scene: &Scene, params: &super::IcParams, seed: u64) -> Option
     } else {
         0
     };
-    let seed = crate::irradiance_cache::gather::mix(seed, 0x7068_6f74_6f6e);
     Some(PhotonMaps::build(
         scene,
         (photons, caustic_photons),
         (bounces, gather_bounces),
         (global, caustic),
-        seed,
+        photon_seed(seed),
     ))
+}
+
+/// The lookups of the global and caustic maps: the `--photon-lookup` nearest photons within
+/// `--photon-radius` of the scene's size, half as many within a quarter of that for caustics.
+fn photon_lookups(scene: &Scene, params: &super::IcParams) -> (Lookup, Lookup) {
+    let radius = params.photon_radius * super::gather::scene_size(scene);
+    let global = Lookup {
+        count: params.photon_lookup,
+        max_radius: radius,
+        hull: true,
+    };
+    let caustic = Lookup {
+        count: (params.photon_lookup / 2).max(1),
+        max_radius: radius * 0.25,
+        hull: false,
+    };
+    (global, caustic)
+}
+
+/// The photons' streams of a render's `seed`.
+fn photon_seed(seed: u64) -> u64 {
+    crate::irradiance_cache::gather::mix(seed, 0x7068_6f74_6f6e)
+}
+
+/// The caustic map of the cache in media (`None` without caustic photons, or where no surface
+/// makes caustics): photons of up to `bounces` bounces, as a first surface's caustic may take
+/// at `max_depth` = bounces + 2.
+#[must_use]
+pub fn media_caustic_map(
+    scene: &Scene,
+    params: &super::IcParams,
+    seed: u64,
+) -> Option<crate::photon_map::CausticMap> {
+    if params.caustic_photons() == 0
+        || params.bounces == 0
+        || crate::photon_map::trace::caustic_targets(scene).is_empty()
+    {
+        return None;
+    }
+    let bounces = crate::photon_map::bounce_limit(params.bounces);
+    let map = crate::photon_map::PhotonMap::caustic(
+        scene,
+        params.caustic_photons(),
+        bounces,
+        photon_seed(seed),
+    )?;
+    Some(crate::photon_map::CausticMap {
+        map,
+        lookup: photon_lookups(scene, params).1,
+    })
 }
 
 /// The header of a cache file for `scene` rendered by `ic` at `width` pixels across, its records

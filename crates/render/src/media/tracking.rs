@@ -155,6 +155,33 @@ pub fn medium_after(
     }
 }
 
+/// The medium containing `p`: a ray along `dir` to the first surface that bounds a medium tells
+/// by its facing; where none is met, the camera's medium (the one around the scene).
+#[must_use]
+pub fn medium_at(scene: &Scene, p: Vec3, dir: Vec3) -> Option<usize> {
+    let mut ray = Ray::new(p, dir);
+    for _ in 0..MAX_CROSSINGS {
+        let Some(hit) = scene.accel.intersect(&ray) else {
+            return scene.camera_medium;
+        };
+        let shape = &scene.shapes[hit.geom_id as usize];
+        if shape.media.is_transition() {
+            // Leaving through the front (along the normal): inside, the interior.
+            return if dir.dot(hit.ng) > 0.0 {
+                shape.media.interior
+            } else {
+                shape.media.exterior
+            };
+        }
+        let q = ray.at(hit.t);
+        ray = Ray::new(
+            offset_ray_origin(q, hit.ng.normalize_or(dir), dir, scene.scale),
+            dir,
+        );
+    }
+    scene.camera_medium
+}
+
 /// The first opaque surface a ray meets, past any null boundaries.
 #[derive(Clone, Copy, Debug)]
 pub struct OpaqueHit {

@@ -30,9 +30,11 @@ use crate::irradiance_cache::record::{
 use crate::irradiance_cache::store::RecordStore;
 use crate::irradiance_cache::IcParams;
 use crate::media::tracking::{first_opaque, medium_after};
+use crate::photon_map::CausticMap;
 use crate::scene::Scene;
 use ircache_math::{offset_ray_origin, Frame, Rgb, Rng, Vec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// What building the cache did.
@@ -55,6 +57,8 @@ pub struct MediaCacheStats {
     pub seconds: f64,
     /// Ward's metric was used in place of the one asked for ([`METRIC_NOTE`]).
     pub metric_replaced: bool,
+    /// The caustic map beside the records, if one was made.
+    pub caustic_map: Option<crate::photon_map::MapSummary>,
 }
 
 /// Records in media scenes.
@@ -128,13 +132,15 @@ pub struct RecordSite {
 /// The key of a record's layout stream (beyond every cell's index).
 const LAYOUT_KEY: u64 = u64::MAX;
 
-/// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced.
+/// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced; with
+/// `caustics`, without the caustics at `site`, which that map serves.
 #[must_use]
 pub fn make_record(
     scene: &Scene,
     params: &IcParams,
     site: &RecordSite,
     key: u64,
+    caustics: Option<&Arc<CausticMap>>,
 ) -> (Record, MediaCacheStats) {
     let strata = Stratification::from_divisions(params.media_divisions);
     let frame = Frame::from_z(site.n);
@@ -144,7 +150,7 @@ pub fn make_record(
     let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
         .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()])
         .with_gradients(gradients)
-        .with_deeper_bounces(params.bounces, params.media_deeper_paths);
+        .with_deeper_bounces(params.bounces, params.media_deeper_paths, caustics);
     let d = |v: Vec3| v.as_dvec3();
     let n = strata.azimuthal;
     let layout = params
@@ -254,15 +260,16 @@ impl MediaCache {
 
     /// Fills the cache from the first hits of camera rays through the centres of a
     /// `width` × `height` image (run inside a rayon pool), after the records `loaded` (from a
-    /// cache file), which come first in [`Self::records`].
+    /// cache file), which come first in [`Self::records`]; with `caustics`, records without
+    /// the caustics that map serves.
     #[must_use]
     pub fn build(
         scene: &Scene,
         params: &IcParams,
-        width: usize,
-        height: usize,
+        (width, height): (usize, usize),
         seed: u64,
         loaded: Vec<Record>,
+        caustics: Option<&Arc<CausticMap>>,
     ) -> MediaCache {
         let start = Instant::now();
         let mut cache = MediaCache::new(scene, params);
@@ -318,6 +325,7 @@ impl MediaCache {
                         ircache_math::rng::mix64(
                             seed ^ (*pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
                         ),
+                        caustics,
                     )
                 })
                 .collect();

@@ -8,13 +8,14 @@
 
 use super::cache::{make_record, RecordSite};
 use super::gradient::{gather, March};
-use super::scene_medium::{medium_at, SceneMedium};
+use super::scene_medium::SceneMedium;
 use crate::integrators::path_continuation::Arrival;
 use crate::integrators::volpath::{PathState, VolPathIntegrator};
 use crate::integrators::RayCounts;
 use crate::irradiance_cache::hemisphere::{to_world, Stratification};
 use crate::irradiance_cache::points::{PointIrradiance, PointMethod};
 use crate::irradiance_cache::IcParams;
+use crate::media::tracking::medium_at;
 use crate::media::tracking::transmittance_along;
 use crate::scene::Scene;
 use ircache_math::{offset_ray_origin, Frame, Ray, Rgb, Rng, Vec3, PI};
@@ -81,7 +82,7 @@ pub fn media_irradiance_at_points(
                 // No bounce (`-ab 0`): direct light alone.
                 _ if params.bounces == 0 => (Rgb::ZERO, [Vec3::ZERO; 3], [Vec3::ZERO; 3]),
                 PointMethod::Cache => {
-                    let (r, _) = make_record(scene, params, &site, rng.next_u32().into());
+                    let (r, _) = make_record(scene, params, &site, rng.next_u32().into(), None);
                     (r.e, r.grad_t, r.grad_r)
                 }
                 PointMethod::BruteForce { samples } => {
@@ -116,7 +117,7 @@ fn brute_force(
     let at = |x| {
         let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
             .with_gradients(false)
-            .with_deeper_bounces(params.bounces, params.media_deeper_paths);
+            .with_deeper_bounces(params.bounces, params.media_deeper_paths, None);
         let march = March {
             gradients: false,
             ..March::default()
@@ -188,6 +189,7 @@ fn volpath_irradiance(
                 beta: Rgb::ONE,
                 depth: 1,
                 arrival: Arrival::Gather,
+                caustic_chain: false,
             };
             sum += integrator.trace(scene, start, None, false, &mut stream, &mut rng, &mut rays);
         }

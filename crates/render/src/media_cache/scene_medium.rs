@@ -32,10 +32,10 @@ use crate::integrators::RayCounts;
 use crate::lights::LightSample;
 use crate::media::tracking::{
     first_opaque, medium_after, sample_flight, transmittance_along,
-    transmittance_with_depth_gradient, Flight, OpaqueHit, MAX_CROSSINGS,
+    transmittance_with_depth_gradient, Flight, OpaqueHit,
 };
 use crate::scene::Scene;
-use ircache_math::{offset_ray_origin, Ray, Rgb, Rng, Vec2, Vec3};
+use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 use std::cell::RefCell;
 
 /// The key of the deeper bounces' streams (beside the gather direction's bits).
@@ -99,37 +99,13 @@ pub struct SceneMedium<'a> {
     deeper: Option<VolPathIntegrator>,
     /// Such paths per gather ray.
     deeper_paths: u32,
+    /// A caustic map serves the receiver's caustics: its deeper paths leave out the emission
+    /// they reach through delta lobes alone, unscattered ([`VolPathIntegrator::trace`]).
+    caustics_served: bool,
     /// The last source evaluated: point, direction, value and gradient.
     last_source: RefCell<Option<Source>>,
     last: RefCell<Option<Traced>>,
     rays: RefCell<RayCounts>,
-}
-
-/// The medium containing `p`: a ray along `dir` to the first surface that bounds a medium tells
-/// by its facing; where none is met, the camera's medium (the one around the scene).
-#[must_use]
-pub fn medium_at(scene: &Scene, p: Vec3, dir: Vec3) -> Option<usize> {
-    let mut ray = Ray::new(p, dir);
-    for _ in 0..MAX_CROSSINGS {
-        let Some(hit) = scene.accel.intersect(&ray) else {
-            return scene.camera_medium;
-        };
-        let shape = &scene.shapes[hit.geom_id as usize];
-        if shape.media.is_transition() {
-            // Leaving through the front (along the normal): inside, the interior.
-            return if dir.dot(hit.ng) > 0.0 {
-                shape.media.interior
-            } else {
-                shape.media.exterior
-            };
-        }
-        let q = ray.at(hit.t);
-        ray = Ray::new(
-            offset_ray_origin(q, hit.ng.normalize_or(dir), dir, scene.scale),
-            dir,
-        );
-    }
-    scene.camera_medium
 }
 
 impl<'a> SceneMedium<'a> {
@@ -151,6 +127,7 @@ impl<'a> SceneMedium<'a> {
             spot_lights: scene.lights.has_spot_lights(),
             deeper: None,
             deeper_paths: 1,
+            caustics_served: false,
             rotation: std::cell::Cell::new(None),
             march_step: std::cell::Cell::new(None),
             last_source: RefCell::new(None),
@@ -178,12 +155,21 @@ impl<'a> SceneMedium<'a> {
 
     /// Gathers `bounces` indirect bounces (`-ab`; unbounded: Russian roulette alone): the
     /// ones beyond the first by the mean of `paths` `volpath` paths per gather ray (see the
-    /// module).
+    /// module). With `caustics`, the receiver's caustics are the map's, left out of the
+    /// gather, and the paths take those of their own Lambertian vertices from it.
     #[must_use]
-    pub fn with_deeper_bounces(mut self, bounces: u32, paths: u32) -> Self {
+    pub fn with_deeper_bounces(
+        mut self,
+        bounces: u32,
+        paths: u32,
+        caustics: Option<&std::sync::Arc<crate::photon_map::CausticMap>>,
+    ) -> Self {
         self.deeper_paths = paths.max(1);
-        self.deeper = (bounces > 1)
-            .then(|| VolPathIntegrator::plain(VolPathIntegrator::depth_of_bounces(bounces)));
+        self.caustics_served = caustics.is_some();
+        self.deeper = (bounces > 1).then(|| VolPathIntegrator {
+            caustics: caustics.cloned(),
+            ..VolPathIntegrator::plain(VolPathIntegrator::depth_of_bounces(bounces))
+        });
         self
     }
 
@@ -441,6 +427,7 @@ impl<'a> SceneMedium<'a> {
             t0 = t1;
         }
         let mut arrival = Arrival::Gather;
+        let mut caustic_chain = false;
         let (ray, medium, eta) = match start {
             Some(found) => found,
             None => {
@@ -463,7 +450,9 @@ impl<'a> SceneMedium<'a> {
                     return Rgb::ZERO;
                 };
                 beta *= bs.weight;
-                // Light samples cannot take what a delta lobe reaches: it counts in full.
+                // Light samples cannot take what a delta lobe reaches: it counts in full, or
+                // is the receiver's caustic, which the map serves.
+                caustic_chain = self.caustics_served && bs.delta;
                 if bs.delta {
                     arrival = Arrival::Bsdf {
                         from: it.p.into(),
@@ -485,6 +474,7 @@ impl<'a> SceneMedium<'a> {
             beta,
             depth,
             arrival,
+            caustic_chain,
         };
         let l = integrator.trace(scene, state, None, false, &mut stream, &mut rng, &mut rays);
         let mut counts = self.rays.borrow_mut();

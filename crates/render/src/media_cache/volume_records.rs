@@ -159,6 +159,7 @@ pub fn gather(
                 beta: Rgb::ONE,
                 depth: 1,
                 arrival: indirect_arrival(p, 0.25 / PI, sample_emitters),
+                caustic_chain: false,
             };
             let mut rng = Rng::new(u64::from(stream.next_u32()), 0x766f_6c75);
             let l = integrator.trace(

@@ -151,6 +151,41 @@ impl PhotonMap {
     }
 }
 
+impl PhotonMap {
+    /// The caustic map of `wanted` photons of up to `max_bounces` bounces, on a stream of its
+    /// own of `seed`; `None` when `wanted` is 0 or nothing was stored, so that the paths keep
+    /// the light it would hold. Caustics are sharp and seen directly: estimated where they are
+    /// asked for, never precomputed.
+    #[must_use]
+    pub fn caustic(scene: &Scene, wanted: u64, max_bounces: u16, seed: u64) -> Option<PhotonMap> {
+        (wanted > 0)
+            .then(|| {
+                let seed = seed ^ CAUSTIC_SALT;
+                PhotonMap::build(scene, MapKind::Caustic, wanted, max_bounces, seed, None)
+            })
+            .filter(|m| !m.tree.is_empty())
+    }
+}
+
+/// A caustic map with its lookup size: the caustics of the cache in media, read at the
+/// Lambertian surfaces of its paths (see [`crate::integrators::volpath`]).
+#[derive(Clone, Debug)]
+pub struct CausticMap {
+    /// The photons (L S+ D, none scattered by a medium on the way: [`trace`]).
+    pub map: PhotonMap,
+    /// Its lookups.
+    pub lookup: Lookup,
+}
+
+impl CausticMap {
+    /// Caustic irradiance at `p` on the side of `n` from photons of at most `max_bounces`
+    /// bounces.
+    #[must_use]
+    pub fn irradiance(&self, p: Vec3, n: Vec3, max_bounces: u16) -> Rgb {
+        self.map.irradiance(p, n, max_bounces, &self.lookup)
+    }
+}
+
 /// Estimates the irradiance at every [`PRECOMPUTED_STRIDE`]th photon of `tree`, per bounce
 /// limit.
 fn precompute_irradiance(tree: &KdTree, max_bounces: u16, lookup: &Lookup) -> Precomputed {
@@ -202,7 +237,30 @@ pub struct PhotonMaps {
     pub caustic_lookup: Lookup,
 }
 
-impl std::fmt::Display for PhotonMap {
+/// What making a map did, for reports.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapSummary {
+    /// Which photons it keeps.
+    pub kind: MapKind,
+    /// How it was traced.
+    pub stats: TraceStats,
+    /// Seconds spent tracing and building it.
+    pub seconds: f64,
+}
+
+impl PhotonMap {
+    /// What making it did.
+    #[must_use]
+    pub fn summary(&self) -> MapSummary {
+        MapSummary {
+            kind: self.kind,
+            stats: self.stats,
+            seconds: self.seconds,
+        }
+    }
+}
+
+impl std::fmt::Display for MapSummary {
     /// `Global map: N photons stored of M emitted, R M rays, S s`.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
@@ -214,6 +272,13 @@ impl std::fmt::Display for PhotonMap {
             self.stats.rays as f64 * 1e-6,
             self.seconds
         )
+    }
+}
+
+impl std::fmt::Display for PhotonMap {
+    /// See [`MapSummary`].
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.summary().fmt(f)
     }
 }
 
@@ -243,15 +308,7 @@ impl PhotonMaps {
             seed,
             Some(&global_lookup),
         );
-        // Caustics are sharp and seen directly: estimated at the pixel, never precomputed. A
-        // map that stored nothing is dropped, so the gathers keep the paths it would serve.
-        let caustic = (caustic > 0)
-            .then(|| {
-                let bounces = gather_bounces.saturating_add(1);
-                let seed = seed ^ CAUSTIC_SALT;
-                PhotonMap::build(scene, MapKind::Caustic, caustic, bounces, seed, None)
-            })
-            .filter(|m| !m.tree.is_empty());
+        let caustic = PhotonMap::caustic(scene, caustic, gather_bounces.saturating_add(1), seed);
         PhotonMaps {
             global: global_map,
             caustic,

@@ -15,6 +15,13 @@
 //! flux by `η²` as it scales radiance, so the sample's radiance factor is undone. Shading-normal
 //! asymmetry (Veach §5.3) is not corrected.
 //!
+//! In media (002; scenes with `null` boundaries), a photon crosses boundaries without a bounce
+//! and never scatters in a medium: each segment keeps the share that crosses it unscattered,
+//! the transmittance (closed form, or ratio tracking in grids), with Russian roulette. A map
+//! then holds the light that reached its surfaces without meeting the medium on the way; light
+//! the medium scattered is the paths' and the volumetric records' (so the cache takes only the
+//! caustic map in media, whose complement the paths hold exactly).
+//!
 //! Parallel and deterministic: photon `i` draws from its own random stream, keyed by the seed
 //! and `i`; photons are traced in fixed batches and kept in emission order, whatever the
 //! threads. Each pass emits batches until it has stored the number asked for (as Radiance's
@@ -26,6 +33,7 @@
 use super::photon::Photon;
 use crate::lights::emission::Targets;
 use crate::lights::is_positive_finite;
+use crate::media::tracking::{medium_after, medium_at, transmittance, MAX_CROSSINGS};
 use crate::scene::{Scene, ShapeGeometry};
 use ircache_math::ray::offset_ray_origin;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
@@ -192,21 +200,48 @@ fn trace_one(
     let mut rays = 0u64;
     let mut bounces: u16 = 0;
     let mut delta_only = true;
-    // Thin sheets met so far (a bound against a ray caught at one).
+    // Thin sheets and `null` boundaries met so far (a bound against a ray caught at one).
     let mut crossings = 0u32;
+    // The medium the photon travels in (see the module: it never scatters there).
+    let mut medium = if scene.has_media() {
+        medium_at(scene, origin, emitted.direction)
+    } else {
+        None
+    };
     loop {
         rays += 1;
         let Some(it) = scene.intersect(&ray) else {
             break;
         };
+        if let Some(m) = medium {
+            // The share that crosses the segment unscattered, Russian roulette keeping the
+            // flux per photon even.
+            let tr = transmittance(&scene.media[m], ray.o, ray.d, it.t, &mut rng);
+            let q = tr.max_channel().min(1.0);
+            if !is_positive_finite(q) || rng.next_f32() >= q {
+                break;
+            }
+            flux = flux * tr / q;
+        }
         let incoming = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
+        if shape.null {
+            // A medium's boundary: crossed without a bounce, into the medium beyond.
+            crossings += 1;
+            if crossings > MAX_CROSSINGS {
+                break;
+            }
+            medium = medium_after(shape.media, it.ng, ray.d, medium);
+            ray = scene.spawn_ray(&it, ray.d);
+            continue;
+        }
         if shape.masked && rng.next_f32() >= scene.materials[shape.material].opacity(it.uv) {
             // A mask's open part: crossed, as light samples cross it.
             crossings += 1;
             if crossings > crate::scene::MAX_SHEET_CROSSINGS {
                 break;
             }
+            medium = medium_after(shape.media, it.ng, ray.d, medium);
             ray = scene.spawn_ray(&it, ray.d);
             continue;
         }
@@ -235,6 +270,7 @@ fn trace_one(
             }
             flux = flux * scale / q;
             bounces += u16::from(reflected);
+            medium = medium_after(shape.media, it.ng, d, medium);
             ray = scene.spawn_ray(&it, d);
             continue;
         }
@@ -299,6 +335,7 @@ fn trace_one(
         } else {
             bounces += 1;
         }
+        medium = medium_after(shape.media, it.ng, wo, medium);
         ray = scene.spawn_ray(&it, wo);
     }
     rays
