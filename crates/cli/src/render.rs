@@ -352,6 +352,14 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         None
     };
     let scene = Scene::build(&desc).context("building the scene")?;
+    if scene.has_media() && matches!(integrator, Integrator::Ic(_)) {
+        if let Some(aov) = args.aov.first() {
+            bail!(
+                "--aov {aov}: the cache in media (`ic` in a scene with media) makes no extra \
+                 images yet"
+            );
+        }
+    }
     if let Integrator::Ic(ic) = &mut integrator {
         crate::gpu::attach_plane_source(ic, &scene)?;
     }

@@ -590,6 +590,67 @@ fn cache_file_holds_the_records_of_a_media_scene() {
     );
 }
 
+/// In media, the cache's settings its records do not read, and extra images, are refused by
+/// name rather than ignored; the caustic map is made where asked, and reported.
+#[test]
+fn media_scenes_refuse_what_their_cache_ignores() {
+    let d = temp_dir("media-settings");
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/glass-in-fog/scene.xml"
+    );
+    let render = |extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            scene,
+            "--integrator",
+            "ic",
+            "--spp",
+            "1",
+            "--width",
+            "12",
+            "--height",
+            "12",
+            "--media-divisions",
+            "16",
+            "--media-volume-divisions",
+            "16",
+            "-o",
+            "x.exr",
+            "--stats",
+            "x.json",
+        ];
+        args.extend_from_slice(extra);
+        ircache(&args, &d)
+    };
+    for (extra, named) in [
+        (
+            &["--photon-records", "on"][..],
+            "--photon-records is not used",
+        ),
+        (
+            &["--divisions", "64", "--supersamples", "8"][..],
+            "--divisions, --supersamples are not used",
+        ),
+        (&["--photons", "1000"][..], "a global photon map"),
+        (&["--aov", "irradiance"][..], "--aov irradiance"),
+    ] {
+        let o = render(extra);
+        assert!(!o.status.success(), "{extra:?} was accepted");
+        assert!(stderr(&o).contains(named), "{extra:?}: {}", stderr(&o));
+    }
+    let o = render(&["--caustic-photons", "2000"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("Caustic map: "), "{}", stderr(&o));
+    let stats = stats_of(&d, "x.json");
+    assert!(
+        stats["media_cache"]["caustic_map"]["stored"]
+            .as_u64()
+            .is_some_and(|n| n >= 2000),
+        "{stats}"
+    );
+}
+
 #[test]
 fn four_processes_share_one_cache_file_on_disjoint_tiles() {
     let d = temp_dir("shared-cache");

@@ -94,15 +94,48 @@ pub fn unavailable(what: &str) -> String {
     )
 }
 
+/// The irradiance cache's settings that records in media do not read (their gathers take
+/// `--media-divisions` rays, without super-samples, re-gathers, radiance records or photon
+/// records): given other than their defaults, they are refused rather than ignored.
+const UNUSED_IN_MEDIA: [&str; 12] = [
+    "divisions",
+    "record_source",
+    "supersamples",
+    "record_error",
+    "regather_at",
+    "gradient_formula",
+    "overture",
+    "record_order",
+    "radiance_order",
+    "radiance_accuracy",
+    "cached_environment",
+    "photon_records",
+];
+
 /// Refuses by name the cache's settings that records in media do not take yet (`auto` photon
-/// maps and radiance caching make none there).
+/// maps and radiance caching make none there), and those they do not read.
 pub fn available(params: &IcParams) -> Result<(), String> {
     use crate::irradiance_cache::params::{Deeper, RadianceCaching};
+    let defaults = IcParams::default().to_pairs();
+    let unused: Vec<String> = params
+        .to_pairs()
+        .into_iter()
+        .zip(defaults)
+        .filter(|((name, value), (_, default))| UNUSED_IN_MEDIA.contains(name) && value != default)
+        .map(|((name, _), _)| format!("--{}", name.replace('_', "-")))
+        .collect();
+    if !unused.is_empty() {
+        return Err(unavailable(&format!(
+            "{} {} not used there (a record's gather takes --media-divisions rays)",
+            unused.join(", "),
+            if unused.len() == 1 { "is" } else { "are" }
+        )));
+    }
     let what = if params.bounces > 1 && params.deeper == Deeper::Cache {
         "a cache per bounce (--deeper-bounces cache) is not available there: give --deeper-bounces traced"
-    } else if params.photons.is_some_and(|n| n > 0) || params.caustic_photons.is_some_and(|n| n > 0)
-    {
-        "photon maps are not available there yet"
+    } else if params.photons.is_some_and(|n| n > 0) {
+        "a global photon map is not available there yet (photons do not scatter in media; the \
+         caustic map, --caustic-photons, is)"
     } else if params.radiance_cache == RadianceCaching::On {
         "radiance caching is not available there yet"
     } else if params.uses_ambient() {
