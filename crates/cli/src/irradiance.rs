@@ -197,6 +197,7 @@ pub fn run(args: &IrradianceArgs) -> Result<()> {
         });
         (results, None)
     } else {
+        params.check_without_media().map_err(anyhow::Error::msg)?;
         pool.install(|| {
             irradiance_at_points(&scene, &params, &queries, method, direct_samples, args.seed)
         })

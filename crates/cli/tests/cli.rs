@@ -591,7 +591,8 @@ fn cache_file_holds_the_records_of_a_media_scene() {
 }
 
 /// In media, the cache's settings its records do not read, and extra images, are refused by
-/// name rather than ignored; the caustic map is made where asked, and reported.
+/// name rather than ignored, as the media's own settings are in a scene without media; the
+/// caustic map is made where asked, and reported.
 #[test]
 fn media_scenes_refuse_what_their_cache_ignores() {
     let d = temp_dir("media-settings");
@@ -639,6 +640,31 @@ fn media_scenes_refuse_what_their_cache_ignores() {
         assert!(!o.status.success(), "{extra:?} was accepted");
         assert!(stderr(&o).contains(named), "{extra:?}: {}", stderr(&o));
     }
+    // And the media's own settings in a scene without media (the built-in Cornell box).
+    let o = ircache(
+        &[
+            "render",
+            "--integrator",
+            "ic",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--media-march",
+            "4",
+            "-o",
+            "y.exr",
+        ],
+        &d,
+    );
+    assert!(!o.status.success(), "--media-march accepted without media");
+    assert!(
+        stderr(&o).contains("--media-march is for scenes with participating media"),
+        "{}",
+        stderr(&o)
+    );
     let o = render(&["--caustic-photons", "2000"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("Caustic map: "), "{}", stderr(&o));

@@ -110,6 +110,13 @@ impl Integrator {
         pool: &rayon::ThreadPool,
     ) -> Result<(Integrator, Option<crate::irradiance_cache::CacheStats>), crate::scene::RenderError>
     {
+        if let Integrator::Ic(ic) = self {
+            if !scene.has_media() {
+                ic.params
+                    .check_without_media()
+                    .map_err(crate::scene::RenderError::Invalid)?;
+            }
+        }
         match self {
             Integrator::VolPath(_) => {}
             Integrator::Direct(_) => scene.require_no_media("the direct integrator")?,

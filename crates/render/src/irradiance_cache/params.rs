@@ -1060,6 +1060,43 @@ impl IcParams {
         PARAMS.iter().map(|s| (s.name, (s.get)(self))).collect()
     }
 
+    /// The command-line names (`--media-divisions`) of the settings among `names` (the
+    /// parameter table's) that differ from their defaults: what a user gave.
+    #[must_use]
+    pub fn given_among(&self, names: &[&str]) -> Vec<String> {
+        let defaults = IcParams::default();
+        PARAMS
+            .iter()
+            .filter(|s| names.contains(&s.name) && (s.get)(self) != (s.get)(&defaults))
+            .map(|s| format!("--{}", s.name.replace('_', "-")))
+            .collect()
+    }
+
+    /// The settings only records in participating media read.
+    pub const MEDIA_ONLY: [&'static str; 7] = [
+        "media_gradient",
+        "media_light_samples",
+        "media_march",
+        "media_volume_records",
+        "media_volume_divisions",
+        "media_deeper_paths",
+        "media_divisions",
+    ];
+
+    /// Refuses the settings only records in media read ([`Self::MEDIA_ONLY`]) when given for a
+    /// scene without media.
+    pub fn check_without_media(&self) -> Result<(), String> {
+        let given = self.given_among(&Self::MEDIA_ONLY);
+        if given.is_empty() {
+            return Ok(());
+        }
+        Err(format!(
+            "{} {} for scenes with participating media; this one has none",
+            given.join(", "),
+            if given.len() == 1 { "is" } else { "are" }
+        ))
+    }
+
     /// Settings that cannot go together: unbounded bounces need the deeper bounces traced (one
     /// cache per bounce level would be endless).
     pub fn check(&self) -> Result<(), String> {

@@ -116,14 +116,7 @@ const UNUSED_IN_MEDIA: [&str; 12] = [
 /// maps and radiance caching make none there), and those they do not read.
 pub fn available(params: &IcParams) -> Result<(), String> {
     use crate::irradiance_cache::params::{Deeper, RadianceCaching};
-    let defaults = IcParams::default().to_pairs();
-    let unused: Vec<String> = params
-        .to_pairs()
-        .into_iter()
-        .zip(defaults)
-        .filter(|((name, value), (_, default))| UNUSED_IN_MEDIA.contains(name) && value != default)
-        .map(|((name, _), _)| format!("--{}", name.replace('_', "-")))
-        .collect();
+    let unused = params.given_among(&UNUSED_IN_MEDIA);
     if !unused.is_empty() {
         return Err(unavailable(&format!(
             "{} {} not used there (a record's gather takes --media-divisions rays)",
