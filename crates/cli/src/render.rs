@@ -480,8 +480,9 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
     );
     if let Some(st) = &out.media_cache {
         eprintln!(
-            "media cache: {} records ({} from the cache file), {:.1} M gather rays, {:.1} M shadow rays, {:.1} M march steps; pre-pass {:.2} s",
+            "media cache: {} records (per level: {:?}; {} from the cache file), {:.1} M gather rays, {:.1} M shadow rays, {:.1} M march steps; pre-pass {:.2} s",
             st.records,
+            st.per_level,
             st.loaded,
             st.gather_rays as f64 * 1e-6,
             st.shadow_rays as f64 * 1e-6,
@@ -646,6 +647,7 @@ fn write_stats(
             "media_cache".into(),
             serde_json::json!({
                 "records_computed": st.records,
+                "records_per_level": st.per_level,
                 "records_loaded": st.loaded,
                 "gather_rays": st.gather_rays,
                 "shadow_rays": st.shadow_rays,

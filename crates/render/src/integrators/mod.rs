@@ -289,7 +289,9 @@ fn media_cache_integrator(
         surface = contents
             .records
             .into_iter()
-            .filter(|(r, c)| r.level == 0 && c.is_none())
+            .filter(|(r, c)| {
+                u32::from(r.level) < crate::media_cache::cache::MAX_LEVELS && c.is_none()
+            })
             .map(|(r, _)| r)
             .collect();
         // A forced file of another scene may name media this one lacks.
@@ -323,10 +325,7 @@ fn media_cache_integrator(
         cache.stats.notes = notes;
         cache.stats.caustic_map = caustics.as_ref().map(|c| c.map.summary());
         if let Some(f) = file.as_mut() {
-            let new: Vec<_> = cache.records()[cache.stats.loaded..]
-                .iter()
-                .map(|&r| (r, None))
-                .collect();
+            let new: Vec<_> = cache.made().iter().map(|&r| (r, None)).collect();
             f.append(&new)?;
         }
         Some(std::sync::Arc::new(cache))

@@ -311,11 +311,11 @@ impl VolPathIntegrator {
             // against them (`path`'s split, [`super::path_continuation`]).
             let mut strategy = BsdfStrategy::All;
             let mut light_samples = 1;
-            if let Some(cache) = self.cache.as_ref().filter(|_| depth == 0) {
+            if let Some(cache) = self.cache.as_ref() {
                 let k = bsdf.lambertian_albedo(wo_local);
                 let sp = ShadingPoint::facing(it, wo);
                 let served = (!k.is_black())
-                    .then(|| cache.irradiance(it.p, sp.n, sp.n_bump))
+                    .then(|| cache.irradiance(depth, it.p, sp.n, sp.n_bump))
                     .flatten();
                 if let Some(e) = served {
                     let vertex = Vertex::Surface(&it, &bsdf, wo_local);

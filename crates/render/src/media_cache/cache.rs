@@ -42,6 +42,8 @@ use std::time::Instant;
 pub struct MediaCacheStats {
     /// Records made.
     pub records: usize,
+    /// Of them, at each level ([`MediaCache`]).
+    pub per_level: Vec<usize>,
     /// Records read from a cache file before the pre-pass.
     pub loaded: usize,
     /// What a user should hear of the cache file
@@ -61,10 +63,15 @@ pub struct MediaCacheStats {
     pub caustic_map: Option<crate::photon_map::MapSummary>,
 }
 
-/// Records in media scenes.
+/// Records in media scenes, by level: level d serves surface vertices at depth d, each record
+/// holding the bounces a path may still take there (`bounces − d`). Level 0 serves the camera
+/// rays' first surfaces; deeper levels those a camera path reaches through surfaces without a
+/// Lambertian part (glass, mirrors, metals), one level deeper at each.
 #[derive(Debug)]
 pub struct MediaCache {
-    store: RecordStore<Record>,
+    levels: Vec<RecordStore<Record>>,
+    /// The records made here, in order (not those loaded).
+    made: Vec<Record>,
     /// Interpolation mode.
     mode: GradientMode,
     /// What building it did.
@@ -168,6 +175,20 @@ pub fn make_record(
     key: u64,
     caustics: Option<&Arc<CausticMap>>,
 ) -> (Record, MediaCacheStats) {
+    make_record_at(scene, params, site, key, caustics, 0)
+}
+
+/// [`make_record`] for a surface vertex at `depth`: the bounces a path may still take there.
+fn make_record_at(
+    scene: &Scene,
+    params: &IcParams,
+    site: &RecordSite,
+    key: u64,
+    caustics: Option<&Arc<CausticMap>>,
+    depth: u32,
+) -> (Record, MediaCacheStats) {
+    let bounces = params.bounces.saturating_sub(depth);
+    let level = u8::try_from(depth).unwrap_or(u8::MAX);
     let strata = Stratification::from_divisions(params.media_divisions);
     let frame = Frame::from_z(site.n);
     let origin = offset_ray_origin(site.p, site.ng, site.n, scene.scale);
@@ -176,7 +197,7 @@ pub fn make_record(
     let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
         .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()])
         .with_gradients(gradients)
-        .with_deeper_bounces(params.bounces, params.media_deeper_paths, caustics);
+        .with_deeper_bounces(bounces, params.media_deeper_paths, caustics);
     let d = |v: Vec3| v.as_dvec3();
     let n = strata.azimuthal;
     let layout = params
@@ -238,7 +259,7 @@ pub fn make_record(
         r,
         grad_t,
         grad_r,
-        level: 0,
+        level,
         ray_variance: 0.0,
         radiance: NO_RADIANCE,
     };
@@ -266,28 +287,87 @@ pub fn first_site(scene: &Scene, ray: ircache_math::Ray) -> Option<RecordSite> {
     })
 }
 
+/// Most levels of records ([`MediaCache`]): the first surface and two deeper (a glass sphere's
+/// two refractions, or a metal's reflection).
+pub const MAX_LEVELS: u32 = 3;
+
+/// The surface a camera ray's path reaches at depth `depth` (> 0) through surfaces without a
+/// Lambertian part, each passed along a sample of its BSDF drawn from `key`, as a record site,
+/// if it has a Lambertian part seen from the path's side; `None` where the path meets such a
+/// part sooner, an emitter, a window pane or a mask, or nothing.
+#[must_use]
+pub fn site_at_depth(
+    scene: &Scene,
+    mut ray: ircache_math::Ray,
+    depth: u32,
+    key: u64,
+) -> Option<RecordSite> {
+    let mut medium = scene.camera_medium;
+    let mut rng = Rng::keyed(key, &[SITE_KEY]);
+    for d in 0..=depth {
+        let hit = first_opaque(scene, ray, medium, &mut 0, |_, _, _| {})?;
+        let it = hit.it;
+        let shape = &scene.shapes[it.shape as usize];
+        if shape.area_light.is_some() || shape.thin_sheet || shape.masked {
+            return None;
+        }
+        let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
+        let wo = it.frame.to_local(-ray.d);
+        if !bsdf.lambertian_albedo(wo).is_black() {
+            if d < depth {
+                return None;
+            }
+            let n = ShadingPoint::facing(it, -ray.d).n;
+            return Some(RecordSite {
+                p: it.p,
+                ng: it.ng,
+                n,
+                medium: medium_after(shape.media, it.ng, n, hit.medium),
+                footprint: 0.0,
+            });
+        }
+        let bs = bsdf.sample(wo, rng.next_f32(), rng.next_2d())?;
+        let wi = it.frame.from_local(bs.wi);
+        medium = medium_after(shape.media, it.ng, wi, hit.medium);
+        ray = scene.spawn_ray(&it, wi);
+    }
+    None
+}
+
+/// The key of a deeper site's lobe samples.
+const SITE_KEY: u64 = 0x7369_7465;
+
 impl MediaCache {
-    /// An empty cache.
+    /// An empty cache, with a level for each depth that has a bounce left, at most
+    /// [`MAX_LEVELS`].
     #[must_use]
     pub fn new(scene: &Scene, params: &IcParams) -> MediaCache {
         let (r_min, _) = params.radius_limits(2.0 * scene.radius);
         let min_validity = (params.accuracy * r_min).max(scene.radius * 1e-4);
+        let levels = params.bounces.clamp(1, MAX_LEVELS) as usize;
         MediaCache {
-            store: RecordStore::new(
-                min_validity,
-                params.accuracy,
-                media_metric(params.error_metric),
-                params.neighbour_clamp,
-            ),
+            levels: (0..levels)
+                .map(|_| {
+                    RecordStore::new(
+                        min_validity,
+                        params.accuracy,
+                        media_metric(params.error_metric),
+                        params.neighbour_clamp,
+                    )
+                })
+                .collect(),
+            made: Vec::new(),
             mode: params.gradients,
-            stats: MediaCacheStats::default(),
+            stats: MediaCacheStats {
+                per_level: vec![0; levels],
+                ..MediaCacheStats::default()
+            },
         }
     }
 
-    /// Fills the cache from the first hits of camera rays through the centres of a
-    /// `width` × `height` image (run inside a rayon pool), after the records `loaded` (from a
-    /// cache file), which come first in [`Self::records`]; with `caustics`, records without
-    /// the caustics that map serves.
+    /// Fills the cache from the camera paths through the centres of a `width` × `height` image
+    /// (run inside a rayon pool), level by level, after the records `loaded` (from a cache
+    /// file); with `caustics`, records without the caustics that map serves.
     #[must_use]
     pub fn build(
         scene: &Scene,
@@ -301,7 +381,9 @@ impl MediaCache {
         let mut cache = MediaCache::new(scene, params);
         cache.stats.loaded = loaded.len();
         for record in loaded {
-            cache.store.insert(record);
+            if let Some(level) = cache.levels.get_mut(usize::from(record.level)) {
+                level.insert(record);
+            }
         }
         let pixel_spread = scene.camera.pixel_spread(width);
         // Sites of one row closer than this (and facing alike) share a record.
@@ -310,62 +392,70 @@ impl MediaCache {
             .0
             .max(scene.radius * 1e-3)
             * params.accuracy;
-        for y in 0..height {
-            // The row's sites that no record covers yet, thinned against each other by the
-            // smallest record spacing.
-            let mut wanted: Vec<(usize, RecordSite)> = Vec::new();
-            for x in 0..width {
-                let film = ircache_math::Vec2::new(
-                    (x as f32 + 0.5) / width as f32,
-                    (y as f32 + 0.5) / height as f32,
-                );
-                let ray = scene.camera.generate_ray(film);
-                let Some(mut site) = first_site(scene, ray) else {
-                    continue;
-                };
-                // The pixel's footprint at the site (000 eq. 3.60): the camera ray is straight
-                // through null boundaries and media.
-                site.footprint = pixel_footprint(
-                    pixel_spread,
-                    (site.p - ray.o).length(),
-                    site.n.dot(ray.d).abs(),
-                );
-                if cache.store.covers(site.p, site.n) {
-                    continue;
+        for level in 0..cache.levels.len() {
+            for y in 0..height {
+                // The row's sites that no record covers yet, thinned against each other by the
+                // smallest record spacing.
+                let mut wanted: Vec<(u64, RecordSite)> = Vec::new();
+                for x in 0..width {
+                    let film = ircache_math::Vec2::new(
+                        (x as f32 + 0.5) / width as f32,
+                        (y as f32 + 0.5) / height as f32,
+                    );
+                    let ray = scene.camera.generate_ray(film);
+                    let pixel = (y * width + x) as u64;
+                    let key = ircache_math::rng::mix64(
+                        seed ^ pixel.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                            ^ (level as u64).wrapping_mul(0xD1B5_4A32_D192_ED03),
+                    );
+                    let site = if level == 0 {
+                        first_site(scene, ray).map(|mut site| {
+                            // The pixel's footprint at the site (000 eq. 3.60): the camera ray
+                            // is straight through null boundaries and media.
+                            site.footprint = pixel_footprint(
+                                pixel_spread,
+                                (site.p - ray.o).length(),
+                                site.n.dot(ray.d).abs(),
+                            );
+                            site
+                        })
+                    } else {
+                        site_at_depth(scene, ray, level as u32, key)
+                    };
+                    let Some(site) = site else {
+                        continue;
+                    };
+                    if cache.levels[level].covers(site.p, site.n) {
+                        continue;
+                    }
+                    if wanted
+                        .iter()
+                        .any(|(_, w)| (w.p - site.p).length() < spacing && w.n.dot(site.n) > 0.9)
+                    {
+                        continue;
+                    }
+                    wanted.push((key, site));
                 }
-                if wanted
-                    .iter()
-                    .any(|(_, w)| (w.p - site.p).length() < spacing && w.n.dot(site.n) > 0.9)
-                {
-                    continue;
+                let made: Vec<(Record, MediaCacheStats)> = wanted
+                    .par_iter()
+                    .map(|(key, site)| {
+                        make_record_at(scene, params, site, *key, caustics, level as u32)
+                    })
+                    .collect();
+                for (record, st) in made {
+                    // A record an earlier one of this row already covers is dropped (the row
+                    // was chosen before any of its records existed).
+                    if cache.levels[level].covers(record.p, record.n) {
+                        continue;
+                    }
+                    cache.levels[level].insert(record);
+                    cache.made.push(record);
+                    cache.stats.records += 1;
+                    cache.stats.per_level[level] += 1;
+                    cache.stats.gather_rays += st.gather_rays;
+                    cache.stats.shadow_rays += st.shadow_rays;
+                    cache.stats.march_steps += st.march_steps;
                 }
-                wanted.push((y * width + x, site));
-            }
-            let made: Vec<(Record, MediaCacheStats)> = wanted
-                .par_iter()
-                .map(|(pixel, site)| {
-                    make_record(
-                        scene,
-                        params,
-                        site,
-                        ircache_math::rng::mix64(
-                            seed ^ (*pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
-                        ),
-                        caustics,
-                    )
-                })
-                .collect();
-            for (record, st) in made {
-                // A record an earlier one of this row already covers is dropped (the row was
-                // chosen before any of its records existed).
-                if cache.store.covers(record.p, record.n) {
-                    continue;
-                }
-                cache.store.insert(record);
-                cache.stats.records += 1;
-                cache.stats.gather_rays += st.gather_rays;
-                cache.stats.shadow_rays += st.shadow_rays;
-                cache.stats.march_steps += st.march_steps;
             }
         }
         cache.stats.seconds = start.elapsed().as_secs_f64();
@@ -373,19 +463,27 @@ impl MediaCache {
         cache
     }
 
-    /// Interpolated irradiance at `p` with normal `n` (bump-mapped `n_rot`), relaxing the
-    /// accuracy up to twice where no record reaches at once; `None` where none does.
+    /// Interpolated irradiance at `p` with normal `n` (bump-mapped `n_rot`) for a surface
+    /// vertex at `depth`, relaxing the accuracy up to twice where no record reaches at once;
+    /// `None` where none does.
     #[must_use]
-    pub fn irradiance(&self, p: Vec3, n: Vec3, n_rot: Vec3) -> Option<Rgb> {
+    pub fn irradiance(&self, depth: u32, p: Vec3, n: Vec3, n_rot: Vec3) -> Option<Rgb> {
+        let level = self.levels.get(depth as usize)?;
         [1.0, 2.0]
             .into_iter()
-            .find_map(|threshold| self.store.interpolate(p, n, n_rot, threshold, self.mode))
+            .find_map(|threshold| level.interpolate(p, n, n_rot, threshold, self.mode))
             .map(|i| i.e)
     }
 
-    /// The records.
+    /// The records of the camera rays' first surfaces (level 0).
     #[must_use]
     pub fn records(&self) -> &[Record] {
-        self.store.records()
+        self.levels[0].records()
+    }
+
+    /// The records made by [`Self::build`], every level, in the order made.
+    #[must_use]
+    pub fn made(&self) -> &[Record] {
+        &self.made
     }
 }
