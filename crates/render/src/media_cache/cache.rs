@@ -187,7 +187,11 @@ fn make_record_at(
     caustics: Option<&Arc<CausticMap>>,
     depth: u32,
 ) -> (Record, MediaCacheStats) {
-    let bounces = params.bounces.saturating_sub(depth);
+    let bounces = if params.bounces == crate::irradiance_cache::params::UNBOUNDED {
+        params.bounces
+    } else {
+        params.bounces.saturating_sub(depth)
+    };
     let level = u8::try_from(depth).unwrap_or(u8::MAX);
     let strata = Stratification::from_divisions(params.media_divisions);
     let frame = Frame::from_z(site.n);
