@@ -887,9 +887,35 @@ fn marched_camera_rays_go_on_through_glass() {
         &[("error_metric", "ward")],
     );
     let image = render_desc(&desc, 2, 2).image;
-    // The pixels whose camera ray meets the glass first (through the fog box's null faces).
     let scene = Scene::build(&desc).expect("scene");
-    let through_glass = |x: u32, y: u32| {
+    // The pixels whose camera ray meets the glass first.
+    let glass = pixels_first_meeting(&scene, size, &reference, |_, bsdf, _| !bsdf.has_smooth());
+    assert!(glass.len() > 20, "{} pixels see the glass", glass.len());
+    let ratio = luminance_ratio_over(&glass, &image, &reference);
+    assert!(
+        (ratio - 1.0).abs() < 0.08,
+        "through the glass: luminance ratio {ratio}"
+    );
+    let (m, _) = against(&image, &reference);
+    assert!(
+        (m.lum_ratio - 1.0).abs() < 0.015,
+        "whole image: luminance ratio {}",
+        m.lum_ratio
+    );
+}
+
+/// The pixels of `scene`'s `size`² image whose camera ray (through null boundaries) first meets
+/// an opaque surface that emits nothing and whose BSDF there, seen along the ray (local `wo`),
+/// satisfies `first`; less the few that see the lamp's small images in it (brighter than four
+/// times the median of `reference` over them), whose coverage by a pixel's samples would
+/// decide their mean.
+fn pixels_first_meeting(
+    scene: &Scene,
+    size: u32,
+    reference: &ircache_image::Image,
+    first: impl Fn(&Scene, &ircache_render::bsdf::Bsdf, Vec3) -> bool,
+) -> Vec<usize> {
+    let meets = |x: u32, y: u32| {
         let film = ircache_math::Vec2::new(
             (x as f32 + 0.5) / size as f32,
             (y as f32 + 0.5) / size as f32,
@@ -901,48 +927,46 @@ fn marched_camera_rays_go_on_through_glass() {
             };
             let shape = &scene.shapes[it.shape as usize];
             if !shape.null {
-                return !it
-                    .bsdf(&scene.materials[shape.material], ray.d)
-                    .has_smooth();
+                let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
+                return shape.area_light.is_none()
+                    && first(scene, &bsdf, it.frame.to_local(-ray.d));
             }
             ray = scene.spawn_ray(&it, ray.d);
         }
         false
     };
-    let luminance = |p: Rgb| f64::from(0.2126 * p.r + 0.7152 * p.g + 0.0722 * p.b);
-    let glass: Vec<usize> = (0..size * size)
-        .filter(|&i| through_glass(i % size, i / size))
+    let pixels: Vec<usize> = (0..size * size)
+        .filter(|&i| meets(i % size, i / size))
         .map(|i| i as usize)
         .collect();
-    // Less the few pixels that see the lamp itself through the sphere (its small refracted
-    // image, whose coverage by a pixel's samples would decide the mean).
-    let mut seen: Vec<f64> = glass
+    let mut seen: Vec<f64> = pixels
         .iter()
         .map(|&i| luminance(reference.pixels[i]))
         .collect();
     seen.sort_by(f64::total_cmp);
-    let median = seen[seen.len() / 2];
-    let glass: Vec<usize> = glass
+    let Some(&median) = seen.get(seen.len() / 2) else {
+        return pixels;
+    };
+    pixels
         .into_iter()
         .filter(|&i| luminance(reference.pixels[i]) < 4.0 * median)
-        .collect();
-    assert!(glass.len() > 20, "{} pixels see the glass", glass.len());
-    let ratio_over_glass = |img: &ircache_image::Image| {
-        let sum =
-            |im: &ircache_image::Image| glass.iter().map(|&i| luminance(im.pixels[i])).sum::<f64>();
-        sum(img) / sum(&reference)
-    };
-    let ratio = ratio_over_glass(&image);
-    assert!(
-        (ratio - 1.0).abs() < 0.08,
-        "through the glass: luminance ratio {ratio}"
-    );
-    let (m, _) = against(&image, &reference);
-    assert!(
-        (m.lum_ratio - 1.0).abs() < 0.015,
-        "whole image: luminance ratio {}",
-        m.lum_ratio
-    );
+        .collect()
+}
+
+/// Luminance (Rec. 709).
+fn luminance(p: Rgb) -> f64 {
+    f64::from(0.2126 * p.r + 0.7152 * p.g + 0.0722 * p.b)
+}
+
+/// The summed luminance of `image` over `pixels` against `reference`'s.
+fn luminance_ratio_over(
+    pixels: &[usize],
+    image: &ircache_image::Image,
+    reference: &ircache_image::Image,
+) -> f64 {
+    let sum =
+        |im: &ircache_image::Image| pixels.iter().map(|&i| luminance(im.pixels[i])).sum::<f64>();
+    sum(image) / sum(reference)
 }
 
 /// Records by depth in media (`MediaCache`'s levels): in `scenes/glass-in-fog` at its own
@@ -973,53 +997,16 @@ fn media_records_by_depth_serve_what_glass_and_metal_show() {
         "records per level {per_level:?}"
     );
     let scene = Scene::build(&desc).expect("scene");
-    let without_lambertian = |x: u32, y: u32| {
-        let film = ircache_math::Vec2::new(
-            (x as f32 + 0.5) / size as f32,
-            (y as f32 + 0.5) / size as f32,
-        );
-        let mut ray = scene.camera.generate_ray(film);
-        for _ in 0..8 {
-            let Some(it) = scene.intersect(&ray) else {
-                return false;
-            };
-            let shape = &scene.shapes[it.shape as usize];
-            if !shape.null {
-                let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
-                return shape.area_light.is_none()
-                    && bsdf.lambertian_albedo(it.frame.to_local(-ray.d)).is_black();
-            }
-            ray = scene.spawn_ray(&it, ray.d);
-        }
-        false
-    };
-    let luminance = |p: Rgb| f64::from(0.2126 * p.r + 0.7152 * p.g + 0.0722 * p.b);
-    let spheres: Vec<usize> = (0..size * size)
-        .filter(|&i| without_lambertian(i % size, i / size))
-        .map(|i| i as usize)
-        .collect();
-    let mut seen: Vec<f64> = spheres
-        .iter()
-        .map(|&i| luminance(reference.pixels[i]))
-        .collect();
-    seen.sort_by(f64::total_cmp);
-    let median = seen[seen.len() / 2];
-    let spheres: Vec<usize> = spheres
-        .into_iter()
-        .filter(|&i| luminance(reference.pixels[i]) < 4.0 * median)
-        .collect();
+    // The pixels whose camera ray meets a surface without a Lambertian part first.
+    let spheres = pixels_first_meeting(&scene, size, &reference, |_, bsdf, wo| {
+        bsdf.lambertian_albedo(wo).is_black()
+    });
     assert!(
         spheres.len() > 30,
         "{} pixels see the spheres",
         spheres.len()
     );
-    let sum = |im: &ircache_image::Image| {
-        spheres
-            .iter()
-            .map(|&i| luminance(im.pixels[i]))
-            .sum::<f64>()
-    };
-    let ratio = sum(&out.image) / sum(&reference);
+    let ratio = luminance_ratio_over(&spheres, &out.image, &reference);
     assert!(
         (ratio - 1.0).abs() < 0.06,
         "on the spheres: luminance ratio {ratio}"
@@ -1064,7 +1051,6 @@ fn caustic_photons_in_fog_replace_the_gathers_caustic_paths() {
         ..IcParams::default()
     };
     let map = Arc::new(media_caustic_map(&scene, &params, 5).expect("a caustic map"));
-    let luminance = |c: Rgb| f64::from(0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b);
     let up = Vec3::Y;
     // (whole gather, gather without caustics, map) at a floor point.
     let at = |x: f32, z: f32, key: u64| {

@@ -13,7 +13,7 @@ use super::path_continuation::{
 use super::{mis_weight, RayCounts};
 use crate::irradiance_cache::gather::ShadingPoint;
 use crate::media::tracking::{
-    medium_after, sample_flight, transmittance_along, Flight, MAX_CROSSINGS,
+    across_boundary, medium_after, sample_flight, transmittance_along, Flight,
 };
 use crate::media::Phase;
 use crate::sampler::{dims, Sampler};
@@ -252,12 +252,10 @@ impl VolPathIntegrator {
             let shape = &scene.shapes[it.shape as usize];
             if shape.null {
                 // An index-matched boundary: the ray goes on, in the medium beyond.
-                crossings += 1;
-                if crossings > MAX_CROSSINGS {
+                let Some(next) = across_boundary(scene, &it, ray.d, medium, &mut crossings) else {
                     break;
-                }
-                medium = medium_after(shape.media, it.ng, ray.d, medium);
-                ray = scene.spawn_ray(&it, ray.d);
+                };
+                (ray, medium) = next;
                 continue;
             }
             if scene.has_see_through && (shape.thin_sheet || shape.masked) {

@@ -182,6 +182,27 @@ pub fn medium_at(scene: &Scene, p: Vec3, dir: Vec3) -> Option<usize> {
     scene.camera_medium
 }
 
+/// The ray on past the `null` boundary at `it` along `d` (no bounce), with the medium beyond;
+/// `None` once `crossings`, which counts them, passes [`MAX_CROSSINGS`].
+#[must_use]
+pub fn across_boundary(
+    scene: &Scene,
+    it: &Interaction,
+    d: Vec3,
+    medium: Option<usize>,
+    crossings: &mut u32,
+) -> Option<(Ray, Option<usize>)> {
+    *crossings += 1;
+    if *crossings > MAX_CROSSINGS {
+        return None;
+    }
+    let shape = &scene.shapes[it.shape as usize];
+    Some((
+        scene.spawn_ray(it, d),
+        medium_after(shape.media, it.ng, d, medium),
+    ))
+}
+
 /// The first opaque surface a ray meets, past any null boundaries.
 #[derive(Clone, Copy, Debug)]
 pub struct OpaqueHit {

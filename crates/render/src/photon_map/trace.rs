@@ -33,7 +33,7 @@
 use super::photon::Photon;
 use crate::lights::emission::Targets;
 use crate::lights::is_positive_finite;
-use crate::media::tracking::{medium_after, medium_at, transmittance, MAX_CROSSINGS};
+use crate::media::tracking::{across_boundary, medium_after, medium_at, transmittance};
 use crate::scene::{Scene, ShapeGeometry};
 use ircache_math::ray::offset_ray_origin;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
@@ -227,12 +227,10 @@ fn trace_one(
         let shape = &scene.shapes[it.shape as usize];
         if shape.null {
             // A medium's boundary: crossed without a bounce, into the medium beyond.
-            crossings += 1;
-            if crossings > MAX_CROSSINGS {
+            let Some(next) = across_boundary(scene, &it, ray.d, medium, &mut crossings) else {
                 break;
-            }
-            medium = medium_after(shape.media, it.ng, ray.d, medium);
-            ray = scene.spawn_ray(&it, ray.d);
+            };
+            (ray, medium) = next;
             continue;
         }
         if shape.masked && rng.next_f32() >= scene.materials[shape.material].opacity(it.uv) {
