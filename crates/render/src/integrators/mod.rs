@@ -325,7 +325,7 @@ fn media_cache_integrator(
         cache.stats.notes = notes;
         cache.stats.caustic_map = caustics.as_ref().map(|c| c.map.summary());
         if let Some(f) = file.as_mut() {
-            let new: Vec<_> = cache.made().iter().map(|&r| (r, None)).collect();
+            let new: Vec<_> = cache.made().map(|&r| (r, None)).collect();
             f.append(&new)?;
         }
         Some(std::sync::Arc::new(cache))

@@ -1091,10 +1091,16 @@ impl IcParams {
             return Ok(());
         }
         Err(format!(
-            "{} {} for scenes with participating media; this one has none",
-            given.join(", "),
-            if given.len() == 1 { "is" } else { "are" }
+            "{} for scenes with participating media; this one has none",
+            Self::named(&given)
         ))
+    }
+
+    /// Settings' names as the subject of a sentence: `--a is`, `--a, --b are`.
+    #[must_use]
+    pub fn named(given: &[String]) -> String {
+        let verb = if given.len() == 1 { "is" } else { "are" };
+        format!("{} {verb}", given.join(", "))
     }
 
     /// Settings that cannot go together: unbounded bounces need the deeper bounces traced (one

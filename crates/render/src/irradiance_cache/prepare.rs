@@ -263,18 +263,15 @@ fn photon_seed(seed: u64) -> u64 {
 }
 
 /// The caustic map of the cache in media (`None` without caustic photons, or where no surface
-/// makes caustics): photons of up to `bounces` bounces, as a first surface's caustic may take
-/// at `max_depth` = bounces + 2.
+/// makes caustics, whose tracing stores none): photons of up to `bounces` bounces, as a first
+/// surface's caustic may take at `max_depth` = bounces + 2.
 #[must_use]
 pub fn media_caustic_map(
     scene: &Scene,
     params: &super::IcParams,
     seed: u64,
 ) -> Option<crate::photon_map::CausticMap> {
-    if params.caustic_photons() == 0
-        || params.bounces == 0
-        || crate::photon_map::trace::caustic_targets(scene).is_empty()
-    {
+    if params.bounces == 0 {
         return None;
     }
     let bounces = crate::photon_map::bounce_limit(params.bounces);

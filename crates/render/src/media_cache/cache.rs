@@ -70,8 +70,8 @@ pub struct MediaCacheStats {
 #[derive(Debug)]
 pub struct MediaCache {
     levels: Vec<RecordStore<Record>>,
-    /// The records made here, in order (not those loaded).
-    made: Vec<Record>,
+    /// Of each level's records, how many came from a cache file (they come first).
+    loaded: Vec<usize>,
     /// Interpolation mode.
     mode: GradientMode,
     /// What building it did.
@@ -126,9 +126,8 @@ pub fn available(params: &IcParams) -> Result<(), String> {
     let unused = params.given_among(&UNUSED_IN_MEDIA);
     if !unused.is_empty() {
         return Err(unavailable(&format!(
-            "{} {} not used there (a record's gather takes --media-divisions rays)",
-            unused.join(", "),
-            if unused.len() == 1 { "is" } else { "are" }
+            "{} not used there (a record's gather takes --media-divisions rays)",
+            IcParams::named(&unused)
         )));
     }
     let what = if params.bounces > 1 && params.deeper == Deeper::Cache {
@@ -274,31 +273,18 @@ fn make_record_at(
 /// its BSDF has a Lambertian part seen from the ray's side (the part the cache serves).
 #[must_use]
 pub fn first_site(scene: &Scene, ray: ircache_math::Ray) -> Option<RecordSite> {
-    let hit = first_opaque(scene, ray, scene.camera_medium, &mut 0, |_, _, _| {})?;
-    let it = hit.it;
-    let shape = &scene.shapes[it.shape as usize];
-    let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
-    if bsdf.lambertian_albedo(it.frame.to_local(-ray.d)).is_black() {
-        return None;
-    }
-    let n = ShadingPoint::facing(it, -ray.d).n;
-    Some(RecordSite {
-        p: it.p,
-        ng: it.ng,
-        n,
-        medium: medium_after(shape.media, it.ng, n, hit.medium),
-        footprint: 0.0,
-    })
+    site_at_depth(scene, ray, 0, 0)
 }
 
 /// Most levels of records ([`MediaCache`]): the first surface and two deeper (a glass sphere's
 /// two refractions, or a metal's reflection).
 pub const MAX_LEVELS: u32 = 3;
 
-/// The surface a camera ray's path reaches at depth `depth` (> 0) through surfaces without a
-/// Lambertian part, each passed along a sample of its BSDF drawn from `key`, as a record site,
-/// if it has a Lambertian part seen from the path's side; `None` where the path meets such a
-/// part sooner, an emitter, a window pane or a mask, or nothing.
+/// The surface a camera ray's path reaches at depth `depth` through surfaces without a
+/// Lambertian part, each passed along a sample of its BSDF drawn from `key` (none at depth 0:
+/// the first opaque surface), as a record site, if it has a Lambertian part seen from the
+/// path's side; `None` where the path meets such a part sooner, meets an emitter, a window pane
+/// or a mask past the first surface, or meets nothing.
 #[must_use]
 pub fn site_at_depth(
     scene: &Scene,
@@ -312,7 +298,9 @@ pub fn site_at_depth(
         let hit = first_opaque(scene, ray, medium, &mut 0, |_, _, _| {})?;
         let it = hit.it;
         let shape = &scene.shapes[it.shape as usize];
-        if shape.area_light.is_some() || shape.thin_sheet || shape.masked {
+        // Past lobe samples, an emitter, a pane or a mask ends the path (the first surface may
+        // be any).
+        if depth > 0 && (shape.area_light.is_some() || shape.thin_sheet || shape.masked) {
             return None;
         }
         let bsdf = it.bsdf(&scene.materials[shape.material], ray.d);
@@ -329,6 +317,9 @@ pub fn site_at_depth(
                 medium: medium_after(shape.media, it.ng, n, hit.medium),
                 footprint: 0.0,
             });
+        }
+        if d == depth {
+            return None;
         }
         let bs = bsdf.sample(wo, rng.next_f32(), rng.next_2d())?;
         let wi = it.frame.from_local(bs.wi);
@@ -360,7 +351,7 @@ impl MediaCache {
                     )
                 })
                 .collect(),
-            made: Vec::new(),
+            loaded: vec![0; levels],
             mode: params.gradients,
             stats: MediaCacheStats {
                 per_level: vec![0; levels],
@@ -385,8 +376,10 @@ impl MediaCache {
         let mut cache = MediaCache::new(scene, params);
         cache.stats.loaded = loaded.len();
         for record in loaded {
-            if let Some(level) = cache.levels.get_mut(usize::from(record.level)) {
-                level.insert(record);
+            let level = usize::from(record.level);
+            if let Some(store) = cache.levels.get_mut(level) {
+                store.insert(record);
+                cache.loaded[level] += 1;
             }
         }
         let pixel_spread = scene.camera.pixel_spread(width);
@@ -453,7 +446,6 @@ impl MediaCache {
                         continue;
                     }
                     cache.levels[level].insert(record);
-                    cache.made.push(record);
                     cache.stats.records += 1;
                     cache.stats.per_level[level] += 1;
                     cache.stats.gather_rays += st.gather_rays;
@@ -485,9 +477,11 @@ impl MediaCache {
         self.levels[0].records()
     }
 
-    /// The records made by [`Self::build`], every level, in the order made.
-    #[must_use]
-    pub fn made(&self) -> &[Record] {
-        &self.made
+    /// The records made by [`Self::build`], level by level.
+    pub fn made(&self) -> impl Iterator<Item = &Record> {
+        self.levels
+            .iter()
+            .zip(&self.loaded)
+            .flat_map(|(store, &loaded)| &store.records()[loaded..])
     }
 }

@@ -149,9 +149,7 @@ impl PhotonMap {
         }
         estimate::irradiance(&self.tree, p, n, max_bounces, lookup)
     }
-}
 
-impl PhotonMap {
     /// The caustic map of `wanted` photons of up to `max_bounces` bounces, on a stream of its
     /// own of `seed`; `None` when `wanted` is 0 or nothing was stored, so that the paths keep
     /// the light it would hold. Caustics are sharp and seen directly: estimated where they are
@@ -164,6 +162,16 @@ impl PhotonMap {
                 PhotonMap::build(scene, MapKind::Caustic, wanted, max_bounces, seed, None)
             })
             .filter(|m| !m.tree.is_empty())
+    }
+
+    /// What making it did.
+    #[must_use]
+    pub fn summary(&self) -> MapSummary {
+        MapSummary {
+            kind: self.kind,
+            stats: self.stats,
+            seconds: self.seconds,
+        }
     }
 }
 
@@ -246,18 +254,6 @@ pub struct MapSummary {
     pub stats: TraceStats,
     /// Seconds spent tracing and building it.
     pub seconds: f64,
-}
-
-impl PhotonMap {
-    /// What making it did.
-    #[must_use]
-    pub fn summary(&self) -> MapSummary {
-        MapSummary {
-            kind: self.kind,
-            stats: self.stats,
-            seconds: self.seconds,
-        }
-    }
 }
 
 impl std::fmt::Display for MapSummary {
