@@ -234,7 +234,7 @@ impl SamplerSettings {
             row_seed,
             index: 0,
             dim: 0,
-            high_digits: [u64::MAX; CACHED_DIMS],
+            sobol_dims: [None; CACHED_DIMS],
             dim_hashes: [0; CACHED_DIMS],
             batch: Batch::default(),
         }
@@ -282,6 +282,29 @@ const DIGIT_PERMUTATIONS: [[u8; 4]; 24] = [
     [3, 0, 1, 2],
 ];
 
+/// The first base-4 digit of a `sobol` sample index that lies wholly in the pixel's Morton code
+/// (those below hold the sample's own bits; with an odd log₂ spp, the lowest bit alone).
+#[inline]
+fn first_pixel_digit(log2_spp: u32) -> u32 {
+    log2_spp.div_ceil(2).max(log2_spp & 1)
+}
+
+/// The base-4 digits `digits` of the Morton-ordered index `morton` (shifted down one bit when
+/// `odd`), each permuted by a hash of the digits above it and `salt` (pbrt-v4's
+/// `ZSobolSampler::GetSampleIndex`); the other bits zero.
+#[inline]
+fn permuted_digits(morton: u64, salt: u64, odd: bool, digits: std::ops::Range<u32>) -> u64 {
+    let mut index = 0u64;
+    for i in digits {
+        let shift = 2 * i - u32::from(odd);
+        let digit = (morton >> shift) & 3;
+        let higher = morton >> (shift + 2);
+        let p = (hash64(higher, salt) >> 40) % 24;
+        index |= u64::from(DIGIT_PERMUTATIONS[p as usize][digit as usize]) << shift;
+    }
+    index
+}
+
 /// One pixel's samples.
 #[derive(Clone, Debug)]
 pub struct PixelSampler<'a> {
@@ -291,9 +314,8 @@ pub struct PixelSampler<'a> {
     row_seed: u32,
     index: u32,
     dim: u32,
-    /// `sobol`: per dimension, the permuted digits of the pixel's part of the sample index (the
-    /// same for all the pixel's samples); `u64::MAX` until computed.
-    high_digits: [u64; CACHED_DIMS],
+    /// `sobol`: per dimension, what all the pixel's samples share (`None` until computed).
+    sobol_dims: [Option<SobolDim>; CACHED_DIMS],
     /// Per dimension, the pixel's hash of it (0 until computed).
     dim_hashes: [u64; CACHED_DIMS],
     /// The values of a batch of consecutive samples, each dimension's filled at its first draw.
@@ -356,6 +378,20 @@ impl Default for Batch {
 /// Dimensions whose per-pixel values (Sobol' pixel digits, dimension hashes) a pixel sampler
 /// keeps.
 const CACHED_DIMS: usize = 48;
+
+/// `sobol`: what a pixel's draws of one dimension share, computed once per pixel and dimension
+/// instead of at every draw.
+#[derive(Clone, Copy, Debug)]
+struct SobolDim {
+    /// The permuted digits of the pixel's part of the sample index.
+    high: u64,
+    /// Progressive: the pixel's shuffle of its own samples (the octave shuffle's seed in the low
+    /// word, the XOR in the high one).
+    shuffle: u64,
+    /// The Owen scrambles' seeds: the first coordinate's in the low word, the second's (and a
+    /// 1-D draw's) in the high one.
+    scramble: u64,
+}
 
 /// A permutation of `0..2^32` that maps every octave `[2^t, 2^(t+1))` (and 0, 1) to itself: the
 /// bits below `j`'s highest are nested-scrambled (each flipped by a hash of the bits above it),
@@ -553,50 +589,62 @@ impl PixelSampler<'_> {
     /// which every prefix of a power-of-two length keeps, then XORed with a constant (which maps
     /// aligned blocks to aligned blocks); both differ per dimension and pixel, so that dimension
     /// pairs do not pair the same points.
-    fn sobol_index(&mut self, dim: u32) -> u64 {
-        let Grid {
-            log2_spp, digits, ..
-        } = self.s.grid;
-        let odd = log2_spp & 1 == 1;
-        let morton = self.morton << log2_spp | u64::from(self.index);
-        let salt = (0x5555_5555u64).wrapping_mul(u64::from(dim)) ^ self.s.seed;
-        let last = u32::from(odd);
-        // Digits from this one up lie wholly in the pixel's Morton code.
-        let first_pixel_digit = log2_spp.div_ceil(2).max(last);
-        let permuted = |from: u32, to: u32| {
-            let mut index = 0u64;
-            for i in from..to {
-                let shift = 2 * i - u32::from(odd);
-                let digit = (morton >> shift) & 3;
-                let higher = morton >> (shift + 2);
-                let p = (hash64(higher, salt) >> 40) % 24;
-                index |= u64::from(DIGIT_PERMUTATIONS[p as usize][digit as usize]) << shift;
-            }
-            index
-        };
-        let high = match self.high_digits.get_mut(dim as usize) {
-            Some(&mut h) if h != u64::MAX => h,
-            Some(slot) => {
-                *slot = permuted(first_pixel_digit, digits);
-                *slot
-            }
-            None => permuted(first_pixel_digit, digits),
-        };
+    fn sobol_index(&mut self, dim: u32) -> (u64, u64) {
+        let log2_spp = self.s.grid.log2_spp;
+        let sd = self.sobol_dim(dim);
         if self.s.progressive {
             // Seeded by pixel and dimension: a shuffle shared by the pixels would give every
             // pixel the same pairing of one dimension's points with another's, and without the
             // XOR (which moves each aligned prefix block to another) sample 0 would be the same
             // point of every pixel's block.
-            let h = hash64(self.morton, salt ^ 0x0c7a);
             let mask = (1u64 << log2_spp) - 1;
-            let own = u64::from(octave_shuffle(self.index, h as u32)) ^ ((h >> 32) & mask);
-            return high | own;
+            let own = u64::from(octave_shuffle(self.index, sd.shuffle as u32))
+                ^ ((sd.shuffle >> 32) & mask);
+            return (sd.high | own, sd.scramble);
         }
-        let mut index = high | permuted(last, first_pixel_digit);
+        let odd = log2_spp & 1 == 1;
+        let morton = self.morton << log2_spp | u64::from(self.index);
+        let salt = Self::sobol_salt(self.s.seed, dim);
+        let last = u32::from(odd);
+        let mut index =
+            sd.high | permuted_digits(morton, salt, odd, last..first_pixel_digit(log2_spp));
         if odd {
             index |= (morton & 1) ^ (hash64(morton >> 1, salt) & 1);
         }
-        index
+        (index, sd.scramble)
+    }
+
+    /// The salt of dimension `dim`'s digit permutations.
+    #[inline]
+    fn sobol_salt(seed: u64, dim: u32) -> u64 {
+        (0x5555_5555u64).wrapping_mul(u64::from(dim)) ^ seed
+    }
+
+    /// What the pixel's draws of dimension `dim` share (kept for the first [`CACHED_DIMS`]).
+    #[inline]
+    fn sobol_dim(&mut self, dim: u32) -> SobolDim {
+        if let Some(Some(sd)) = self.sobol_dims.get(dim as usize) {
+            return *sd;
+        }
+        let Grid {
+            log2_spp, digits, ..
+        } = self.s.grid;
+        let salt = Self::sobol_salt(self.s.seed, dim);
+        let morton = self.morton << log2_spp;
+        let sd = SobolDim {
+            high: permuted_digits(
+                morton,
+                salt,
+                log2_spp & 1 == 1,
+                first_pixel_digit(log2_spp)..digits,
+            ),
+            shuffle: hash64(self.morton, salt ^ 0x0c7a),
+            scramble: hash64(self.s.seed, u64::from(dim)),
+        };
+        if let Some(slot) = self.sobol_dims.get_mut(dim as usize) {
+            *slot = Some(sd);
+        }
+        sd
     }
 
     fn sample_1d(&mut self, dim: u32) -> f32 {
@@ -614,11 +662,8 @@ impl PixelSampler<'_> {
                 to_unit(sobol_0(p) ^ self.dim_seed(dim, 1))
             }
             SamplerKind::Sobol => {
-                let i = self.sobol_index(dim);
-                to_unit(owen_scramble(
-                    sobol_0(i as u32),
-                    hash32(s.seed, u64::from(dim)),
-                ))
+                let (i, scramble) = self.sobol_index(dim);
+                to_unit(owen_scramble(sobol_0(i as u32), (scramble >> 32) as u32))
             }
         }
     }
@@ -660,8 +705,8 @@ impl PixelSampler<'_> {
                 )
             }
             SamplerKind::Sobol => {
-                let i = self.sobol_index(dim) as u32;
-                let h = hash64(s.seed, u64::from(dim));
+                let (i, h) = self.sobol_index(dim);
+                let i = i as u32;
                 Vec2::new(
                     to_unit(owen_scramble(sobol_0(i), h as u32)),
                     to_unit(owen_scramble(sobol_1(i), (h >> 32) as u32)),

@@ -169,20 +169,20 @@ pub fn sobol_0(i: u32) -> u32 {
 }
 
 /// The second Sobol' dimension (primitive polynomial x + 1, direction numbers all 1: the generator
-/// matrix is Pascal's triangle mod 2) of point `i`, as 32-bit fixed point.
+/// matrix is Pascal's triangle mod 2) of point `i`, as 32-bit fixed point. Read as a polynomial
+/// a(x) over GF(2) (bit k the coefficient of xᵏ), i maps to a(1 + x), whose bits, reversed,
+/// are the point's. On halves of 2s bits, a(1 + x) = a_lo(1 + x) + (1 + xˢ)·a_hi(1 + x), so
+/// five shift-and-XOR steps, smallest halves first, compute it without a loop over i's bits.
 #[inline]
 #[must_use]
-pub fn sobol_1(mut i: u32) -> u32 {
-    let mut v = 1u32 << 31;
-    let mut r = 0;
-    while i != 0 {
-        if i & 1 != 0 {
-            r ^= v;
-        }
-        i >>= 1;
-        v ^= v >> 1;
-    }
-    r
+pub fn sobol_1(i: u32) -> u32 {
+    let mut v = i;
+    v ^= (v >> 1) & 0x5555_5555;
+    v ^= (v >> 2) & 0x3333_3333;
+    v ^= (v >> 4) & 0x0f0f_0f0f;
+    v ^= (v >> 8) & 0x00ff_00ff;
+    v ^= (v >> 16) & 0x0000_ffff;
+    v.reverse_bits()
 }
 
 #[cfg(test)]
@@ -247,7 +247,12 @@ mod tests {
         for k in 1..32 {
             v[k] = v[k - 1] ^ (v[k - 1] >> 1);
         }
-        for i in [0u32, 1, 2, 3, 5, 77, 1023, 0xffff_ffff] {
+        let mut rng = ircache_math::Rng::new(7, 1);
+        let some = (0..1000).map(|_| rng.next_u32());
+        for i in [0u32, 1, 2, 3, 5, 77, 1023, 0xffff_ffff]
+            .into_iter()
+            .chain(some)
+        {
             let want = (0..32)
                 .filter(|k| i >> k & 1 == 1)
                 .fold(0, |acc, k| acc ^ v[k]);
