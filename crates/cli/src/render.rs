@@ -43,7 +43,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub seed: Option<u64>,
     /// Sampler (overrides the scene's): independent, stratified, multijitter, orthogonal,
-    /// ldsampler (Mitsuba 3's) or sobol (Owen-scrambled Sobol' along a Morton curve, the best).
+    /// ldsampler (Mitsuba 3's), sobol (Owen-scrambled Sobol' along a Morton curve: lowest error after a blur) or lattice (a shifted rank-1 lattice sequence along the same curve: lowest per-pixel error at the first bounce of the Cornell box; with --adaptive, its prefixes instead of sobol's).
     #[arg(long)]
     pub sampler: Option<String>,
     /// Adaptive pixel sampling to this root-mean-square relative error over the image (e.g.
@@ -365,10 +365,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let load_seconds = t0.elapsed().as_secs_f64();
     let settings = settings(args, &desc)?;
-    if settings.sampling.adaptive.is_some() && settings.sampling.sampler != SamplerKind::Sobol {
+    if settings.sampling.adaptive.is_some()
+        && !matches!(
+            settings.sampling.sampler,
+            SamplerKind::Sobol | SamplerKind::Lattice
+        )
+    {
         eprintln!(
             "note: --adaptive draws its samples from the sobol sampler (its prefixes stay \
-             stratified as samples are added), not {}",
+             stratified as samples are added; --sampler lattice is the other that does), not {}",
             settings.sampling.sampler.name()
         );
     }

@@ -97,8 +97,13 @@ impl RenderSettings {
     pub fn sampler(&self) -> SamplerSettings {
         let (kind, spp) = match self.sampling.adaptive {
             None => (self.sampling.sampler, self.spp),
+            // Prefixes of a progressive sequence: `lattice` where asked, `sobol` otherwise.
             Some(a) => (
-                SamplerKind::Sobol,
+                if self.sampling.sampler == SamplerKind::Lattice {
+                    SamplerKind::Lattice
+                } else {
+                    SamplerKind::Sobol
+                },
                 a.max_spp.max(crate::adaptive::pilot_samples(self.spp)),
             ),
         };

@@ -197,9 +197,15 @@ fn relative_mse(img: &ircache_image::Image, reference: &ircache_image::Image) ->
 
 #[test]
 fn adaptive_sampling_lowers_the_error_at_equal_samples_and_stays_unbiased() {
+    // Prefixes of `sobol` (the default) and of `lattice`.
+    adaptive_against_uniform(SamplerKind::Sobol);
+    adaptive_against_uniform(SamplerKind::Lattice);
+}
+
+fn adaptive_against_uniform(kind: SamplerKind) {
     let reference = render_desc(&floor_by_bsdf_samples(4096), 2, 1).image;
     let adaptive = Sampling {
-        sampler: SamplerKind::Sobol,
+        sampler: kind,
         jitter: true,
         adaptive: Some(Adaptive {
             target: 0.03,
@@ -220,7 +226,7 @@ fn adaptive_sampling_lowers_the_error_at_equal_samples_and_stays_unbiased() {
             relative_mse(&out.image, &reference),
         );
         eprintln!(
-            "seed {seed}: adaptive {spp:.1} spp {e_a:.3e}, uniform {uniform_spp} spp {e_u:.3e}"
+            "{kind:?} seed {seed}: adaptive {spp:.1} spp {e_a:.3e}, uniform {uniform_spp} spp {e_u:.3e}"
         );
         uniform_error += e_u;
         adaptive_error += e_a;

@@ -11,10 +11,17 @@
 //!   digit scrambling, the sample order shuffled per dimension (Mitsuba 3's `ldsampler`);
 //! - `sobol`: Owen-scrambled Sobol' points indexed along a Morton curve over the image with
 //!   hashed base-4 digit permutations (pbrt-v4's `ZSobolSampler`, Ahmed and Wonka 2020), so that
-//!   neighbouring pixels' samples are stratified together; each 2-D pair is a (0, 2)-sequence.
+//!   neighbouring pixels' samples are stratified together; each 2-D pair is a (0, 2)-sequence;
+//! - `lattice`: the same Morton-ordered, digit-permuted indices into an extensible rank-1
+//!   lattice sequence (Hickernell, Hong, L'Écuyer and Lemieux 2000) instead: point i of a 2-D
+//!   pair is φ₂(i)·(1, g) mod 1, φ₂ the radical inverse in base 2, so that the first 2ᵏ points of
+//!   any aligned block are the rank-1 lattice of 2ᵏ points with generator g, randomly shifted
+//!   (Cranley–Patterson) and mirrored per dimension. Its points lie on a sheared lattice, as
+//!   correlated multi-jitter's nearly do, and every power-of-two prefix keeps that.
 
 use super::permute::{
-    hash32, hash64, owen_scramble, permute, permute_pow2, sobol_0, sobol_1, to_unit, Divisor,
+    hash32, hash64, lattice_point, owen_scramble, permute, permute_pow2, sobol_0, sobol_1, to_unit,
+    Divisor,
 };
 use super::Sampler;
 use ircache_math::sampling::ONE_MINUS_EPSILON;
@@ -35,17 +42,20 @@ pub enum SamplerKind {
     LowDiscrepancy,
     /// Owen-scrambled Sobol' along a Morton curve.
     Sobol,
+    /// A shifted extensible rank-1 lattice sequence along a Morton curve.
+    Lattice,
 }
 
 impl SamplerKind {
     /// Every kind with its plugin name.
-    pub const ALL: [(SamplerKind, &'static str); 6] = [
+    pub const ALL: [(SamplerKind, &'static str); 7] = [
         (SamplerKind::Independent, "independent"),
         (SamplerKind::Stratified, "stratified"),
         (SamplerKind::MultiJitter, "multijitter"),
         (SamplerKind::Orthogonal, "orthogonal"),
         (SamplerKind::LowDiscrepancy, "ldsampler"),
         (SamplerKind::Sobol, "sobol"),
+        (SamplerKind::Lattice, "lattice"),
     ];
 
     /// The kind named `name` (Mitsuba's plugin names, and `sobol`).
@@ -85,7 +95,9 @@ impl SamplerKind {
                 let s = orthogonal_base(n);
                 s * s
             }
-            SamplerKind::LowDiscrepancy | SamplerKind::Sobol => n.next_power_of_two(),
+            SamplerKind::LowDiscrepancy | SamplerKind::Sobol | SamplerKind::Lattice => {
+                n.next_power_of_two()
+            }
         }
     }
 }
@@ -185,7 +197,7 @@ impl SamplerSettings {
                 a: orthogonal_base(spp),
                 ..Grid::default()
             },
-            SamplerKind::Sobol => {
+            SamplerKind::Sobol | SamplerKind::Lattice => {
                 let log2_spp = spp.trailing_zeros();
                 let log2_res = width
                     .max(height)
@@ -221,7 +233,7 @@ impl SamplerSettings {
     #[must_use]
     pub fn pixel(&self, x: u32, y: u32) -> PixelSampler<'_> {
         let pixel_seed = hash64(self.seed, u64::from(y) << 32 | u64::from(x));
-        let morton = if self.kind == SamplerKind::Sobol {
+        let morton = if matches!(self.kind, SamplerKind::Sobol | SamplerKind::Lattice) {
             morton2(x, y)
         } else {
             0
@@ -665,6 +677,10 @@ impl PixelSampler<'_> {
                 let (i, scramble) = self.sobol_index(dim);
                 to_unit(owen_scramble(sobol_0(i as u32), (scramble >> 32) as u32))
             }
+            SamplerKind::Lattice => {
+                let (i, shift) = self.sobol_index(dim);
+                to_unit(sobol_0(i as u32).wrapping_add((shift >> 32) as u32))
+            }
         }
     }
 
@@ -711,6 +727,11 @@ impl PixelSampler<'_> {
                     to_unit(owen_scramble(sobol_0(i), h as u32)),
                     to_unit(owen_scramble(sobol_1(i), (h >> 32) as u32)),
                 )
+            }
+            SamplerKind::Lattice => {
+                let (i, shift) = self.sobol_index(dim);
+                let (x, y) = lattice_point(i as u32, shift);
+                Vec2::new(to_unit(x), to_unit(y))
             }
         }
     }

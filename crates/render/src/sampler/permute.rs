@@ -185,6 +185,32 @@ pub fn sobol_1(i: u32) -> u32 {
     v.reverse_bits()
 }
 
+/// The generator g of the `lattice` sampler's rank-1 lattice sequence φ₂(i)·(1, g): of the odd
+/// g < 2¹², the one whose lattices of 4 to 4 096 points have the longest shortest vector relative
+/// to a hexagonal lattice's of the same density, at its worst over those sizes (0.71 at 4 points,
+/// where no lattice does better; 0.90 at 16, 0.95 at 64, 0.99 at 256).
+pub const LATTICE_GENERATOR: u32 = 3045;
+
+/// Point `i` of the `lattice` sampler's sequence (32-bit fixed point): φ₂(i)·(1, ±g) mod 1 plus a
+/// shift, from `shift`'s two words (its lowest bit of the second picks the sign, a mirror image:
+/// which of the two a scene prefers depends on how its integrands lie, so neither is fixed).
+/// Since φ₂(2ᵏq + j) = φ₂(j) + φ₂(q)/2ᵏ, every aligned block of 2ᵏ indices is the 2ᵏ-point
+/// rank-1 lattice, shifted.
+#[inline]
+#[must_use]
+pub fn lattice_point(i: u32, shift: u64) -> (u32, u32) {
+    let g = if shift >> 32 & 1 == 1 {
+        LATTICE_GENERATOR.wrapping_neg()
+    } else {
+        LATTICE_GENERATOR
+    };
+    let v = i.reverse_bits();
+    (
+        v.wrapping_add(shift as u32),
+        v.wrapping_mul(g).wrapping_add((shift >> 32) as u32),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -347,3 +347,65 @@ fn batched_draws_equal_single_draws_bit_for_bit() {
         }
     }
 }
+
+/// Whether `pts` (a power-of-two count N) is a rank-1 lattice with generator (1, g) (`Some(true)`)
+/// or its mirror image (1, −g) (`Some(false)`), shifted: sorted by x, the points step by 1/N in x
+/// and, in y, by ±g/N modulo 1, each to 24-bit precision. Random or merely stratified points are
+/// neither (`None`).
+fn lattice_sign(pts: &[Vec2], g: u32) -> Option<bool> {
+    let n = pts.len() as f64;
+    let mut sorted = pts.to_vec();
+    sorted.sort_by(|a, b| a.x.total_cmp(&b.x));
+    let close = |d: f64| (d - d.round()).abs() < 1e-5;
+    let steps = |step: f64| {
+        sorted.windows(2).all(|w| {
+            close(f64::from(w[1].x - w[0].x) - 1.0 / n)
+                && close(f64::from(w[1].y - w[0].y) - step / n)
+        })
+    };
+    let g = f64::from(g);
+    [true, false]
+        .into_iter()
+        .find(|&up| steps(if up { g } else { -g }))
+}
+
+#[test]
+fn lattice_prefixes_of_every_power_of_two_are_shifted_lattices() {
+    use super::permute::LATTICE_GENERATOR;
+    let g = LATTICE_GENERATOR;
+    for progressive in [false, true] {
+        let mut s = settings(SamplerKind::Lattice, 256);
+        s.progressive = progressive;
+        let mut signs = [0u32; 2];
+        for (x, y) in PIXELS {
+            for d in PAIRS {
+                let pts = points_2d(&s, x, y, d);
+                let Some(up) = lattice_sign(&pts, g) else {
+                    panic!("({x}, {y}) dim {d} progressive {progressive}: no lattice");
+                };
+                signs[usize::from(up)] += 1;
+                assert!(latin(&points_1d(&s, x, y, d)), "({x}, {y}) dim {d}");
+                // Progressive: every prefix; plain: the blocks of powers of 4 (base-4 digits).
+                // (Two points cannot tell g from −g.)
+                let step = if progressive { 1 } else { 2 };
+                for k in (2..8).step_by(step) {
+                    assert_eq!(
+                        lattice_sign(&pts[..1 << k], g),
+                        Some(up),
+                        "({x}, {y}) dim {d} progressive {progressive}: first {}",
+                        1 << k
+                    );
+                }
+            }
+        }
+        // The mirror image is chosen per dimension: both occur over 32 pairs.
+        for d in (0..64).step_by(2) {
+            let up = lattice_sign(&points_2d(&s, 1, 0, d), g).expect("a lattice");
+            signs[usize::from(up)] += 1;
+        }
+        assert!(signs.iter().all(|&c| c > 4), "{signs:?}");
+    }
+    // Not every point set passes: Sobol' nets are stratified but no lattice.
+    let sobol = settings(SamplerKind::Sobol, 64);
+    assert_eq!(lattice_sign(&points_2d(&sobol, 1, 0, 0), g), None);
+}
