@@ -9,7 +9,6 @@ use ircache_render::integrators::ic::PixelPass;
 use ircache_render::integrators::Integrator;
 use ircache_render::irradiance_cache::params::RadianceCaching;
 use ircache_render::render::{render, Adaptive, RenderOutput, RenderSettings};
-use ircache_render::sampler::SamplerKind;
 use ircache_render::scene::Scene;
 use ircache_scene::obj_scene::ObjCamera;
 use ircache_scene::SceneDesc;
@@ -43,7 +42,10 @@ pub struct RenderArgs {
     #[arg(long)]
     pub seed: Option<u64>,
     /// Sampler (overrides the scene's): independent, stratified, multijitter, orthogonal,
-    /// ldsampler (Mitsuba 3's), sobol (Owen-scrambled Sobol' along a Morton curve: lowest error after a blur) or lattice (a shifted rank-1 lattice sequence along the same curve: lowest per-pixel error at the first bounce of the Cornell box; with --adaptive, its prefixes instead of sobol's).
+    /// ldsampler (Mitsuba 3's), sobol (Owen-scrambled Sobol' along a Morton curve: lowest error
+    /// after a blur) or lattice (a shifted rank-1 lattice sequence along the same curve: lowest
+    /// per-pixel error at the first bounce of the Cornell box; with --adaptive, its prefixes
+    /// instead of sobol's).
     #[arg(long)]
     pub sampler: Option<String>,
     /// Adaptive pixel sampling to this root-mean-square relative error over the image (e.g.
@@ -365,19 +367,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let load_seconds = t0.elapsed().as_secs_f64();
     let settings = settings(args, &desc)?;
-    if settings.sampling.adaptive.is_some()
-        && !matches!(
-            settings.sampling.sampler,
-            SamplerKind::Sobol | SamplerKind::Lattice
-        )
-    {
+    // Under --adaptive the sampler is the progressive one `RenderSettings::sampler` picks.
+    let drawn = settings.sampler();
+    if drawn.kind != settings.sampling.sampler {
         eprintln!(
-            "note: --adaptive draws its samples from the sobol sampler (its prefixes stay \
+            "note: --adaptive draws its samples from the {} sampler (its prefixes stay \
              stratified as samples are added; --sampler lattice is the other that does), not {}",
+            drawn.kind.name(),
             settings.sampling.sampler.name()
         );
     }
-    let rounded = settings.sampler().spp;
+    let rounded = drawn.spp;
     if rounded != settings.spp && settings.sampling.adaptive.is_none() {
         // Said even with --quiet: the render costs more than asked.
         eprintln!(

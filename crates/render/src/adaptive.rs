@@ -3,10 +3,13 @@
 //! estimated root-mean-square relative error reaches the target.
 //!
 //! A pixel's error is estimated from the two halves of its samples: the samples are prefixes of
-//! one Owen-scrambled Sobol' sequence per pixel (or, asked for, a rank-1 lattice sequence), and
-//! both halves of a prefix of 2^k samples are nets (lattices) of 2^(k−1), so the squared difference of the halves' means measures the error of the
+//! one Owen-scrambled Sobol' sequence per pixel, and both halves of a prefix of 2^k samples are
+//! nets of 2^(k−1), so the squared difference of the halves' means measures the error of the
 //! pixel's estimate *with its stratification* (a per-sample variance overstates the error of
-//! smooth pixels, which stratification serves far better than 1/n, and misjudges edges).
+//! smooth pixels, which stratification serves far better than 1/n, and misjudges edges). With
+//! `--sampler lattice` the prefixes are a rank-1 lattice sequence's; its halves are lattices too,
+//! but translates of each other, so their difference sees the integrand's change along one vector
+//! only (with the cache's small pilots it misled the rounds: BENCHMARKS.md).
 //!
 //! To spend a budget of samples with the least mean squared error Σ mᵢ(nᵢ), each pixel's
 //! marginal gain −∂mᵢ/∂nᵢ must be equal; with mᵢ = wᵢ/nᵢ (wᵢ the error of one sample) that is

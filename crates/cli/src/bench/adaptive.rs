@@ -2,8 +2,8 @@
 //! rendering (issue 9).
 //!
 //! For each scene: uniform series with the default sampler (`multijitter`) and with the sequence
-//! adaptive sampling takes prefixes of (`lattice` for `path`, `sobol` for `ic`) at 4, 16, 64, … spp (`ic`: the square grids of
-//! [`super::next_square_count`]), and adaptive renders
+//! adaptive sampling takes prefixes of (`lattice` for `path`, `sobol` for `ic`) at 4, 16, 64, …
+//! spp (`ic`: the square grids of [`super::next_square_count`]), and adaptive renders
 //! (pilot 8 spp; `ic` 4) at two or three targets (estimated root-mean-square relative error, chosen per
 //! scene to span about 16 to 150 samples a pixel); for each adaptive render, the time each uniform series needs
 //! to reach its relMSE_trim, interpolated between the two renders that bracket it (log–log).

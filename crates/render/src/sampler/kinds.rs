@@ -294,7 +294,7 @@ const DIGIT_PERMUTATIONS: [[u8; 4]; 24] = [
     [3, 0, 1, 2],
 ];
 
-/// The first base-4 digit of a `sobol` sample index that lies wholly in the pixel's Morton code
+/// The first base-4 digit of a `sobol` (or `lattice`) sample index that lies wholly in the pixel's Morton code
 /// (those below hold the sample's own bits; with an odd log₂ spp, the lowest bit alone).
 #[inline]
 fn first_pixel_digit(log2_spp: u32) -> u32 {
@@ -326,7 +326,8 @@ pub struct PixelSampler<'a> {
     row_seed: u32,
     index: u32,
     dim: u32,
-    /// `sobol`: per dimension, what all the pixel's samples share (`None` until computed).
+    /// `sobol` and `lattice`: per dimension, what all the pixel's samples share (`None` until
+    /// computed).
     sobol_dims: [Option<SobolDim>; CACHED_DIMS],
     /// Per dimension, the pixel's hash of it (0 until computed).
     dim_hashes: [u64; CACHED_DIMS],
@@ -391,8 +392,8 @@ impl Default for Batch {
 /// keeps.
 const CACHED_DIMS: usize = 48;
 
-/// `sobol`: what a pixel's draws of one dimension share, computed once per pixel and dimension
-/// instead of at every draw.
+/// `sobol` and `lattice`: what a pixel's draws of one dimension share, computed once per pixel
+/// and dimension instead of at every draw.
 #[derive(Clone, Copy, Debug)]
 struct SobolDim {
     /// The permuted digits of the pixel's part of the sample index.
@@ -400,8 +401,8 @@ struct SobolDim {
     /// Progressive: the pixel's shuffle of its own samples (the octave shuffle's seed in the low
     /// word, the XOR in the high one).
     shuffle: u64,
-    /// The Owen scrambles' seeds: the first coordinate's in the low word, the second's (and a
-    /// 1-D draw's) in the high one.
+    /// The Owen scrambles' seeds (`lattice`: the shifts): the first coordinate's in the low
+    /// word, the second's (and a 1-D draw's) in the high one.
     scramble: u64,
 }
 
