@@ -20,8 +20,8 @@
 //!   correlated multi-jitter's nearly do, and every power-of-two prefix keeps that.
 
 use super::permute::{
-    hash32, hash64, lattice_point, owen_scramble, permute, permute_pow2, sobol_0, sobol_1, to_unit,
-    Divisor,
+    div_rem_lanes, hash32, hash64, lattice_point, owen_scramble, permute, permute_lanes,
+    permute_pow2, sobol_0, sobol_1, to_unit, Divisor, LANES,
 };
 use super::Sampler;
 use ircache_math::sampling::ONE_MINUS_EPSILON;
@@ -354,7 +354,7 @@ fn batch_slot(dim: u32) -> Option<usize> {
     (extra < BATCH_EXTRA_DIMS).then_some(BATCH_DIMS + extra)
 }
 /// Samples a batch holds (the pixel pass's packet width).
-pub const BATCH_SAMPLES: usize = 16;
+pub const BATCH_SAMPLES: usize = LANES;
 
 /// One draw's form, as a batch holds it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -471,12 +471,8 @@ impl PixelSampler<'_> {
             self.batch.forms[d] = form;
             return;
         }
-        if form == Form::Two
-            && s.kind == SamplerKind::MultiJitter
-            && s.grid.a as usize <= BATCH_SAMPLES
-            && s.grid.b as usize <= BATCH_SAMPLES
-        {
-            self.fill_multijitter_tabled(d, dim);
+        if matches!(s.kind, SamplerKind::MultiJitter | SamplerKind::Stratified) {
+            self.fill_permuted(d, dim, form);
             self.batch.forms[d] = form;
             return;
         }
@@ -505,38 +501,56 @@ impl PixelSampler<'_> {
         multijitter_pow2(values, first, dim, pixel_seed, seed, grid, spp);
     }
 
-    /// [`Self::sample_2d`] of `multijitter` on other small grids for the whole batch: the
-    /// sub-stratum permutations of the m columns and k rows (Kensler's `sx`, `sy`, which depend
-    /// only on the dimension) computed once for the batch instead of once a sample (m + k chains
-    /// against 2 per sample, each cycle-walking); the same values (a test compares the two).
-    fn fill_multijitter_tabled(&mut self, d: usize, dim: u32) {
+    /// [`Self::sample_1d`] and [`Self::sample_2d`] of `multijitter` and `stratified` for the
+    /// whole batch (on power-of-two grids the 2-D draws take the loop above, as fast): the
+    /// permutations with their cycle walking, the divisions and the jitter hashes in vector lanes
+    /// ([`permute_lanes`], [`div_rem_lanes`]); the same values (a test compares the two). Drawn
+    /// one sample at a time they were a fifth of a path-traced render at sample counts whose
+    /// grids are not powers of two (35, 132, 506 samples for 32, 128, 512 asked).
+    fn fill_permuted(&mut self, d: usize, dim: u32, form: Form) {
         let s = self.s;
-        let grid = s.grid;
         let seed = self.dim_seed(dim, 0);
+        let (first, len, pixel_seed) = (self.batch.first, self.batch.len, self.pixel_seed);
+        // Lanes past the batch repeat its first sample (their values are not read).
+        let index: [u32; LANES] = std::array::from_fn(|l| {
+            if (l as u32) < len {
+                first + l as u32
+            } else {
+                first
+            }
+        });
+        let p = permute_lanes(&index, s.grid.by_spp, seed);
+        let jitter: [(f32, f32); LANES] = if s.jitter {
+            index.map(|i| {
+                let h = hash64(pixel_seed, u64::from(i) << 32 | u64::from(dim));
+                (to_unit(h as u32), to_unit((h >> 32) as u32))
+            })
+        } else {
+            [(0.5, 0.5); LANES]
+        };
+        let values = &mut self.batch.values[d];
+        if form != Form::Two {
+            let n = s.spp as f32;
+            for ((v, &p), &(jx, _)) in values.iter_mut().zip(&p).zip(&jitter) {
+                *v = Vec2::new((p as f32 + jx) / n, 0.0);
+            }
+            return;
+        }
+        let (p_div_m, p_mod_m) = div_rem_lanes(&p, s.grid.a);
+        if s.kind == SamplerKind::Stratified {
+            let r = s.grid.a as f32;
+            for (l, v) in values.iter_mut().enumerate() {
+                let (jx, jy) = jitter[l];
+                *v = Vec2::new((p_mod_m[l] as f32 + jx) / r, (p_div_m[l] as f32 + jy) / r);
+            }
+            return;
+        }
         let (seed_x, seed_y) = sub_stratum_seeds(seed);
-        let mut sx = [0u32; BATCH_SAMPLES];
-        let mut sy = [0u32; BATCH_SAMPLES];
-        for (v, sx) in (0..grid.a).zip(&mut sx) {
-            *sx = permute(v, grid.by_a, seed_x);
+        let sx = permute_lanes(&p_mod_m, s.grid.by_a, seed_x);
+        let sy = permute_lanes(&p_div_m, s.grid.by_b, seed_y);
+        for (l, v) in values.iter_mut().enumerate() {
+            *v = multijitter_point(s.grid, (p_mod_m[l], p_div_m[l]), (sx[l], sy[l]), jitter[l]);
         }
-        for (v, sy) in (0..grid.b).zip(&mut sy) {
-            *sy = permute(v, grid.by_b, seed_y);
-        }
-        let index = self.index;
-        let (first, len) = (self.batch.first, self.batch.len);
-        for lane in 0..len {
-            self.index = first + lane;
-            let p = permute(self.index, grid.by_spp, seed);
-            let (p_div_m, p_mod_m) = grid.by_a.div_rem(p);
-            let jitter = self.jitter2(dim);
-            self.batch.values[d][lane as usize] = multijitter_point(
-                grid,
-                (p_mod_m, p_div_m),
-                (sx[p_mod_m as usize], sy[p_div_m as usize]),
-                jitter,
-            );
-        }
-        self.index = index;
     }
 
     #[inline]

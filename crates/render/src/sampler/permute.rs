@@ -90,6 +90,65 @@ pub fn permute(mut i: u32, n: Divisor, seed: u32) -> u32 {
     n.remainder(i.wrapping_add(seed))
 }
 
+/// Lanes of [`permute_lanes`] and [`div_rem_lanes`]: a batch of samples.
+pub const LANES: usize = 16;
+
+/// [`permute`] of `LANES` indices at once, the same values (see [`walk_cycles`]). Every index
+/// must be below `n`.
+#[inline]
+#[must_use]
+pub fn permute_lanes(i: &[u32; LANES], n: Divisor, seed: u32) -> [u32; LANES] {
+    let x = walk_cycles(*i, &[n.get(); LANES], &[seed; LANES]);
+    div_rem_lanes(&x.map(|v| v.wrapping_add(seed)), n.get()).1
+}
+
+/// Kensler's rounds with cycle walking for `N` lanes, each with its own count and seed: every
+/// lane takes each round and keeps it while it still walks its cycle, so that the loop runs in
+/// vector lanes instead of one chain of a dozen dependent multiplications after another.
+#[inline]
+fn walk_cycles<const N: usize>(mut x: [u32; N], count: &[u32; N], seed: &[u32; N]) -> [u32; N] {
+    // The mask of each count (0 for a count of 1: every round then gives 0, as `permute` does).
+    let w: [u32; N] = count.map(|c| {
+        u32::MAX
+            .checked_shr((c.max(1) - 1).leading_zeros())
+            .unwrap_or(0)
+    });
+    for l in 0..N {
+        x[l] = kensler_round(x[l], w[l], seed[l]);
+    }
+    // A lane leaves [0, n) with probability below 1/2 a round (n > (w + 1) / 2).
+    while (0..N).fold(false, |any, l| any | (x[l] >= count[l])) {
+        for l in 0..N {
+            let next = kensler_round(x[l], w[l], seed[l]);
+            x[l] = if x[l] >= count[l] { next } else { x[l] };
+        }
+    }
+    x
+}
+
+/// `(a / d, a % d)` for `LANES` dividends at once, exact: the quotient's estimate
+/// ⌊a·⌊(2³² − 1)/d⌋ / 2³²⌋ is short by at most two, which two corrections of the remainder
+/// make good; 32 × 32-bit products, unlike [`Divisor`]'s 128-bit ones, run in vector lanes.
+#[inline]
+#[must_use]
+pub fn div_rem_lanes(a: &[u32; LANES], d: u32) -> ([u32; LANES], [u32; LANES]) {
+    let (d, m) = (u64::from(d), u64::from(u32::MAX / d));
+    let mut q = [0u32; LANES];
+    let mut r = [0u32; LANES];
+    for ((&a, q), r) in a.iter().zip(&mut q).zip(&mut r) {
+        let a = u64::from(a);
+        let mut qe = (a * m) >> 32;
+        let mut re = a - qe * d;
+        for _ in 0..2 {
+            let over = re >= d;
+            re -= if over { d } else { 0 };
+            qe += u64::from(over);
+        }
+        (*q, *r) = (qe as u32, re as u32);
+    }
+    (q, r)
+}
+
 /// [`permute`] for a power-of-two `n` given as its mask `w = n − 1` (the value always falls in
 /// range, so there is no cycle walking): straight-line code, whose chains for several indices
 /// overlap.
@@ -260,6 +319,33 @@ mod tests {
             let by = Divisor::new(d);
             for &a in &dividends {
                 assert_eq!(by.div_rem(a), (a / d, a % d), "{a} by {d}");
+            }
+            // The lanes' division too, sixteen dividends at a time.
+            for chunk in dividends.chunks_exact(LANES) {
+                let a: [u32; LANES] = chunk.try_into().unwrap();
+                let (q, r) = div_rem_lanes(&a, d);
+                for l in 0..LANES {
+                    assert_eq!((q[l], r[l]), (a[l] / d, a[l] % d), "{} by {d}", a[l]);
+                }
+            }
+        }
+    }
+
+    /// The lanes' permutation is the permutation, cycle walking and all: every n to 300 and
+    /// some larger ones, several seeds, indices from every part of [0, n).
+    #[test]
+    fn permute_lanes_equals_permute() {
+        let mut rng = ircache_math::Rng::keyed(9, &[2]);
+        for n in (1..=300).chain([506, 1024, 4099, 65_537]) {
+            let by = Divisor::new(n);
+            for _ in 0..4 {
+                let seed = rng.next_u32();
+                let i: [u32; LANES] = std::array::from_fn(|_| rng.next_u32() % n);
+                let lanes = permute_lanes(&i, by, seed);
+                for l in 0..LANES {
+                    let want = permute(i[l], by, seed);
+                    assert_eq!(lanes[l], want, "n {n} seed {seed} i {}", i[l]);
+                }
             }
         }
     }

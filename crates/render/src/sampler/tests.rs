@@ -304,7 +304,7 @@ fn progressive_sobol_prefixes_of_every_power_of_two_are_nets_and_pairs_independe
 #[test]
 fn batched_draws_equal_single_draws_bit_for_bit() {
     for (kind, _) in SamplerKind::ALL {
-        for spp in [1, 4, 16, 35, 64, 100] {
+        for spp in [1, 4, 16, 35, 64, 100, 128, 512] {
             let s = settings(kind, spp);
             let plan = |i: u32, d: u32| (i * 7 + d * 3).is_multiple_of(5);
             let single = |x: u32, y: u32, i: u32, d: u32| {
