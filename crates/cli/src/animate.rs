@@ -41,11 +41,11 @@ pub struct AnimateArgs {
     /// frame's estimate, 5.12–5.14) or `off`.
     #[arg(long, default_value = "interpolated", value_parser = parse_gradients)]
     pub temporal_gradients: SlopeKind,
-    /// How `temporal` estimates a new record's next frame for its lifespan: `regather` (the
-    /// hemisphere gathered again in the next frame with the same random numbers) or `reproject`
-    /// (001 §5.2.4: the record's gather rays carried to the next frame and their hits shaded
-    /// again, no hemisphere rays; fewer rays, but records live shorter: BENCHMARKS.md).
-    #[arg(long, default_value = "regather", value_parser = NextFrame::parse)]
+    /// How `temporal` estimates a new record's next frame for its lifespan: `reproject` (001
+    /// §5.2.4: the record's gather rays carried to the next frame and their hits shaded again,
+    /// no hemisphere rays) or `regather` (the hemisphere gathered again in the next frame with
+    /// the same random numbers: no holes, about twice the rays; BENCHMARKS.md).
+    #[arg(long, default_value = NextFrame::default().name(), value_parser = NextFrame::parse)]
     pub next_frame: NextFrame,
     /// Everything `ircache render` takes; SCENE is an `<animation>` file or a still scene
     /// (which then needs --frames; none: the built-in Cornell box), and -o a file name whose

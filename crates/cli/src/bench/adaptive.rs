@@ -128,7 +128,7 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
             "path",
             None,
             2,
-            &[0.2, 0.1],
+            &[0.1, 0.05, 0.03],
         ),
         (
             "sponza-dabrovic/sponza.obj",
@@ -136,7 +136,7 @@ pub fn run_all(shared: &Path, only: Option<&str>) -> Result<()> {
             "path",
             None,
             2,
-            &[0.3, 0.2],
+            &[0.1, 0.05, 0.03],
         ),
     ];
     println!("\nAdaptive pixel sampling against uniform (pilot 8 spp, `ic` 4; time of each uniform series to the adaptive render's relMSE_trim)");

@@ -5,7 +5,7 @@
 //! halves of `REFERENCE_SPP` each, the frames' motions applied to the shapes through
 //! `mi.traverse`, the matrices computed by ircache's own animation code); `ircache animate` (a
 //! process each, wall time) with the temporal cache (interpolated and extrapolated temporal
-//! gradients; next frames estimated by gathering again, the default, and by reprojection), the
+//! gradients; next frames estimated by reprojection, the default, and by gathering again), the
 //! age-based cache and a cache per frame; the measures of
 //! `ircache_image::flicker`; then Mitsuba `multijitter` per frame at 4, 16, 64, … spp ([`super::next_sample_count`]) until its
 //! mean relMSE reaches the temporal cache's, the equal-error time interpolated between the two
@@ -183,19 +183,19 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
                 "temporal, interpolated",
                 "temporal",
                 "interpolated",
-                "regather",
+                "reproject",
             ),
             (
-                "  … next frames reprojected",
+                "  … next frames gathered again",
                 "temporal",
                 "interpolated",
-                "reproject",
+                "regather",
             ),
             (
                 "temporal, extrapolated",
                 "temporal",
                 "extrapolated",
-                "regather",
+                "reproject",
             ),
             ("age-based", "age", "off", "regather"),
             ("cache per frame", "per-frame", "off", "regather"),

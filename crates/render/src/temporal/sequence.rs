@@ -83,13 +83,13 @@ impl CacheMode {
 /// How the temporal cache estimates a new record's next frame (`--next-frame`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum NextFrame {
-    /// Reprojecting the record's gather (001 §5.2.4).
-    Reproject,
-    /// Gathering it again in the next frame with the same random numbers: the default, by
-    /// measurement (BENCHMARKS.md: reprojection traces 0.55–0.63× the rays, but its holes and
-    /// z-test misses read as change, so records live shorter, and the sequences took as long or
-    /// longer, the cube in a box 16.5 against 15.4 s).
+    /// Reprojecting the record's gather (001 §5.2.4): the default, by measurement (BENCHMARKS.md,
+    /// 2026-12-07: 0.36–0.53× the estimates' rays; the box scenes' sequences 0.86–0.95× the time
+    /// and the lamp room's 0.97×, at the same error within 2 % and the same flicker).
     #[default]
+    Reproject,
+    /// Gathering it again in the next frame with the same random numbers (a whole gather, no
+    /// holes).
     Regather,
 }
 
@@ -141,7 +141,7 @@ impl Default for TemporalParams {
             accuracy: 0.05,
             max_lifespan: 10,
             gradients: SlopeKind::Interpolated,
-            next_frame: NextFrame::Regather,
+            next_frame: NextFrame::default(),
         }
     }
 }
