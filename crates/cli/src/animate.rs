@@ -115,8 +115,8 @@ fn load(args: &RenderArgs) -> Result<(SceneDesc, Animation)> {
 /// Runs `ircache animate`.
 pub fn run(args: &AnimateArgs) -> Result<()> {
     let r = &args.render;
-    if r.tile.is_some() || r.gpu || !r.aov.is_empty() || r.adaptive.is_some() {
-        bail!("ircache animate does not take --tile, --gpu, --aov or --adaptive");
+    if r.tile.is_some() || r.gpu || !r.aov.is_empty() {
+        bail!("ircache animate does not take --tile, --gpu or --aov");
     }
     let t0 = Instant::now();
     let (base, animation) = load(r)?;
@@ -179,7 +179,8 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let mut cache =
         SequenceCache::new(ic, params, (settings.width, settings.height), settings.seed)?;
     let mut fills: Vec<FrameStats> = Vec::new();
-    let mut render_seconds = Vec::new();
+    // Each frame's pixel pass: seconds and pixel samples taken.
+    let mut pixel_passes: Vec<(f64, u64)> = Vec::new();
     let mut render_frame = |cache: &SequenceCache, frame: u32, scene: &Scene| -> Result<()> {
         let mut ic = ic.clone();
         ic.seed = settings.seed;
@@ -188,7 +189,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         ));
         let out = render(scene, &Integrator::Ic(ic), &settings, &|_| {})?;
         let path = write(frame, &out.image)?;
-        render_seconds.push(out.seconds);
+        pixel_passes.push((out.seconds, out.samples));
         say(format!(
             "frame {frame}: pixels {:.2} s -> {}",
             out.seconds,
@@ -230,10 +231,10 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         gathers - records,
         fills.iter().map(|f| f.gather_rays).sum::<u64>() as f64 * 1e-6,
         fills.iter().map(|f| f.seconds).sum::<f64>(),
-        render_seconds.iter().sum::<f64>(),
+        pixel_passes.iter().map(|p| p.0).sum::<f64>(),
     ));
     if let Some(path) = &r.stats {
-        write_stats(path, args, &fills, &render_seconds, wall)?;
+        write_stats(path, args, &fills, &pixel_passes, wall)?;
     }
     Ok(())
 }
@@ -242,18 +243,19 @@ fn write_stats(
     path: &Path,
     args: &AnimateArgs,
     fills: &[FrameStats],
-    render_seconds: &[f64],
+    pixel_passes: &[(f64, u64)],
     wall: f64,
 ) -> Result<()> {
     let frames: Vec<serde_json::Value> = fills
         .iter()
-        .zip(render_seconds)
-        .map(|(f, px)| {
+        .zip(pixel_passes)
+        .map(|(f, &(px, samples))| {
             serde_json::json!({
                 "frame": f.frame, "live": f.live, "carried": f.carried, "renewed": f.renewed,
                 "new": f.new, "dropped": f.dropped, "estimates": f.estimates,
                 "estimate_rays": f.estimate_rays,
                 "gather_rays": f.gather_rays, "cache_seconds": f.seconds, "pixel_seconds": px,
+                "pixel_samples": samples,
             })
         })
         .collect();
@@ -267,7 +269,7 @@ fn write_stats(
         "estimate_rays": fills.iter().map(|f| f.estimate_rays).sum::<u64>(),
         "gather_rays": fills.iter().map(|f| f.gather_rays).sum::<u64>(),
         "cache_seconds": fills.iter().map(|f| f.seconds).sum::<f64>(),
-        "pixel_seconds": render_seconds.iter().sum::<f64>(),
+        "pixel_seconds": pixel_passes.iter().map(|p| p.0).sum::<f64>(),
         "wall_seconds": wall,
         "frames": frames,
     });

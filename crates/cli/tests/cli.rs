@@ -1283,6 +1283,52 @@ fn animate_writes_numbered_frames_same_seed_same_frames_and_compare_measures_the
         let o = run(&format!("{mode}-#.exr"), mode);
         assert!(o.status.success(), "{mode}: {}", stderr(&o));
     }
+    // Adaptive sampling frame by frame: more samples than the pilot where the pixels need them,
+    // at most the cap, and the same frames from the same seed.
+    let adaptive = |out: &str| {
+        let o = ircache(
+            &[
+                "animate",
+                &anim,
+                "--frames",
+                "2..3",
+                "--width",
+                "24",
+                "--height",
+                "24",
+                "--spp",
+                "4",
+                "--adaptive",
+                "0.01",
+                "--max-spp",
+                "32",
+                "-o",
+                out,
+                "-q",
+                "--stats",
+                "adaptive.json",
+            ],
+            &d,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("adaptive.json")).unwrap())
+                .unwrap();
+        let frames = s["frames"].as_array().unwrap().clone();
+        frames
+            .iter()
+            .map(|f| f["pixel_samples"].as_u64().unwrap() as f64 / (24.0 * 24.0))
+            .collect::<Vec<_>>()
+    };
+    for mean in adaptive("ad-#.exr") {
+        assert!(mean > 4.5 && mean <= 32.0, "mean spp {mean}");
+    }
+    adaptive("ae-#.exr");
+    for f in 2..=3 {
+        let a = std::fs::read(d.join(format!("ad-{f}.exr"))).unwrap();
+        let b = std::fs::read(d.join(format!("ae-{f}.exr"))).unwrap();
+        assert!(a == b, "adaptive frame {f} differs between two runs");
+    }
     // A sequence against itself: no error, no high-pass error; its flicker index is positive
     // (the cube moves).
     let o = ircache(

@@ -5,11 +5,12 @@
 //! halves of `REFERENCE_SPP` each, the frames' motions applied to the shapes through
 //! `mi.traverse`, the matrices computed by ircache's own animation code); `ircache animate` (a
 //! process each, wall time) with the temporal cache (interpolated and extrapolated temporal
-//! gradients; next frames estimated by reprojection, the default, and by gathering again), the
-//! age-based cache and a cache per frame; the measures of
-//! `ircache_image::flicker`; then Mitsuba `multijitter` per frame at 4, 16, 64, … spp ([`super::next_sample_count`]) until its
-//! mean relMSE reaches the temporal cache's, the equal-error time interpolated between the two
-//! sequences that bracket it (log error against log time).
+//! gradients; next frames estimated by reprojection, the default, and by gathering again; and
+//! with `--adaptive` pixel sampling), the age-based cache and a cache per frame; the measures of
+//! `ircache_image::flicker`; then Mitsuba `multijitter` per frame at 4, 16, 64, … spp
+//! ([`super::next_sample_count`]) until its mean relMSE reaches both temporal caches' (uniform and
+//! adaptive), the equal-error times interpolated between the two sequences that bracket them
+//! (log error against log time).
 
 use super::mitsuba_render_frames;
 use super::radiance::own_scenes;
@@ -25,6 +26,8 @@ use std::time::Instant;
 const REFERENCE_SPP: u32 = 512;
 /// Samples per pixel of the cache's renders.
 const SPP: u32 = 16;
+/// `--adaptive` of the adaptive row (pilot 4 spp; `ic`'s target scale, as `bench --only adaptive`).
+const ADAPTIVE_TARGET: &str = "0.01";
 
 /// One animation to measure.
 struct Case {
@@ -178,30 +181,50 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
         )?;
         let frames_arg = format!("{}..{}", case.frames.0, case.frames.1);
         let mut temporal = None;
-        for (label, mode, gradients, next_frame) in [
+        let mut adaptive = None;
+        // (label, mode, temporal gradients, next frame, pixel sampling: spp and more arguments)
+        let adaptive_args = ["--adaptive", ADAPTIVE_TARGET, "--max-spp", "128"];
+        for (label, mode, gradients, next_frame, (spp, more)) in [
             (
                 "temporal, interpolated",
                 "temporal",
                 "interpolated",
                 "reproject",
+                (SPP, &[][..]),
             ),
             (
                 "  … next frames gathered again",
                 "temporal",
                 "interpolated",
                 "regather",
+                (SPP, &[][..]),
+            ),
+            (
+                "  … --adaptive (pilot 4, at most 128)",
+                "temporal",
+                "interpolated",
+                "reproject",
+                (4, &adaptive_args[..]),
             ),
             (
                 "temporal, extrapolated",
                 "temporal",
                 "extrapolated",
                 "reproject",
+                (SPP, &[][..]),
             ),
-            ("age-based", "age", "off", "regather"),
-            ("cache per frame", "per-frame", "off", "regather"),
+            ("age-based", "age", "off", "regather", (SPP, &[][..])),
+            (
+                "cache per frame",
+                "per-frame",
+                "off",
+                "regather",
+                (SPP, &[][..]),
+            ),
         ] {
-            let pattern = dir.join(format!("{mode}-{gradients}-{next_frame}-###.exr"));
-            let stats = dir.join(format!("{mode}-{gradients}-{next_frame}.json"));
+            let tag = if more.is_empty() { "" } else { "-adaptive" };
+            let pattern = dir.join(format!("{mode}-{gradients}-{next_frame}{tag}-###.exr"));
+            let stats = dir.join(format!("{mode}-{gradients}-{next_frame}{tag}.json"));
             let t = Instant::now();
             let out = std::process::Command::new(&exe)
                 .args([
@@ -211,9 +234,10 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
                     &frames_arg,
                 ])
                 .args(["--width", &w.to_string(), "--height", &h.to_string()])
-                .args(["--spp", &SPP.to_string(), "--integrator", "ic", "-q"])
+                .args(["--spp", &spp.to_string(), "--integrator", "ic", "-q"])
                 .args(["--cache-mode", mode, "--temporal-gradients", gradients])
                 .args(["--next-frame", next_frame])
+                .args(more)
                 .arg("-o")
                 .arg(&pattern)
                 .arg("--stats")
@@ -236,7 +260,9 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
                     s["cache_seconds"].as_f64().unwrap_or(0.0)
                 ),
             );
-            if mode == "temporal" && temporal.is_none() {
+            if !more.is_empty() {
+                adaptive = Some(m);
+            } else if mode == "temporal" && temporal.is_none() {
                 temporal = Some(m);
             }
         }
@@ -245,7 +271,18 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             println!("  Mitsuba's equal-error search not run: {why}");
             continue;
         }
-        // Mitsuba at more samples until it reaches the temporal cache's relMSE.
+        // Mitsuba at more samples until it reaches both temporal caches' relMSE.
+        let compared: Vec<(&str, Measured)> = [
+            ("temporal cache", Some(temporal)),
+            ("adaptive one", adaptive),
+        ]
+        .into_iter()
+        .filter_map(|(name, m)| m.map(|m| (name, m)))
+        .collect();
+        let target = compared
+            .iter()
+            .map(|(_, m)| m.report.rel_mse_trim)
+            .fold(f64::INFINITY, f64::min);
         let mut series: Vec<Measured> = Vec::new();
         let mut spp = 4;
         loop {
@@ -254,22 +291,20 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             let m = measure(&read_frames(&pattern, case.frames)?, seconds, &reference)?;
             show(&format!("Mitsuba multijitter, {spp} spp"), &m, "");
             series.push(m);
-            if m.report.rel_mse_trim <= temporal.report.rel_mse_trim
-                || seconds > 30.0 * temporal.seconds
-                || spp >= 4096
-            {
+            if m.report.rel_mse_trim <= target || seconds > 30.0 * temporal.seconds || spp >= 4096 {
                 break;
             }
             spp = super::next_sample_count(spp);
         }
-        let equal = equal_error_seconds(&series, temporal.report.rel_mse_trim);
-        match equal {
-            Some(t) => println!(
-                "  Mitsuba multijitter at the temporal cache's relMSE: {t:.1} s, {:.2}× the temporal cache's {:.1} s",
-                t / temporal.seconds,
-                temporal.seconds
-            ),
-            None => println!("  Mitsuba multijitter did not reach the temporal cache's relMSE within the cap"),
+        for (name, m) in compared {
+            match equal_error_seconds(&series, m.report.rel_mse_trim) {
+                Some(t) => println!(
+                    "  Mitsuba multijitter at the {name}'s relMSE: {t:.1} s, {:.2}× the {name}'s {:.1} s",
+                    t / m.seconds,
+                    m.seconds
+                ),
+                None => println!("  Mitsuba multijitter did not reach the {name}'s relMSE within the cap"),
+            }
         }
     }
     Ok(())

@@ -84,7 +84,7 @@ impl CacheMode {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum NextFrame {
     /// Reprojecting the record's gather (001 §5.2.4): the default, by measurement (BENCHMARKS.md,
-    /// 2026-12-07: 0.36–0.53× the estimates' rays; the box scenes' sequences 0.86–0.95× the time
+    /// 2026-12-07: 0.36–0.53× the estimates' rays; the box scenes' sequences 0.87–0.98× the time
     /// and the lamp room's 0.97×, at the same error within 2 % and the same flicker).
     #[default]
     Reproject,
