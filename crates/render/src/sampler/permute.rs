@@ -93,37 +93,26 @@ pub fn permute(mut i: u32, n: Divisor, seed: u32) -> u32 {
 /// Lanes of [`permute_lanes`] and [`div_rem_lanes`]: a batch of samples.
 pub const LANES: usize = 16;
 
-/// [`permute`] of `LANES` indices at once, the same values (see [`walk_cycles`]). Every index
-/// must be below `n`.
+/// [`permute`] of `LANES` indices at once, the same values: every lane takes each round and keeps
+/// it while it still walks its cycle, so that the loop runs in vector lanes instead of one chain
+/// of a dozen dependent multiplications after another. Every index must be below `n`.
 #[inline]
 #[must_use]
 pub fn permute_lanes(i: &[u32; LANES], n: Divisor, seed: u32) -> [u32; LANES] {
-    let x = walk_cycles(*i, &[n.get(); LANES], &[seed; LANES]);
-    div_rem_lanes(&x.map(|v| v.wrapping_add(seed)), n.get()).1
-}
-
-/// Kensler's rounds with cycle walking for `N` lanes, each with its own count and seed: every
-/// lane takes each round and keeps it while it still walks its cycle, so that the loop runs in
-/// vector lanes instead of one chain of a dozen dependent multiplications after another.
-#[inline]
-fn walk_cycles<const N: usize>(mut x: [u32; N], count: &[u32; N], seed: &[u32; N]) -> [u32; N] {
-    // The mask of each count (0 for a count of 1: every round then gives 0, as `permute` does).
-    let w: [u32; N] = count.map(|c| {
-        u32::MAX
-            .checked_shr((c.max(1) - 1).leading_zeros())
-            .unwrap_or(0)
-    });
-    for l in 0..N {
-        x[l] = kensler_round(x[l], w[l], seed[l]);
+    let count = n.get();
+    if count <= 1 {
+        return [0; LANES];
     }
+    let w = u32::MAX >> (count - 1).leading_zeros();
+    let mut x = i.map(|v| kensler_round(v, w, seed));
     // A lane leaves [0, n) with probability below 1/2 a round (n > (w + 1) / 2).
-    while (0..N).fold(false, |any, l| any | (x[l] >= count[l])) {
-        for l in 0..N {
-            let next = kensler_round(x[l], w[l], seed[l]);
-            x[l] = if x[l] >= count[l] { next } else { x[l] };
+    while x.iter().fold(false, |any, &v| any | (v >= count)) {
+        for v in &mut x {
+            let next = kensler_round(*v, w, seed);
+            *v = if *v >= count { next } else { *v };
         }
     }
-    x
+    div_rem_lanes(&x.map(|v| v.wrapping_add(seed)), count).1
 }
 
 /// `(a / d, a % d)` for `LANES` dividends at once, exact: the quotient's estimate
