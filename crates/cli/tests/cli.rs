@@ -1311,11 +1311,9 @@ fn animate_writes_numbered_frames_same_seed_same_frames_and_compare_measures_the
             &d,
         );
         assert!(o.status.success(), "{}", stderr(&o));
-        let s: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(d.join("adaptive.json")).unwrap())
-                .unwrap();
-        let frames = s["frames"].as_array().unwrap().clone();
-        frames
+        stats_of(&d, "adaptive.json")["frames"]
+            .as_array()
+            .unwrap()
             .iter()
             .map(|f| f["pixel_samples"].as_u64().unwrap() as f64 / (24.0 * 24.0))
             .collect::<Vec<_>>()
