@@ -521,10 +521,7 @@ impl PixelSampler<'_> {
         });
         let p = permute_lanes(&index, s.grid.by_spp, seed);
         let jitter: [(f32, f32); LANES] = if s.jitter {
-            index.map(|i| {
-                let h = hash64(pixel_seed, u64::from(i) << 32 | u64::from(dim));
-                (to_unit(h as u32), to_unit((h >> 32) as u32))
-            })
+            index.map(|i| unit_pair(sample_bits(pixel_seed, i, dim)))
         } else {
             [(0.5, 0.5); LANES]
         };
@@ -538,10 +535,8 @@ impl PixelSampler<'_> {
         }
         let (p_div_m, p_mod_m) = div_rem_lanes(&p, s.grid.a);
         if s.kind == SamplerKind::Stratified {
-            let r = s.grid.a as f32;
             for (l, v) in values.iter_mut().enumerate() {
-                let (jx, jy) = jitter[l];
-                *v = Vec2::new((p_mod_m[l] as f32 + jx) / r, (p_div_m[l] as f32 + jy) / r);
+                *v = stratified_point(s.grid.a, (p_mod_m[l], p_div_m[l]), jitter[l]);
             }
             return;
         }
@@ -577,18 +572,14 @@ impl PixelSampler<'_> {
     /// 64 random bits of the current sample's dimension `dim`.
     #[inline]
     fn sample_hash(&self, dim: u32) -> u64 {
-        hash64(
-            self.pixel_seed,
-            u64::from(self.index) << 32 | u64::from(dim),
-        )
+        sample_bits(self.pixel_seed, self.index, dim)
     }
 
     /// Two jitter offsets from one hash.
     #[inline]
     fn jitter2(&self, dim: u32) -> (f32, f32) {
         if self.s.jitter {
-            let h = self.sample_hash(dim);
-            (to_unit(h as u32), to_unit((h >> 32) as u32))
+            unit_pair(self.sample_hash(dim))
         } else {
             (0.5, 0.5)
         }
@@ -703,18 +694,13 @@ impl PixelSampler<'_> {
         let s = self.s;
         match s.kind {
             SamplerKind::Independent => {
-                let h = self.sample_hash(dim);
-                Vec2::new(to_unit(h as u32), to_unit((h >> 32) as u32))
+                let (x, y) = unit_pair(self.sample_hash(dim));
+                Vec2::new(x, y)
             }
             SamplerKind::Stratified => {
-                let r = s.grid.a;
                 let p = permute(self.index, s.grid.by_spp, self.dim_seed(dim, 0));
                 let (y_stratum, x_stratum) = s.grid.by_a.div_rem(p);
-                let (jx, jy) = self.jitter2(dim);
-                Vec2::new(
-                    (x_stratum as f32 + jx) / r as f32,
-                    (y_stratum as f32 + jy) / r as f32,
-                )
+                stratified_point(s.grid.a, (x_stratum, y_stratum), self.jitter2(dim))
             }
             SamplerKind::MultiJitter => {
                 // Kensler 2013, listing 5: stratum (p mod m, p div m), sub-strata from the
@@ -779,6 +765,24 @@ fn sub_stratum_seeds(seed: u32) -> (u32, u32) {
     )
 }
 
+/// 64 random bits of sample `index`'s dimension `dim` in the pixel `pixel_seed`.
+#[inline]
+fn sample_bits(pixel_seed: u64, index: u32, dim: u32) -> u64 {
+    hash64(pixel_seed, u64::from(index) << 32 | u64::from(dim))
+}
+
+/// Two offsets in [0, 1) from a sample's 64 random bits.
+#[inline]
+fn unit_pair(bits: u64) -> (f32, f32) {
+    (to_unit(bits as u32), to_unit((bits >> 32) as u32))
+}
+
+/// `stratified`'s 2-D point: cell (x, y) of the r × r grid, jittered within.
+#[inline]
+fn stratified_point(r: u32, (x, y): (u32, u32), (jx, jy): (f32, f32)) -> Vec2 {
+    Vec2::new((x as f32 + jx) / r as f32, (y as f32 + jy) / r as f32)
+}
+
 /// Kensler's multi-jittered point (2013, listing 5): stratum (p mod m, p div m), the sub-strata
 /// `(sx, sy)` of the permuted other coordinate, jittered within. The divisions by m and k are
 /// multiplications by their reciprocals, exact on power-of-two grids (the reciprocals are
@@ -820,8 +824,7 @@ fn multijitter_pow2(
         let (p_div_m, p_mod_m) = (p >> log2_m, p & wm);
         let sx = permute_pow2(p_mod_m, wm, seed_x);
         let sy = permute_pow2(p_div_m, wk, seed_y);
-        let h = hash64(pixel_seed, u64::from(index) << 32 | u64::from(dim));
-        let jitter = (to_unit(h as u32), to_unit((h >> 32) as u32));
+        let jitter = unit_pair(sample_bits(pixel_seed, index, dim));
         *v = multijitter_point(grid, (p_mod_m, p_div_m), (sx, sy), jitter);
     }
 }
