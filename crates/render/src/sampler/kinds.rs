@@ -20,8 +20,8 @@
 //!   correlated multi-jitter's nearly do, and every power-of-two prefix keeps that.
 
 use super::permute::{
-    div_rem_lanes, hash32, hash64, lattice_point, owen_scramble, permute, permute_lanes,
-    permute_pow2, sobol_0, sobol_1, to_unit, Divisor, LANES,
+    div_rem_lanes, hash32, hash64, lattice_point, owen_scramble, permute, permute_lanes, sobol_0,
+    sobol_1, to_unit, Divisor, LANES,
 };
 use super::Sampler;
 use ircache_math::sampling::ONE_MINUS_EPSILON;
@@ -461,16 +461,6 @@ impl PixelSampler<'_> {
     #[cold]
     fn fill(&mut self, d: usize, dim: u32, form: Form) {
         let s = self.s;
-        if form == Form::Two
-            && s.kind == SamplerKind::MultiJitter
-            && s.spp.is_power_of_two()
-            && s.grid.a.is_power_of_two()
-            && s.jitter
-        {
-            self.fill_multijitter_pow2(d, dim);
-            self.batch.forms[d] = form;
-            return;
-        }
         if matches!(s.kind, SamplerKind::MultiJitter | SamplerKind::Stratified) {
             self.fill_permuted(d, dim, form);
             self.batch.forms[d] = form;
@@ -489,21 +479,9 @@ impl PixelSampler<'_> {
         self.index = index;
     }
 
-    /// [`Self::sample_2d`] of `multijitter` on power-of-two grids for the whole batch, written as
-    /// one loop over the samples without branches or cycle walking, whose independent chains
-    /// overlap (an AVX2 build of it measured no faster): the same operations on the same
-    /// values, so the same bits (a test compares the two).
-    fn fill_multijitter_pow2(&mut self, d: usize, dim: u32) {
-        let seed = self.dim_seed(dim, 0);
-        let (first, pixel_seed, grid, spp) =
-            (self.batch.first, self.pixel_seed, self.s.grid, self.s.spp);
-        let values = &mut self.batch.values[d];
-        multijitter_pow2(values, first, dim, pixel_seed, seed, grid, spp);
-    }
-
     /// [`Self::sample_1d`] and [`Self::sample_2d`] of `multijitter` and `stratified` for the
-    /// whole batch (on power-of-two grids the 2-D draws take the loop above, as fast): the
-    /// permutations with their cycle walking, the divisions and the jitter hashes in vector lanes
+    /// whole batch, on any grid: the permutations with their cycle walking, the divisions and
+    /// the jitter hashes in vector lanes
     /// ([`permute_lanes`], [`div_rem_lanes`]); the same values (a test compares the two). Drawn
     /// one sample at a time they were a fifth of a path-traced render at sample counts whose
     /// grids are not powers of two (35, 132, 506 samples for 32, 128, 512 asked).
@@ -800,33 +778,6 @@ fn multijitter_point(
         (p_div_m as f32 + (sx as f32 + jy) * inv_m) * inv_k,
     )
     .min(Vec2::splat(ONE_MINUS_EPSILON))
-}
-
-/// `multijitter`'s 2-D values of dimension `dim` for samples `first..first + BATCH_SAMPLES`
-/// of a pixel (`pixel_seed`, the dimension's `seed`) on a power-of-two grid: Kensler 2013,
-/// listing 5, as [`PixelSampler::sample_2d`] computes it one sample at a time.
-#[inline]
-fn multijitter_pow2(
-    values: &mut [Vec2; BATCH_SAMPLES],
-    first: u32,
-    dim: u32,
-    pixel_seed: u64,
-    seed: u32,
-    grid: Grid,
-    spp: u32,
-) {
-    let (seed_x, seed_y) = sub_stratum_seeds(seed);
-    let (wn, wm, wk) = (spp - 1, grid.a - 1, grid.b - 1);
-    let log2_m = grid.a.trailing_zeros();
-    for (lane, v) in values.iter_mut().enumerate() {
-        let index = first.wrapping_add(lane as u32);
-        let p = permute_pow2(index & wn, wn, seed);
-        let (p_div_m, p_mod_m) = (p >> log2_m, p & wm);
-        let sx = permute_pow2(p_mod_m, wm, seed_x);
-        let sy = permute_pow2(p_div_m, wk, seed_y);
-        let jitter = unit_pair(sample_bits(pixel_seed, index, dim));
-        *v = multijitter_point(grid, (p_mod_m, p_div_m), (sx, sy), jitter);
-    }
 }
 
 impl Sampler for PixelSampler<'_> {

@@ -138,15 +138,6 @@ pub fn div_rem_lanes(a: &[u32; LANES], d: u32) -> ([u32; LANES], [u32; LANES]) {
     (q, r)
 }
 
-/// [`permute`] for a power-of-two `n` given as its mask `w = n − 1` (the value always falls in
-/// range, so there is no cycle walking): straight-line code, whose chains for several indices
-/// overlap.
-#[inline(always)]
-#[must_use]
-pub fn permute_pow2(i: u32, w: u32, seed: u32) -> u32 {
-    kensler_round(i, w, seed).wrapping_add(seed) & w
-}
-
 /// One round of Kensler's hash of `i` under the mask `w` (seed `p`): invertible on `[0, w]`.
 #[inline(always)]
 fn kensler_round(mut i: u32, w: u32, p: u32) -> u32 {
