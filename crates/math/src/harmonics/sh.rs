@@ -20,6 +20,31 @@ pub fn project(order: usize, rule: &quadrature::Rule, f: impl FnMut(DVec3) -> f6
     ShBasis::new(order).project(rule, f)
 }
 
+/// Y_l^m for bands 0–2 at the unit direction `w` in closed form (single precision, Condon–Shortley
+/// phase, index l² + l + m): the same values as [`ShBasis`] of order 3 without its tables, for
+/// callers that evaluate them once per lookup or gather ray (the volumetric records).
+#[must_use]
+pub fn bands_0_to_2(w: glam::Vec3) -> [f32; 9] {
+    // √(1/4π), √(3/4π), √(15/4π), √(5/16π), √(15/16π).
+    const K0: f32 = 0.282_094_8;
+    const K1: f32 = 0.488_602_5;
+    const K2: f32 = 1.092_548_5;
+    const K20: f32 = 0.315_391_57;
+    const K22: f32 = 0.546_274_2;
+    let (x, y, z) = (w.x, w.y, w.z);
+    [
+        K0,
+        -K1 * y,
+        K1 * z,
+        -K1 * x,
+        K2 * x * y,
+        -K2 * y * z,
+        K20 * (3.0 * z * z - 1.0),
+        -K2 * x * z,
+        K22 * (x * x - y * y),
+    ]
+}
+
 /// The rotation of spherical-harmonic coefficients by a rotation matrix: block-diagonal, one
 /// (2l+1)² block per band, row-major over m, m' = −l … l.
 #[derive(Clone, Debug)]
@@ -151,6 +176,38 @@ mod tests {
         assert!((y[1] + k * w.y).abs() < 1e-15);
         assert!((y[2] - k * w.z).abs() < 1e-15);
         assert!((y[3] + k * w.x).abs() < 1e-15);
+    }
+
+    /// The closed form of bands 0–2 against the general evaluator, over directions of every
+    /// octant and the poles.
+    #[test]
+    fn bands_0_to_2_equal_the_basis() {
+        let mut basis = ShBasis::new(3);
+        let mut y = [0.0f64; 9];
+        let mut directions = vec![DVec3::Z, -DVec3::Z, DVec3::X, -DVec3::Y];
+        for i in 0..200 {
+            let (a, b) = (
+                f64::from(i) * 0.618_034 % 1.0,
+                f64::from(i) * 0.754_877 % 1.0,
+            );
+            let z = 1.0 - 2.0 * a;
+            let r = (1.0 - z * z).sqrt();
+            directions.push(DVec3::new(
+                r * (2.0 * PI * b).cos(),
+                r * (2.0 * PI * b).sin(),
+                z,
+            ));
+        }
+        for w in directions {
+            basis.eval(w, &mut y);
+            let closed = bands_0_to_2(w.as_vec3());
+            for (i, (&c, &e)) in closed.iter().zip(&y).enumerate() {
+                assert!(
+                    (f64::from(c) - e).abs() < 2e-6,
+                    "{w:?} index {i}: {c} against {e}"
+                );
+            }
+        }
     }
 
     /// A-T6: rotations keep the norm, compose, and R(2π) = I; agree with projecting the rotated

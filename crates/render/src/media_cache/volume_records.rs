@@ -26,14 +26,13 @@ use crate::irradiance_cache::store::RecordStore;
 use crate::media::tracking::first_opaque;
 use crate::media::{Medium, Phase};
 use crate::scene::Scene;
-use ircache_math::harmonics::sh::ShBasis;
+use ircache_math::harmonics::sh::bands_0_to_2;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3, PI};
 use rayon::prelude::*;
 use std::time::Instant;
 
 /// Coefficients a colour: bands 0, 1 and 2.
-pub const COEFFICIENTS: usize = ORDER * ORDER;
-const ORDER: usize = 3;
+pub const COEFFICIENTS: usize = 9;
 
 /// A record of the in-scattered indirect light at a point of a medium.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,13 +67,11 @@ impl CachedRecord for VolumeRecord {
 /// lookup.
 #[must_use]
 pub fn scattering_weights(d: Vec3, phase: Phase) -> [f32; COEFFICIENTS] {
-    let mut y = [0.0f64; COEFFICIENTS];
-    ShBasis::new(ORDER).eval(d.as_dvec3(), &mut y);
+    let y = bands_0_to_2(d);
     let g = phase.mean_cosine();
     // Band l of index i = l² + l + m is weighted gˡ.
-    std::array::from_fn(|i| {
-        g.powi(ircache_math::harmonics::band_and_degree(i).0 as i32) * y[i] as f32
-    })
+    let band = [1.0, g, g, g, g * g, g * g, g * g, g * g, g * g];
+    std::array::from_fn(|i| band[i] * y[i])
 }
 
 impl VolumeRecord {
@@ -128,8 +125,6 @@ pub fn gather(
     let azimuthal = 2 * polar;
     let count = polar * azimuthal;
     let sample_emitters = scene.samples_lights_in(medium);
-    let mut basis = ShBasis::new(ORDER);
-    let mut y = [0.0f64; COEFFICIENTS];
     let mut sum = [Rgb::ZERO; COEFFICIENTS];
     let mut inverse_distances = 0.0f64;
     let mut rays = RayCounts::default();
@@ -171,9 +166,8 @@ pub fn gather(
                 &mut rng,
                 &mut rays,
             );
-            basis.eval(w.as_dvec3(), &mut y);
-            for (s, &b) in sum.iter_mut().zip(&y) {
-                *s += l * b as f32;
+            for (s, &b) in sum.iter_mut().zip(&bands_0_to_2(w)) {
+                *s += l * b;
             }
         }
     }
@@ -264,22 +258,11 @@ impl VolumeCache {
     #[must_use]
     pub fn in_scattered(&self, p: Vec3, medium: usize, d: Vec3, phase: Phase) -> Option<Rgb> {
         let weights = scattering_weights(d, phase);
-        let mut serving: Vec<(Vec3, f32, Rgb)> = Vec::new();
+        let mut fit = LocalLinear::default();
         self.for_each_serving(p, medium, 1.0, |rec, e| {
-            serving.push((rec.p - p, (1.0 - e).max(1e-6), rec.in_scattered(&weights)));
+            fit.add(rec.p - p, (1.0 - e).max(1e-6), rec.in_scattered(&weights));
         });
-        if serving.is_empty() {
-            return None;
-        }
-        let value = local_linear(&serving).unwrap_or_else(|| {
-            let (sum, weights) = serving
-                .iter()
-                .fold((Rgb::ZERO, 0.0f32), |(s, w), &(_, wi, v)| {
-                    (s + v * wi, w + wi)
-                });
-            sum / weights
-        });
-        Some(value.max(Rgb::ZERO))
+        fit.value().map(|v| v.max(Rgb::ZERO))
     }
 
     /// The records.
@@ -362,45 +345,92 @@ impl VolumeCache {
 
 /// The value at the origin of a weighted least-squares plane through `(offset, weight, value)`
 /// (local linear regression: no first-order bias where the records lie to one side, the
-/// volumetric records having no gradients of their own); `None` where the offsets do not span
-/// three dimensions well.
-fn local_linear(serving: &[(Vec3, f32, Rgb)]) -> Option<Rgb> {
-    if serving.len() < 4 {
-        return None;
+/// volumetric records having no gradients of their own), accumulated record by record; their
+/// weighted mean where the offsets do not span three dimensions well.
+#[derive(Clone, Copy, Debug)]
+struct LocalLinear {
+    /// Records added.
+    count: usize,
+    /// Σ w v vᵀ over the design rows v = (1, offset), unscaled.
+    moments: ircache_math::DMat4,
+    /// Σ w v valueᵀ, a column per channel.
+    values: [ircache_math::DVec4; 3],
+    /// The largest offset's length: the fit's scale.
+    scale: f32,
+}
+
+impl Default for LocalLinear {
+    // Not derived: glam's default matrix is the identity.
+    fn default() -> LocalLinear {
+        LocalLinear {
+            count: 0,
+            moments: ircache_math::DMat4::ZERO,
+            values: [ircache_math::DVec4::ZERO; 3],
+            scale: 0.0,
+        }
     }
-    let scale = serving
-        .iter()
-        .map(|s| s.0.length())
-        .fold(0.0f32, f32::max)
-        .max(f32::MIN_POSITIVE);
-    // The design row (1, offset/scale) of a record.
-    let design = |o: Vec3| {
-        let o = o / scale;
-        ircache_math::DVec4::new(1.0, f64::from(o.x), f64::from(o.y), f64::from(o.z))
-    };
-    let mut m = ircache_math::DMat4::ZERO;
-    for &(o, w, _) in serving {
-        let v = design(o);
+}
+
+impl LocalLinear {
+    /// Adds a record at `offset` from the point with weight `w` and value `value`.
+    fn add(&mut self, offset: Vec3, w: f32, value: Rgb) {
+        let v = ircache_math::DVec4::new(
+            1.0,
+            f64::from(offset.x),
+            f64::from(offset.y),
+            f64::from(offset.z),
+        );
         let w = f64::from(w);
-        m += ircache_math::DMat4::from_cols(
+        self.moments += ircache_math::DMat4::from_cols(
             v * (w * v.x),
             v * (w * v.y),
             v * (w * v.z),
             v * (w * v.w),
         );
+        for (sum, c) in self.values.iter_mut().zip([value.r, value.g, value.b]) {
+            *sum += v * (w * f64::from(c));
+        }
+        self.count += 1;
+        self.scale = self.scale.max(offset.length());
     }
-    let det = m.determinant();
-    if det.is_nan() || det.abs() <= 1e-6 * m.col(0).x.powi(4) {
-        return None;
+
+    /// The plane's value at the point, or the weighted mean where fewer than four records span
+    /// the space; `None` without records.
+    fn value(&self) -> Option<Rgb> {
+        if self.count == 0 {
+            return None;
+        }
+        let mean = || {
+            let w = self.moments.col(0).x;
+            Rgb::new(
+                (self.values[0].x / w) as f32,
+                (self.values[1].x / w) as f32,
+                (self.values[2].x / w) as f32,
+            )
+        };
+        if self.count < 4 {
+            return Some(mean());
+        }
+        // In offsets over the scale (conditioning, and a scale-free singularity test): M becomes
+        // S M S and each right-hand side S b with S = diag(1, 1/s, 1/s, 1/s).
+        let s = 1.0 / f64::from(self.scale.max(f32::MIN_POSITIVE));
+        let scaling = ircache_math::DVec4::new(1.0, s, s, s);
+        let m = ircache_math::DMat4::from_diagonal(scaling)
+            * self.moments
+            * ircache_math::DMat4::from_diagonal(scaling);
+        let det = m.determinant();
+        if det.is_nan() || det.abs() <= 1e-6 * m.col(0).x.powi(4) {
+            return Some(mean());
+        }
+        // The plane's value at the point: e₁ᵀ M⁻¹ b.
+        let row = m.inverse().row(0);
+        let at = |b: ircache_math::DVec4| row.dot(b * scaling) as f32;
+        Some(Rgb::new(
+            at(self.values[0]),
+            at(self.values[1]),
+            at(self.values[2]),
+        ))
     }
-    let inverse = m.inverse();
-    let mut sum = Rgb::ZERO;
-    for &(o, w, value) in serving {
-        // The equivalent kernel: e₁ᵀ M⁻¹ v w.
-        let l = inverse.row(0).dot(design(o)) * f64::from(w);
-        sum += value * l as f32;
-    }
-    Some(sum)
 }
 
 /// Calls `f(point, medium)` at the middle of each quadrature stratum of `ray`'s medium segments
@@ -438,6 +468,7 @@ mod tests {
     use super::*;
     use crate::media::phase::henyey_greenstein;
     use ircache_math::harmonics::quadrature;
+    use ircache_math::harmonics::sh::ShBasis;
 
     /// The project's scene `scenes/NAME/scene.xml` with `defines`, built.
     fn project_scene(name: &str, defines: &[(String, String)]) -> Scene {
@@ -606,7 +637,14 @@ mod tests {
                 (o, 0.1 + rng.next_f32(), plane(o))
             })
             .collect();
-        let fit = local_linear(&serving).expect("seven records span the space");
+        let local_linear = |serving: &[(Vec3, f32, Rgb)]| {
+            let mut fit = LocalLinear::default();
+            for &(o, w, v) in serving {
+                fit.add(o, w, v);
+            }
+            fit.value().expect("records were added")
+        };
+        let fit = local_linear(&serving);
         let exact = plane(Vec3::ZERO);
         for c in 0..3 {
             assert!(
@@ -619,15 +657,33 @@ mod tests {
         let (sum, weights) = serving
             .iter()
             .fold((Rgb::ZERO, 0.0), |(s, w), &(_, wi, v)| (s + v * wi, w + wi));
+        let mean = sum / weights;
         assert!(
-            ((sum / weights)[0] - exact[0]).abs() > 0.1,
+            (mean[0] - exact[0]).abs() > 0.1,
             "the weighted mean is biased here"
         );
+        // Coplanar records (and fewer than four) take the weighted mean.
         let flat: Vec<(Vec3, f32, Rgb)> = serving
             .iter()
             .map(|&(o, w, v)| (Vec3::new(o.x, o.y, 0.0), w, v))
             .collect();
-        assert!(local_linear(&flat).is_none());
+        let flat_mean = flat.iter().fold(Rgb::ZERO, |s, &(_, w, v)| s + v * w) / weights;
+        for (fit, mean) in [
+            (local_linear(&flat), flat_mean),
+            (local_linear(&serving[..3]), {
+                let (s, w) = serving[..3]
+                    .iter()
+                    .fold((Rgb::ZERO, 0.0), |(s, w), &(_, wi, v)| (s + v * wi, w + wi));
+                s / w
+            }),
+        ] {
+            for c in 0..3 {
+                assert!(
+                    (fit[c] - mean[c]).abs() < 1e-5 * mean[c].abs(),
+                    "{fit:?} against {mean:?}"
+                );
+            }
+        }
     }
 
     /// A record's in-scattered light equals the integral ∫ f_p(d·ω) L(ω) dω by a fine product
@@ -644,7 +700,7 @@ mod tests {
         };
         let rule = quadrature::sphere(24);
         let bands: Vec<Vec<f64>> = (0..3)
-            .map(|c| ShBasis::new(ORDER).project(&rule, |w| light(w)[c]))
+            .map(|c| ShBasis::new(3).project(&rule, |w| light(w)[c]))
             .collect();
         let radiance: [Rgb; COEFFICIENTS] = std::array::from_fn(|i| {
             Rgb::new(bands[0][i] as f32, bands[1][i] as f32, bands[2][i] as f32)
