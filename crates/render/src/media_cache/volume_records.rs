@@ -13,10 +13,11 @@
 //! (one row at a time, gathered in parallel, inserted in row order: the same cache at any
 //! thread count), with Ward's radius R = the harmonic mean of the gather directions' reaches
 //! (the first hit, or in a grid nearer, where its optical depth reaches 4: [`optical_reach`])
-//! bounded to [scene size/64, scene size/4], serving within a·R (ε = distance/(a·R) ≤ 1) through
-//! a local linear fit with weights 1 − ε (they carry no gradients); a record serves only its
-//! own medium. Bands 0–2 hold the light's direction well enough: band 3 moved the image by
-//! 0.03 % in the fog box; the bias that remains is the interpolation's (BENCHMARKS.md).
+//! bounded to [scene size/64, scene size/4]. Records are placed where none lies within a·R
+//! (ε = distance/(a·R) ≤ 1) and serve out to ε ≤ [`LOOKUP_REACH`] through a local linear fit
+//! with weights 1 − ε/[`LOOKUP_REACH`] (they carry no gradients); a record serves only its own
+//! medium. Bands 0–2 hold the light's direction well enough: band 3 moved the image by 0.03 % in
+//! the fog box; the bias that remains is the interpolation's (BENCHMARKS.md).
 
 use crate::integrators::media_march::{indirect_arrival, quadrature_points};
 use crate::integrators::volpath::{PathState, VolPathIntegrator};
@@ -100,11 +101,21 @@ pub struct VolumeCacheStats {
     pub seconds: f64,
 }
 
+/// How far past the radius a·R that places records a record serves the pixel pass's lookups:
+/// at 1 most lookups found one to three records (62 % of them in the fog box), too few for the
+/// local linear fit, and their weighted mean showed each record's noise as a patch. Out to 1.5
+/// a lookup averages more records at no cost in bias to first order (the fit): fog box relMSE_trim
+/// −11 to −17 %, blurred −18 to −25 %, glass-in-fog −7 % and −16 %; the smoke plume, whose
+/// records' light changes faster, within ±5 %, and 2 loses there (BENCHMARKS.md).
+pub const LOOKUP_REACH: f32 = 1.5;
+
 /// Volumetric records and their index.
 #[derive(Debug)]
 pub struct VolumeCache {
     store: RecordStore<VolumeRecord>,
     accuracy: f32,
+    /// How far past its placement radius a·R a record serves lookups ([`LOOKUP_REACH`]).
+    lookup_reach: f32,
     /// What building it did.
     pub stats: VolumeCacheStats,
 }
@@ -209,13 +220,23 @@ fn optical_reach(medium: &Medium, p: Vec3, w: Vec3, t_hit: f32) -> f32 {
 }
 
 impl VolumeCache {
-    /// An empty cache serving within `accuracy` · R.
+    /// An empty cache placing records `accuracy` · R apart and serving out to
+    /// [`LOOKUP_REACH`] times that.
     #[must_use]
     pub fn new(scene: &Scene, accuracy: f32) -> VolumeCache {
         let min_validity = accuracy * 2.0 * scene.radius / 64.0;
+        let lookup_reach = LOOKUP_REACH;
+        // The store's radii are the lookups' reach, so that they take its one-cell path; the
+        // placement's test (ε ≤ 1) lies inside them.
         VolumeCache {
-            store: RecordStore::new(min_validity, accuracy, ErrorMetric::Ward, false),
+            store: RecordStore::new(
+                min_validity * lookup_reach,
+                accuracy * lookup_reach,
+                ErrorMetric::Ward,
+                false,
+            ),
             accuracy,
+            lookup_reach,
             stats: VolumeCacheStats::default(),
         }
     }
@@ -228,19 +249,21 @@ impl VolumeCache {
         threshold: f32,
         mut f: impl FnMut(&VolumeRecord, f32),
     ) {
-        self.store.for_each_near_within(p, threshold, |id| {
-            let rec = &self.store.records()[id as usize];
-            if rec.medium != medium {
-                return;
-            }
-            let e = (p - rec.p).length() / (self.accuracy * rec.r);
-            if e <= threshold {
-                f(rec, e);
-            }
-        });
+        self.store
+            .for_each_near_within(p, threshold / self.lookup_reach, |id| {
+                let rec = &self.store.records()[id as usize];
+                if rec.medium != medium {
+                    return;
+                }
+                let e = (p - rec.p).length() / (self.accuracy * rec.r);
+                if e <= threshold {
+                    f(rec, e);
+                }
+            });
     }
 
-    /// True when a record of `medium` serves `p`.
+    /// True when a record of `medium` lies within a·R of `p` (the placement's test; lookups reach
+    /// further).
     #[must_use]
     pub fn covers(&self, p: Vec3, medium: usize) -> bool {
         let mut found = false;
@@ -249,9 +272,10 @@ impl VolumeCache {
     }
 
     /// The in-scattered indirect light at `p` towards a camera ray along `d` per unit
-    /// scattering coefficient from the records serving it (ε ≤ 1): the value at `p` of a
-    /// weighted least-squares plane through them (weights 1 − ε), or their weighted mean where
-    /// fewer than four span the space; `None` where none serves. No relaxed second try: a record
+    /// scattering coefficient from the records serving it (ε ≤ [`LOOKUP_REACH`]): the value at
+    /// `p` of a weighted least-squares plane through them (weights 1 − ε/[`LOOKUP_REACH`]), or
+    /// their weighted mean where fewer than four span the space; `None` where none serves. No
+    /// relaxed second try (a wider reach where none serves): a record
     /// stretched past its radius near a dark wall overstates the light (measured: the
     /// in-scattered light 3.7 % high with one and weighted means, 2.2–2.5 % without and with
     /// the fit), and the caller then traces a path.
@@ -259,8 +283,13 @@ impl VolumeCache {
     pub fn in_scattered(&self, p: Vec3, medium: usize, d: Vec3, phase: Phase) -> Option<Rgb> {
         let weights = scattering_weights(d, phase);
         let mut fit = LocalLinear::default();
-        self.for_each_serving(p, medium, 1.0, |rec, e| {
-            fit.add(rec.p - p, (1.0 - e).max(1e-6), rec.in_scattered(&weights));
+        let reach = self.lookup_reach;
+        self.for_each_serving(p, medium, reach, |rec, e| {
+            fit.add(
+                rec.p - p,
+                (1.0 - e / reach).max(1e-6),
+                rec.in_scattered(&weights),
+            );
         });
         fit.value().map(|v| v.max(Rgb::ZERO))
     }
@@ -347,48 +376,47 @@ impl VolumeCache {
 /// (local linear regression: no first-order bias where the records lie to one side, the
 /// volumetric records having no gradients of their own), accumulated record by record; their
 /// weighted mean where the offsets do not span three dimensions well.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct LocalLinear {
     /// Records added.
     count: usize,
-    /// Σ w v vᵀ over the design rows v = (1, offset), unscaled.
-    moments: ircache_math::DMat4,
+    /// Σ w v vᵀ over the design rows v = (1, offset), unscaled: its upper triangle, row by row
+    /// (00, 01, 02, 03, 11, 12, 13, 22, 23, 33).
+    moments: [f64; 10],
     /// Σ w v valueᵀ, a column per channel.
-    values: [ircache_math::DVec4; 3],
+    values: [[f64; 4]; 3],
     /// The largest offset's length: the fit's scale.
     scale: f32,
 }
 
-impl Default for LocalLinear {
-    // Not derived: glam's default matrix is the identity.
-    fn default() -> LocalLinear {
-        LocalLinear {
-            count: 0,
-            moments: ircache_math::DMat4::ZERO,
-            values: [ircache_math::DVec4::ZERO; 3],
-            scale: 0.0,
-        }
-    }
-}
-
 impl LocalLinear {
     /// Adds a record at `offset` from the point with weight `w` and value `value`.
+    #[inline]
     fn add(&mut self, offset: Vec3, w: f32, value: Rgb) {
-        let v = ircache_math::DVec4::new(
-            1.0,
+        let (x, y, z) = (
             f64::from(offset.x),
             f64::from(offset.y),
             f64::from(offset.z),
         );
         let w = f64::from(w);
-        self.moments += ircache_math::DMat4::from_cols(
-            v * (w * v.x),
-            v * (w * v.y),
-            v * (w * v.z),
-            v * (w * v.w),
-        );
+        let (wx, wy, wz) = (w * x, w * y, w * z);
+        let m = &mut self.moments;
+        m[0] += w;
+        m[1] += wx;
+        m[2] += wy;
+        m[3] += wz;
+        m[4] += wx * x;
+        m[5] += wx * y;
+        m[6] += wx * z;
+        m[7] += wy * y;
+        m[8] += wy * z;
+        m[9] += wz * z;
         for (sum, c) in self.values.iter_mut().zip([value.r, value.g, value.b]) {
-            *sum += v * (w * f64::from(c));
+            let c = f64::from(c);
+            sum[0] += w * c;
+            sum[1] += wx * c;
+            sum[2] += wy * c;
+            sum[3] += wz * c;
         }
         self.count += 1;
         self.scale = self.scale.max(offset.length());
@@ -400,12 +428,12 @@ impl LocalLinear {
         if self.count == 0 {
             return None;
         }
+        let m = &self.moments;
         let mean = || {
-            let w = self.moments.col(0).x;
             Rgb::new(
-                (self.values[0].x / w) as f32,
-                (self.values[1].x / w) as f32,
-                (self.values[2].x / w) as f32,
+                (self.values[0][0] / m[0]) as f32,
+                (self.values[1][0] / m[0]) as f32,
+                (self.values[2][0] / m[0]) as f32,
             )
         };
         if self.count < 4 {
@@ -414,17 +442,34 @@ impl LocalLinear {
         // In offsets over the scale (conditioning, and a scale-free singularity test): M becomes
         // S M S and each right-hand side S b with S = diag(1, 1/s, 1/s, 1/s).
         let s = 1.0 / f64::from(self.scale.max(f32::MIN_POSITIVE));
-        let scaling = ircache_math::DVec4::new(1.0, s, s, s);
-        let m = ircache_math::DMat4::from_diagonal(scaling)
-            * self.moments
-            * ircache_math::DMat4::from_diagonal(scaling);
-        let det = m.determinant();
-        if det.is_nan() || det.abs() <= 1e-6 * m.col(0).x.powi(4) {
+        let s2 = s * s;
+        let scaled = ircache_math::DMat4::from_cols_array(&[
+            m[0],
+            m[1] * s,
+            m[2] * s,
+            m[3] * s,
+            m[1] * s,
+            m[4] * s2,
+            m[5] * s2,
+            m[6] * s2,
+            m[2] * s,
+            m[5] * s2,
+            m[7] * s2,
+            m[8] * s2,
+            m[3] * s,
+            m[6] * s2,
+            m[8] * s2,
+            m[9] * s2,
+        ]);
+        let det = scaled.determinant();
+        if det.is_nan() || det.abs() <= 1e-6 * m[0].powi(4) {
             return Some(mean());
         }
         // The plane's value at the point: e₁ᵀ M⁻¹ b.
-        let row = m.inverse().row(0);
-        let at = |b: ircache_math::DVec4| row.dot(b * scaling) as f32;
+        let row = scaled.inverse().row(0);
+        let at = |b: [f64; 4]| {
+            row.dot(ircache_math::DVec4::new(b[0], b[1] * s, b[2] * s, b[3] * s)) as f32
+        };
         Some(Rgb::new(
             at(self.values[0]),
             at(self.values[1]),
