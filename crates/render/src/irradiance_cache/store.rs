@@ -14,8 +14,8 @@ use rustc_hash::FxHashMap;
 #[derive(Clone, Debug)]
 pub struct RecordStore<R: CachedRecord = Record> {
     records: Vec<R>,
-    /// Each record's position and current validity radius at threshold 1 (neighbour clamping
-    /// shrinks it after the record is filed in its cells).
+    /// Each record's position and validity radius at threshold 1, beside the records: lookups
+    /// reject the far candidates of a cell from these 16 bytes without reading the record.
     reach: Vec<[f32; 4]>,
     /// Cell size of grid level 0 (the smallest validity radius expected).
     base_cell: f32,
@@ -25,8 +25,8 @@ pub struct RecordStore<R: CachedRecord = Record> {
     metric: ErrorMetric,
     /// Neighbour clamping: a record's radius never exceeds a neighbour's plus their distance.
     clamp_neighbours: bool,
-    /// (level, cell) → the records filed there, each with its reach as it was filed.
-    cells: FxHashMap<(u8, [i32; 3]), Vec<CellEntry>>,
+    /// (level, cell) → record indices.
+    cells: FxHashMap<(u8, [i32; 3]), Vec<u32>>,
     /// Grid levels holding at least one record.
     levels_used: u64,
 }
@@ -43,32 +43,6 @@ pub struct Interpolated {
 }
 
 const MAX_GRID_LEVEL: u8 = 40;
-
-/// A record as a cell lists it: its position and validity radius beside its index, so that a
-/// lookup rejects a cell's far candidates in one pass over the cell (not one dependent load
-/// into [`RecordStore::reach`] per candidate: the fog box's pixel pass spent a tenth of its
-/// time there). Neighbour clamping only shrinks radii, so the copy filed at insertion is
-/// never smaller than the record's radius; with clamping the survivors are checked again.
-#[derive(Clone, Copy, Debug)]
-struct CellEntry {
-    reach: [f32; 4],
-    id: u32,
-}
-
-impl CellEntry {
-    /// Whether its sphere grown `threshold` times may hold `p` (a relative margin keeps the
-    /// records on the boundary, whatever the rounding).
-    #[inline]
-    fn may_reach(&self, p: Vec3, threshold: f32) -> bool {
-        within_reach(self.reach, p, threshold)
-    }
-}
-
-#[inline]
-fn within_reach([x, y, z, rho]: [f32; 4], p: Vec3, threshold: f32) -> bool {
-    let reach = threshold * rho;
-    (p - Vec3::new(x, y, z)).length_squared() <= reach * reach * (1.0 + 1e-4)
-}
 
 impl<R: CachedRecord> RecordStore<R> {
     /// An empty store; `min_validity_radius` sets the finest grid (any positive value works,
@@ -185,22 +159,16 @@ impl<R: CachedRecord> RecordStore<R> {
         let size = self.cell_size(level);
         let lo = Self::cell_of(p - Vec3::splat(rho), size);
         let hi = Self::cell_of(p + Vec3::splat(rho), size);
-        let entry = CellEntry {
-            reach: [p.x, p.y, p.z, rho],
-            id: self.records.len() as u32,
-        };
+        let id = self.records.len() as u32;
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
                 for z in lo[2]..=hi[2] {
-                    self.cells
-                        .entry((level, [x, y, z]))
-                        .or_default()
-                        .push(entry);
+                    self.cells.entry((level, [x, y, z])).or_default().push(id);
                 }
             }
         }
         self.levels_used |= 1 << level;
-        self.reach.push(entry.reach);
+        self.reach.push([p.x, p.y, p.z, rho]);
         self.records.push(rec);
     }
 
@@ -247,8 +215,7 @@ impl<R: CachedRecord> RecordStore<R> {
     pub fn for_each_near(&self, p: Vec3, mut f: impl FnMut(u32)) {
         // Every level's cell first, then their records: the hash probes, each a likely cache
         // miss in a large cache, overlap instead of waiting one behind the other's records.
-        let mut cells: [&[CellEntry]; MAX_GRID_LEVEL as usize + 1] =
-            [&[]; MAX_GRID_LEVEL as usize + 1];
+        let mut cells: [&[u32]; MAX_GRID_LEVEL as usize + 1] = [&[]; MAX_GRID_LEVEL as usize + 1];
         let mut found = 0;
         let mut used = self.levels_used;
         while used != 0 {
@@ -260,13 +227,10 @@ impl<R: CachedRecord> RecordStore<R> {
                 found += 1;
             }
         }
-        for entries in &cells[..found] {
-            for entry in *entries {
-                // A clamped record's radius may have shrunk since it was filed.
-                if entry.may_reach(p, 1.0)
-                    && (!self.clamp_neighbours || self.may_reach(entry.id, p, 1.0))
-                {
-                    f(entry.id);
+        for ids in &cells[..found] {
+            for &id in *ids {
+                if self.may_reach(id, p, 1.0) {
+                    f(id);
                 }
             }
         }
@@ -277,7 +241,9 @@ impl<R: CachedRecord> RecordStore<R> {
     /// the records on the boundary, whatever the rounding.
     #[inline]
     fn may_reach(&self, id: u32, p: Vec3, threshold: f32) -> bool {
-        within_reach(self.reach[id as usize], p, threshold)
+        let [x, y, z, rho] = self.reach[id as usize];
+        let reach = threshold * rho;
+        (p - Vec3::new(x, y, z)).length_squared() <= reach * reach * (1.0 + 1e-4)
     }
 
     /// Calls `f(record index)` once for every record whose validity sphere grown `threshold`
@@ -301,9 +267,7 @@ impl<R: CachedRecord> RecordStore<R> {
                 for y in lo[1]..=hi[1] {
                     for z in lo[2]..=hi[2] {
                         if let Some(c) = self.cells.get(&(level, [x, y, z])) {
-                            ids.extend(
-                                c.iter().filter(|e| e.may_reach(p, threshold)).map(|e| e.id),
-                            );
+                            ids.extend_from_slice(c);
                         }
                     }
                 }

@@ -71,8 +71,8 @@ pub fn scattering_weights(d: Vec3, phase: Phase) -> [f32; COEFFICIENTS] {
     let y = bands_0_to_2(d);
     let g = phase.mean_cosine();
     // Band l of index i = l² + l + m is weighted gˡ.
-    let band = [1.0, g, g, g, g * g, g * g, g * g, g * g, g * g];
-    std::array::from_fn(|i| band[i] * y[i])
+    let power = [1.0, g, g * g];
+    std::array::from_fn(|i| power[ircache_math::harmonics::band_and_degree(i).0] * y[i])
 }
 
 impl VolumeRecord {
@@ -114,8 +114,6 @@ pub const LOOKUP_REACH: f32 = 1.5;
 pub struct VolumeCache {
     store: RecordStore<VolumeRecord>,
     accuracy: f32,
-    /// How far past its placement radius a·R a record serves lookups ([`LOOKUP_REACH`]).
-    lookup_reach: f32,
     /// What building it did.
     pub stats: VolumeCacheStats,
 }
@@ -225,18 +223,16 @@ impl VolumeCache {
     #[must_use]
     pub fn new(scene: &Scene, accuracy: f32) -> VolumeCache {
         let min_validity = accuracy * 2.0 * scene.radius / 64.0;
-        let lookup_reach = LOOKUP_REACH;
         // The store's radii are the lookups' reach, so that they take its one-cell path; the
         // placement's test (ε ≤ 1) lies inside them.
         VolumeCache {
             store: RecordStore::new(
-                min_validity * lookup_reach,
-                accuracy * lookup_reach,
+                min_validity * LOOKUP_REACH,
+                accuracy * LOOKUP_REACH,
                 ErrorMetric::Ward,
                 false,
             ),
             accuracy,
-            lookup_reach,
             stats: VolumeCacheStats::default(),
         }
     }
@@ -250,7 +246,7 @@ impl VolumeCache {
         mut f: impl FnMut(&VolumeRecord, f32),
     ) {
         self.store
-            .for_each_near_within(p, threshold / self.lookup_reach, |id| {
+            .for_each_near_within(p, threshold / LOOKUP_REACH, |id| {
                 let rec = &self.store.records()[id as usize];
                 if rec.medium != medium {
                     return;
@@ -283,11 +279,10 @@ impl VolumeCache {
     pub fn in_scattered(&self, p: Vec3, medium: usize, d: Vec3, phase: Phase) -> Option<Rgb> {
         let weights = scattering_weights(d, phase);
         let mut fit = LocalLinear::default();
-        let reach = self.lookup_reach;
-        self.for_each_serving(p, medium, reach, |rec, e| {
+        self.for_each_serving(p, medium, LOOKUP_REACH, |rec, e| {
             fit.add(
                 rec.p - p,
-                (1.0 - e / reach).max(1e-6),
+                (1.0 - e / LOOKUP_REACH).max(1e-6),
                 rec.in_scattered(&weights),
             );
         });
@@ -699,10 +694,13 @@ mod tests {
                 exact[c]
             );
         }
-        let (sum, weights) = serving
-            .iter()
-            .fold((Rgb::ZERO, 0.0), |(s, w), &(_, wi, v)| (s + v * wi, w + wi));
-        let mean = sum / weights;
+        let weighted_mean = |serving: &[(Vec3, f32, Rgb)]| {
+            let (sum, weights) = serving
+                .iter()
+                .fold((Rgb::ZERO, 0.0), |(s, w), &(_, wi, v)| (s + v * wi, w + wi));
+            sum / weights
+        };
+        let mean = weighted_mean(&serving);
         assert!(
             (mean[0] - exact[0]).abs() > 0.1,
             "the weighted mean is biased here"
@@ -712,16 +710,8 @@ mod tests {
             .iter()
             .map(|&(o, w, v)| (Vec3::new(o.x, o.y, 0.0), w, v))
             .collect();
-        let flat_mean = flat.iter().fold(Rgb::ZERO, |s, &(_, w, v)| s + v * w) / weights;
-        for (fit, mean) in [
-            (local_linear(&flat), flat_mean),
-            (local_linear(&serving[..3]), {
-                let (s, w) = serving[..3]
-                    .iter()
-                    .fold((Rgb::ZERO, 0.0), |(s, w), &(_, wi, v)| (s + v * wi, w + wi));
-                s / w
-            }),
-        ] {
+        for part in [&flat[..], &serving[..3]] {
+            let (fit, mean) = (local_linear(part), weighted_mean(part));
             for c in 0..3 {
                 assert!(
                     (fit[c] - mean[c]).abs() < 1e-5 * mean[c].abs(),
