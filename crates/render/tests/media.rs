@@ -293,10 +293,20 @@ fn emitting_slab_shows_le_times_one_minus_transmittance() {
 /// Single scattering from a point light of intensity I in an infinite homogeneous medium
 /// (`max_depth` 2), camera ray passing the light at distance D with its foot a distance C ahead:
 /// L = ∫_{−C}^{∞} σ_s p(θ) I e^{−σ_t (C + t)} e^{−σ_t ℓ}/ℓ² dt, ℓ = √(D² + t²), by quadrature.
+///
+/// With the light 0.02 from the ray, free-flight sampling alone puts a vertex near the light
+/// rarely and then weighs it by 1/r²: its estimate's spread over 4096 samples was 6.1 %
+/// (isotropic) and 1.8 % (g = 0.5), against the 1 % asked here, which equiangular sampling of
+/// the light meets (0.32 % and 0.86 %; `integrators::equiangular`).
 #[test]
 fn single_scattering_matches_quadrature() {
-    let (sigma_t, albedo, intensity, d, c) = (0.5f64, 0.6f64, 3.0f64, 1.0f64, 2.0f64);
-    for phase in [PhaseDesc::Isotropic, PhaseDesc::HenyeyGreenstein { g: 0.5 }] {
+    let (sigma_t, albedo, intensity, c) = (0.5f64, 0.6f64, 3.0f64, 2.0f64);
+    for (d, phase) in [
+        (1.0f64, PhaseDesc::Isotropic),
+        (1.0, PhaseDesc::HenyeyGreenstein { g: 0.5 }),
+        (0.02, PhaseDesc::Isotropic),
+        (0.02, PhaseDesc::HenyeyGreenstein { g: 0.5 }),
+    ] {
         let g = match phase {
             PhaseDesc::Isotropic => 0.0,
             PhaseDesc::HenyeyGreenstein { g } => f64::from(g),
@@ -339,26 +349,38 @@ fn single_scattering_matches_quadrature() {
             position: Vec3::new(0.0, d as f32, 0.0),
             intensity: Rgb::splat(intensity as f32),
         };
-        let mut desc = scene(cam, volpath(2), vec![speck], vec![light]);
-        desc.media = vec![medium(
-            VolumeDesc::constant(Rgb::splat(sigma_t as f32)),
-            Rgb::splat(albedo as f32),
-            None,
-            phase,
-        )];
-        let out = render_desc(&desc, 2, 9);
-        let (m, e) = mean_and_error(&out.image);
-        let got = f64::from(m.g);
-        assert!(
-            (got - reference).abs() < (4.0 * f64::from(e.g)).max(0.01 * reference),
-            "{phase:?}: {got} vs quadrature {reference} (σ {})",
-            e.g
-        );
-        assert!(
-            f64::from(e.g) < 0.005 * reference,
-            "too noisy to decide: σ {}",
-            e.g
-        );
+        // `volpath`, and the cache's pixel pass, which marches the camera ray to infinity.
+        for integrator in ["volpath", "ic"] {
+            let mut desc = scene(
+                cam.clone(),
+                IntegratorDesc {
+                    kind: integrator.into(),
+                    ..volpath(2)
+                },
+                vec![speck.clone()],
+                vec![light.clone()],
+            );
+            desc.media = vec![medium(
+                VolumeDesc::constant(Rgb::splat(sigma_t as f32)),
+                Rgb::splat(albedo as f32),
+                None,
+                phase,
+            )];
+            let out = render_desc(&desc, 2, 9);
+            let (m, e) = mean_and_error(&out.image);
+            let got = f64::from(m.g);
+            assert!(
+                (got - reference).abs() < (4.0 * f64::from(e.g)).max(0.01 * reference),
+                "{integrator}, {phase:?}, light {d} from the ray: {got} vs quadrature {reference} \
+                 (σ {})",
+                e.g
+            );
+            assert!(
+                f64::from(e.g) < if d < 0.1 { 0.01 } else { 0.005 } * reference,
+                "{integrator}, {phase:?}, light {d} from the ray: too noisy, σ {} of {reference}",
+                e.g
+            );
+        }
     }
 }
 

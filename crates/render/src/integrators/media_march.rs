@@ -30,6 +30,7 @@
 //! the piece (the smoke plume's single scattering within 0.02 % of `volpath`'s mean, blocks within
 //! 0.7 %; ratio tracking from point to point, before, had twice the noise).
 
+use super::equiangular::{DistanceDensity, Segment};
 use super::light_sampling::BsdfStrategy;
 use super::path_continuation::{count_and_roulette, sample_continuation, Arrival};
 use super::volpath::{light_sample_with, PathState, Vertex, VolPathIntegrator};
@@ -270,8 +271,16 @@ fn march_segment(
 ) -> (Rgb, Rgb) {
     let med = &scene.media[medium];
     let mut jitter = Rng::new(u64::from(rng.next_u32()), 0x6a69_7474);
-    let (quadrature, segment) = quadrature_points(med, ray, t_hit, points, || jitter.next_f32());
+    let (quadrature, segment, density) =
+        quadrature_points(med, ray, t_hit, points, || jitter.next_f32());
     let shift = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+    // Point and spot lights' single scattering also by as many equiangular samples, each
+    // strategy's light samples weighed against the other's.
+    let equiangular = density
+        .filter(|_| depth + 2 <= max_depth && scene.samples_lights_in(medium))
+        .and_then(|density| {
+            Segment::for_density(scene, medium, ray, t_hit, density, quadrature.len() as u32)
+        });
     let mut sum = Rgb::ZERO;
     for (i, &(t, weight)) in quadrature.iter().enumerate() {
         let u = lattice_point(shift, i as u32);
@@ -281,7 +290,29 @@ fn march_segment(
             medium,
             depth,
         };
-        sum += weight * source(integrator, scene, &at, max_depth, u, rng, rays);
+        sum += weight
+            * source(
+                integrator,
+                scene,
+                &at,
+                equiangular.as_ref(),
+                max_depth,
+                u,
+                rng,
+                rays,
+            );
+    }
+    if let Some(equiangular) = &equiangular {
+        let n = equiangular.samples;
+        let (u_select, u_t) = (rng.next_f32(), rng.next_f32());
+        for i in 0..n {
+            // Stratified distances, the light choices a lattice across them.
+            let u = (
+                (u_select + i as f32 * LATTICE[0]).fract(),
+                (i as f32 + (u_t + i as f32 * LATTICE[1]).fract()) / n as f32,
+            );
+            sum += equiangular.estimate(scene, medium, med.phase, u, rng, rays);
+        }
     }
     (sum, segment)
 }
@@ -307,6 +338,7 @@ fn source(
     integrator: &VolPathIntegrator,
     scene: &Scene,
     at: &MarchPoint,
+    equiangular: Option<&Segment>,
     max_depth: u32,
     u: (f32, Vec2),
     rng: &mut Rng,
@@ -323,7 +355,7 @@ fn source(
         return q;
     }
     if scene.samples_lights_in(at.medium) {
-        let vertex = Vertex::Medium(at.p, at.d, med.phase);
+        let vertex = Vertex::Medium(at.p, at.d, med.phase, equiangular);
         q += c.sigma_s * light_sample_with(scene, &vertex, Some(at.medium), None, u, rng, rays);
     }
     if at.depth + 2 < max_depth {
@@ -387,7 +419,9 @@ pub(crate) fn indirect_arrival(p: Vec3, pdf: f32, sample_emitters: bool) -> Arri
 }
 
 /// The quadrature of a medium segment of `ray` up to `t_hit`: distances with weights
-/// T(t₀, t)/(n pdf(t)) (`jitter` places each in its stratum), and the segment's transmittance.
+/// T(t₀, t)/(n pdf(t)) (`jitter` places each in its stratum), the segment's transmittance, and
+/// in homogeneous media the points' density n pdf(t) (the distance strategy that equiangular
+/// samples are weighed against, [`super::equiangular`]).
 /// Homogeneous media: one distance per stratum of equal scattering probability under the
 /// channels' mean extinction σ̄, pdf = σ̄ e^{−σ̄ s}/(1 − e^{−σ̄ L}); grids: the same under a
 /// piecewise-constant model of σ̄ ([`grid_quadrature`]). `points` strata where the segment is
@@ -398,9 +432,9 @@ pub(crate) fn quadrature_points(
     t_hit: f32,
     points: u32,
     mut jitter: impl FnMut() -> f32,
-) -> (Vec<(f32, Rgb)>, Rgb) {
+) -> (Vec<(f32, Rgb)>, Rgb, Option<DistanceDensity>) {
     let Some((t0, t1)) = med.clip(ray.o, ray.d, t_hit) else {
-        return (Vec::new(), Rgb::ONE);
+        return (Vec::new(), Rgb::ONE, None);
     };
     let length = t1 - t0;
     if med.homogeneous {
@@ -409,8 +443,9 @@ pub(crate) fn quadrature_points(
             .exp()
             .map(|x| if x.is_nan() { 0.0 } else { x });
         let mean = sigma_t.mean();
-        if mean <= 0.0 || !length.is_finite() {
-            return (Vec::new(), segment);
+        // An unbounded segment (a camera in fog looking at the sky) has mass 1 and finite points.
+        if mean <= 0.0 {
+            return (Vec::new(), segment, None);
         }
         let mass = -(-mean * length).exp_m1();
         let n = strata(points, mass);
@@ -422,12 +457,18 @@ pub(crate) fn quadrature_points(
                 (t0 + s, weight)
             })
             .collect();
-        return (out, segment);
+        let density = DistanceDensity::Quadrature {
+            count: n,
+            mean,
+            mass,
+        };
+        return (out, segment, Some(density));
     }
     if !length.is_finite() {
-        return (Vec::new(), Rgb::ONE);
+        return (Vec::new(), Rgb::ONE, None);
     }
-    grid_quadrature(med, ray, (t0, t1), points, jitter)
+    let (out, segment) = grid_quadrature(med, ray, (t0, t1), points, jitter);
+    (out, segment, None)
 }
 
 /// Majorant optical depth per piece of a grid's extinction model along a ray (0.5: the smoke
@@ -558,7 +599,7 @@ mod tests {
             let mut sum = Rgb::ZERO;
             for _ in 0..runs {
                 let mut jitter = Rng::new(u64::from(rng.next_u32()), 1);
-                let (points, segment) =
+                let (points, segment, _) =
                     quadrature_points(&med, &ray, length, 8, || jitter.next_f32());
                 let expected = (sigma * -length).exp();
                 assert!((0..3).all(|c| (segment[c] - expected[c]).abs() < 1e-6));
@@ -609,7 +650,7 @@ mod tests {
         let (mut sum, mut segment_sum) = (0.0f64, 0.0f64);
         for _ in 0..runs {
             let mut jitter = Rng::new(u64::from(rng.next_u32()), 2);
-            let (points, segment) = quadrature_points(&med, &ray, 5.0, 8, || jitter.next_f32());
+            let (points, segment, _) = quadrature_points(&med, &ray, 5.0, 8, || jitter.next_f32());
             segment_sum += f64::from(segment.g);
             sum += points.iter().map(|&(_, w)| f64::from(w.g)).sum::<f64>();
         }

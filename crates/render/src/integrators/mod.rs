@@ -4,6 +4,7 @@
 //! the pixel's random stream, and counts the rays it traces.
 
 pub mod direct;
+pub mod equiangular;
 pub mod ic;
 pub mod light_sampling;
 pub mod media_march;

@@ -6,6 +6,7 @@
 //! surfaces alike (1: emitters seen directly, 2: direct light); crossing a `null` boundary does
 //! not count. Medium emission (an ircache extension) is gathered along every segment.
 
+use super::equiangular::Segment;
 use super::light_sampling::BsdfStrategy;
 use super::path_continuation::{
     count_and_roulette, cross_see_through, Arrival, Crossing, PathSettings,
@@ -48,8 +49,9 @@ pub struct VolPathIntegrator {
 pub(crate) enum Vertex<'a> {
     /// A surface point with its BSDF, outgoing direction in the local frame.
     Surface(&'a Interaction, &'a crate::bsdf::Bsdf, Vec3),
-    /// A point in a medium, reached along `d`, with the medium's phase function.
-    Medium(Vec3, Vec3, Phase),
+    /// A point in a medium, reached along `d`, with the medium's phase function and, where its
+    /// distance was drawn on a segment that also takes equiangular samples, that segment.
+    Medium(Vec3, Vec3, Phase, Option<&'a Segment>),
 }
 
 /// A path about to find its next vertex.
@@ -198,6 +200,17 @@ impl VolPathIntegrator {
             let t_hit = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
             if let Some(m) = medium.filter(|_| !std::mem::take(&mut skip_medium)) {
                 let med = &scene.media[m];
+                let sample_emitters = scene.samples_lights_in(m);
+                // Point and spot lights' single scattering by equiangular sampling, weighed
+                // against the light sample at the free flight's scattering.
+                let segment = (depth + 1 < max_depth && sample_emitters)
+                    .then(|| Segment::for_flight(scene, m, &ray, t_hit))
+                    .flatten();
+                if let Some(segment) = &segment {
+                    sampler.set_dimension(dims::equiangular(depth, crossings));
+                    let u = (sampler.next_1d(), sampler.next_1d());
+                    l += beta * segment.estimate(scene, m, med.phase, u, rng, rays);
+                }
                 let mut emitted = Rgb::ZERO;
                 let flight = sample_flight(med, ray.o, ray.d, t_hit, &mut beta, &mut emitted, rng);
                 l += emitted;
@@ -207,9 +220,8 @@ impl VolPathIntegrator {
                     Flight::Scattered { t, .. } => {
                         caustic_chain = false;
                         let p = ray.at(t);
-                        let sample_emitters = scene.samples_lights_in(m);
                         if depth + 1 < max_depth && sample_emitters {
-                            let vertex = Vertex::Medium(p, ray.d, med.phase);
+                            let vertex = Vertex::Medium(p, ray.d, med.phase, segment.as_ref());
                             l += beta
                                 * sample_light(
                                     scene,
@@ -480,7 +492,7 @@ pub(crate) fn light_sample_with(
                 medium,
             )
         }
-        Vertex::Medium(p, d, phase) => {
+        Vertex::Medium(p, d, phase, _) => {
             let value = phase.eval(d, ls.wi);
             let ray = scene.shadow_ray_at(p, None, ls.wi, ls.distance);
             (Rgb::splat(value), Rgb::splat(value), value, ray, medium)
@@ -499,6 +511,14 @@ pub(crate) fn light_sample_with(
             }
         }
         _ => (f, 1.0),
+    };
+    // A point or spot light's sample at a distance drawn on a segment that also takes
+    // equiangular samples of it.
+    let w = match vertex {
+        Vertex::Medium(.., Some(segment)) if ls.is_delta => {
+            w * segment.distance_weight(scene, (p - segment.o).dot(segment.d), &ls)
+        }
+        _ => w,
     };
     weighted * tr * ls.radiance * (w / ls.pdf)
 }

@@ -197,6 +197,8 @@ pub struct LightSet {
     /// Every light is sampled within a bounded factor of what a Lambertian surface receives
     /// from it (see [`LightSet::samples_diffuse_well`]).
     diffuse_well: bool,
+    /// A point or spot light is among the lights.
+    delta_positions: bool,
 }
 
 /// What an area light emits: one radiance, or a texture looked up at the surface's uv (Mitsuba's
@@ -466,6 +468,9 @@ impl LightSet {
             Light::Constant(_) | Light::Envmap(_) => false,
         });
         LightSet {
+            delta_positions: lights
+                .iter()
+                .any(|l| matches!(l, Light::Point(_) | Light::Spot(_))),
             diffuse_well,
             by_power: Distribution1D::new(&powers),
             lights,
@@ -505,6 +510,33 @@ impl LightSet {
     #[must_use]
     pub fn has_spot_lights(&self) -> bool {
         self.lights.iter().any(|l| matches!(l, Light::Spot(_)))
+    }
+
+    /// If light `light` is a point or a spot light (a delta in position, whose 1/r² a distance
+    /// along a ray through a medium is sampled against: [`crate::integrators::equiangular`]),
+    /// its position and the part of `[t0, t1]` along `o + t d` it lights (a spot's cone).
+    #[must_use]
+    pub fn delta_position_along(
+        &self,
+        light: u32,
+        o: Vec3,
+        d: Vec3,
+        interval: (f32, f32),
+    ) -> Option<(Vec3, (f32, f32))> {
+        match self.lights.get(light as usize)? {
+            Light::Point(l) => Some((l.position, interval)),
+            Light::Spot(l) => Some((
+                l.position_and_intensity().0,
+                l.cone_interval(o, d, interval)?,
+            )),
+            _ => None,
+        }
+    }
+
+    /// True when a point or spot light is among the emitters.
+    #[must_use]
+    pub fn has_delta_positions(&self) -> bool {
+        self.delta_positions
     }
 
     /// When the scene's only emitter is a directional light: the unit direction towards it and
@@ -834,7 +866,7 @@ impl LightSet {
 
     /// The light chosen by `u_select` at `p` and its selection probability.
     #[inline]
-    fn select(&self, p: Vec3, u_select: f32) -> (usize, f32) {
+    pub(crate) fn select(&self, p: Vec3, u_select: f32) -> (usize, f32) {
         selection::select(&self.bounds, p, u_select)
     }
 

@@ -100,6 +100,65 @@ impl SpotLight {
         Some((self.position, direction, weight))
     }
 
+    /// The part of `[t0, t1]` along `o + t d` inside the cutoff cone (where the light reaches),
+    /// a single interval for cutoffs below 90° (the cone is convex); the whole of it for wider
+    /// cones; `None` where the ray misses the cone.
+    #[must_use]
+    pub fn cone_interval(&self, o: Vec3, d: Vec3, (t0, t1): (f32, f32)) -> Option<(f32, f32)> {
+        if self.cos_cutoff <= 0.0 {
+            return Some((t0, t1));
+        }
+        // In the light's frame (an affine map keeps t): v + t w inside when v_z + t w_z ≥ 0 and
+        // (v_z + t w_z)² ≥ cos²α |v + t w|².
+        let v = self.world_to_local * (o - self.position);
+        let w = self.world_to_local * d;
+        let c2 = self.cos_cutoff * self.cos_cutoff;
+        let (v, w) = (v.as_dvec3(), w.as_dvec3());
+        let c2 = f64::from(c2);
+        let a = w.z * w.z - c2 * w.length_squared();
+        let b = 2.0 * (w.z * v.z - c2 * w.dot(v));
+        let c = v.z * v.z - c2 * v.length_squared();
+        let inside = |t: f64| {
+            let x = v + w * t;
+            x.z >= 0.0 && x.z * x.z >= c2 * x.length_squared()
+        };
+        // The quadratic's roots split the line into pieces; the cone is one of them (or two
+        // touching at the apex); keep the one whose middle is inside, within [t0, t1].
+        let disc = b * b - 4.0 * a * c;
+        let (lo, hi) = (f64::from(t0), f64::from(t1));
+        let mut cuts = [lo, hi, hi, hi];
+        if disc >= 0.0 && a != 0.0 {
+            let q = -0.5 * (b + b.signum() * disc.sqrt());
+            cuts[2] = q / a;
+            cuts[3] = if q != 0.0 { c / q } else { q / a };
+        } else if a == 0.0 && b != 0.0 {
+            cuts[2] = -c / b;
+        }
+        for t in &mut cuts[2..] {
+            *t = if t.is_finite() { t.clamp(lo, hi) } else { hi };
+        }
+        cuts.sort_by(f64::total_cmp);
+        let mut found: Option<(f64, f64)> = None;
+        for pair in cuts.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            if !(b > a) {
+                continue;
+            }
+            let mid = if b.is_finite() {
+                0.5 * (a + b)
+            } else {
+                a + 1.0 + a.abs()
+            };
+            if inside(mid) {
+                found = Some(match found {
+                    Some((s, _)) => (s, b),
+                    None => (a, b),
+                });
+            }
+        }
+        found.map(|(a, b)| (a as f32, b as f32))
+    }
+
     #[inline]
     #[must_use]
     pub fn sample(&self, p_ref: Vec3) -> Option<(Vec3, f32, Rgb)> {
@@ -115,5 +174,64 @@ impl SpotLight {
             return None;
         }
         Some((wi, dist, self.intensity * (falloff / dist2)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ircache_math::Rng;
+
+    /// Along random rays, a distance lies in `cone_interval` exactly where the light reaches it
+    /// (falloff above zero), to a hair at the interval's ends, for narrow cones and a light
+    /// frame that scales its axes unevenly; past 90° the interval holds every lit distance.
+    #[test]
+    fn cone_interval_is_where_the_light_reaches() {
+        let mut rng = Rng::new(17, 3);
+        for (cutoff, beam, to_world) in [
+            (
+                20.0,
+                15.0,
+                Mat4::from_translation(Vec3::new(0.3, 1.0, -0.2)),
+            ),
+            (
+                60.0,
+                10.0,
+                Mat4::from_translation(Vec3::new(-1.0, 0.5, 2.0))
+                    * Mat4::from_rotation_x(0.7)
+                    * Mat4::from_scale(Vec3::new(1.0, 2.0, 0.5)),
+            ),
+            (89.0, 30.0, Mat4::from_rotation_y(2.0)),
+            (120.0, 30.0, Mat4::IDENTITY),
+        ] {
+            let light = SpotLight::new(to_world, Rgb::ONE, cutoff, beam);
+            let mut hits = 0;
+            for _ in 0..2000 {
+                let o = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 6.0 - 3.0;
+                let d =
+                    (Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
+                let (t0, t1) = (0.1f32, 8.0f32);
+                let interval = light.cone_interval(o, d, (t0, t1));
+                for k in 0..400 {
+                    let t = t0 + (t1 - t0) * (k as f32 + 0.5) / 400.0;
+                    let lit = light.sample(o + d * t).is_some();
+                    let within = interval.is_some_and(|(a, b)| t >= a && t <= b);
+                    // Past 90° the whole segment is kept (it need only hold the lit part).
+                    if lit != within && (lit || cutoff < 90.0) {
+                        let (a, b) = interval.unwrap_or((f32::NAN, f32::NAN));
+                        let margin = 1e-3 * (1.0 + t.abs());
+                        assert!(
+                            (t - a).abs() < margin || (t - b).abs() < margin,
+                            "cutoff {cutoff}: t {t} lit {lit}, interval {interval:?}"
+                        );
+                    }
+                    hits += usize::from(lit);
+                }
+            }
+            assert!(
+                hits > 1000,
+                "cutoff {cutoff}: too few rays through the cone ({hits})"
+            );
+        }
     }
 }

@@ -115,6 +115,13 @@ impl Medium {
         }
     }
 
+    /// The coefficients where they are the same everywhere inside (constant extinction and
+    /// albedo): the densities of free-flight sampling are then closed forms.
+    #[must_use]
+    pub fn constant_coefficients(&self) -> Option<Coefficients> {
+        (self.sigma_t.is_constant() && self.albedo.is_constant()).then(|| self.at(Vec3::ZERO))
+    }
+
     /// Calls `f(t0, t1, majorant)` for the pieces of `[t0, t1]` along `o + t d` with a bound on
     /// the extinction in each (local majorants in grids, the medium's majorant elsewhere), in
     /// order, until `f` returns false.

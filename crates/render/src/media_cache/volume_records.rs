@@ -481,7 +481,8 @@ fn for_each_quadrature_point(scene: &Scene, ray: Ray, points: u32, mut f: impl F
             return;
         };
         let segment = Ray::new(o, ray.d);
-        let (quadrature, _) = quadrature_points(&scene.media[m], &segment, t_end, points, || 0.5);
+        let (quadrature, _, _) =
+            quadrature_points(&scene.media[m], &segment, t_end, points, || 0.5);
         // Points where nothing scatters need no record (the march adds no in-scattering there).
         for (t, _) in quadrature {
             let p = segment.at(t);

@@ -52,6 +52,18 @@ pub const EXTRA_BSDF: u32 = 2048;
 /// `depth` (reflect or pass), which takes no vertex block of its own.
 pub const EXTRA_SHEET: u32 = 3072;
 
+/// Index in [`extra`] of the equiangular light sample on the `i`-th medium segment after
+/// vertex `depth` ([`crate::integrators::equiangular`]).
+pub const EXTRA_EQUIANGULAR: u32 = 3584;
+
+/// The dimensions (light choice, distance) of the equiangular sample on the medium segment
+/// that follows `crossings` null boundaries crossed since the path began, after vertex `depth`.
+#[inline]
+#[must_use]
+pub fn equiangular(depth: u32, crossings: u32) -> u32 {
+    extra(depth, EXTRA_EQUIANGULAR + crossings.min(255))
+}
+
 /// The dimension of the choice at the `crossing`-th thin sheet (from 1) met after vertex `depth`.
 #[inline]
 #[must_use]

@@ -1,0 +1,219 @@
+//! Equiangular sampling of point and spot lights along rays through media (Kulla and Fajardo
+//! 2012, §4 and §5), the single scattering's distance drawn towards the light instead of by
+//! the medium's free flight, weighed against free-flight sampling by the power heuristic.
+//!
+//! Free-flight sampling puts a scattering vertex anywhere along the ray; its light sample
+//! carries the light's I/r², which a vertex drawn close to a point light makes arbitrarily
+//! large (near a lamp in fog, `volpath`'s fireflies and the march's spikes). Equiangular
+//! sampling draws the distance uniformly in the angle the light subtends, which cancels the
+//! 1/r², so a ray that passes close to the light is sampled where its light is. The two are
+//! combined by multiple importance sampling over (light, distance) pairs:
+//!
+//! - the distance strategy: the first scattering at t of free-flight sampling (`volpath`:
+//!   density r e^{−r (t − t₀)} with r the rate of real scatterings; the march: its quadrature's
+//!   n points) with the light chosen at x(t) by the light set's selection;
+//! - the equiangular strategy: the light chosen by the selection at the segment's middle, then
+//!   t from [`Equiangular`] towards it, on the part of the segment a spot's cone covers (only
+//!   point and spot lights; for other lights the distance strategy alone).
+//!
+//! Only media with constant coefficients qualify (homogeneous fog), where the free-flight
+//! density has a closed form; in grids free-flight sampling stands alone.
+
+use super::RayCounts;
+use crate::lights::LightSample;
+use crate::media::tracking::transmittance_along;
+use crate::media::Phase;
+use crate::scene::Scene;
+use ircache_math::sampling::Equiangular;
+use ircache_math::{Ray, Rgb, Rng, Vec3};
+
+/// How the distance strategy of a segment draws its distances.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum DistanceDensity {
+    /// Free-flight sampling's first real scattering, at rate r per unit length.
+    Flight { rate: f32 },
+    /// `count` points stratified by the transmittance under the mean extinction `mean`, whose
+    /// probabilities sum to `mass` over the segment (the march's quadrature).
+    Quadrature { count: u32, mean: f32, mass: f32 },
+}
+
+/// A segment of a ray through a medium with constant coefficients, with what both strategies'
+/// densities need.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Segment {
+    /// The ray's origin and unit direction.
+    pub o: Vec3,
+    pub d: Vec3,
+    /// The segment, `t1` possibly infinite.
+    pub t0: f32,
+    pub t1: f32,
+    /// The medium's extinction and scattering coefficients.
+    pub sigma_t: Rgb,
+    pub sigma_s: Rgb,
+    /// The distance strategy.
+    pub distance: DistanceDensity,
+    /// Equiangular samples taken on the segment.
+    pub samples: u32,
+}
+
+impl Segment {
+    /// The segment of `ray` up to `t_hit` in `medium` for free-flight sampling (`volpath`), or
+    /// `None` where the medium is not constant, scatters nothing or no point or spot light
+    /// exists.
+    #[must_use]
+    pub fn for_flight(scene: &Scene, medium: usize, ray: &Ray, t_hit: f32) -> Option<Segment> {
+        if !scene.lights.has_delta_positions() {
+            return None;
+        }
+        let c = scene.media[medium].constant_coefficients()?;
+        // `sample_flight`'s choice at a tentative collision (rate: the majorant): scattering
+        // with probability mean σ_s over mean σ_s + mean σ_n.
+        let majorant = scene.media[medium].majorant;
+        let ps = c.sigma_s.mean();
+        let pn = (Rgb::splat(majorant) - c.sigma_t).max(Rgb::ZERO).mean();
+        if !(ps > 0.0) {
+            return None;
+        }
+        let rate = majorant * ps / (ps + pn);
+        Segment::for_density(
+            scene,
+            medium,
+            ray,
+            t_hit,
+            DistanceDensity::Flight { rate },
+            1,
+        )
+    }
+
+    /// The segment of `ray` up to `t_hit` in `medium` whose distances are drawn with `density`,
+    /// beside `samples` equiangular samples; `None` as [`Self::for_flight`].
+    #[must_use]
+    pub fn for_density(
+        scene: &Scene,
+        medium: usize,
+        ray: &Ray,
+        t_hit: f32,
+        density: DistanceDensity,
+        samples: u32,
+    ) -> Option<Segment> {
+        if !scene.lights.has_delta_positions() || samples == 0 {
+            return None;
+        }
+        let med = &scene.media[medium];
+        let c = med.constant_coefficients()?;
+        if c.sigma_s.is_black() {
+            return None;
+        }
+        let (t0, t1) = med.clip(ray.o, ray.d, t_hit)?;
+        Some(Segment {
+            o: ray.o,
+            d: ray.d,
+            t0,
+            t1,
+            sigma_t: c.sigma_t,
+            sigma_s: c.sigma_s,
+            distance: density,
+            samples,
+        })
+    }
+
+    /// The density of the distance strategy at `t`.
+    #[must_use]
+    pub fn distance_pdf(&self, t: f32) -> f32 {
+        let s = (t - self.t0).max(0.0);
+        match self.distance {
+            DistanceDensity::Flight { rate } => rate * (-rate * s).exp(),
+            DistanceDensity::Quadrature { count, mean, mass } => {
+                count as f32 * mean * (-mean * s).exp() / mass
+            }
+        }
+    }
+
+    /// Where the equiangular strategy selects its light.
+    fn selection_point(&self) -> Vec3 {
+        let span = self.t1 - self.t0;
+        let t = if span.is_finite() {
+            self.t0 + 0.5 * span
+        } else {
+            self.t0
+        };
+        self.o + self.d * t
+    }
+
+    /// The equiangular distribution towards `light` and the probability of selecting it there.
+    fn towards(&self, scene: &Scene, light: u32) -> Option<(Equiangular, f32)> {
+        let (position, interval) =
+            scene
+                .lights
+                .delta_position_along(light, self.o, self.d, (self.t0, self.t1))?;
+        let eq = Equiangular::new(self.o, self.d, position, interval)?;
+        let selection = scene
+            .lights
+            .selection_probability(self.selection_point(), light);
+        (selection > 0.0).then_some((eq, selection))
+    }
+
+    /// The power heuristic's weight of the distance strategy's light sample `ls`, taken at
+    /// distance `t` (its density: the distance's times `ls.pdf`, the selection there).
+    #[must_use]
+    pub fn distance_weight(&self, scene: &Scene, t: f32, ls: &LightSample) -> f32 {
+        if !ls.is_delta {
+            return 1.0;
+        }
+        let Some((eq, selection)) = self.towards(scene, ls.light) else {
+            return 1.0;
+        };
+        let own = self.distance_pdf(t) * ls.pdf;
+        super::mis_weight(own, self.samples as f32 * selection * eq.pdf(t))
+    }
+
+    /// The equiangular strategy's estimate of the single scattering along the segment, per unit
+    /// of the transmittance before `t0`: a light chosen by `u_select`, a distance by `u`, the
+    /// light sample's transmittance from `rng`; zero where the light chosen is not a point or
+    /// spot light.
+    #[allow(clippy::too_many_arguments)]
+    #[must_use]
+    pub fn estimate(
+        &self,
+        scene: &Scene,
+        medium: usize,
+        phase: Phase,
+        (u_select, u): (f32, f32),
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> Rgb {
+        if scene.lights.is_empty() {
+            return Rgb::ZERO;
+        }
+        let light = scene.lights.select(self.selection_point(), u_select).0 as u32;
+        let Some((eq, selection)) = self.towards(scene, light) else {
+            return Rgb::ZERO;
+        };
+        let (t, pdf) = eq.sample(u);
+        if !(pdf > 0.0) {
+            return Rgb::ZERO;
+        }
+        let x = self.o + self.d * t;
+        let Some(at_x) =
+            scene
+                .lights
+                .sample_light(light as usize, 1.0, x, ircache_math::Vec2::ZERO)
+        else {
+            return Rgb::ZERO;
+        };
+        let f = phase.eval(self.d, at_x.wi);
+        if !(f > 0.0) || at_x.radiance.is_black() {
+            return Rgb::ZERO;
+        }
+        let own = self.samples as f32 * selection * pdf;
+        let other = self.distance_pdf(t) * scene.lights.selection_probability(x, light);
+        let w = super::mis_weight(own, other);
+        if !(w > 0.0) {
+            return Rgb::ZERO;
+        }
+        let shadow = scene.shadow_ray_at(x, None, at_x.wi, at_x.distance);
+        let tr = transmittance_along(scene, shadow, Some(medium), rng, rays);
+        let before = (self.sigma_t * -(t - self.t0)).exp();
+        before * self.sigma_s * at_x.radiance * tr * (f * w / own)
+    }
+}
