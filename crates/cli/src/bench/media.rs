@@ -7,7 +7,8 @@
 //! blurred, σ = 2 px); the reference is `volpath` at 4096 spp made here on a seed of its own;
 //! the records' pre-pass times and rays are printed, so the gradient's overhead over the
 //! media-blind default reads off the table. (2) The cache at its defaults on `cornell-fog`,
-//! `smoke-box` and `glass-in-fog` (glass and gold spheres in the fog) at their own `max_depth` 6
+//! `smoke-box`, `glass-in-fog` (glass and gold spheres in the fog) and `spot-fog` (a spot light's
+//! beam) at their own `max_depth` 6
 //! (the bounces beyond the first traced from the gathers) against `volpath` the same way, each
 //! against a reference of its own. (3) `volpath` at `max_depth` 6 (`multijitter`) against Mitsuba
 //! 3's `volpath` (`multijitter`) at equal spp, both against a Mitsuba reference of 4096 spp made
@@ -97,7 +98,7 @@ pub fn run_all(with_mitsuba: bool, case: Option<&str>) -> Result<()> {
     println!(
         "\nThe cache at the scenes' own depth (max_depth 6), defaults, 16 spp; reference: volpath at 4096 spp"
     );
-    for name in ["cornell-fog", "smoke-box", "glass-in-fog"] {
+    for name in ["cornell-fog", "smoke-box", "glass-in-fog", "spot-fog"] {
         let path = own_scenes().join(name).join("scene.xml");
         let defines = vec![
             ("resx".to_string(), size.to_string()),
