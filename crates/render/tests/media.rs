@@ -297,15 +297,21 @@ fn emitting_slab_shows_le_times_one_minus_transmittance() {
 /// With the light 0.02 from the ray, free-flight sampling alone puts a vertex near the light
 /// rarely and then weighs it by 1/r²: its estimate's spread over 4096 samples was 6.1 %
 /// (isotropic) and 1.8 % (g = 0.5), against the 1 % asked here, which equiangular sampling of
-/// the light meets (0.32 % and 0.86 %; `integrators::equiangular`).
+/// the light meets (0.32 % and 0.86 %; `integrators::equiangular`). A spot light that lights
+/// part of the ray checks that its equiangular samples, kept to its cone, and the free flight's
+/// are weighed consistently.
 #[test]
 fn single_scattering_matches_quadrature() {
     let (sigma_t, albedo, intensity, c) = (0.5f64, 0.6f64, 3.0f64, 2.0f64);
-    for (d, phase) in [
-        (1.0f64, PhaseDesc::Isotropic),
-        (1.0, PhaseDesc::HenyeyGreenstein { g: 0.5 }),
-        (0.02, PhaseDesc::Isotropic),
-        (0.02, PhaseDesc::HenyeyGreenstein { g: 0.5 }),
+    // A spot light aimed 45° down and ahead (cutoff 30°, beam 20°) lights only part of the ray.
+    let (cutoff, beam) = (30f64.to_radians(), 20f64.to_radians());
+    for (d, phase, spot) in [
+        (1.0f64, PhaseDesc::Isotropic, false),
+        (1.0, PhaseDesc::HenyeyGreenstein { g: 0.5 }, false),
+        (0.02, PhaseDesc::Isotropic, false),
+        (0.02, PhaseDesc::HenyeyGreenstein { g: 0.5 }, false),
+        (0.02, PhaseDesc::HenyeyGreenstein { g: 0.5 }, true),
+        (0.3, PhaseDesc::Isotropic, true),
     ] {
         let g = match phase {
             PhaseDesc::Isotropic => 0.0,
@@ -317,10 +323,32 @@ fn single_scattering_matches_quadrature() {
             let cos = -t / l;
             let p = (1.0 - g * g)
                 / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * cos).powf(1.5));
-            sigma_t * albedo * p * intensity * (-sigma_t * (c + t)).exp() * (-sigma_t * l).exp()
+            // The spot's falloff, linear in the angle off its axis (0, −1, 1)/√2.
+            let falloff = if spot {
+                let angle = ((d + t) / (std::f64::consts::SQRT_2 * l))
+                    .clamp(-1.0, 1.0)
+                    .acos();
+                ((cutoff - angle) / (cutoff - beam)).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            sigma_t
+                * albedo
+                * p
+                * intensity
+                * falloff
+                * (-sigma_t * (c + t)).exp()
+                * (-sigma_t * l).exp()
                 / (l * l)
         };
-        let reference = ircache_render::testing::adaptive_simpson(&integrand, -c, 80.0, 1e-10, 40);
+        // In pieces, so that the spot's lit stretch near the light is not stepped over.
+        let mut cuts = [-c, -d, 0.0, d, 2.0 * d, 4.0 * d, 10.0 * d, 1.0, 80.0];
+        cuts.sort_by(f64::total_cmp);
+        let reference: f64 = cuts
+            .windows(2)
+            .filter(|w| w[1] > w[0])
+            .map(|w| ircache_render::testing::adaptive_simpson(&integrand, w[0], w[1], 1e-11, 40))
+            .sum();
         // Something to trace against, far off the ray.
         let speck = ShapeDesc {
             id: None,
@@ -345,9 +373,19 @@ fn single_scattering_matches_quadrature() {
             4096,
         );
         cam.medium = Some(0);
-        let light = EmitterDesc::Point {
-            position: Vec3::new(0.0, d as f32, 0.0),
-            intensity: Rgb::splat(intensity as f32),
+        let light = if spot {
+            EmitterDesc::Spot {
+                to_world: Mat4::from_translation(Vec3::new(0.0, d as f32, 0.0))
+                    * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_4),
+                intensity: Rgb::splat(intensity as f32),
+                cutoff_angle: cutoff.to_degrees() as f32,
+                beam_width: beam.to_degrees() as f32,
+            }
+        } else {
+            EmitterDesc::Point {
+                position: Vec3::new(0.0, d as f32, 0.0),
+                intensity: Rgb::splat(intensity as f32),
+            }
         };
         // `volpath`, and the cache's pixel pass, which marches the camera ray to infinity.
         for integrator in ["volpath", "ic"] {
@@ -371,13 +409,14 @@ fn single_scattering_matches_quadrature() {
             let got = f64::from(m.g);
             assert!(
                 (got - reference).abs() < (4.0 * f64::from(e.g)).max(0.01 * reference),
-                "{integrator}, {phase:?}, light {d} from the ray: {got} vs quadrature {reference} \
-                 (σ {})",
+                "{integrator}, {phase:?}, spot {spot}, light {d} from the ray: {got} vs quadrature \
+                 {reference} (σ {})",
                 e.g
             );
             assert!(
                 f64::from(e.g) < if d < 0.1 { 0.01 } else { 0.005 } * reference,
-                "{integrator}, {phase:?}, light {d} from the ray: too noisy, σ {} of {reference}",
+                "{integrator}, {phase:?}, spot {spot}, light {d} from the ray: too noisy, σ {} of \
+                 {reference}",
                 e.g
             );
         }
