@@ -16,13 +16,14 @@
 //!   t from [`Equiangular`] towards it, on the part of the segment a spot's cone covers (only
 //!   point and spot lights; for other lights the distance strategy alone).
 //!
-//! Only media with constant coefficients qualify (homogeneous fog), where the free-flight
-//! density has a closed form; in grids free-flight sampling stands alone.
+//! In media with constant coefficients (fog) the free flight's density is a closed form; in
+//! grids the weights take a homogeneous medium's at the grid's majorant in its place, which
+//! keeps them a partition of unity (so the sum stays unbiased, if less well weighed), and the
+//! equiangular sample's transmittance back to the segment's start is ratio tracked.
 
 use super::RayCounts;
 use crate::lights::LightSample;
-use crate::media::tracking::transmittance_along;
-use crate::media::Phase;
+use crate::media::tracking::{transmittance, transmittance_along};
 use crate::scene::Scene;
 use ircache_math::sampling::Equiangular;
 use ircache_math::{Ray, Rgb, Rng, Vec3};
@@ -47,9 +48,11 @@ pub(crate) struct Segment {
     /// The segment, `t1` possibly infinite.
     pub t0: f32,
     pub t1: f32,
-    /// The medium's extinction and scattering coefficients.
-    pub sigma_t: Rgb,
-    pub sigma_s: Rgb,
+    /// The medium.
+    pub medium: usize,
+    /// Its extinction and scattering coefficients where they are constant (closed-form
+    /// transmittance); `None` in a grid (ratio tracking, lookups).
+    pub constant: Option<(Rgb, Rgb)>,
     /// The distance strategy.
     pub distance: DistanceDensity,
     /// Equiangular samples taken on the segment.
@@ -58,23 +61,30 @@ pub(crate) struct Segment {
 
 impl Segment {
     /// The segment of `ray` up to `t_hit` in `medium` for free-flight sampling (`volpath`), or
-    /// `None` where the medium is not constant, scatters nothing or no point or spot light
-    /// exists.
+    /// `None` where the medium scatters nothing or no point or spot light exists. In a grid the
+    /// free flight's density has no closed form; the weights then take the density of a
+    /// homogeneous medium at the grid's majorant in its place, which keeps them a partition of
+    /// unity (both strategies compute the same weights), so the sum stays unbiased.
     #[must_use]
     pub fn for_flight(scene: &Scene, medium: usize, ray: &Ray, t_hit: f32) -> Option<Segment> {
         if !scene.lights.has_delta_positions() {
             return None;
         }
-        let c = scene.media[medium].constant_coefficients()?;
-        // `sample_flight`'s choice at a tentative collision (rate: the majorant): scattering
-        // with probability mean σ_s over mean σ_s + mean σ_n.
-        let majorant = scene.media[medium].majorant;
-        let ps = c.sigma_s.mean();
-        let pn = (Rgb::splat(majorant) - c.sigma_t).max(Rgb::ZERO).mean();
-        if !(ps > 0.0) {
-            return None;
-        }
-        let rate = majorant * ps / (ps + pn);
+        let med = &scene.media[medium];
+        let majorant = med.majorant;
+        let rate = match med.constant_coefficients() {
+            Some(c) => {
+                // `sample_flight`'s choice at a tentative collision (rate: the majorant):
+                // scattering with probability mean σ_s over mean σ_s + mean σ_n.
+                let ps = c.sigma_s.mean();
+                let pn = (Rgb::splat(majorant) - c.sigma_t).max(Rgb::ZERO).mean();
+                if !(ps > 0.0) {
+                    return None;
+                }
+                majorant * ps / (ps + pn)
+            }
+            None => majorant,
+        };
         Segment::for_density(
             scene,
             medium,
@@ -85,8 +95,9 @@ impl Segment {
         )
     }
 
-    /// The segment of `ray` up to `t_hit` in `medium` whose distances are drawn with `density`,
-    /// beside `samples` equiangular samples; `None` as [`Self::for_flight`].
+    /// The segment of `ray` up to `t_hit` in `medium` whose distances are drawn with `density`
+    /// (or weighed as if they were: see [`Self::for_flight`]), beside `samples` equiangular
+    /// samples; `None` as [`Self::for_flight`].
     #[must_use]
     pub fn for_density(
         scene: &Scene,
@@ -100,18 +111,19 @@ impl Segment {
             return None;
         }
         let med = &scene.media[medium];
-        let c = med.constant_coefficients()?;
-        if c.sigma_s.is_black() {
-            return None;
-        }
+        let constant = match med.constant_coefficients() {
+            Some(c) if c.sigma_s.is_black() => return None,
+            Some(c) => Some((c.sigma_t, c.sigma_s)),
+            None => None,
+        };
         let (t0, t1) = med.clip(ray.o, ray.d, t_hit)?;
         Some(Segment {
             o: ray.o,
             d: ray.d,
             t0,
             t1,
-            sigma_t: c.sigma_t,
-            sigma_s: c.sigma_s,
+            medium,
+            constant,
             distance: density,
             samples,
         })
@@ -171,17 +183,15 @@ impl Segment {
     /// of the transmittance before `t0`: a light chosen by `u_select`, a distance by `u`, the
     /// light sample's transmittance from `rng`; zero where the light chosen is not a point or
     /// spot light.
-    #[allow(clippy::too_many_arguments)]
     #[must_use]
     pub fn estimate(
         &self,
         scene: &Scene,
-        medium: usize,
-        phase: Phase,
         (u_select, u): (f32, f32),
         rng: &mut Rng,
         rays: &mut RayCounts,
     ) -> Rgb {
+        let (medium, phase) = (self.medium, scene.media[self.medium].phase);
         if scene.lights.is_empty() {
             return Rgb::ZERO;
         }
@@ -211,9 +221,23 @@ impl Segment {
         if !(w > 0.0) {
             return Rgb::ZERO;
         }
+        // The light reaching x and the way back to the segment's start.
+        let (before, sigma_s) = match self.constant {
+            Some((sigma_t, sigma_s)) => ((sigma_t * -(t - self.t0)).exp(), sigma_s),
+            None => {
+                let sigma_s = scene.media[medium].at(x).sigma_s;
+                if sigma_s.is_black() {
+                    return Rgb::ZERO;
+                }
+                let before = transmittance(&scene.media[medium], self.o, self.d, t, rng);
+                (before, sigma_s)
+            }
+        };
+        if before.is_black() {
+            return Rgb::ZERO;
+        }
         let shadow = scene.shadow_ray_at(x, None, at_x.wi, at_x.distance);
         let tr = transmittance_along(scene, shadow, Some(medium), rng, rays);
-        let before = (self.sigma_t * -(t - self.t0)).exp();
-        before * self.sigma_s * at_x.radiance * tr * (f * w / own)
+        before * sigma_s * at_x.radiance * tr * (f * w / own)
     }
 }

@@ -311,7 +311,7 @@ fn march_segment(
                 (u_select + i as f32 * LATTICE[0]).fract(),
                 (i as f32 + (u_t + i as f32 * LATTICE[1]).fract()) / n as f32,
             );
-            sum += equiangular.estimate(scene, medium, med.phase, u, rng, rays);
+            sum += equiangular.estimate(scene, u, rng, rays);
         }
     }
     (sum, segment)
@@ -420,8 +420,8 @@ pub(crate) fn indirect_arrival(p: Vec3, pdf: f32, sample_emitters: bool) -> Arri
 
 /// The quadrature of a medium segment of `ray` up to `t_hit`: distances with weights
 /// T(t₀, t)/(n pdf(t)) (`jitter` places each in its stratum), the segment's transmittance, and
-/// in homogeneous media the points' density n pdf(t) (the distance strategy that equiangular
-/// samples are weighed against, [`super::equiangular`]).
+/// the points' density n pdf(t) (in grids a stand-in for it) for the weights against
+/// equiangular samples ([`super::equiangular`]).
 /// Homogeneous media: one distance per stratum of equal scattering probability under the
 /// channels' mean extinction σ̄, pdf = σ̄ e^{−σ̄ s}/(1 − e^{−σ̄ L}); grids: the same under a
 /// piecewise-constant model of σ̄ ([`grid_quadrature`]). `points` strata where the segment is
@@ -468,7 +468,16 @@ pub(crate) fn quadrature_points(
         return (Vec::new(), Rgb::ONE, None);
     }
     let (out, segment) = grid_quadrature(med, ray, (t0, t1), points, jitter);
-    (out, segment, None)
+    // The weights against equiangular samples take a homogeneous medium of the segment's mean
+    // extinction in place of the model's density (any density both sides compute keeps the
+    // weights a partition of unity).
+    let through = segment.mean().max(1e-6);
+    let density = (!out.is_empty()).then(|| DistanceDensity::Quadrature {
+        count: out.len() as u32,
+        mean: -through.ln() / length,
+        mass: 1.0 - through,
+    });
+    (out, segment, density)
 }
 
 /// Majorant optical depth per piece of a grid's extinction model along a ray (0.5: the smoke

@@ -209,7 +209,7 @@ impl VolPathIntegrator {
                 if let Some(segment) = &segment {
                     sampler.set_dimension(dims::equiangular(depth, crossings));
                     let u = (sampler.next_1d(), sampler.next_1d());
-                    l += beta * segment.estimate(scene, m, med.phase, u, rng, rays);
+                    l += beta * segment.estimate(scene, u, rng, rays);
                 }
                 let mut emitted = Rgb::ZERO;
                 let flight = sample_flight(med, ray.o, ray.d, t_hit, &mut beta, &mut emitted, rng);
