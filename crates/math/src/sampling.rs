@@ -307,7 +307,9 @@ impl Equiangular {
         let delta = to.dot(d);
         let h = (to - d * delta).length();
         // h is only known to about an ulp of ‖to‖ (scale-free).
-        if !(h > 4.0 * f32::EPSILON * to.length()) || !(t1 > t0) {
+        let apart = h > 4.0 * f32::EPSILON * to.length();
+        let nonempty = t1 > t0;
+        if !apart || !nonempty {
             return None;
         }
         let theta_a = (t0 - delta).atan2(h);
@@ -335,7 +337,7 @@ impl Equiangular {
     /// The density of distance `t` (zero outside the interval).
     #[must_use]
     pub fn pdf(&self, t: f32) -> f32 {
-        if !(t >= self.t0 && t <= self.t1) {
+        if !(self.t0..=self.t1).contains(&t) {
             return 0.0;
         }
         let x = t - self.delta;

@@ -22,7 +22,7 @@
 //! equiangular sample's transmittance back to the segment's start is ratio tracked.
 
 use super::RayCounts;
-use crate::lights::LightSample;
+use crate::lights::{is_positive_finite, LightSample};
 use crate::media::tracking::{transmittance, transmittance_along};
 use crate::scene::Scene;
 use ircache_math::sampling::Equiangular;
@@ -78,7 +78,7 @@ impl Segment {
                 // scattering with probability mean σ_s over mean σ_s + mean σ_n.
                 let ps = c.sigma_s.mean();
                 let pn = (Rgb::splat(majorant) - c.sigma_t).max(Rgb::ZERO).mean();
-                if !(ps > 0.0) {
+                if !is_positive_finite(ps) {
                     return None;
                 }
                 majorant * ps / (ps + pn)
@@ -200,7 +200,7 @@ impl Segment {
             return Rgb::ZERO;
         };
         let (t, pdf) = eq.sample(u);
-        if !(pdf > 0.0) {
+        if !is_positive_finite(pdf) {
             return Rgb::ZERO;
         }
         let x = self.o + self.d * t;
@@ -212,13 +212,13 @@ impl Segment {
             return Rgb::ZERO;
         };
         let f = phase.eval(self.d, at_x.wi);
-        if !(f > 0.0) || at_x.radiance.is_black() {
+        if !is_positive_finite(f) || at_x.radiance.is_black() {
             return Rgb::ZERO;
         }
         let own = self.samples as f32 * selection * pdf;
         let other = self.distance_pdf(t) * scene.lights.selection_probability(x, light);
         let w = super::mis_weight(own, other);
-        if !(w > 0.0) {
+        if !is_positive_finite(w) {
             return Rgb::ZERO;
         }
         // The light reaching x and the way back to the segment's start.

@@ -141,7 +141,7 @@ impl SpotLight {
         let mut found: Option<(f64, f64)> = None;
         for pair in cuts.windows(2) {
             let (a, b) = (pair[0], pair[1]);
-            if !(b > a) {
+            if b <= a {
                 continue;
             }
             let mid = if b.is_finite() {
