@@ -38,8 +38,7 @@ pub(crate) enum DistanceDensity {
     Quadrature { count: u32, mean: f32, mass: f32 },
 }
 
-/// A segment of a ray through a medium with constant coefficients, with what both strategies'
-/// densities need.
+/// A segment of a ray through a medium, with what both strategies' densities need.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Segment {
     /// The ray's origin and unit direction.
