@@ -533,6 +533,15 @@ impl LightSet {
         }
     }
 
+    /// The positions of the point and spot lights.
+    pub fn delta_positions(&self) -> impl Iterator<Item = Vec3> + '_ {
+        self.lights.iter().filter_map(|l| match l {
+            Light::Point(l) => Some(l.position),
+            Light::Spot(l) => Some(l.position_and_intensity().0),
+            _ => None,
+        })
+    }
+
     /// True when a point or spot light is among the emitters.
     #[must_use]
     pub fn has_delta_positions(&self) -> bool {

@@ -12,8 +12,9 @@
 //! Records are placed by a pre-pass along camera rays at the pixel pass's own quadrature points
 //! (one row at a time, gathered in parallel, inserted in row order: the same cache at any
 //! thread count), with Ward's radius R = the harmonic mean of the gather directions' reaches
-//! (the first hit, or in a grid nearer, where its optical depth reaches 4: [`optical_reach`])
-//! bounded to [scene size/64, scene size/4]. Records are placed where none lies within a·R
+//! (the first hit, or in a grid nearer, where its optical depth reaches 4: [`optical_reach`]),
+//! at most the distance to the nearest point or spot light, bounded to [scene size/64, scene
+//! size/4]. Records are placed where none lies within a·R
 //! (ε = distance/(a·R) ≤ 1) and serve out to ε ≤ [`LOOKUP_REACH`] through a local linear fit
 //! with weights 1 − ε/[`LOOKUP_REACH`] (they carry no gradients); a record serves only its own
 //! medium. Bands 0–2 hold the light's direction well enough: band 3 moved the image by 0.03 % in
@@ -187,9 +188,16 @@ pub fn gather(
     } else {
         f32::INFINITY
     };
+    // The light of a point or spot lamp, scattered, changes on the scale of the distance to it,
+    // which no gather hit holds (open fog).
+    let lamp = scene
+        .lights
+        .delta_positions()
+        .map(|q| (q - p).length())
+        .fold(f32::INFINITY, f32::min);
     let record = VolumeRecord {
         p,
-        r: harmonic.clamp(size / 64.0, size / 4.0),
+        r: harmonic.min(lamp).clamp(size / 64.0, size / 4.0),
         medium,
         radiance: sum.map(|s| s * solid_angle),
     };
