@@ -24,6 +24,7 @@
 use super::RayCounts;
 use crate::lights::{is_positive_finite, LightSample};
 use crate::media::tracking::{transmittance, transmittance_along};
+use crate::media::Coefficients;
 use crate::scene::Scene;
 use ircache_math::sampling::Equiangular;
 use ircache_math::{Ray, Rgb, Rng, Vec3};
@@ -71,7 +72,8 @@ impl Segment {
         }
         let med = &scene.media[medium];
         let majorant = med.majorant;
-        let rate = match med.constant_coefficients() {
+        let coefficients = med.constant_coefficients();
+        let rate = match coefficients {
             Some(c) => {
                 // `sample_flight`'s choice at a tentative collision (rate: the majorant):
                 // scattering with probability mean σ_s over mean σ_s + mean σ_n.
@@ -84,14 +86,8 @@ impl Segment {
             }
             None => majorant,
         };
-        Segment::for_density(
-            scene,
-            medium,
-            ray,
-            t_hit,
-            DistanceDensity::Flight { rate },
-            1,
-        )
+        let density = DistanceDensity::Flight { rate };
+        Segment::with_coefficients(scene, medium, ray, t_hit, coefficients, density, 1)
     }
 
     /// The segment of `ray` up to `t_hit` in `medium` whose distances are drawn with `density`
@@ -109,13 +105,26 @@ impl Segment {
         if !scene.lights.has_delta_positions() || samples == 0 {
             return None;
         }
-        let med = &scene.media[medium];
-        let constant = match med.constant_coefficients() {
+        let coefficients = scene.media[medium].constant_coefficients();
+        Segment::with_coefficients(scene, medium, ray, t_hit, coefficients, density, samples)
+    }
+
+    /// The segment, given the medium's constant coefficients (`None` in a grid).
+    fn with_coefficients(
+        scene: &Scene,
+        medium: usize,
+        ray: &Ray,
+        t_hit: f32,
+        coefficients: Option<Coefficients>,
+        density: DistanceDensity,
+        samples: u32,
+    ) -> Option<Segment> {
+        let constant = match coefficients {
             Some(c) if c.sigma_s.is_black() => return None,
             Some(c) => Some((c.sigma_t, c.sigma_s)),
             None => None,
         };
-        let (t0, t1) = med.clip(ray.o, ray.d, t_hit)?;
+        let (t0, t1) = scene.media[medium].clip(ray.o, ray.d, t_hit)?;
         Some(Segment {
             o: ray.o,
             d: ray.d,

@@ -99,6 +99,15 @@ enum Light {
 }
 
 impl Light {
+    /// The position of a point or spot light (a delta in position).
+    fn delta_position(&self) -> Option<Vec3> {
+        match self {
+            Light::Point(l) => Some(l.position),
+            Light::Spot(l) => Some(l.position_and_intensity().0),
+            _ => None,
+        }
+    }
+
     /// A point, spot or directional light: no path can hit it, only light samples reach it.
     fn is_delta(&self) -> bool {
         matches!(
@@ -468,9 +477,7 @@ impl LightSet {
             Light::Constant(_) | Light::Envmap(_) => false,
         });
         LightSet {
-            delta_positions: lights
-                .iter()
-                .any(|l| matches!(l, Light::Point(_) | Light::Spot(_))),
+            delta_positions: lights.iter().any(|l| l.delta_position().is_some()),
             diffuse_well,
             by_power: Distribution1D::new(&powers),
             lights,
@@ -523,23 +530,17 @@ impl LightSet {
         d: Vec3,
         interval: (f32, f32),
     ) -> Option<(Vec3, (f32, f32))> {
-        match self.lights.get(light as usize)? {
-            Light::Point(l) => Some((l.position, interval)),
-            Light::Spot(l) => Some((
-                l.position_and_intensity().0,
-                l.cone_interval(o, d, interval)?,
-            )),
-            _ => None,
+        let light = self.lights.get(light as usize)?;
+        let position = light.delta_position()?;
+        match light {
+            Light::Spot(l) => Some((position, l.cone_interval(o, d, interval)?)),
+            _ => Some((position, interval)),
         }
     }
 
     /// The positions of the point and spot lights.
     pub fn delta_positions(&self) -> impl Iterator<Item = Vec3> + '_ {
-        self.lights.iter().filter_map(|l| match l {
-            Light::Point(l) => Some(l.position),
-            Light::Spot(l) => Some(l.position_and_intensity().0),
-            _ => None,
-        })
+        self.lights.iter().filter_map(Light::delta_position)
     }
 
     /// True when a point or spot light is among the emitters.
