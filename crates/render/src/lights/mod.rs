@@ -538,6 +538,12 @@ impl LightSet {
         }
     }
 
+    /// The position of light `light` if it is a point or a spot light.
+    #[must_use]
+    pub fn delta_position(&self, light: u32) -> Option<Vec3> {
+        self.lights.get(light as usize)?.delta_position()
+    }
+
     /// The positions of the point and spot lights.
     pub fn delta_positions(&self) -> impl Iterator<Item = Vec3> + '_ {
         self.lights.iter().filter_map(Light::delta_position)

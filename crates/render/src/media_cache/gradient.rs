@@ -66,12 +66,54 @@ pub trait GatherMedium {
     fn source(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3];
     /// Its spatial gradient with `w` fixed, per channel.
     fn source_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3];
+    /// The source of a whole march step, q̄ with q̄ ∫ T_r dt = ∫ T_r q dt over the step (T_r
+    /// from its start at its extinction), an estimate where q peaks inside the step (a point
+    /// light's 1/r²). By default q at the step's middle.
+    fn step_source(&self, o: DVec3, w: DVec3, step: &StepExtent) -> [f64; 3] {
+        self.source(o, w, step.middle())
+    }
+    /// Its gradient, as [`Self::source_gradient`] is `source`'s.
+    fn step_source_gradient(&self, o: DVec3, w: DVec3, step: &StepExtent) -> [DVec3; 3] {
+        self.source_gradient(o, w, step.middle())
+    }
     /// Radiance towards `o` from the bounces beyond the ray's first vertex (a collision in the
     /// medium or the opaque hit), an unbiased estimate; `None` where the gather sees one bounce.
     /// It joins the cell's surface radiance: eq. 11's walls differentiate it as the surface's,
     /// and no transmittance gradient is taken of it.
     fn deeper(&self, _o: DVec3, _w: DVec3) -> Option<[f64; 3]> {
         None
+    }
+}
+
+/// A march step `[t0, t1]` along a gather ray and its extinction (constant over it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepExtent {
+    pub t0: f64,
+    pub t1: f64,
+    pub sigma: [f64; 3],
+}
+
+impl StepExtent {
+    /// The step's middle, where its coefficients are read.
+    #[must_use]
+    pub fn middle(&self) -> f64 {
+        0.5 * (self.t0 + self.t1)
+    }
+
+    /// The weight that turns a sample of the source at distance `t` drawn with density `pdf` on
+    /// the step into an estimate of the step's source q̄ ([`GatherMedium::step_source`]):
+    /// e^{−σ (t − t0)}/(pdf ∫ e^{−σ (t' − t0)} dt'), per channel.
+    #[must_use]
+    pub fn sample_weight(&self, t: f64, pdf: f64) -> [f64; 3] {
+        let len = self.t1 - self.t0;
+        std::array::from_fn(|c| {
+            let integral = exp_integral(self.sigma[c], len);
+            if pdf > 0.0 && integral > 0.0 {
+                (-self.sigma[c] * (t - self.t0)).exp() / (pdf * integral)
+            } else {
+                0.0
+            }
+        })
     }
 }
 
@@ -295,10 +337,11 @@ fn trace_cell(scene: &dyn GatherMedium, x: DVec3, w: DVec3, march: &March) -> Ce
             let t1 = (t + dt).min(segment_end);
             let mid = 0.5 * (t + t1);
             let sigma = scene.sigma_t(x, w, mid);
-            let q = scene.source(x, w, mid);
+            let span = StepExtent { t0: t, t1, sigma };
+            let q = scene.step_source(x, w, &span);
             let (gq, gs) = if march.gradients {
                 (
-                    scene.source_gradient(x, w, mid),
+                    scene.step_source_gradient(x, w, &span),
                     scene.sigma_t_gradient(x, w, mid),
                 )
             } else {

@@ -12,6 +12,11 @@
 //! every ray: a quadrature rule, not an estimate, and in the smoke grid it read the ceiling's
 //! light 3–5 % low.)
 //!
+//! A march step's source ([`GatherMedium::step_source`]) takes point and spot lights at a
+//! distance drawn on the step towards the light (equiangular, as the pixel pass's march and
+//! `volpath` do: [`crate::integrators::equiangular`]), not at the step's middle, whose 1/r²
+//! made the records that a gather ray passing near the lamp reached spikes and the rest dark.
+//!
 //! Deeper bounces (`max_depth` above 3, [`SceneMedium::with_deeper_bounces`]) are `volpath`'s
 //! paths on from each gather ray's first vertex: a free flight along the ray to a collision in
 //! the medium or to the opaque hit, then a phase or BSDF sample, with the emitters that sample
@@ -24,7 +29,7 @@
 //! and grids ([`transmittance_with_depth_gradient`]); no extra shadow rays. Spot lights alone
 //! fall back to differences of the whole source.
 
-use super::gradient::{DVec3, GatherMedium};
+use super::gradient::{DVec3, GatherMedium, StepExtent};
 use crate::integrators::light_sampling::BsdfStrategy;
 use crate::integrators::path_continuation::{count_and_roulette, sample_continuation, Arrival};
 use crate::integrators::volpath::{PathState, VolPathIntegrator};
@@ -35,6 +40,7 @@ use crate::media::tracking::{
     transmittance_with_depth_gradient, Flight, OpaqueHit,
 };
 use crate::scene::Scene;
+use ircache_math::sampling::Equiangular;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 use std::cell::RefCell;
 
@@ -47,6 +53,8 @@ const SURFACE_STEP: u32 = u32::MAX;
 /// The keys of a light sample's tracking streams: its transmittance, its optical depth.
 const TRANSMITTANCE_STREAM: u64 = 0x006d_6564_6961;
 const DEPTH_STREAM: u64 = 0x0064_6570_7468;
+/// The key of the stream of a point or spot light sample's distance on its march step.
+const DISTANCE_STREAM: u64 = 0x0065_7175_6961;
 
 /// A ray traced up to its first opaque hit.
 #[derive(Clone, Debug)]
@@ -206,20 +214,76 @@ impl<'a> SceneMedium<'a> {
         (wrap((i as f32 + select) / n as f32), u)
     }
 
-    /// Calls `f(i, sample)` for each of the light samples of gather direction `w` at `p` that
-    /// can contribute (the stream both [`Self::direct`] and [`Self::scattered_with_gradient`]
-    /// walk, so the two agree sample by sample).
-    fn for_each_light_sample(&self, p: Vec3, w: DVec3, mut f: impl FnMut(u32, LightSample)) {
+    /// Calls `f(i, sample, at, weight)` for each of the light samples of gather direction `w`
+    /// at `p` that can contribute (the stream both [`Self::direct`] and
+    /// [`Self::scattered_with_gradient`] walk, so the two agree sample by sample); the sample is
+    /// taken at `at` and its value counts `weight` times.
+    ///
+    /// With `step`, the march step about `p` (its middle), a point or spot light is sampled
+    /// not at `p` but at a distance drawn on the step towards it ([`Equiangular`], Kulla and
+    /// Fajardo 2012), weighed to estimate the step's source ([`StepExtent::sample_weight`]): at
+    /// the middle alone its 1/r² made a gather ray that passes near the lamp a spike, and the
+    /// records that met none read dark (the spot in the fog box: the image 0.8 % dark).
+    fn for_each_light_sample(
+        &self,
+        p: Vec3,
+        w: DVec3,
+        step: Option<&StepExtent>,
+        mut f: impl FnMut(u32, LightSample, Vec3, Rgb),
+    ) {
         let lights = &self.scene.lights;
         if lights.is_empty() {
             return;
         }
+        let step = step.filter(|_| lights.has_delta_positions());
         for i in 0..self.light_samples {
             let (u_sel, u) = self.light_sample(w, i);
+            if let Some(step) = step {
+                let (light, selection) = lights.select(p, u_sel);
+                if lights.delta_position(light as u32).is_some() {
+                    // Nothing where the light misses the step (a spot's cone) or the ray meets it.
+                    if let Some((at, weight)) = self.step_distance(p, w, step, light as u32, i) {
+                        if let Some(ls) = lights
+                            .sample_light(light, selection, at, u)
+                            .filter(|ls| ls.pdf > 0.0)
+                        {
+                            f(i, ls, at, weight);
+                        }
+                    }
+                    continue;
+                }
+            }
             if let Some(ls) = lights.sample(p, u_sel, u).filter(|ls| ls.pdf > 0.0) {
-                f(i, ls);
+                f(i, ls, p, Rgb::ONE);
             }
         }
+    }
+
+    /// For point or spot light `light` and march step `step` about `p` along `w`: a distance on
+    /// the step drawn uniformly in the angle the light subtends (within a spot's cone), as the
+    /// point there and the sample's weight. `None` where the light misses the step or the ray
+    /// passes through it.
+    fn step_distance(
+        &self,
+        p: Vec3,
+        w: DVec3,
+        step: &StepExtent,
+        light: u32,
+        i: u32,
+    ) -> Option<(Vec3, Rgb)> {
+        let middle = step.middle();
+        let d = w.as_vec3();
+        let interval = ((step.t0 - middle) as f32, (step.t1 - middle) as f32);
+        let (position, interval) = self
+            .scene
+            .lights
+            .delta_position_along(light, p, d, interval)?;
+        let equiangular = Equiangular::new(p, d, position, interval)?;
+        let mut rng = Self::sample_stream(DISTANCE_STREAM, w, self.step_key(w, false), i);
+        let (t, pdf) = equiangular.sample(rng.next_f32());
+        let weight = step.sample_weight(middle + f64::from(t), f64::from(pdf));
+        let weight = Rgb::new(weight[0] as f32, weight[1] as f32, weight[2] as f32);
+        Some((p + d * t, weight))
     }
 
     /// Counts a march step along `w` (see `march_step`).
@@ -253,28 +317,31 @@ impl<'a> SceneMedium<'a> {
 
     /// Light arriving at `p` (in `medium`) along the light samples of gather direction `w`, with
     /// transmittance: `f(direction towards the light)` weighs each; the mean over the samples.
+    /// With `march_step` (a source's), point and spot lights are sampled over the step
+    /// ([`Self::for_each_light_sample`]).
     fn direct(
         &self,
         p: Vec3,
         w: DVec3,
         offset_normal: Option<Vec3>,
         medium: Option<usize>,
+        march_step: Option<&StepExtent>,
         f: impl Fn(Vec3) -> Rgb,
     ) -> Rgb {
         let mut sum = Rgb::ZERO;
-        let mut rays = self.rays.borrow_mut();
         let step = self.step_key(w, offset_normal.is_some());
-        self.for_each_light_sample(p, w, |i, ls| {
+        self.for_each_light_sample(p, w, march_step, |i, ls, at, count| {
             let weight = f(ls.wi);
             if weight.is_black() {
                 return;
             }
             let ray = self
                 .scene
-                .shadow_ray_at(p, offset_normal, ls.wi, ls.distance);
+                .shadow_ray_at(at, offset_normal, ls.wi, ls.distance);
             let mut rng = Self::sample_stream(TRANSMITTANCE_STREAM, w, step, i);
+            let mut rays = self.rays.borrow_mut();
             let tr = transmittance_along(self.scene, ray, medium, &mut rng, &mut rays);
-            sum += weight * tr * ls.radiance / ls.pdf;
+            sum += weight * tr * ls.radiance * count / ls.pdf;
         });
         sum / self.light_samples as f32
     }
@@ -341,7 +408,7 @@ impl<'a> SceneMedium<'a> {
                 if bsdf.has_smooth() {
                     let wo_local = it.frame.to_local(wo);
                     let side = medium_after(shape.media, it.ng, wo, medium);
-                    l += self.direct(it.p, w, Some(it.ng), side, |wi| {
+                    l += self.direct(it.p, w, Some(it.ng), side, None, |wi| {
                         bsdf.eval(wo_local, it.frame.to_local(wi))
                             * scene.perturbed_shadowing(&it, wi)
                     });
@@ -502,8 +569,15 @@ impl<'a> SceneMedium<'a> {
         Some(m.at(p))
     }
 
-    /// The source q at `p` towards direction `-w` (the receiver) in `medium`.
-    fn q(&self, medium: Option<usize>, p: DVec3, w: DVec3) -> [f64; 3] {
+    /// The source q at `p` towards direction `-w` (the receiver) in `medium`; with
+    /// `march_step`, the step's about `p` ([`GatherMedium::step_source`]).
+    fn q(
+        &self,
+        medium: Option<usize>,
+        p: DVec3,
+        w: DVec3,
+        march_step: Option<&StepExtent>,
+    ) -> [f64; 3] {
         let Some(c) = self.coefficients(medium, p) else {
             return [0.0; 3];
         };
@@ -512,7 +586,7 @@ impl<'a> SceneMedium<'a> {
             let m = &self.scene.media[medium.unwrap_or(0)];
             let towards = (-w).as_vec3();
             let phase = m.phase;
-            let li = self.direct(p.as_vec3(), w, None, medium, |wi| {
+            let li = self.direct(p.as_vec3(), w, None, medium, march_step, |wi| {
                 Rgb::splat(phase.eval(-wi, towards))
             });
             q += c.sigma_s * li;
@@ -527,8 +601,15 @@ impl<'a> SceneMedium<'a> {
     /// held). A sample's integrand in area measure, f = L_e p(−ωᵢ·ω) T cos θ_y / r², moves with
     /// p as ∇ln f = ∇ln p − ∇τ + 2ωᵢ/r + (n_y/cos θ_y + ωᵢ)/r (the last two for points at a
     /// distance; a distant light's direction is held, leaving −∇τ). `None` for the gradient
-    /// with spot lights, whose falloff is not differentiated here.
-    fn q_with_gradient(&self, medium: Option<usize>, p: DVec3, w: DVec3) -> Source {
+    /// with spot lights, whose falloff is not differentiated here. With `march_step`, the
+    /// step's source about `p` and its gradient ([`GatherMedium::step_source`]).
+    fn q_with_gradient(
+        &self,
+        medium: Option<usize>,
+        p: DVec3,
+        w: DVec3,
+        march_step: Option<&StepExtent>,
+    ) -> Source {
         let mut out = Source {
             p,
             w,
@@ -539,7 +620,7 @@ impl<'a> SceneMedium<'a> {
             return out;
         };
         if self.spot_lights && !c.sigma_s.is_black() {
-            out.q = self.q(medium, p, w);
+            out.q = self.q(medium, p, w, march_step);
             out.gradient = None;
             return out;
         }
@@ -557,7 +638,7 @@ impl<'a> SceneMedium<'a> {
             });
         }
         if !c.sigma_s.is_black() {
-            let (li, li_gradient) = self.scattered_with_gradient(p, w, medium, m.phase);
+            let (li, li_gradient) = self.scattered_with_gradient(p, w, medium, m.phase, march_step);
             q += c.sigma_s * li;
             let sigma_s = rgb(c.sigma_s);
             let li = rgb(li);
@@ -589,13 +670,13 @@ impl<'a> SceneMedium<'a> {
         w: DVec3,
         medium: Option<usize>,
         phase: crate::media::Phase,
+        march_step: Option<&StepExtent>,
     ) -> (Rgb, [DVec3; 3]) {
         let (mut sum, mut gradient) = (Rgb::ZERO, [DVec3::ZERO; 3]);
-        let x = p.as_vec3();
         let towards = (-w).as_vec3();
         let mut rays = self.rays.borrow_mut();
         let step = self.step_key(w, false);
-        self.for_each_light_sample(x, w, |i, ls| {
+        self.for_each_light_sample(p.as_vec3(), w, march_step, |i, ls, x, count| {
             let weight = phase.eval(-ls.wi, towards);
             if weight <= 0.0 {
                 return;
@@ -614,7 +695,7 @@ impl<'a> SceneMedium<'a> {
             if tr.is_black() {
                 return;
             }
-            let value = ls.radiance * tr * (weight / ls.pdf);
+            let value = ls.radiance * tr * count * (weight / ls.pdf);
             sum += value;
             // ∇ln of the sample's integrand, less −∇τ (per channel, below).
             let wi = ls.wi.as_dvec3();
@@ -640,6 +721,51 @@ impl<'a> SceneMedium<'a> {
         });
         let n = f64::from(self.light_samples);
         (sum / self.light_samples as f32, gradient.map(|g| g / n))
+    }
+
+    /// [`GatherMedium::source`] at `t`, or with `march_step` [`GatherMedium::step_source`].
+    fn source_over(&self, o: DVec3, w: DVec3, t: f64, march_step: Option<&StepExtent>) -> [f64; 3] {
+        self.begin_march_step(w);
+        let medium = self.medium_along(o, w, t);
+        if !self.gradients {
+            return self.q(medium, o + w * t, w, march_step);
+        }
+        let source = self.q_with_gradient(medium, o + w * t, w, march_step);
+        *self.last_source.borrow_mut() = Some(source);
+        source.q
+    }
+
+    /// The gradient of [`Self::source_over`].
+    fn source_gradient_over(
+        &self,
+        o: DVec3,
+        w: DVec3,
+        t: f64,
+        march_step: Option<&StepExtent>,
+    ) -> [DVec3; 3] {
+        let medium = self.medium_along(o, w, t);
+        let p = o + w * t;
+        let known = *self.last_source.borrow();
+        let source = match known {
+            Some(s) if s.p == p && s.w == w => s,
+            _ => self.q_with_gradient(medium, p, w, march_step),
+        };
+        if let Some(g) = source.gradient {
+            return g;
+        }
+        // Spot lights: differences of the whole source, its light samples drawn anew.
+        let h = self.step(medium, p, t);
+        let Some(tangents) = self.tangents else {
+            return self.central(h, p, |q| self.q(medium, q, w, march_step));
+        };
+        let mut g = [DVec3::ZERO; 3];
+        for e in tangents {
+            let a = self.q(medium, p + e * h, w, march_step);
+            for c in 0..3 {
+                g[c] += e * ((a[c] - source.q[c]) / h);
+            }
+        }
+        g
     }
 
     /// Central differences of `f` at `p` with step `h`, along the world axes or the
@@ -766,39 +892,18 @@ impl GatherMedium for SceneMedium<'_> {
     }
 
     fn source(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3] {
-        self.begin_march_step(w);
-        let medium = self.medium_along(o, w, t);
-        if !self.gradients {
-            return self.q(medium, o + w * t, w);
-        }
-        let source = self.q_with_gradient(medium, o + w * t, w);
-        *self.last_source.borrow_mut() = Some(source);
-        source.q
+        self.source_over(o, w, t, None)
+    }
+
+    fn step_source(&self, o: DVec3, w: DVec3, step: &StepExtent) -> [f64; 3] {
+        self.source_over(o, w, step.middle(), Some(step))
     }
 
     fn source_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3] {
-        let medium = self.medium_along(o, w, t);
-        let p = o + w * t;
-        let known = *self.last_source.borrow();
-        let source = match known {
-            Some(s) if s.p == p && s.w == w => s,
-            _ => self.q_with_gradient(medium, p, w),
-        };
-        if let Some(g) = source.gradient {
-            return g;
-        }
-        // Spot lights: differences of the whole source, its light samples drawn anew.
-        let h = self.step(medium, p, t);
-        let Some(tangents) = self.tangents else {
-            return self.central(h, p, |q| self.q(medium, q, w));
-        };
-        let mut g = [DVec3::ZERO; 3];
-        for e in tangents {
-            let a = self.q(medium, p + e * h, w);
-            for c in 0..3 {
-                g[c] += e * ((a[c] - source.q[c]) / h);
-            }
-        }
-        g
+        self.source_gradient_over(o, w, t, None)
+    }
+
+    fn step_source_gradient(&self, o: DVec3, w: DVec3, step: &StepExtent) -> [DVec3; 3] {
+        self.source_gradient_over(o, w, step.middle(), Some(step))
     }
 }
