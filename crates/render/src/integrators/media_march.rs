@@ -40,6 +40,7 @@ use crate::media::Medium;
 use crate::sampler::Sampler;
 use crate::scene::{Interaction, Scene};
 use ircache_embree::Hit;
+use ircache_math::sampling::ONE_MINUS_EPSILON;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
 
 /// How camera rays are marched.
@@ -451,7 +452,9 @@ pub(crate) fn quadrature_points(
         let n = strata(points, mass);
         let out = (0..n)
             .map(|i| {
-                let xi = (i as f32 + jitter()) / n as f32;
+                // Below 1: (n − 1 + u)/n rounds to 1 for u near 1, a point at infinity on an
+                // unbounded segment (open fog: an invalid shadow ray).
+                let xi = ((i as f32 + jitter()) / n as f32).min(ONE_MINUS_EPSILON);
                 let s = (-(-xi * mass).ln_1p() / mean).min(length);
                 let weight = (sigma_t * -s).exp() * (mass / (n as f32 * mean * (-mean * s).exp()));
                 (t0 + s, weight)
@@ -592,6 +595,28 @@ mod tests {
                 column: 1,
             },
         })
+    }
+
+    /// On a segment without end (a camera in fog looking at the sky) every point is finite,
+    /// with a finite weight, however near 1 the jitter: (n − 1 + u)/n rounded to 1 for the
+    /// largest u below 1 and put the last point at infinity.
+    #[test]
+    fn an_unbounded_segment_has_finite_points_for_any_jitter() {
+        let ray = Ray::new(Vec3::new(0.0, 2.0, 10.0), Vec3::new(0.0, 0.6, -0.8));
+        let med = medium(VolumeDesc::constant(Rgb::splat(0.05)));
+        let below_one = f32::from_bits(1.0f32.to_bits() - 1);
+        for jitter in [0.0, 0.5, 0.999, below_one] {
+            for n in [1, 7, 16, 64] {
+                let (points, _, _) = quadrature_points(&med, &ray, f32::INFINITY, n, || jitter);
+                assert!(!points.is_empty());
+                for (t, w) in points {
+                    assert!(
+                        t.is_finite() && ray.at(t).is_finite() && w.max_channel().is_finite(),
+                        "{n} points, jitter {jitter}: t {t}, weight {w:?}"
+                    );
+                }
+            }
+        }
     }
 
     /// The mean over jitters of the quadrature's weights is ∫ T dt per channel, and the
