@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 /// Bytes that open every cache file.
 pub const MAGIC: &[u8; 8] = b"IRCACHE\0";
 /// The format version this build reads and writes.
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 /// Header size in bytes.
 pub const HEADER_BYTES: usize = 1024;
 /// Record size in bytes (payload and checksum).
@@ -329,13 +329,15 @@ fn decode_radiance(slots: &[u8]) -> Option<(RadianceCoefficients, usize)> {
 
 /// A volumetric record's two slots.
 fn encode_volume(v: &VolumeRecord) -> Vec<u8> {
-    let mut values = Vec::with_capacity(5 + 3 * COEFFICIENTS);
+    let mut values = Vec::with_capacity(11 + 3 * COEFFICIENTS);
     values.extend_from_slice(&v.p.to_array());
     values.push(v.r);
     values.push(v.medium as f32);
     for c in &v.radiance {
         values.extend_from_slice(&c.to_array());
     }
+    values.extend_from_slice(&v.towards.to_array());
+    values.extend_from_slice(&v.high_bands.to_array());
     let mut out = write_slot([VOLUME, 0, 0, 0], &values[..SLOT_FLOATS]).to_vec();
     out.extend_from_slice(&write_slot([CONTINUATION, 0, 0, 0], &values[SLOT_FLOATS..]));
     out
@@ -354,6 +356,7 @@ fn decode_volume(slots: &[u8]) -> Option<VolumeRecord> {
     if medium < 0.0 || medium.fract() != 0.0 {
         return None;
     }
+    let end = 5 + 3 * COEFFICIENTS;
     Some(VolumeRecord {
         p: Vec3::new(values[0], values[1], values[2]),
         r: values[3],
@@ -361,6 +364,8 @@ fn decode_volume(slots: &[u8]) -> Option<VolumeRecord> {
         radiance: std::array::from_fn(|i| {
             Rgb::new(values[5 + 3 * i], values[6 + 3 * i], values[7 + 3 * i])
         }),
+        towards: Vec3::from_slice(&values[end..end + 3]),
+        high_bands: Rgb::new(values[end + 3], values[end + 4], values[end + 5]),
     })
 }
 
@@ -872,6 +877,8 @@ mod tests {
             r: 0.25 * (i + 1) as f32,
             medium: i % 2,
             radiance: std::array::from_fn(|k| Rgb::new(k as f32, -0.5 * k as f32, i as f32)),
+            towards: Vec3::new(0.6, -0.8 * i as f32, 0.0),
+            high_bands: Rgb::new(0.1, -0.2, i as f32),
         };
         let recs: Vec<Stored> = (0..3).map(|i| (record(i), None)).collect();
         let vols: Vec<VolumeRecord> = (0..3).map(volume).collect();
