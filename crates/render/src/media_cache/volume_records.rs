@@ -10,10 +10,12 @@
 //! Bands above 2 are not small where the light arrives from a narrow region (a spot's beam in
 //! the fog) and the phase function is forward (Henyey–Greenstein's series Σ gˡ (2l + 1) P_l
 //! converges slowly: at g = 0.5 bands 0–2 hold 0.625 of its forward peak): in open fog at g = 0.5
-//! the bands alone read 19 % low beside the beam and 7 % high elsewhere. So a record also holds
-//! what they miss towards the camera ray that placed it (d₀, the phase-weighted sum of the same
-//! samples less the bands' value), added to lookups from directions near d₀ (the camera's rays
-//! through a record's neighbourhood arrive from about there; the share fades out by 30° away).
+//! the bands alone read 19 % low beside the beam and 7 % high elsewhere (at g = 0.8 negative).
+//! So a record also holds what they miss towards the camera ray that placed it (d₀: the light
+//! scattered towards it, from half the paths stratified over the sphere and half in the phase
+//! function's lobe about d₀ by the balance heuristic, less the bands' value), added to lookups
+//! from directions near d₀ (the camera's rays through a record's neighbourhood arrive from about
+//! there; the share fades out by 30° away).
 //!
 //! Records are placed by a pre-pass along camera rays at the pixel pass's own quadrature points
 //! (one row at a time, gathered in parallel, inserted in row order: the same cache at any
@@ -55,8 +57,8 @@ pub struct VolumeRecord {
     pub radiance: [Rgb; COEFFICIENTS],
     /// The direction d₀ of the camera ray that placed it (unit).
     pub towards: Vec3,
-    /// The light scattered towards −d₀ that bands above 2 hold: the phase-weighted sum of
-    /// the gather's samples less the bands' value there.
+    /// The light scattered towards −d₀ that bands above 2 hold: the gather's estimate of it
+    /// (both halves, balance heuristic) less the bands' value there.
     pub high_bands: Rgb,
 }
 
