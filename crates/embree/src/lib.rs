@@ -522,9 +522,13 @@ fn rtc_ray(ray: &Ray) -> ffi::RTCRay {
 }
 
 impl Scene {
-    /// Closest hit along `ray` within `[t_min, t_max]` (`rtcIntersect1`, incoherent context).
+    /// Closest hit along `ray` within `[t_min, t_max]` (`rtcIntersect1`, incoherent context);
+    /// none for a ray Embree would refuse ([`traceable`]).
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !traceable(ray) {
+            return None;
+        }
         let mut ctx = ffi::RTCIntersectContext::new(ffi::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
         let mut rh = ffi::RTCRayHit {
             ray: rtc_ray(ray),
@@ -553,9 +557,13 @@ impl Scene {
         })
     }
 
-    /// Whether anything is hit along `ray` within `[t_min, t_max]` (`rtcOccluded1`).
+    /// Whether anything is hit along `ray` within `[t_min, t_max]` (`rtcOccluded1`); true for a
+    /// ray Embree would refuse ([`traceable`]: no light along it).
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
+        if !traceable(ray) {
+            return true;
+        }
         let mut ctx = ffi::RTCIntersectContext::new(ffi::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT);
         let mut r = rtc_ray(ray);
         // SAFETY: as in `intersect`.
@@ -649,7 +657,7 @@ impl Scene {
             // SAFETY: as in `intersect16`.
             unsafe { ffi::rtcOccluded16(valid.0.as_ptr(), self.raw, &mut ctx, &mut ray16) };
             for (i, (o, r)) in out.iter_mut().zip(rays).enumerate() {
-                *o = ray16.tfar[i] < r.t_max;
+                *o = !traceable(r) || ray16.tfar[i] < r.t_max;
             }
         }
     }
@@ -667,8 +675,21 @@ impl Scene {
     }
 }
 
-/// Builds the SoA packet and valid mask for up to 16 rays; inactive lanes get an empty ray
-/// segment (`tnear = 0 > tfar = -inf`) so they are inert even if Embree reads them.
+/// Whether Embree takes `ray` (its `RayK::valid`): origin and direction within ±1.844e18 in
+/// every coordinate, `t_min` and `t_max` numbers. A ray that is not (a numerical failure
+/// upstream: a point at infinity, a NaN direction) would stop the whole process in Embree's
+/// assertion; it misses, and shadow rays along it are occluded, instead.
+#[inline(always)]
+#[must_use]
+pub fn traceable(ray: &Ray) -> bool {
+    const LARGE: f32 = 1.844e18;
+    let within = |v: Vec3| v.x.abs() <= LARGE && v.y.abs() <= LARGE && v.z.abs() <= LARGE;
+    within(ray.o) && within(ray.d) && !ray.t_min.is_nan() && !ray.t_max.is_nan()
+}
+
+/// Builds the SoA packet and valid mask for up to 16 rays; inactive lanes (past the rays, or
+/// rays Embree would refuse: [`traceable`]) get an empty ray segment (`tnear = 0 > tfar =
+/// -inf`) so they are inert even if Embree reads them.
 #[inline(always)]
 fn packet(rays: &[Ray]) -> (ffi::Valid16, ffi::RTCRay16) {
     debug_assert!(rays.len() <= 16);
@@ -688,6 +709,9 @@ fn packet(rays: &[Ray]) -> (ffi::Valid16, ffi::RTCRay16) {
         flags: [0; 16],
     };
     for (i, r) in rays.iter().enumerate().take(16) {
+        if !traceable(r) {
+            continue;
+        }
         valid.0[i] = -1;
         p.org_x[i] = r.o.x;
         p.org_y[i] = r.o.y;

@@ -198,6 +198,59 @@ fn triangle_miss_segment_limits_and_occlusion() {
     assert!(!scene.occluded(&ray(o, down, 1.001, f32::INFINITY)));
 }
 
+/// Rays Embree would refuse (an origin at infinity or beyond 1.844e18, a NaN direction or
+/// distance: numerical failures upstream) miss and are occluded, alone and in packets beside
+/// good rays, which keep their answers; without the check Debian's Embree aborts the process
+/// in its `ray.valid()` assertion (open fog's march once put a point at infinity).
+#[test]
+fn rays_embree_would_refuse_miss_instead_of_aborting() {
+    let scene = scene_of(
+        &[
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ],
+        &[[0, 1, 2]],
+    );
+    let down = Vec3::new(0.0, 0.0, -1.0);
+    let good = ray(Vec3::new(0.25, 0.25, 1.0), down, 0.0, f32::INFINITY);
+    let bad = [
+        ray(
+            Vec3::new(0.25, f32::INFINITY, 1.0),
+            down,
+            0.0,
+            f32::INFINITY,
+        ),
+        ray(Vec3::new(0.25, 0.25, 1e19), down, 0.0, f32::INFINITY),
+        ray(
+            Vec3::new(0.25, 0.25, 1.0),
+            Vec3::new(f32::NAN, 0.0, -1.0),
+            0.0,
+            1.0,
+        ),
+        ray(Vec3::new(0.25, 0.25, 1.0), down, f32::NAN, f32::INFINITY),
+        ray(Vec3::new(0.25, 0.25, 1.0), down, 0.0, f32::NAN),
+    ];
+    for r in &bad {
+        assert!(!ircache_embree::traceable(r), "{r:?}");
+        assert!(scene.intersect(r).is_none(), "{r:?}");
+        assert!(scene.occluded(r), "{r:?}");
+    }
+    assert!(ircache_embree::traceable(&good));
+    let mut rays = vec![good];
+    rays.extend_from_slice(&bad);
+    rays.push(good);
+    let mut hits = vec![None; rays.len()];
+    scene.intersect16(&rays, &mut hits);
+    let mut occluded = vec![false; rays.len()];
+    scene.occluded16(&rays, &mut occluded);
+    for (i, (h, o)) in hits.iter().zip(&occluded).enumerate() {
+        let is_good = i == 0 || i == rays.len() - 1;
+        assert_eq!(h.is_some(), is_good, "ray {i}: {h:?}");
+        assert!(*o, "ray {i}");
+    }
+}
+
 #[test]
 fn sphere_hits_from_outside_and_inside_with_outward_normal() {
     let c = Vec3::new(1.0, 2.0, 3.0);
