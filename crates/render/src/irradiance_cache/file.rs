@@ -18,7 +18,9 @@
 //! - in scenes with media, volumetric records (`media_cache::volume_records`): a slot tagged
 //!   0xFD, 1 byte zero, 2 bytes zero, with position, radius, medium index and the first 24 of
 //!   the 27 spherical-harmonic values (9 coefficients × 3 channels), then one continuation slot
-//!   (number 0) with the last 3. The media cache's surface records are ordinary records.
+//!   (number 0) with the last 3, the direction of the camera ray that placed the record and
+//!   the light bands above 2 scatter towards it (3 + 3; format 5). The media cache's surface
+//!   records are ordinary records.
 
 use super::params::{IcParams, PARAMS};
 use super::record::{Record, NO_RADIANCE};
