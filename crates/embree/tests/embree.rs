@@ -20,6 +20,18 @@ fn ray(o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> Ray {
     Ray { o, d, t_min, t_max }
 }
 
+/// The triangle (0,0,0), (1,0,0), (0,1,0).
+fn unit_triangle() -> Scene {
+    scene_of(
+        &[
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ],
+        &[[0, 1, 2]],
+    )
+}
+
 fn rand_vec(rng: &mut Rng, lo: f32, hi: f32) -> Vec3 {
     Vec3::new(
         lo + (hi - lo) * rng.next_f32(),
@@ -167,14 +179,7 @@ fn triangle_convention_on_random_triangles() {
 
 #[test]
 fn triangle_miss_segment_limits_and_occlusion() {
-    let scene = scene_of(
-        &[
-            Vec3::new(0.0, 0.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-        ],
-        &[[0, 1, 2]],
-    );
+    let scene = unit_triangle();
     let o = Vec3::new(0.25, 0.25, 1.0);
     let down = Vec3::new(0.0, 0.0, -1.0);
     // Miss: pointing away, and passing beside the triangle.
@@ -204,14 +209,7 @@ fn triangle_miss_segment_limits_and_occlusion() {
 /// in its `ray.valid()` assertion (open fog's march once put a point at infinity).
 #[test]
 fn rays_embree_would_refuse_miss_instead_of_aborting() {
-    let scene = scene_of(
-        &[
-            Vec3::new(0.0, 0.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(0.0, 1.0, 0.0),
-        ],
-        &[[0, 1, 2]],
-    );
+    let scene = unit_triangle();
     let down = Vec3::new(0.0, 0.0, -1.0);
     let good = ray(Vec3::new(0.25, 0.25, 1.0), down, 0.0, f32::INFINITY);
     let bad = [

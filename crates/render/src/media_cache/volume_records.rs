@@ -662,13 +662,39 @@ mod tests {
         assert!(short >= 2, "only {short} reaches end in the smoke");
     }
 
+    /// The mean of `n` phase-sampled paths' in-scattered light (green) at `at` (the pixel
+    /// pass's estimator where no record serves) and its standard error.
+    fn mean_of_paths(
+        integrator: &VolPathIntegrator,
+        scene: &Scene,
+        at: &crate::integrators::media_march::MarchPoint,
+        n: u32,
+    ) -> (f64, f64) {
+        use crate::integrators::media_march::in_scattered_by_path;
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        let mut rng = Rng::new(11, 12);
+        let mut rays = RayCounts::default();
+        for k in 0..n {
+            let at_k =
+                in_scattered_by_path(integrator, scene, at, u64::from(k), &mut rng, &mut rays);
+            let v = f64::from(at_k.g);
+            sum += v;
+            sum2 += v * v;
+        }
+        let mean = sum / f64::from(n);
+        (
+            mean,
+            ((sum2 / f64::from(n) - mean * mean) / f64::from(n)).sqrt(),
+        )
+    }
+
     /// A record gathered in the fog Cornell box predicts the in-scattered indirect light at its
     /// own position: against the mean of phase-sampled paths from there (the pixel pass's
     /// estimator where no record serves), within 2 % or three standard errors (the record's,
     /// 32 768 paths, and 40 000 paths'), for camera directions along three axes.
     #[test]
     fn a_record_predicts_the_in_scattered_light_of_paths() {
-        use crate::integrators::media_march::{in_scattered_by_path, MarchPoint};
+        use crate::integrators::media_march::MarchPoint;
         let scene = project_scene("cornell-fog", &[("max_depth".to_string(), "3".to_string())]);
         let integrator = VolPathIntegrator::plain(3);
         let medium = 0;
@@ -689,21 +715,9 @@ mod tests {
                     depth: 0,
                 };
                 let n = 40_000;
-                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-                let mut rng = Rng::new(11, 12);
-                let mut rays = RayCounts::default();
-                for k in 0..n {
-                    let v = f64::from(
-                        in_scattered_by_path(&integrator, &scene, &at, k, &mut rng, &mut rays).g,
-                    );
-                    sum += v;
-                    sum2 += v * v;
-                }
-                let mean = sum / f64::from(n as u32);
-                let error =
-                    ((sum2 / f64::from(n as u32) - mean * mean) / f64::from(n as u32)).sqrt();
+                let (mean, error) = mean_of_paths(&integrator, &scene, &at, n);
                 // The record's own noise at most as the paths' per path.
-                let both = error * (1.0 + f64::from(n as u32) / f64::from(divisions)).sqrt();
+                let both = error * (1.0 + f64::from(n) / f64::from(divisions)).sqrt();
                 assert!(
                     (f64::from(predicted) - mean).abs() < (3.0 * both).max(0.02 * mean),
                     "at {p:?} towards {d:?}: record {predicted}, paths {mean} ± {error}"
@@ -721,7 +735,7 @@ mod tests {
     /// the beam they turn negative).
     #[test]
     fn a_record_beside_a_beam_holds_the_light_bands_0_to_2_miss() {
-        use crate::integrators::media_march::{in_scattered_by_path, MarchPoint};
+        use crate::integrators::media_march::MarchPoint;
         // The scene's g = 0.5, and Mitsuba's default for `hg`, 0.8.
         // (tolerance floor, least miss of the bands alone somewhere): at 0.8 paths near the
         // lamp have heavy tails (single values 30 000 times the mean; 250 000 paths' means
@@ -759,26 +773,7 @@ mod tests {
                     depth: 0,
                 };
                 let n: u32 = if g > 0.6 { 1_000_000 } else { 100_000 };
-                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-                let mut rng = Rng::new(11, 12);
-                let mut rays = RayCounts::default();
-                for k in 0..n {
-                    let v = f64::from(
-                        in_scattered_by_path(
-                            &integrator,
-                            &scene,
-                            &at,
-                            u64::from(k),
-                            &mut rng,
-                            &mut rays,
-                        )
-                        .g,
-                    );
-                    sum += v;
-                    sum2 += v * v;
-                }
-                let mean = sum / f64::from(n);
-                let error = ((sum2 / f64::from(n) - mean * mean) / f64::from(n)).sqrt();
+                let (mean, error) = mean_of_paths(&integrator, &scene, &at, n);
                 let predicted = f64::from(record.in_scattered(&weights, d).g);
                 // The record's own noise at most as the paths' per path (its directions stratified).
                 let both = error * (1.0 + f64::from(n) / f64::from(divisions)).sqrt();
