@@ -15,7 +15,7 @@
 //! A march step's source ([`GatherMedium::step_source`]) takes point and spot lights at a
 //! distance drawn on the step towards the light (equiangular, as the pixel pass's march and
 //! `volpath` do: [`crate::integrators::equiangular`]), not at the step's middle, whose 1/r²
-//! made the records that a gather ray passing near the lamp reached spikes and the rest dark.
+//! made the records that a gather ray passing near the lamp reached spikes and the rest low.
 //!
 //! Deeper bounces (`max_depth` above 3, [`SceneMedium::with_deeper_bounces`]) are `volpath`'s
 //! paths on from each gather ray's first vertex: a free flight along the ray to a collision in
@@ -223,7 +223,7 @@ impl<'a> SceneMedium<'a> {
     /// not at `p` but at a distance drawn on the step towards it ([`Equiangular`], Kulla and
     /// Fajardo 2012), weighed to estimate the step's source ([`StepExtent::sample_weight`]): at
     /// the middle alone its 1/r² made a gather ray that passes near the lamp a spike, and the
-    /// records that met none read dark (the spot in the fog box: the image 0.8 % dark).
+    /// records that met none read low (spot-fog over six seeds: relMSE_trim 4.0e-4 → 2.2e-4).
     fn for_each_light_sample(
         &self,
         p: Vec3,
