@@ -57,6 +57,9 @@ pub(crate) struct Segment {
     pub distance: DistanceDensity,
     /// Equiangular samples taken on the segment.
     pub samples: u32,
+    /// Where the scene has one point or spot light: its index and [`Self::towards`] it, made
+    /// once (the march asks for it at each of its points).
+    single: Option<(u32, Option<(Equiangular, f32)>)>,
 }
 
 impl Segment {
@@ -125,7 +128,7 @@ impl Segment {
             None => None,
         };
         let (t0, t1) = scene.media[medium].clip(ray.o, ray.d, t_hit)?;
-        Some(Segment {
+        let mut segment = Segment {
             o: ray.o,
             d: ray.d,
             t0,
@@ -134,7 +137,13 @@ impl Segment {
             constant,
             distance: density,
             samples,
-        })
+            single: None,
+        };
+        segment.single = scene
+            .lights
+            .single_delta_position()
+            .map(|light| (light, segment.towards_anew(scene, light)));
+        Some(segment)
     }
 
     /// The density of the distance strategy at `t`.
@@ -162,6 +171,14 @@ impl Segment {
 
     /// The equiangular distribution towards `light` and the probability of selecting it there.
     fn towards(&self, scene: &Scene, light: u32) -> Option<(Equiangular, f32)> {
+        match self.single {
+            Some((only, towards)) if only == light => towards,
+            _ => self.towards_anew(scene, light),
+        }
+    }
+
+    /// [`Self::towards`], computed.
+    fn towards_anew(&self, scene: &Scene, light: u32) -> Option<(Equiangular, f32)> {
         let (position, interval) =
             scene
                 .lights

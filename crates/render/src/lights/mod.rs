@@ -208,6 +208,8 @@ pub struct LightSet {
     diffuse_well: bool,
     /// A point or spot light is among the lights.
     delta_positions: bool,
+    /// The index of the one point or spot light, where there is exactly one.
+    single_delta_position: Option<u32>,
 }
 
 /// What an area light emits: one radiance, or a texture looked up at the surface's uv (Mitsuba's
@@ -476,8 +478,16 @@ impl LightSet {
             Light::Sphere(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => true,
             Light::Constant(_) | Light::Envmap(_) => false,
         });
+        let mut with_positions = (0u32..)
+            .zip(&lights)
+            .filter(|(_, l)| l.delta_position().is_some());
+        let single_delta_position = match (with_positions.next(), with_positions.next()) {
+            (Some((i, _)), None) => Some(i),
+            _ => None,
+        };
         LightSet {
             delta_positions: lights.iter().any(|l| l.delta_position().is_some()),
+            single_delta_position,
             diffuse_well,
             by_power: Distribution1D::new(&powers),
             lights,
@@ -547,6 +557,12 @@ impl LightSet {
     /// The positions of the point and spot lights.
     pub fn delta_positions(&self) -> impl Iterator<Item = Vec3> + '_ {
         self.lights.iter().filter_map(Light::delta_position)
+    }
+
+    /// The index of the scene's one point or spot light, where it has exactly one.
+    #[must_use]
+    pub fn single_delta_position(&self) -> Option<u32> {
+        self.single_delta_position
     }
 
     /// True when a point or spot light is among the emitters.
