@@ -478,16 +478,13 @@ impl LightSet {
             Light::Sphere(_) | Light::Point(_) | Light::Spot(_) | Light::Directional(_) => true,
             Light::Constant(_) | Light::Envmap(_) => false,
         });
-        let mut with_positions = (0u32..)
+        let positioned: Vec<u32> = (0u32..)
             .zip(&lights)
-            .filter(|(_, l)| l.delta_position().is_some());
-        let single_delta_position = match (with_positions.next(), with_positions.next()) {
-            (Some((i, _)), None) => Some(i),
-            _ => None,
-        };
+            .filter_map(|(i, l)| l.delta_position().map(|_| i))
+            .collect();
         LightSet {
-            delta_positions: lights.iter().any(|l| l.delta_position().is_some()),
-            single_delta_position,
+            delta_positions: !positioned.is_empty(),
+            single_delta_position: (positioned.len() == 1).then(|| positioned[0]),
             diffuse_well,
             by_power: Distribution1D::new(&powers),
             lights,
@@ -613,6 +610,20 @@ impl LightSet {
         let at = at.into();
         let (idx, sel) = self.select(at.p, u_select);
         self.sample_chosen(idx, sel, at, u, true, shared)
+    }
+
+    /// [`Self::sample`] once its light is chosen: light `idx`, selected with probability `sel`
+    /// by [`Self::select`] (for a caller that looks at the choice first).
+    #[inline]
+    #[must_use]
+    pub(crate) fn sample_selected(
+        &self,
+        idx: usize,
+        sel: f32,
+        at: impl Into<Receiver>,
+        u: Vec2,
+    ) -> Option<LightSample> {
+        self.sample_chosen(idx, sel, at.into(), u, true, &mut SharedSetUp::default())
     }
 
     /// Samples light `idx` alone with `u`, its densities scaled by `sel` (1 where every light is

@@ -238,23 +238,27 @@ impl<'a> SceneMedium<'a> {
         let step = step.filter(|_| lights.has_delta_positions());
         for i in 0..self.light_samples {
             let (u_sel, u) = self.light_sample(w, i);
-            if let Some(step) = step {
-                let (light, selection) = lights.select(p, u_sel);
-                if lights.delta_position(light as u32).is_some() {
-                    // Nothing where the light misses the step (a spot's cone) or the ray meets it.
-                    if let Some((at, weight)) = self.step_distance(p, w, step, light as u32, i) {
-                        if let Some(ls) = lights
-                            .sample_light(light, selection, at, u)
-                            .filter(|ls| ls.pdf > 0.0)
-                        {
-                            f(i, ls, at, weight);
-                        }
-                    }
-                    continue;
+            let Some(step) = step else {
+                if let Some(ls) = lights.sample(p, u_sel, u).filter(|ls| ls.pdf > 0.0) {
+                    f(i, ls, p, Rgb::ONE);
                 }
-            }
-            if let Some(ls) = lights.sample(p, u_sel, u).filter(|ls| ls.pdf > 0.0) {
-                f(i, ls, p, Rgb::ONE);
+                continue;
+            };
+            let (light, selection) = lights.select(p, u_sel);
+            let (at, weight) = if lights.delta_position(light as u32).is_some() {
+                // Nothing where the light misses the step (a spot's cone) or the ray meets it.
+                let Some(moved) = self.step_distance(p, w, step, light as u32, i) else {
+                    continue;
+                };
+                moved
+            } else {
+                (p, Rgb::ONE)
+            };
+            if let Some(ls) = lights
+                .sample_selected(light, selection, at, u)
+                .filter(|ls| ls.pdf > 0.0)
+            {
+                f(i, ls, at, weight);
             }
         }
     }
