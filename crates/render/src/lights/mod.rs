@@ -612,20 +612,6 @@ impl LightSet {
         self.sample_chosen(idx, sel, at, u, true, shared)
     }
 
-    /// [`Self::sample`] once its light is chosen: light `idx`, selected with probability `sel`
-    /// by [`Self::select`] (for a caller that looks at the choice first).
-    #[inline]
-    #[must_use]
-    pub(crate) fn sample_selected(
-        &self,
-        idx: usize,
-        sel: f32,
-        at: impl Into<Receiver>,
-        u: Vec2,
-    ) -> Option<LightSample> {
-        self.sample_chosen(idx, sel, at.into(), u, true, &mut SharedSetUp::default())
-    }
-
     /// Samples light `idx` alone with `u`, its densities scaled by `sel` (1 where every light is
     /// sampled in turn): an environment light's sample carries its own radiance and density,
     /// not the whole environment's.
@@ -643,9 +629,10 @@ impl LightSet {
 
     /// Samples light `idx`, chosen with probability `sel`; with `whole_environment`, an
     /// environment direction is weighed as every environment light's (one-sample MIS over them,
-    /// [`Self::pdf_environment`]).
+    /// [`Self::pdf_environment`]): [`Self::sample`] once [`Self::select`] has chosen, for a
+    /// caller that looks at the choice first.
     #[inline]
-    fn sample_chosen(
+    pub(crate) fn sample_chosen(
         &self,
         idx: usize,
         sel: f32,

@@ -254,8 +254,9 @@ impl<'a> SceneMedium<'a> {
             } else {
                 (p, Rgb::ONE)
             };
+            let shared = &mut crate::lights::SharedSetUp::default();
             if let Some(ls) = lights
-                .sample_selected(light, selection, at, u)
+                .sample_chosen(light, selection, at.into(), u, true, shared)
                 .filter(|ls| ls.pdf > 0.0)
             {
                 f(i, ls, at, weight);
