@@ -886,6 +886,7 @@ fn media_cache_serves_the_lambertian_part_of_glossy_surfaces() {
         2,
         Vec::new(),
         None,
+        None,
     );
     let on_floor = cache
         .records()
@@ -1160,8 +1161,12 @@ fn caustic_photons_in_fog_replace_the_gathers_caustic_paths() {
             medium: medium_at(&scene, p + up * 1e-3, up),
             footprint: 0.0,
         };
-        let whole = luminance(make_record(&scene, &params, &site, key, None).0.e);
-        let gathered = luminance(make_record(&scene, &params, &site, key, Some(&map)).0.e);
+        let whole = luminance(make_record(&scene, &params, &site, key, (None, None)).0.e);
+        let gathered = luminance(
+            make_record(&scene, &params, &site, key, (Some(&map), None))
+                .0
+                .e,
+        );
         (whole, gathered, luminance(map.irradiance(p, up, 2)))
     };
     let (mut whole, mut gathered, mut caustic) = (0.0, 0.0, 0.0);
@@ -1218,7 +1223,11 @@ fn interpolation_errors(size: u32, reference_divisions: usize) -> Vec<(&'static 
     let reference: Vec<Rgb> = sites
         .iter()
         .enumerate()
-        .map(|(i, s)| make_record(&scene, &fine, s, 7 + i as u64, None).0.e)
+        .map(|(i, s)| {
+            make_record(&scene, &fine, s, 7 + i as u64, (None, None))
+                .0
+                .e
+        })
         .collect();
     let mut out = Vec::new();
     for (name, form) in [
@@ -1250,6 +1259,7 @@ fn interpolation_errors(size: u32, reference_divisions: usize) -> Vec<(&'static 
             (size as usize / 2, size as usize / 2),
             3,
             Vec::new(),
+            None,
             None,
         );
         let (mut sum, mut n) = (0.0f64, 0usize);
@@ -1728,4 +1738,83 @@ fn marched_grid_single_scattering_agrees_with_volpath() {
         m.rel_mse_trim,
         t.rel_mse_trim
     );
+}
+
+/// A surface record whose deeper bounces take the light scattered along its gather rays from
+/// the volumetric records (their light one bounce shorter, at quadrature points, the paths
+/// going on from the opaque hit alone through the transmittance) gathers the same irradiance
+/// as one whose deeper paths find their collisions by free flights: in the fog box and the
+/// smoke box at `max_depth` 6, the mean over 12 camera-seen sites × 8 keys agrees within
+/// three standard errors of the difference and within 3 %, and the records' own spread
+/// (between keys) does not grow.
+#[test]
+fn surface_records_take_the_light_in_the_medium_from_volumetric_records() {
+    use ircache_render::integrators::volpath::VolPathIntegrator;
+    use ircache_render::irradiance_cache::IcParams;
+    use ircache_render::media_cache::cache::{first_site, make_record};
+    use ircache_render::media_cache::volume_records::VolumeCache;
+    for name in ["cornell-fog", "smoke-box"] {
+        let scene = Scene::build(&fog_scene(name, "irrcache", 6, 16, 1)).expect("scene");
+        let params = IcParams {
+            bounces: 4,
+            ..IcParams::default()
+        };
+        let gatherer = VolPathIntegrator::plain(6);
+        let volume = Arc::new(VolumeCache::build(
+            &gatherer,
+            &scene,
+            params.accuracy,
+            256,
+            16,
+            32,
+            32,
+            1,
+            Vec::new(),
+        ));
+        let sites: Vec<_> = (0..12)
+            .filter_map(|i| {
+                let film = ircache_math::Vec2::new(
+                    0.1 + 0.8 * (i % 4) as f32 / 3.0,
+                    0.15 + 0.7 * (i / 4) as f32 / 2.0,
+                );
+                first_site(&scene, scene.camera.generate_ray(film))
+            })
+            .collect();
+        assert!(sites.len() >= 10, "{name}: {} sites", sites.len());
+        // Per key, the sum over sites of each way's irradiance (luminance).
+        let keys = 8u64;
+        let mut sums = [Vec::new(), Vec::new()];
+        for key in 0..keys {
+            for (way, served) in [None, Some(&volume)].into_iter().enumerate() {
+                let total: f64 = sites
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| {
+                        let k = 100 * key + i as u64;
+                        luminance(make_record(&scene, &params, s, k, (None, served)).0.e)
+                    })
+                    .sum();
+                sums[way].push(total);
+            }
+        }
+        let stats = |v: &[f64]| {
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            (mean, var)
+        };
+        let (traced, traced_var) = stats(&sums[0]);
+        let (served, served_var) = stats(&sums[1]);
+        let error = ((traced_var + served_var) / keys as f64).sqrt();
+        assert!(
+            (served - traced).abs() < 3.0 * error && (served / traced - 1.0).abs() < 0.03,
+            "{name}: served {served}, traced {traced} ± {error}"
+        );
+        assert!(
+            served_var < 1.5 * traced_var,
+            "{name}: spread {} against {}",
+            served_var.sqrt(),
+            traced_var.sqrt()
+        );
+    }
 }

@@ -311,6 +311,31 @@ fn media_cache_integrator(
         p,
         caustics.is_some(),
     ));
+    // Volumetric records first: their paths are `volpath`'s own, and the surface records'
+    // gathers take the light scattered along their rays from them.
+    let max_depth = volpath::VolPathIntegrator::depth_of_bounces(p.bounces);
+    let volume_records =
+        (p.media_volume_records && p.media_march > 0 && p.bounces > 0).then(|| {
+            let gatherer = volpath::VolPathIntegrator {
+                hide_emitters: ic.hide_emitters,
+                first_light_samples: p.direct_samples,
+                ..volpath::VolPathIntegrator::plain(max_depth)
+            };
+            let records = pool.install(|| {
+                crate::media_cache::volume_records::VolumeCache::build(
+                    &gatherer,
+                    scene,
+                    p.accuracy,
+                    p.media_volume_divisions,
+                    p.media_march,
+                    settings.width,
+                    settings.height,
+                    settings.seed,
+                    std::mem::take(&mut volume),
+                )
+            });
+            std::sync::Arc::new(records)
+        });
     // No bounce (`max_depth` 2): direct light alone, no records.
     let cache = if p.bounces > 0 {
         let mut cache = pool.install(|| {
@@ -321,6 +346,7 @@ fn media_cache_integrator(
                 settings.seed,
                 surface,
                 caustics.as_ref(),
+                volume_records.as_ref(),
             )
         });
         cache.stats.notes = notes;
@@ -333,7 +359,10 @@ fn media_cache_integrator(
     } else {
         None
     };
-    let mut integrator = volpath::VolPathIntegrator {
+    if let (Some(f), Some(records)) = (file.as_mut(), volume_records.as_ref()) {
+        f.append_volume(&records.records()[records.stats.loaded..])?;
+    }
+    let integrator = volpath::VolPathIntegrator {
         hide_emitters: ic.hide_emitters,
         cache,
         camera_march: (p.media_march > 0).then_some(media_march::CameraMarch {
@@ -341,33 +370,9 @@ fn media_cache_integrator(
         }),
         first_light_samples: p.direct_samples,
         caustics,
-        ..volpath::VolPathIntegrator::plain(volpath::VolPathIntegrator::depth_of_bounces(p.bounces))
+        volume_records,
+        ..volpath::VolPathIntegrator::plain(max_depth)
     };
-    if p.media_volume_records && p.media_march > 0 && p.bounces > 0 {
-        let gatherer = volpath::VolPathIntegrator {
-            cache: None,
-            camera_march: None,
-            caustics: None,
-            ..integrator.clone()
-        };
-        let records = pool.install(|| {
-            crate::media_cache::volume_records::VolumeCache::build(
-                &gatherer,
-                scene,
-                p.accuracy,
-                p.media_volume_divisions,
-                p.media_march,
-                settings.width,
-                settings.height,
-                settings.seed,
-                volume,
-            )
-        });
-        if let Some(f) = file.as_mut() {
-            f.append_volume(&records.records()[records.stats.loaded..])?;
-        }
-        integrator.volume_records = Some(std::sync::Arc::new(records));
-    }
     Ok(integrator)
 }
 

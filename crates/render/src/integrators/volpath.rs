@@ -172,7 +172,34 @@ impl VolPathIntegrator {
         rng: &mut Rng,
         rays: &mut RayCounts,
     ) -> Rgb {
+        self.trace_split(scene, start, first, skip_first_medium, sampler, rng, rays)
+            .all
+    }
+
+    /// [`Self::trace`], with the part of the light that the path's last vertex (depth
+    /// `max_depth` − 1) emits kept apart: what the same path brings with one vertex fewer
+    /// allowed is the difference. Light from the media cache's records and the caustic map is
+    /// counted in full alone: the part is exact for an integrator without them.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn trace_split(
+        &self,
+        scene: &Scene,
+        start: PathState,
+        first: Option<Option<Hit>>,
+        skip_first_medium: bool,
+        sampler: &mut dyn Sampler,
+        rng: &mut Rng,
+        rays: &mut RayCounts,
+    ) -> PathLight {
         let max_depth = self.depth_limit();
+        let mut last = Rgb::ZERO;
+        // Light emitted at vertex `at`: counted in full, and apart where `at` is the last.
+        let mut add = |l: &mut Rgb, value: Rgb, at: u32| {
+            *l += value;
+            if at.saturating_add(1) == max_depth {
+                last += value;
+            }
+        };
         let PathState {
             mut ray,
             mut medium,
@@ -209,11 +236,15 @@ impl VolPathIntegrator {
                 if let Some(segment) = &segment {
                     sampler.set_dimension(dims::equiangular(depth, crossings));
                     let u = (sampler.next_1d(), sampler.next_1d());
-                    l += beta * segment.estimate(scene, u, rng, rays);
+                    add(
+                        &mut l,
+                        beta * segment.estimate(scene, u, rng, rays),
+                        depth + 1,
+                    );
                 }
                 let mut emitted = Rgb::ZERO;
                 let flight = sample_flight(med, ray.o, ray.d, t_hit, &mut beta, &mut emitted, rng);
-                l += emitted;
+                add(&mut l, emitted, depth);
                 match flight {
                     Flight::Absorbed => break,
                     Flight::Passed => {}
@@ -222,17 +253,17 @@ impl VolPathIntegrator {
                         let p = ray.at(t);
                         if depth + 1 < max_depth && sample_emitters {
                             let vertex = Vertex::Medium(p, ray.d, med.phase, segment.as_ref());
-                            l += beta
-                                * sample_light(
-                                    scene,
-                                    &vertex,
-                                    medium,
-                                    depth,
-                                    Some(Weighing::ONE),
-                                    sampler,
-                                    rng,
-                                    rays,
-                                );
+                            let direct = sample_light(
+                                scene,
+                                &vertex,
+                                medium,
+                                depth,
+                                Some(Weighing::ONE),
+                                sampler,
+                                rng,
+                                rays,
+                            );
+                            add(&mut l, beta * direct, depth + 1);
                         }
                         sampler.set_dimension(dims::vertex(depth, dims::BSDF));
                         sampler.skip_1d();
@@ -255,7 +286,8 @@ impl VolPathIntegrator {
                 if scene.lights.has_environment() && !caustic_chain {
                     let w = arrival.emission_weight(|p| scene.lights.pdf_environment(p, ray.d));
                     if w > 0.0 {
-                        l += beta * scene.lights.environment_radiance(ray.d) * w;
+                        let le = scene.lights.environment_radiance(ray.d);
+                        add(&mut l, beta * le * w, depth);
                     }
                 }
                 break;
@@ -307,7 +339,7 @@ impl VolPathIntegrator {
                             .lights
                             .pdf_area(light, it.prim, from.p, it.p, it.frame.n)
                     });
-                    l += beta * le * w;
+                    add(&mut l, beta * le * w, depth);
                 }
             }
             if depth + 1 >= max_depth {
@@ -345,7 +377,7 @@ impl VolPathIntegrator {
                         let u = super::media_march::lattice_point(shift, i);
                         direct += light_sample_with(scene, &vertex, medium, weighing, u, rng, rays);
                     }
-                    l += beta * direct / n as f32;
+                    add(&mut l, beta * direct / n as f32, depth + 1);
                     let caustic = self.caustic_irradiance(&it, sp.n, depth);
                     l += beta * k * (e + caustic) * ircache_math::INV_PI;
                     if !glossy {
@@ -375,8 +407,9 @@ impl VolPathIntegrator {
                 if bsdf.has_smooth() && !scene.lights.is_empty() {
                     let vertex = Vertex::Surface(&it, &bsdf, wo_local);
                     let weighing = (!alone).then_some(Weighing::ONE);
-                    l += beta
-                        * sample_light(scene, &vertex, medium, depth, weighing, sampler, rng, rays);
+                    let direct =
+                        sample_light(scene, &vertex, medium, depth, weighing, sampler, rng, rays);
+                    add(&mut l, beta * direct, depth + 1);
                 }
                 if alone {
                     break;
@@ -402,8 +435,17 @@ impl VolPathIntegrator {
                 break;
             }
         }
-        l
+        PathLight { all: l, last }
     }
+}
+
+/// A path's light, and the part of it its last allowed vertex emits.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct PathLight {
+    /// All of it.
+    pub all: Rgb,
+    /// What the vertex at depth `max_depth` − 1 emits (or the light samples before it take).
+    pub last: Rgb,
 }
 
 /// How a light sample is weighed against the vertex's own phase or BSDF sample (power

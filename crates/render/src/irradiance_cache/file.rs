@@ -17,10 +17,11 @@
 //!   A record whose continuation is incomplete or damaged is skipped with it.
 //! - in scenes with media, volumetric records (`media_cache::volume_records`): a slot tagged
 //!   0xFD, 1 byte zero, 2 bytes zero, with position, radius, medium index and the first 24 of
-//!   the 27 spherical-harmonic values (9 coefficients × 3 channels), then one continuation slot
-//!   (number 0) with the last 3, the direction of the camera ray that placed the record and
-//!   the light bands above 2 scatter towards it (3 + 3; format 5). The media cache's surface
-//!   records are ordinary records.
+//!   the 27 spherical-harmonic values (9 coefficients × 3 channels), then two continuation
+//!   slots (numbers 0 and 1) with the last 3, the direction of the camera ray that placed the
+//!   record, the light bands above 2 scatter towards it (3 + 3; format 5) and the 27 values of
+//!   the light one bounce shorter (format 6). The media cache's surface records are ordinary
+//!   records.
 
 use super::params::{IcParams, PARAMS};
 use super::record::{Record, NO_RADIANCE};
@@ -34,7 +35,7 @@ use std::path::{Path, PathBuf};
 /// Bytes that open every cache file.
 pub const MAGIC: &[u8; 8] = b"IRCACHE\0";
 /// The format version this build reads and writes.
-pub const VERSION: u32 = 5;
+pub const VERSION: u32 = 6;
 /// Header size in bytes.
 pub const HEADER_BYTES: usize = 1024;
 /// Record size in bytes (payload and checksum).
@@ -340,10 +341,21 @@ fn encode_volume(v: &VolumeRecord) -> Vec<u8> {
     }
     values.extend_from_slice(&v.towards.to_array());
     values.extend_from_slice(&v.high_bands.to_array());
+    for c in &v.short {
+        values.extend_from_slice(&c.to_array());
+    }
     let mut out = write_slot([VOLUME, 0, 0, 0], &values[..SLOT_FLOATS]).to_vec();
-    out.extend_from_slice(&write_slot([CONTINUATION, 0, 0, 0], &values[SLOT_FLOATS..]));
+    for (k, chunk) in values[SLOT_FLOATS..].chunks(SLOT_FLOATS).enumerate() {
+        let [lo, hi] = (k as u16).to_le_bytes();
+        out.extend_from_slice(&write_slot([CONTINUATION, 0, lo, hi], chunk));
+    }
     out
 }
+
+/// Slots a volumetric record takes: its own and [`VOLUME_CONTINUATIONS`].
+const VOLUME_SLOTS: usize = 1 + VOLUME_CONTINUATIONS;
+/// Continuation slots after a volumetric record's: 11 + 6 · 9 values, 29 a slot.
+const VOLUME_CONTINUATIONS: usize = 2;
 
 /// A volumetric record from the start of `slots`; `None` when it is not one, is damaged or
 /// lacks its continuation.
@@ -351,9 +363,11 @@ fn decode_volume(slots: &[u8]) -> Option<VolumeRecord> {
     if slots.first() != Some(&VOLUME) {
         return None;
     }
-    let first = read_slot(slots.get(..RECORD_BYTES)?)?;
-    let rest = decode_continuation(slots.get(RECORD_BYTES..2 * RECORD_BYTES)?, 0)?;
-    let values: Vec<f32> = first.iter().chain(&rest).copied().collect();
+    let mut values = read_slot(slots.get(..RECORD_BYTES)?)?.to_vec();
+    for k in 0..VOLUME_CONTINUATIONS {
+        let slot = slots.get((k + 1) * RECORD_BYTES..(k + 2) * RECORD_BYTES)?;
+        values.extend_from_slice(&decode_continuation(slot, k)?);
+    }
     let medium = values[4];
     if medium < 0.0 || medium.fract() != 0.0 {
         return None;
@@ -368,6 +382,10 @@ fn decode_volume(slots: &[u8]) -> Option<VolumeRecord> {
         }),
         towards: Vec3::from_slice(&values[end..end + 3]),
         high_bands: Rgb::new(values[end + 3], values[end + 4], values[end + 5]),
+        short: std::array::from_fn(|i| {
+            let at = end + 6 + 3 * i;
+            Rgb::new(values[at], values[at + 1], values[at + 2])
+        }),
     })
 }
 
@@ -508,7 +526,7 @@ fn scan_records(bytes: &[u8]) -> Scan {
             scan.volume.push(v);
             scan.damaged += bad_run;
             bad_run = 0;
-            i += 2;
+            i += VOLUME_SLOTS;
             scan.end = i * RECORD_BYTES;
             continue;
         }
@@ -881,6 +899,7 @@ mod tests {
             radiance: std::array::from_fn(|k| Rgb::new(k as f32, -0.5 * k as f32, i as f32)),
             towards: Vec3::new(0.6, -0.8 * i as f32, 0.0),
             high_bands: Rgb::new(0.1, -0.2, i as f32),
+            short: std::array::from_fn(|k| Rgb::new(0.5 * k as f32, -(k as f32), i as f32)),
         };
         let recs: Vec<Stored> = (0..3).map(|i| (record(i), None)).collect();
         let vols: Vec<VolumeRecord> = (0..3).map(volume).collect();
@@ -894,15 +913,16 @@ mod tests {
             (c.records.as_slice(), c.volume.as_slice()),
             (&recs[..], &vols[..])
         );
-        // The second volumetric record's continuation (slots: 2 records, 2 per volume record).
+        // The second volumetric record's first continuation (slots: 2 records, then 3 per
+        // volume record).
         let mut bad = std::fs::read(&path).unwrap();
-        bad[HEADER_BYTES + 5 * RECORD_BYTES + 8] ^= 1;
+        bad[HEADER_BYTES + (2 + VOLUME_SLOTS + 1) * RECORD_BYTES + 8] ^= 1;
         std::fs::write(&path, &bad).unwrap();
         let c = read(&path).unwrap();
         assert_eq!(c.records, recs);
         assert_eq!(c.volume, [vols[0], vols[2]]);
-        // Its first slot is skipped as damage; its continuation, alone, is too.
-        assert_eq!(c.damaged, 2);
+        // Its first slot is skipped as damage; its continuations, alone, are too.
+        assert_eq!(c.damaged, VOLUME_SLOTS as u64);
     }
 
     #[test]

@@ -20,6 +20,7 @@
 
 use super::gradient::{gather, March, MediaGradient};
 use super::scene_medium::SceneMedium;
+use super::volume_records::VolumeCache;
 use crate::integrators::RayCounts;
 use crate::irradiance_cache::gather::ShadingPoint;
 use crate::irradiance_cache::hemisphere::{to_world, Stratification};
@@ -165,16 +166,18 @@ pub struct RecordSite {
 const LAYOUT_KEY: u64 = u64::MAX;
 
 /// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced; with
-/// `caustics`, without the caustics at `site`, which that map serves.
+/// `caustics`, without the caustics at `site`, which that map serves; with `volume`, the light
+/// its deeper bounces scatter along the gather rays from those records
+/// ([`SceneMedium::with_volume_records`]).
 #[must_use]
 pub fn make_record(
     scene: &Scene,
     params: &IcParams,
     site: &RecordSite,
     key: u64,
-    caustics: Option<&Arc<CausticMap>>,
+    (caustics, volume): (Option<&Arc<CausticMap>>, Option<&Arc<VolumeCache>>),
 ) -> (Record, MediaCacheStats) {
-    make_record_at(scene, params, site, key, caustics, 0)
+    make_record_at(scene, params, site, key, (caustics, volume), 0)
 }
 
 /// [`make_record`] for a surface vertex at `depth`: the bounces a path may still take there.
@@ -183,7 +186,7 @@ fn make_record_at(
     params: &IcParams,
     site: &RecordSite,
     key: u64,
-    caustics: Option<&Arc<CausticMap>>,
+    (caustics, volume): (Option<&Arc<CausticMap>>, Option<&Arc<VolumeCache>>),
     depth: u32,
 ) -> (Record, MediaCacheStats) {
     let bounces = if params.bounces == crate::irradiance_cache::params::UNBOUNDED {
@@ -200,7 +203,8 @@ fn make_record_at(
     let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
         .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()])
         .with_gradients(gradients)
-        .with_deeper_bounces(bounces, params.media_deeper_paths, caustics);
+        .with_deeper_bounces(bounces, params.media_deeper_paths, caustics)
+        .with_volume_records(volume);
     let d = |v: Vec3| v.as_dvec3();
     let n = strata.azimuthal;
     let layout = params
@@ -371,6 +375,7 @@ impl MediaCache {
         seed: u64,
         loaded: Vec<Record>,
         caustics: Option<&Arc<CausticMap>>,
+        volume: Option<&Arc<VolumeCache>>,
     ) -> MediaCache {
         let start = Instant::now();
         let mut cache = MediaCache::new(scene, params);
@@ -436,7 +441,7 @@ impl MediaCache {
                 let made: Vec<(Record, MediaCacheStats)> = wanted
                     .par_iter()
                     .map(|(key, site)| {
-                        make_record_at(scene, params, site, *key, caustics, level as u32)
+                        make_record_at(scene, params, site, *key, (caustics, volume), level as u32)
                     })
                     .collect();
                 for (record, st) in made {

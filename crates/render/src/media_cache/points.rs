@@ -82,7 +82,8 @@ pub fn media_irradiance_at_points(
                 // No bounce (`-ab 0`): direct light alone.
                 _ if params.bounces == 0 => (Rgb::ZERO, [Vec3::ZERO; 3], [Vec3::ZERO; 3]),
                 PointMethod::Cache => {
-                    let (r, _) = make_record(scene, params, &site, rng.next_u32().into(), None);
+                    let (r, _) =
+                        make_record(scene, params, &site, rng.next_u32().into(), (None, None));
                     (r.e, r.grad_t, r.grad_r)
                 }
                 PointMethod::BruteForce { samples } => {

@@ -30,7 +30,9 @@
 //! fall back to differences of the whole source.
 
 use super::gradient::{DVec3, GatherMedium, StepExtent};
+use super::volume_records::VolumeCache;
 use crate::integrators::light_sampling::BsdfStrategy;
+use crate::integrators::media_march::{in_scattered_by_path, quadrature_points, MarchPoint};
 use crate::integrators::path_continuation::{count_and_roulette, sample_continuation, Arrival};
 use crate::integrators::volpath::{PathState, VolPathIntegrator};
 use crate::integrators::RayCounts;
@@ -46,6 +48,16 @@ use std::cell::RefCell;
 
 /// The key of the deeper bounces' streams (beside the gather direction's bits).
 const DEEPER_KEY: u64 = 0x6465_6570_6572;
+
+/// The key of the jitter of [`SceneMedium::in_scattered_by_records`]'s points.
+const RECORDS_KEY: u64 = 0x7265_636f_7264;
+
+/// Quadrature points per medium segment of a gather ray at which the volumetric records serve.
+const RECORD_POINTS: u32 = 4;
+
+/// The largest |g| of a Henyey–Greenstein phase function whose in-scattered light the records'
+/// bands 0–2 serve along gather rays.
+const BANDS_HOLD_PHASE: f32 = 0.5;
 
 /// The step key of light samples at a gather ray's opaque hit.
 const SURFACE_STEP: u32 = u32::MAX;
@@ -107,6 +119,8 @@ pub struct SceneMedium<'a> {
     deeper: Option<VolPathIntegrator>,
     /// Such paths per gather ray.
     deeper_paths: u32,
+    /// Volumetric records serving the deeper paths' light in-scattered along the gather ray.
+    volume: Option<std::sync::Arc<VolumeCache>>,
     /// A caustic map serves the receiver's caustics: its deeper paths leave out the emission
     /// they reach through delta lobes alone, unscattered ([`VolPathIntegrator::trace`]).
     caustics_served: bool,
@@ -135,6 +149,7 @@ impl<'a> SceneMedium<'a> {
             spot_lights: scene.lights.has_spot_lights(),
             deeper: None,
             deeper_paths: 1,
+            volume: None,
             caustics_served: false,
             rotation: std::cell::Cell::new(None),
             march_step: std::cell::Cell::new(None),
@@ -178,6 +193,15 @@ impl<'a> SceneMedium<'a> {
             caustics: caustics.cloned(),
             ..VolPathIntegrator::plain(VolPathIntegrator::depth_of_bounces(bounces))
         });
+        self
+    }
+
+    /// With `volume`, the light the deeper bounces scatter along a gather ray through a medium
+    /// comes from its records, one bounce shorter, where they serve every point of the ray's
+    /// quadrature (see the module); the deeper paths then go on from the opaque hit alone.
+    #[must_use]
+    pub fn with_volume_records(mut self, volume: Option<&std::sync::Arc<VolumeCache>>) -> Self {
+        self.volume = volume.cloned();
         self
     }
 
@@ -438,16 +462,102 @@ impl<'a> SceneMedium<'a> {
     fn deeper_radiance(&self, o: DVec3, w: DVec3) -> Option<Rgb> {
         let integrator = self.deeper.as_ref()?;
         let traced = self.traced(o, w);
-        let mut sum = Rgb::ZERO;
+        let served = self
+            .volume
+            .as_ref()
+            .and_then(|records| self.in_scattered_by_records(integrator, records, &traced));
+        let (mut sum, through) = match served {
+            Some((l, through)) => (l * self.deeper_paths as f32, Some(through)),
+            None => (Rgb::ZERO, None),
+        };
         for k in 0..self.deeper_paths {
-            sum += self.deeper_path(integrator, &traced, k);
+            sum += self.deeper_path(integrator, &traced, k, through);
         }
         Some(sum / self.deeper_paths as f32)
     }
 
+    /// The light of the bounces beyond the first scattered along the ray `traced` towards its
+    /// origin, from the volumetric records' light one bounce shorter at [`RECORD_POINTS`]
+    /// quadrature points per medium segment (where none serves a point, from a phase-sampled
+    /// path there), and the transmittance to the ray's end; `None` where a medium on the way
+    /// scatters too far forward for bands 0–2 ([`BANDS_HOLD_PHASE`]).
+    fn in_scattered_by_records(
+        &self,
+        integrator: &VolPathIntegrator,
+        records: &VolumeCache,
+        traced: &Traced,
+    ) -> Option<(Rgb, Rgb)> {
+        let scene = self.scene;
+        let forward = |m: &Option<usize>| {
+            m.is_some_and(|m| scene.media[m].phase.mean_cosine().abs() > BANDS_HOLD_PHASE)
+        };
+        if traced.media.iter().any(forward) {
+            return None;
+        }
+        let d = traced.w.as_vec3();
+        let mut jitter = Rng::keyed(
+            RECORDS_KEY,
+            &[
+                traced.w.x.to_bits(),
+                traced.w.y.to_bits(),
+                traced.w.z.to_bits(),
+            ],
+        );
+        let (mut sum, mut through) = (Rgb::ZERO, Rgb::ONE);
+        let mut t0 = 0.0f64;
+        for (i, medium) in traced.media.iter().enumerate() {
+            let t1 = traced.crossings.get(i).map_or(traced.s, |c| c.0);
+            if let Some(m) = *medium {
+                let med = &scene.media[m];
+                let ray = Ray::new((traced.o + traced.w * t0).as_vec3(), d);
+                let (points, segment, _) =
+                    quadrature_points(med, &ray, (t1 - t0) as f32, RECORD_POINTS, || {
+                        jitter.next_f32()
+                    });
+                for (t, weight) in points {
+                    let p = ray.at(t);
+                    let sigma_s = med.at(p).sigma_s;
+                    if sigma_s.is_black() {
+                        continue;
+                    }
+                    let l = records
+                        .in_scattered_short(p, m, d, med.phase)
+                        .unwrap_or_else(|| {
+                            let at = MarchPoint {
+                                p,
+                                d,
+                                medium: m,
+                                depth: 1,
+                            };
+                            let key = u64::from(jitter.next_u32());
+                            let mut rng = Rng::new(key, RECORDS_KEY);
+                            let mut rays = RayCounts::default();
+                            let l = in_scattered_by_path(
+                                integrator, scene, &at, key, &mut rng, &mut rays,
+                            );
+                            let mut counts = self.rays.borrow_mut();
+                            counts.gather += rays.bounce + rays.camera;
+                            counts.shadow += rays.shadow;
+                            l
+                        });
+                    sum += through * weight * sigma_s * l;
+                }
+                through *= segment;
+            }
+            t0 = t1;
+        }
+        Some((sum, through))
+    }
+
     /// One path of [`Self::deeper_radiance`] along the ray `traced`, on stream `k` of its
     /// direction.
-    fn deeper_path(&self, integrator: &VolPathIntegrator, traced: &Traced, k: u32) -> Rgb {
+    fn deeper_path(
+        &self,
+        integrator: &VolPathIntegrator,
+        traced: &Traced,
+        k: u32,
+        through: Option<Rgb>,
+    ) -> Rgb {
         let scene = self.scene;
         let Traced {
             o,
@@ -469,7 +579,10 @@ impl<'a> SceneMedium<'a> {
         let mut depth = 1;
         let mut start = None;
         let mut t0 = 0.0f64;
-        for (i, medium) in media.iter().enumerate() {
+        if let Some(through) = through {
+            beta = through;
+        }
+        for (i, medium) in media.iter().enumerate().filter(|_| through.is_none()) {
             let t1 = crossings.get(i).map_or(s, |c| c.0);
             if let Some(m) = *medium {
                 let med = &scene.media[m];

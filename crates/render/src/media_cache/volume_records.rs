@@ -55,6 +55,9 @@ pub struct VolumeRecord {
     pub medium: usize,
     /// L_ind's spherical-harmonic coefficients, index l² + l + m.
     pub radiance: [Rgb; COEFFICIENTS],
+    /// The same of L_ind one bounce shorter: the in-scattered indirect light of a point one
+    /// vertex deeper on a path (a surface record's gather ray), whose bounces are one fewer.
+    pub short: [Rgb; COEFFICIENTS],
     /// The direction d₀ of the camera ray that placed it (unit).
     pub towards: Vec3,
     /// The light scattered towards −d₀ that bands above 2 hold: the gather's estimate of it
@@ -191,7 +194,7 @@ pub fn gather(
             caustic_chain: false,
         };
         let mut rng = Rng::new(u64::from(stream.next_u32()), 0x766f_6c75);
-        let l = integrator.trace(
+        let l = integrator.trace_split(
             scene,
             start,
             Some(hit),
@@ -203,6 +206,7 @@ pub fn gather(
         (l, t_hit)
     };
     let mut sum = [Rgb::ZERO; COEFFICIENTS];
+    let mut short = [Rgb::ZERO; COEFFICIENTS];
     let mut inverse_distances = 0.0f64;
     // Σ f_p L / (n p_sphere + n f_p) over both halves: the light scattered towards −`towards`.
     let n = count as f32;
@@ -226,13 +230,15 @@ pub fn gather(
             let sin = (1.0 - cos * cos).max(0.0).sqrt();
             let phi = 2.0 * PI * u.y;
             let w = Vec3::new(sin * phi.cos(), sin * phi.sin(), cos);
-            let (l, t_hit) = path(w, index);
+            let (light, t_hit) = path(w, index);
+            let l = light.all;
             let reach = optical_reach(&scene.media[medium], p, w, t_hit);
             if reach.is_finite() {
                 inverse_distances += 1.0 / f64::from(reach.max(f32::MIN_POSITIVE));
             }
-            for (s, &b) in sum.iter_mut().zip(&bands_0_to_2(w)) {
+            for ((s, h), &b) in sum.iter_mut().zip(&mut short).zip(&bands_0_to_2(w)) {
                 *s += l * b;
+                *h += (l - light.last) * b;
             }
             scattered += balance(l, w);
         }
@@ -242,7 +248,7 @@ pub fn gather(
             let index = count + j * azimuthal + k;
             let u = stratum(j, k, Rng::keyed(key, &[u64::from(index), 1]).next_2d());
             let (w, _) = phase.sample(towards, u);
-            scattered += balance(path(w, index).0, w);
+            scattered += balance(path(w, index).0.all, w);
         }
     }
     let solid_angle = 4.0 * PI / count as f32;
@@ -264,6 +270,7 @@ pub fn gather(
         r: harmonic.min(lamp).clamp(size / 64.0, size / 4.0),
         medium,
         radiance: sum.map(|s| s * solid_angle),
+        short: short.map(|s| s * solid_angle),
         towards,
         high_bands: Rgb::ZERO,
     };
@@ -360,6 +367,23 @@ impl VolumeCache {
                 (1.0 - e / LOOKUP_REACH).max(1e-6),
                 rec.in_scattered(&weights, d),
             );
+        });
+        fit.value().map(|v| v.max(Rgb::ZERO))
+    }
+
+    /// The in-scattered indirect light one bounce shorter ([`VolumeRecord::short`]) at `p`
+    /// towards a ray along `d` per unit scattering coefficient, bands 0–2 alone, as
+    /// [`Self::in_scattered`] reads the whole.
+    #[must_use]
+    pub fn in_scattered_short(&self, p: Vec3, medium: usize, d: Vec3, phase: Phase) -> Option<Rgb> {
+        let weights = scattering_weights(d, phase);
+        let mut fit = LocalLinear::default();
+        self.for_each_serving(p, medium, LOOKUP_REACH, |rec, e| {
+            let mut v = Rgb::ZERO;
+            for (&c, &w) in rec.short.iter().zip(&weights) {
+                v += c * w;
+            }
+            fit.add(rec.p - p, (1.0 - e / LOOKUP_REACH).max(1e-6), v);
         });
         fit.value().map(|v| v.max(Rgb::ZERO))
     }
@@ -791,6 +815,45 @@ mod tests {
         }
     }
 
+    /// A record's light one bounce shorter ([`VolumeRecord::short`], from the part of each
+    /// path's light its last vertex emits) is the light of the same paths with one vertex fewer
+    /// allowed: a record gathered on the same streams by `volpath` at `max_depth` − 1 holds it
+    /// (to rounding), in the fog box and in the smoke grid, at depths 4 and 6, where the last
+    /// bounce is more than 1 % of the light; unbounded paths have no last vertex. (Scenes with
+    /// point or spot lights draw the last vertex's equiangular sample before the free flight
+    /// that finds it, so there the two gathers' paths part.)
+    #[test]
+    fn a_records_short_light_is_that_of_paths_one_vertex_shorter() {
+        for (name, p) in [
+            ("cornell-fog", Vec3::new(0.1, 1.0, 0.0)),
+            ("smoke-box", Vec3::new(0.1, 1.0, 0.05)),
+        ] {
+            let scene = project_scene(name, &[]);
+            let band_0 = |c: &[Rgb; COEFFICIENTS]| c[0].luminance();
+            for depth in [4, 6] {
+                let at = |max_depth: i32| {
+                    let integrator = VolPathIntegrator::plain(max_depth);
+                    gather(&integrator, &scene, p, 0, 64, 0x5eed, Vec3::Z).0
+                };
+                let (whole, shorter) = (at(depth), at(depth - 1));
+                let scale = band_0(&whole.radiance);
+                for (i, (a, b)) in whole.short.iter().zip(&shorter.radiance).enumerate() {
+                    let off = (*a - *b).map(f32::abs).max_channel();
+                    assert!(
+                        off <= 1e-4 * scale,
+                        "{name}, depth {depth}, coefficient {i}: {a:?} against {b:?}"
+                    );
+                }
+                assert!(
+                    band_0(&whole.radiance) > 1.01 * band_0(&whole.short),
+                    "{name}, depth {depth}: the last bounce holds no light"
+                );
+            }
+            let unbounded = gather(&VolPathIntegrator::plain(-1), &scene, p, 0, 64, 7, Vec3::Z).0;
+            assert_eq!(unbounded.short, unbounded.radiance, "{name}: unbounded");
+        }
+    }
+
     /// In the smoke plume's box, most of which is empty, records sit only where the smoke
     /// scatters: the pixel pass adds no in-scattering elsewhere, so a record there is wasted
     /// (before: 15 128 records at 128², 606 after, the image unchanged in the plume).
@@ -904,6 +967,7 @@ mod tests {
             radiance,
             towards: Vec3::X,
             high_bands: Rgb::splat(1.0),
+            short: [Rgb::ZERO; COEFFICIENTS],
         };
         let fine = quadrature::sphere(200);
         for phase in [
