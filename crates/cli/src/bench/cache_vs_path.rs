@@ -119,7 +119,12 @@ pub(super) fn fmt_time(t: Option<f64>, cap: f64) -> String {
 /// by [`time_to`]), each as a multiple of `best`'s time (below 1: `best` loses).
 pub(super) fn print_time_to_error(label: &str, series: &[Point], best: &Point) {
     let last = series.last().map_or(0.0, |p| p.seconds);
-    let ratio = |t: Option<f64>| t.map_or("?".into(), |t| format!("{:.2}", t / best.seconds));
+    // Past the series' last point, the ratio at its time is a lower bound.
+    let ratio = |t: Option<f64>| {
+        t.map_or(format!("> {:.2}", last / best.seconds), |t| {
+            format!("{:.2}", t / best.seconds)
+        })
+    };
     let (t, tb) = (
         time_to(series, best.error, |p| p.error),
         time_to(series, best.blurred, |p| p.blurred),

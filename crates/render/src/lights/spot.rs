@@ -118,44 +118,61 @@ impl SpotLight {
         let a = w.z * w.z - c2 * w.length_squared();
         let b = 2.0 * (w.z * v.z - c2 * w.dot(v));
         let c = v.z * v.z - c2 * v.length_squared();
-        let inside = |t: f64| {
-            let x = v + w * t;
-            x.z >= 0.0 && x.z * x.z >= c2 * x.length_squared()
-        };
-        // The quadratic's roots split the line into pieces; the cone is one of them (or two
-        // touching at the apex); keep the one whose middle is inside, within [t0, t1].
-        let disc = b * b - 4.0 * a * c;
+        // {f ≥ 0} (f = a t² + b t + c) is the double cone: for a < 0 the piece between the roots,
+        // for a > 0 the two pieces outside them (one in each nappe), for a = 0 a half-line.
+        // The lit nappe is where also v_z + t w_z ≥ 0; it is convex, so what it keeps of
+        // [t0, t1] is one interval.
         let (lo, hi) = (f64::from(t0), f64::from(t1));
-        let mut cuts = [lo, hi, hi, hi];
-        if disc >= 0.0 && a != 0.0 {
-            let q = -0.5 * (b + b.signum() * disc.sqrt());
-            cuts[2] = q / a;
-            cuts[3] = if q != 0.0 { c / q } else { q / a };
-        } else if a == 0.0 && b != 0.0 {
-            cuts[2] = -c / b;
-        }
-        for t in &mut cuts[2..] {
-            *t = if t.is_finite() { t.clamp(lo, hi) } else { hi };
-        }
-        cuts.sort_by(f64::total_cmp);
-        let mut found: Option<(f64, f64)> = None;
-        for pair in cuts.windows(2) {
-            let (a, b) = (pair[0], pair[1]);
-            if b <= a {
-                continue;
-            }
-            let mid = if b.is_finite() {
-                0.5 * (a + b)
+        let (z_lo, z_hi) = if w.z > 0.0 {
+            (-v.z / w.z, f64::INFINITY)
+        } else if w.z < 0.0 {
+            (f64::NEG_INFINITY, -v.z / w.z)
+        } else if v.z >= 0.0 {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        } else {
+            return None;
+        };
+        let clip = |(p, q): (f64, f64)| {
+            let (p, q) = (p.max(lo).max(z_lo), q.min(hi).min(z_hi));
+            (q > p).then_some((p, q))
+        };
+        let disc = b * b - 4.0 * a * c;
+        let found = if a == 0.0 {
+            if b > 0.0 {
+                clip((-c / b, f64::INFINITY))
+            } else if b < 0.0 {
+                clip((f64::NEG_INFINITY, -c / b))
+            } else if c >= 0.0 {
+                clip((f64::NEG_INFINITY, f64::INFINITY))
             } else {
-                a + 1.0 + a.abs()
-            };
-            if inside(mid) {
-                found = Some(match found {
-                    Some((s, _)) => (s, b),
-                    None => (a, b),
-                });
+                None
             }
-        }
+        } else if disc < 0.0 {
+            // No root: the whole line lies inside (a > 0) or outside (a < 0).
+            (a > 0.0)
+                .then(|| clip((f64::NEG_INFINITY, f64::INFINITY)))
+                .flatten()
+        } else {
+            let q = -0.5 * (b + b.signum() * disc.sqrt());
+            let (r1, r2) = {
+                let x = q / a;
+                let y = if q != 0.0 { c / q } else { x };
+                (x.min(y), x.max(y))
+            };
+            if a < 0.0 {
+                clip((r1, r2))
+            } else {
+                // One piece lies in each nappe; the z half-line keeps the lit one's (of the
+                // other, at most a rounding's sliver at the apex).
+                let length = |i: &Option<(f64, f64)>| i.map_or(-1.0, |(p, q)| q - p);
+                let (before, after) = (clip((f64::NEG_INFINITY, r1)), clip((r2, f64::INFINITY)));
+                if length(&before) >= length(&after) {
+                    before
+                } else {
+                    after
+                }
+            }
+        };
         found.map(|(a, b)| (a as f32, b as f32))
     }
 
@@ -184,7 +201,8 @@ mod tests {
 
     /// Along random rays, a distance lies in `cone_interval` exactly where the light reaches it
     /// (falloff above zero), to a hair at the interval's ends, for narrow cones and a light
-    /// frame that scales its axes unevenly; past 90° the interval holds every lit distance.
+    /// frame that scales its axes unevenly, and from near the apex, where the line meets both
+    /// nappes; past 90° the interval holds every lit distance.
     #[test]
     fn cone_interval_is_where_the_light_reaches() {
         let mut rng = Rng::new(17, 3);
@@ -206,11 +224,20 @@ mod tests {
         ] {
             let light = SpotLight::new(to_world, Rgb::ONE, cutoff, beam);
             let mut hits = 0;
-            for _ in 0..2000 {
-                let o = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 6.0 - 3.0;
+            let apex = to_world.transform_point3(Vec3::ZERO);
+            for ray in 0..3000 {
+                // A third of the rays start near the apex (both nappes, the roots close).
+                let near = if ray % 3 == 0 { 0.05 } else { 3.0 };
+                let o = (Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 2.0 - 1.0)
+                    * near
+                    + if near < 1.0 { apex } else { Vec3::ZERO };
                 let d =
                     (Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5).normalize();
-                let (t0, t1) = (0.1f32, 8.0f32);
+                let (t0, t1) = if near < 1.0 {
+                    (-1.0f32, 1.0f32)
+                } else {
+                    (0.1, 8.0)
+                };
                 let interval = light.cone_interval(o, d, (t0, t1));
                 for k in 0..400 {
                     let t = t0 + (t1 - t0) * (k as f32 + 0.5) / 400.0;

@@ -4,8 +4,9 @@
 //! E_s + E_m, the 002 translational gradient of the chosen form and the rotational gradient of
 //! the total cell radiance. A record's gather marches its first bounce: surfaces lit by direct
 //! light with transmittance, the media's single scattering of the lights and their emission;
-//! deeper bounces (`max_depth` above 3) are `volpath` paths per gather ray on from its first
-//! vertex ([`SceneMedium::with_deeper_bounces`]). The `ic` integrator in a media scene is
+//! deeper bounces (`max_depth` above 3) are the volumetric records' light along the gather ray
+//! and `volpath` paths per gather ray on from its opaque hit ([`SceneMedium::with_deeper_bounces`],
+//! [`SceneMedium::with_volume_records`]). The `ic` integrator in a media scene is
 //! therefore `volpath` at `max_depth` whose first surface vertex takes its Lambertian indirect
 //! light from here.
 //!

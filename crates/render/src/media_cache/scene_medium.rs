@@ -17,11 +17,19 @@
 //! `volpath` do: [`crate::integrators::equiangular`]), not at the step's middle, whose 1/r²
 //! made the records that a gather ray passing near the lamp reached spikes and the rest low.
 //!
-//! Deeper bounces (`max_depth` above 3, [`SceneMedium::with_deeper_bounces`]) are `volpath`'s
-//! paths on from each gather ray's first vertex: a free flight along the ray to a collision in
-//! the medium or to the opaque hit, then a phase or BSDF sample, with the emitters that sample
-//! meets directly left out (the march's light samples hold them). `--media-deeper-paths` paths
-//! per cell, on streams keyed by the cell's direction, as the light samples are.
+//! Deeper bounces (`max_depth` above 3, [`SceneMedium::with_deeper_bounces`]) are in two parts.
+//! The light they scatter along the gather ray in a medium, ∫ T σ_s L_ind dt, comes from the
+//! volumetric records' light one bounce shorter (a point on a gather ray is one vertex deeper
+//! than the camera ray's points they were gathered for: [`VolumeCache::in_scattered_short`]) at
+//! [`RECORD_POINTS`] quadrature points per segment, or a phase-sampled path at a point no record
+//! serves; the rest is `volpath`'s paths on from the opaque hit through the transmittance, a
+//! BSDF sample first. Where a medium on the ray scatters too far forward for bands 0–2, or
+//! without records, each path finds its first vertex by a free flight along the ray instead (a
+//! collision in the medium or the opaque hit), then a phase or BSDF sample. The emitters these
+//! samples meet directly are left out (the march's light samples hold them).
+//! `--media-deeper-paths` paths per cell, on streams keyed by the cell's direction, as the light
+//! samples are. The records' part is the same light with less noise (the fog box's records:
+//! relMSE_trim −13 %, blurred −17 %, BENCHMARKS.md).
 //!
 //! The source's gradient comes from the same light samples in closed form, each sample's point
 //! on the light held and its visibility too (§2.7): the phase function's and the geometry's

@@ -17,6 +17,12 @@
 //! from directions near d₀ (the camera's rays through a record's neighbourhood arrive from about
 //! there; the share fades out by 30° away).
 //!
+//! A record also holds bands 0–2 of its light one bounce shorter, the light of its paths with
+//! one vertex fewer allowed (each path's last vertex's part kept apart:
+//! [`VolPathIntegrator::trace_split`]): a point on a surface record's gather ray is one vertex
+//! deeper than the camera ray's points, so that is what it receives
+//! ([`VolumeCache::in_scattered_short`], [`crate::media_cache::scene_medium`]).
+//!
 //! Records are placed by a pre-pass along camera rays at the pixel pass's own quadrature points
 //! (one row at a time, gathered in parallel, inserted in row order: the same cache at any
 //! thread count), with Ward's radius R = the harmonic mean of the gather directions' reaches
