@@ -193,7 +193,9 @@ pub(crate) fn li(
             arrival,
             caustic_chain: false,
         };
-        l += integrator.trace(scene, start, Some(hit), true, sampler, rng, rays);
+        l += integrator
+            .trace(scene, start, Some(hit), true, sampler, rng, rays)
+            .all;
     }
 
     // The in-scattered indirect light from the collision, on a stream of its own (its
@@ -401,7 +403,9 @@ pub(crate) fn in_scattered_by_path(
         arrival: indirect_arrival(at.p, pdf, scene.samples_lights_in(at.medium)),
         caustic_chain: false,
     };
-    integrator.trace(scene, start, None, false, &mut stream, rng, rays)
+    integrator
+        .trace(scene, start, None, false, &mut stream, rng, rays)
+        .all
 }
 
 /// How a path that carries only indirect light arrives at its next vertex: emitters found there

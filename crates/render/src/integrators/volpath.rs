@@ -132,6 +132,7 @@ impl VolPathIntegrator {
             &mut rng,
             rays,
         )
+        .all
     }
 
     /// Caustic irradiance at the surface `it` on the side of `n` from photons that a path
@@ -161,27 +162,13 @@ impl VolPathIntegrator {
     /// delta lobes alone without scattering in a medium (Jensen's split; see
     /// [`crate::photon_map::trace`]), and the path on from it leaves out the emission it finds
     /// in the same way; any other vertex, and a scattering in a medium, ends that rule.
+    ///
+    /// The part of the light that the path's last vertex (depth `max_depth` − 1) emits is also
+    /// kept apart ([`PathLight::last`]): what the same path brings with one vertex fewer allowed
+    /// is the difference. Light from the media cache's records and the caustic map is counted in
+    /// full alone: the part is exact for an integrator without them.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn trace(
-        &self,
-        scene: &Scene,
-        start: PathState,
-        first: Option<Option<Hit>>,
-        skip_first_medium: bool,
-        sampler: &mut dyn Sampler,
-        rng: &mut Rng,
-        rays: &mut RayCounts,
-    ) -> Rgb {
-        self.trace_split(scene, start, first, skip_first_medium, sampler, rng, rays)
-            .all
-    }
-
-    /// [`Self::trace`], with the part of the light that the path's last vertex (depth
-    /// `max_depth` − 1) emits kept apart: what the same path brings with one vertex fewer
-    /// allowed is the difference. Light from the media cache's records and the caustic map is
-    /// counted in full alone: the part is exact for an integrator without them.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn trace_split(
         &self,
         scene: &Scene,
         start: PathState,

@@ -192,7 +192,9 @@ fn volpath_irradiance(
                 arrival: Arrival::Gather,
                 caustic_chain: false,
             };
-            sum += integrator.trace(scene, start, None, false, &mut stream, &mut rng, &mut rays);
+            sum += integrator
+                .trace(scene, start, None, false, &mut stream, &mut rng, &mut rays)
+                .all;
         }
     }
     sum * (PI / strata.cells() as f32)

@@ -716,7 +716,9 @@ impl<'a> SceneMedium<'a> {
             arrival,
             caustic_chain,
         };
-        let l = integrator.trace(scene, state, None, false, &mut stream, &mut rng, &mut rays);
+        let l = integrator
+            .trace(scene, state, None, false, &mut stream, &mut rng, &mut rays)
+            .all;
         let mut counts = self.rays.borrow_mut();
         counts.gather += rays.bounce + rays.camera;
         counts.shadow += rays.shadow;

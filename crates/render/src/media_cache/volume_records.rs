@@ -19,7 +19,7 @@
 //!
 //! A record also holds bands 0–2 of its light one bounce shorter, the light of its paths with
 //! one vertex fewer allowed (each path's last vertex's part kept apart:
-//! [`VolPathIntegrator::trace_split`]): a point on a surface record's gather ray is one vertex
+//! [`VolPathIntegrator::trace`]): a point on a surface record's gather ray is one vertex
 //! deeper than the camera ray's points, so that is what it receives
 //! ([`VolumeCache::in_scattered_short`], [`crate::media_cache::scene_medium`]).
 //!
@@ -200,7 +200,7 @@ pub fn gather(
             caustic_chain: false,
         };
         let mut rng = Rng::new(u64::from(stream.next_u32()), 0x766f_6c75);
-        let l = integrator.trace_split(
+        let l = integrator.trace(
             scene,
             start,
             Some(hit),
