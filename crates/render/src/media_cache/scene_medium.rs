@@ -506,9 +506,10 @@ impl<'a> SceneMedium<'a> {
         }
     }
 
-    /// The light of the bounces beyond the first vertex of the ray from `o` along `w`: the mean
-    /// of `deeper_paths` `volpath` paths from a free flight along the ray (see the module);
-    /// `None` with one bounce.
+    /// The light of the bounces beyond the first vertex of the ray from `o` along `w`: what they
+    /// scatter along it from the volumetric records plus the mean of `deeper_paths` `volpath`
+    /// paths from its opaque hit, or without records the mean of as many paths from a free
+    /// flight along the ray (see the module); `None` with one bounce.
     fn deeper_radiance(&self, o: DVec3, w: DVec3) -> Option<Rgb> {
         let integrator = self.deeper.as_ref()?;
         let traced = self.traced(o, w);
@@ -600,7 +601,8 @@ impl<'a> SceneMedium<'a> {
     }
 
     /// One path of [`Self::deeper_radiance`] along the ray `traced`, on stream `k` of its
-    /// direction.
+    /// direction: from the opaque hit through the transmittance `through` where the records
+    /// hold the medium's part, else from a free flight along the ray.
     fn deeper_path(
         &self,
         integrator: &VolPathIntegrator,
