@@ -14,7 +14,7 @@ pub mod rng;
 pub mod sampling;
 
 pub use frame::Frame;
-pub use glam::{DMat3, DMat4, DVec3, DVec4, Mat3, Mat4, Vec2, Vec3, Vec4};
+pub use glam::{DMat3, DMat4, DVec3, DVec4, Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 pub use ray::{offset_ray_origin, Ray};
 pub use rgb::Rgb;
 pub use rng::Rng;

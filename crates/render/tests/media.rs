@@ -1373,7 +1373,8 @@ fn fog_cornell_gradients_against_finite_differences() {
 /// held (NOTES-002 §2.7), against central differences of the source itself (its light samples
 /// stratified and fixed: common random numbers), at a point of the fog Cornell box that sees
 /// the whole light unoccluded: the ceiling's area light with isotropic and Henyey–Greenstein
-/// fog, and a point light in its place, its source also over a march step (1024 light samples,
+/// fog, and a point light in its place, and a spot light whose falloff (linear in the angle
+/// from its axis) passes the point, their sources also over a march step (1024 light samples,
 /// steps of 1e-3, within 3 % of the gradient's length per component); and inside the smoke plume (`smoke-box`), its optical
 /// depth's gradient marched through the grid, against differences at a fifth of a voxel (ratio
 /// tracking makes smaller steps noise; 4096 light samples, within 5 %).
@@ -1383,23 +1384,31 @@ fn source_gradient_matches_differences_of_the_source() {
     use ircache_render::media::tracking::medium_at;
     use ircache_render::media_cache::gradient::{GatherMedium, StepExtent};
     use ircache_render::media_cache::scene_medium::SceneMedium;
+    // (label, phase, lamp: none (the area light), a point or a spot light, smoke).
     let cases = [
-        ("area light, isotropic", PhaseDesc::Isotropic, false, false),
+        ("area light, isotropic", PhaseDesc::Isotropic, "", false),
         (
             "area light, g = 0.6",
             PhaseDesc::HenyeyGreenstein { g: 0.6 },
-            false,
+            "",
             false,
         ),
         (
             "point light, g = −0.4",
             PhaseDesc::HenyeyGreenstein { g: -0.4 },
-            true,
+            "point",
             false,
         ),
-        ("smoke, area light", PhaseDesc::Isotropic, false, true),
+        (
+            "spot light, p in its falloff, g = 0.3",
+            PhaseDesc::HenyeyGreenstein { g: 0.3 },
+            "spot",
+            false,
+        ),
+        ("smoke, area light", PhaseDesc::Isotropic, "", true),
     ];
-    for (label, phase, point, smoke) in cases {
+    for (label, phase, lamp, smoke) in cases {
+        let point = !lamp.is_empty();
         let mut desc = if smoke {
             project_scene("smoke-box", &[])
         } else {
@@ -1410,10 +1419,28 @@ fn source_gradient_matches_differences_of_the_source() {
             for shape in &mut desc.shapes {
                 shape.emitter = None;
             }
-            desc.emitters.push(EmitterDesc::Point {
-                position: Vec3::new(0.1, 1.8, -0.2),
-                intensity: Rgb::splat(3.0),
-            });
+            let position = Vec3::new(0.1, 1.8, -0.2);
+            if lamp == "spot" {
+                // Aimed 20° off the point, between its beam (10°) and cutoff (30°).
+                let towards = (Vec3::new(0.3, 1.2, 0.2) - position).normalize();
+                let turn = ircache_math::Quat::from_axis_angle(
+                    towards.cross(Vec3::X).normalize(),
+                    20f32.to_radians(),
+                );
+                let axis = turn * towards;
+                desc.emitters.push(EmitterDesc::Spot {
+                    to_world: Mat4::from_translation(position)
+                        * Mat4::from_quat(ircache_math::Quat::from_rotation_arc(Vec3::Z, axis)),
+                    intensity: Rgb::splat(3.0),
+                    cutoff_angle: 30.0,
+                    beam_width: 10.0,
+                });
+            } else {
+                desc.emitters.push(EmitterDesc::Point {
+                    position,
+                    intensity: Rgb::splat(3.0),
+                });
+            }
         }
         let scene = Scene::build(&desc).expect("scene");
         let p = if smoke {

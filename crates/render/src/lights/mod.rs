@@ -519,13 +519,6 @@ impl LightSet {
         self.lights.len()
     }
 
-    /// True when a spot light is among the emitters (an intensity that varies with direction,
-    /// which [`LightSample::normal`] does not describe).
-    #[must_use]
-    pub fn has_spot_lights(&self) -> bool {
-        self.lights.iter().any(|l| matches!(l, Light::Spot(_)))
-    }
-
     /// If light `light` is a point or a spot light (a delta in position, whose 1/r² a distance
     /// along a ray through a medium is sampled against: [`crate::integrators::equiangular`]),
     /// its position and the part of `[t0, t1]` along `o + t d` it lights (a spot's cone).
@@ -542,6 +535,16 @@ impl LightSet {
         match light {
             Light::Spot(l) => Some((position, l.cone_interval(o, d, interval)?)),
             _ => Some((position, interval)),
+        }
+    }
+
+    /// ∇ln of a spot light's falloff at the receiver `x` ([`SpotLight::falloff_log_gradient`]);
+    /// zero for any other light.
+    #[must_use]
+    pub fn falloff_log_gradient(&self, light: u32, x: Vec3) -> Vec3 {
+        match self.lights.get(light as usize) {
+            Some(Light::Spot(l)) => l.falloff_log_gradient(x),
+            _ => Vec3::ZERO,
         }
     }
 

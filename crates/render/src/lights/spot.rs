@@ -73,6 +73,31 @@ impl SpotLight {
         }
     }
 
+    /// ∇ln falloff at the receiver `x` (world space): zero in the fully lit core and outside the
+    /// cone; in between the falloff is linear in the angle θ from the axis, so ∇ln f =
+    /// −∇θ/(cutoff − θ), with ∇cos θ = Mᵀ(ẑ/|u| − u_z u/|u|³) for u = M (x − position).
+    #[must_use]
+    pub fn falloff_log_gradient(&self, x: Vec3) -> Vec3 {
+        let u = self.world_to_local * (x - self.position);
+        let length = u.length();
+        if !is_positive_finite(length) {
+            return Vec3::ZERO;
+        }
+        let cos_t = u.z / length;
+        if cos_t <= self.cos_cutoff || cos_t >= self.cos_beam {
+            return Vec3::ZERO;
+        }
+        let theta = cos_t.clamp(-1.0, 1.0).acos();
+        let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
+        if !(self.cutoff - theta > 0.0) || !is_positive_finite(sin_t) {
+            return Vec3::ZERO;
+        }
+        let d_cos =
+            self.world_to_local.transpose() * (Vec3::Z / length - u * (u.z / length.powi(3)));
+        // ∇θ = −∇cos θ / sin θ.
+        d_cos / (sin_t * (self.cutoff - theta))
+    }
+
     /// The direction from `p_ref` towards the light: `(wi, distance, I·falloff/d²)`; `None` outside
     /// the cone or at the light's position.
     /// Emitted power (see [`super::emission::spot_power`]).

@@ -35,8 +35,8 @@
 //! The source's gradient comes from the same light samples in closed form, each sample's point
 //! on the light held and its visibility too (§2.7): the phase function's and the geometry's
 //! derivatives, and the optical depth's by the pivot form through homogeneous media, boundaries
-//! and grids ([`transmittance_with_depth_gradient`]); no extra shadow rays. Spot lights alone
-//! fall back to differences of the whole source.
+//! and grids ([`transmittance_with_depth_gradient`]), and a spot light's falloff, linear in the
+//! angle from its axis; no extra shadow rays.
 
 use super::gradient::{DVec3, GatherMedium, StepExtent};
 use super::volume_records::VolumeCache;
@@ -163,8 +163,6 @@ pub struct SceneMedium<'a> {
     /// Sources are evaluated with their gradients (off: values alone, their gradients asked for
     /// computed anew).
     gradients: bool,
-    /// The scene has spot lights, whose falloff the closed-form source gradient leaves out.
-    spot_lights: bool,
     /// The paths of the bounces beyond a gather ray's first vertex (`None`: one bounce).
     deeper: Option<VolPathIntegrator>,
     /// Such paths per gather ray.
@@ -196,7 +194,6 @@ impl<'a> SceneMedium<'a> {
             light_samples: light_samples.max(1),
             tangents: None,
             gradients: true,
-            spot_lights: scene.lights.has_spot_lights(),
             deeper: None,
             deeper_paths: 1,
             volume: None,
@@ -777,8 +774,8 @@ impl<'a> SceneMedium<'a> {
     /// light held (NOTES-002 §2.7: "for an area light with its sample points frozen"; visibility
     /// held). A sample's integrand in area measure, f = L_e p(−ωᵢ·ω) T cos θ_y / r², moves with
     /// p as ∇ln f = ∇ln p − ∇τ + 2ωᵢ/r + (n_y/cos θ_y + ωᵢ)/r (the last two for points at a
-    /// distance; a distant light's direction is held, leaving −∇τ). `None` for the gradient
-    /// with spot lights, whose falloff is not differentiated here. With `march_step`, the
+    /// distance; a distant light's direction is held, leaving −∇τ), plus a spot light's
+    /// ∇ln falloff ([`crate::lights::LightSet::falloff_log_gradient`]). With `march_step`, the
     /// step's source about `p` and its gradient ([`GatherMedium::step_source`]).
     fn q_with_gradient(
         &self,
@@ -796,11 +793,6 @@ impl<'a> SceneMedium<'a> {
         let Some(c) = self.coefficients(medium, p) else {
             return out;
         };
-        if self.spot_lights && !c.sigma_s.is_black() {
-            out.q = self.q(medium, p, w, march_step);
-            out.gradient = None;
-            return out;
-        }
         let m = &self.scene.media[medium.unwrap_or(0)];
         let emitted = c.sigma_a() * c.emission;
         let mut q = emitted;
@@ -884,6 +876,11 @@ impl<'a> SceneMedium<'a> {
                 let d_cos = (t - wi * wi.dot(t)) / r;
                 log += d_cos * f64::from(phase.eval_derivative(-ls.wi, towards) / weight);
                 log += wi * (2.0 / r);
+                log += self
+                    .scene
+                    .lights
+                    .falloff_log_gradient(ls.light, x)
+                    .as_dvec3();
                 let n = ls.normal.as_dvec3();
                 let cos_y = -n.dot(wi);
                 if cos_y != 0.0 {
