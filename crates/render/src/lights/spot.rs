@@ -89,7 +89,7 @@ impl SpotLight {
         }
         let theta = cos_t.clamp(-1.0, 1.0).acos();
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        if !(self.cutoff - theta > 0.0) || !is_positive_finite(sin_t) {
+        if !is_positive_finite(self.cutoff - theta) || !is_positive_finite(sin_t) {
             return Vec3::ZERO;
         }
         let d_cos =
