@@ -313,14 +313,14 @@ fn media_cache_integrator(
     ));
     // Volumetric records first: their paths are `volpath`'s own, and the surface records'
     // gathers take the light scattered along their rays from them.
-    let max_depth = volpath::VolPathIntegrator::depth_of_bounces(p.bounces);
+    // `volpath` at the depth asked, as the records' paths take it (without records of any kind).
+    let gatherer = volpath::VolPathIntegrator {
+        hide_emitters: ic.hide_emitters,
+        first_light_samples: p.direct_samples,
+        ..volpath::VolPathIntegrator::plain(volpath::VolPathIntegrator::depth_of_bounces(p.bounces))
+    };
     let volume_records =
         (p.media_volume_records && p.media_march > 0 && p.bounces > 0).then(|| {
-            let gatherer = volpath::VolPathIntegrator {
-                hide_emitters: ic.hide_emitters,
-                first_light_samples: p.direct_samples,
-                ..volpath::VolPathIntegrator::plain(max_depth)
-            };
             let records = pool.install(|| {
                 crate::media_cache::volume_records::VolumeCache::build(
                     &gatherer,
@@ -363,15 +363,13 @@ fn media_cache_integrator(
         f.append_volume(&records.records()[records.stats.loaded..])?;
     }
     let integrator = volpath::VolPathIntegrator {
-        hide_emitters: ic.hide_emitters,
         cache,
         camera_march: (p.media_march > 0).then_some(media_march::CameraMarch {
             points: p.media_march,
         }),
-        first_light_samples: p.direct_samples,
         caustics,
         volume_records,
-        ..volpath::VolPathIntegrator::plain(max_depth)
+        ..gatherer
     };
     Ok(integrator)
 }

@@ -330,20 +330,16 @@ fn decode_radiance(slots: &[u8]) -> Option<(RadianceCoefficients, usize)> {
     ))
 }
 
-/// A volumetric record's two slots.
+/// A volumetric record's [`VOLUME_SLOTS`] slots.
 fn encode_volume(v: &VolumeRecord) -> Vec<u8> {
     let mut values = Vec::with_capacity(11 + 3 * COEFFICIENTS);
     values.extend_from_slice(&v.p.to_array());
     values.push(v.r);
     values.push(v.medium as f32);
-    for c in &v.radiance {
-        values.extend_from_slice(&c.to_array());
-    }
+    values.extend(v.radiance.iter().flat_map(|c| c.to_array()));
     values.extend_from_slice(&v.towards.to_array());
     values.extend_from_slice(&v.high_bands.to_array());
-    for c in &v.short {
-        values.extend_from_slice(&c.to_array());
-    }
+    values.extend(v.short.iter().flat_map(|c| c.to_array()));
     let mut out = write_slot([VOLUME, 0, 0, 0], &values[..SLOT_FLOATS]).to_vec();
     for (k, chunk) in values[SLOT_FLOATS..].chunks(SLOT_FLOATS).enumerate() {
         let [lo, hi] = (k as u16).to_le_bytes();
@@ -372,20 +368,16 @@ fn decode_volume(slots: &[u8]) -> Option<VolumeRecord> {
     if medium < 0.0 || medium.fract() != 0.0 {
         return None;
     }
+    let rgb = |at: usize| Rgb::new(values[at], values[at + 1], values[at + 2]);
     let end = 5 + 3 * COEFFICIENTS;
     Some(VolumeRecord {
         p: Vec3::new(values[0], values[1], values[2]),
         r: values[3],
         medium: medium as usize,
-        radiance: std::array::from_fn(|i| {
-            Rgb::new(values[5 + 3 * i], values[6 + 3 * i], values[7 + 3 * i])
-        }),
+        radiance: std::array::from_fn(|i| rgb(5 + 3 * i)),
         towards: Vec3::from_slice(&values[end..end + 3]),
-        high_bands: Rgb::new(values[end + 3], values[end + 4], values[end + 5]),
-        short: std::array::from_fn(|i| {
-            let at = end + 6 + 3 * i;
-            Rgb::new(values[at], values[at + 1], values[at + 2])
-        }),
+        high_bands: rgb(end + 3),
+        short: std::array::from_fn(|i| rgb(end + 6 + 3 * i)),
     })
 }
 

@@ -98,8 +98,6 @@ impl SpotLight {
         d_cos / (sin_t * (self.cutoff - theta))
     }
 
-    /// The direction from `p_ref` towards the light: `(wi, distance, I·falloff/d²)`; `None` outside
-    /// the cone or at the light's position.
     /// Emitted power (see [`super::emission::spot_power`]).
     #[must_use]
     pub fn power(&self) -> Rgb {
@@ -201,6 +199,8 @@ impl SpotLight {
         found.map(|(a, b)| (a as f32, b as f32))
     }
 
+    /// The direction from `p_ref` towards the light: `(wi, distance, I·falloff/d²)`; `None` outside
+    /// the cone or at the light's position.
     #[inline]
     #[must_use]
     pub fn sample(&self, p_ref: Vec3) -> Option<(Vec3, f32, Rgb)> {

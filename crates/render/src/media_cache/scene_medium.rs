@@ -29,8 +29,8 @@
 //! samples meet directly are left out (the march's light samples hold them).
 //! `--media-deeper-paths` paths per cell, on streams keyed by the cell's direction, as the light
 //! samples are, their first BSDF or phase samples stratified among them ([`first_stratum`]:
-//! smoke box relMSE_trim −3 %, blurred −8 % over six seeds). The records' part is the same light with less noise (the fog box's records:
-//! relMSE_trim −13 %, blurred −17 %, BENCHMARKS.md).
+//! smoke box relMSE_trim −3 %, blurred −8 % over six seeds). The records' part is the same
+//! light with less noise (the fog box: relMSE_trim −13 %, blurred −17 %, BENCHMARKS.md).
 //!
 //! The source's gradient comes from the same light samples in closed form, each sample's point
 //! on the light held and its visibility too (§2.7): the phase function's and the geometry's
@@ -131,6 +131,18 @@ struct Traced {
     media: Vec<Option<usize>>,
     /// The opaque hit, if any.
     opaque: Option<OpaqueHit>,
+}
+
+impl Traced {
+    /// The ray's pieces between crossings: start, end (the opaque hit's distance, ∞ for an
+    /// escaping ray, at the last) and the medium along it.
+    fn segments(&self) -> impl Iterator<Item = (f64, f64, Option<usize>)> + '_ {
+        self.media.iter().enumerate().map(|(i, &medium)| {
+            let t0 = if i == 0 { 0.0 } else { self.crossings[i - 1].0 };
+            let t1 = self.crossings.get(i).map_or(self.s, |c| c.0);
+            (t0, t1, medium)
+        })
+    }
 }
 
 /// A source evaluated at a point towards a direction: its value and, where the light samples
@@ -244,8 +256,8 @@ impl<'a> SceneMedium<'a> {
     }
 
     /// With `volume`, the light the deeper bounces scatter along a gather ray through a medium
-    /// comes from its records, one bounce shorter, where they serve every point of the ray's
-    /// quadrature (see the module); the deeper paths then go on from the opaque hit alone.
+    /// comes from its records, one bounce shorter, at the ray's quadrature points (see the
+    /// module); the deeper paths then go on from the opaque hit alone.
     #[must_use]
     pub fn with_volume_records(mut self, volume: Option<&std::sync::Arc<VolumeCache>>) -> Self {
         self.volume = volume.cloned();
@@ -552,47 +564,42 @@ impl<'a> SceneMedium<'a> {
             ],
         );
         let (mut sum, mut through) = (Rgb::ZERO, Rgb::ONE);
-        let mut t0 = 0.0f64;
-        for (i, medium) in traced.media.iter().enumerate() {
-            let t1 = traced.crossings.get(i).map_or(traced.s, |c| c.0);
-            if let Some(m) = *medium {
-                let med = &scene.media[m];
-                let ray = Ray::new((traced.o + traced.w * t0).as_vec3(), d);
-                let (points, segment, _) =
-                    quadrature_points(med, &ray, (t1 - t0) as f32, RECORD_POINTS, || {
-                        jitter.next_f32()
-                    });
-                for (t, weight) in points {
-                    let p = ray.at(t);
-                    let sigma_s = med.at(p).sigma_s;
-                    if sigma_s.is_black() {
-                        continue;
-                    }
-                    let l = records
-                        .in_scattered_short(p, m, d, med.phase)
-                        .unwrap_or_else(|| {
-                            let at = MarchPoint {
-                                p,
-                                d,
-                                medium: m,
-                                depth: 1,
-                            };
-                            let key = u64::from(jitter.next_u32());
-                            let mut rng = Rng::new(key, RECORDS_KEY);
-                            let mut rays = RayCounts::default();
-                            let l = in_scattered_by_path(
-                                integrator, scene, &at, key, &mut rng, &mut rays,
-                            );
-                            let mut counts = self.rays.borrow_mut();
-                            counts.gather += rays.bounce + rays.camera;
-                            counts.shadow += rays.shadow;
-                            l
-                        });
-                    sum += through * weight * sigma_s * l;
+        for (t0, t1, medium) in traced.segments() {
+            let Some(m) = medium else {
+                continue;
+            };
+            let med = &scene.media[m];
+            let ray = Ray::new((traced.o + traced.w * t0).as_vec3(), d);
+            let (points, segment, _) =
+                quadrature_points(med, &ray, (t1 - t0) as f32, RECORD_POINTS, || {
+                    jitter.next_f32()
+                });
+            for (t, weight) in points {
+                let p = ray.at(t);
+                let sigma_s = med.at(p).sigma_s;
+                if sigma_s.is_black() {
+                    continue;
                 }
-                through *= segment;
+                let l = records
+                    .in_scattered_short(p, m, d, med.phase)
+                    .unwrap_or_else(|| {
+                        let at = MarchPoint {
+                            p,
+                            d,
+                            medium: m,
+                            depth: 1,
+                        };
+                        let key = u64::from(jitter.next_u32());
+                        let mut rng = Rng::new(key, RECORDS_KEY);
+                        let mut rays = RayCounts::default();
+                        let l =
+                            in_scattered_by_path(integrator, scene, &at, key, &mut rng, &mut rays);
+                        self.count_gather_rays(rays);
+                        l
+                    });
+                sum += through * weight * sigma_s * l;
             }
-            t0 = t1;
+            through *= segment;
         }
         Some((sum, through))
     }
@@ -608,15 +615,7 @@ impl<'a> SceneMedium<'a> {
         through: Option<Rgb>,
     ) -> Rgb {
         let scene = self.scene;
-        let Traced {
-            o,
-            w,
-            s,
-            ref crossings,
-            ref media,
-            opaque,
-            ..
-        } = *traced;
+        let Traced { o, w, opaque, .. } = *traced;
         let mut stream = Rng::keyed(
             DEEPER_KEY,
             &[w.x.to_bits(), w.y.to_bits(), w.z.to_bits(), u64::from(k)],
@@ -624,16 +623,12 @@ impl<'a> SceneMedium<'a> {
         let mut rng = Rng::new(u64::from(stream.next_u32()), DEEPER_KEY);
         let mut rays = RayCounts::default();
         let d = w.as_vec3();
-        let mut beta = Rgb::ONE;
+        let mut beta = through.unwrap_or(Rgb::ONE);
         let mut depth = 1;
         let mut start = None;
-        let mut t0 = 0.0f64;
-        if let Some(through) = through {
-            beta = through;
-        }
-        for (i, medium) in media.iter().enumerate().filter(|_| through.is_none()) {
-            let t1 = crossings.get(i).map_or(s, |c| c.0);
-            if let Some(m) = *medium {
+        // Where the records hold the medium's part, the path leaves from the opaque hit.
+        for (t0, t1, medium) in traced.segments().filter(|_| through.is_none()) {
+            if let Some(m) = medium {
                 let med = &scene.media[m];
                 let origin = (o + w * t0).as_vec3();
                 // The march holds the medium's emission along the ray.
@@ -659,7 +654,6 @@ impl<'a> SceneMedium<'a> {
                     }
                 }
             }
-            t0 = t1;
         }
         let mut arrival = Arrival::Gather;
         let mut caustic_chain = false;
@@ -718,10 +712,15 @@ impl<'a> SceneMedium<'a> {
         let l = integrator
             .trace(scene, state, None, false, &mut stream, &mut rng, &mut rays)
             .all;
+        self.count_gather_rays(rays);
+        l
+    }
+
+    /// Adds the rays of a path traced for a gather ray to the gather's counts.
+    fn count_gather_rays(&self, rays: RayCounts) {
         let mut counts = self.rays.borrow_mut();
         counts.gather += rays.bounce + rays.camera;
         counts.shadow += rays.shadow;
-        l
     }
 
     /// The medium at distance `t` along the ray.
@@ -995,19 +994,14 @@ impl GatherMedium for SceneMedium<'_> {
             .filter(|c| c.0 < t_max)
             .collect();
         // A heterogeneous medium also ends at its box.
-        for (i, m) in traced.media.iter().enumerate() {
+        for (t0, t1, m) in traced.segments() {
             let Some(m) = m.map(|m| &self.scene.media[m]) else {
                 continue;
             };
             if m.bounds.is_none() {
                 continue;
             }
-            let t0 = if i == 0 {
-                0.0
-            } else {
-                traced.crossings[i - 1].0
-            };
-            let t1 = traced.crossings.get(i).map_or(traced.s, |c| c.0).min(t_max);
+            let t1 = t1.min(t_max);
             let Some((a, b)) = m.clip(
                 o.as_vec3() + w.as_vec3() * t0 as f32,
                 w.as_vec3(),

@@ -98,6 +98,15 @@ pub fn scattering_weights(d: Vec3, phase: Phase) -> [f32; COEFFICIENTS] {
     std::array::from_fn(|i| power[ircache_math::harmonics::band_and_degree(i).0] * y[i])
 }
 
+/// Σ cᵢ wᵢ: coefficients turned into light by [`scattering_weights`].
+fn weighed(coefficients: &[Rgb; COEFFICIENTS], weights: &[f32; COEFFICIENTS]) -> Rgb {
+    let mut sum = Rgb::ZERO;
+    for (&c, &w) in coefficients.iter().zip(weights) {
+        sum += c * w;
+    }
+    sum
+}
+
 /// Directions within this angle of a record's d₀ take its high bands in full…
 const HIGH_BANDS_FULL: f32 = 5.0;
 /// …and none beyond this one (degrees).
@@ -123,11 +132,7 @@ impl VolumeRecord {
 
     /// Bands 0–2 alone: Σ_lm gˡ L_lm Y_lm(d).
     fn bands(&self, weights: &[f32; COEFFICIENTS]) -> Rgb {
-        let mut sum = Rgb::ZERO;
-        for (&c, &w) in self.radiance.iter().zip(weights) {
-            sum += c * w;
-        }
-        sum
+        weighed(&self.radiance, weights)
     }
 }
 
@@ -366,15 +371,7 @@ impl VolumeCache {
     #[must_use]
     pub fn in_scattered(&self, p: Vec3, medium: usize, d: Vec3, phase: Phase) -> Option<Rgb> {
         let weights = scattering_weights(d, phase);
-        let mut fit = LocalLinear::default();
-        self.for_each_serving(p, medium, LOOKUP_REACH, |rec, e| {
-            fit.add(
-                rec.p - p,
-                (1.0 - e / LOOKUP_REACH).max(1e-6),
-                rec.in_scattered(&weights, d),
-            );
-        });
-        fit.value().map(|v| v.max(Rgb::ZERO))
+        self.fit(p, medium, |rec| rec.in_scattered(&weights, d))
     }
 
     /// The in-scattered indirect light one bounce shorter ([`VolumeRecord::short`]) at `p`
@@ -383,13 +380,16 @@ impl VolumeCache {
     #[must_use]
     pub fn in_scattered_short(&self, p: Vec3, medium: usize, d: Vec3, phase: Phase) -> Option<Rgb> {
         let weights = scattering_weights(d, phase);
+        self.fit(p, medium, |rec| weighed(&rec.short, &weights))
+    }
+
+    /// The value at `p` of the weighted least-squares plane through `value` of the records of
+    /// `medium` serving it (weights 1 − ε/[`LOOKUP_REACH`]), clamped at zero; `None` where none
+    /// serves.
+    fn fit(&self, p: Vec3, medium: usize, value: impl Fn(&VolumeRecord) -> Rgb) -> Option<Rgb> {
         let mut fit = LocalLinear::default();
         self.for_each_serving(p, medium, LOOKUP_REACH, |rec, e| {
-            let mut v = Rgb::ZERO;
-            for (&c, &w) in rec.short.iter().zip(&weights) {
-                v += c * w;
-            }
-            fit.add(rec.p - p, (1.0 - e / LOOKUP_REACH).max(1e-6), v);
+            fit.add(rec.p - p, (1.0 - e / LOOKUP_REACH).max(1e-6), value(rec));
         });
         fit.value().map(|v| v.max(Rgb::ZERO))
     }
