@@ -53,6 +53,34 @@ pub struct Coefficients {
     pub emission: Rgb,
 }
 
+/// The gradients of [`Coefficients`] in space, per channel (r, g, b).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoefficientGradients {
+    /// ∇σ_t.
+    pub sigma_t: [Vec3; 3],
+    /// ∇σ_s.
+    pub sigma_s: [Vec3; 3],
+    /// ∇ of the emitted radiance.
+    pub emission: [Vec3; 3],
+}
+
+impl CoefficientGradients {
+    /// ∇σ_a = ∇σ_t − ∇σ_s (where σ_a > 0; the clamp of [`Coefficients::sigma_a`] has no
+    /// gradient below).
+    #[must_use]
+    pub fn sigma_a(&self, c: &Coefficients) -> [Vec3; 3] {
+        let a = c.sigma_t - c.sigma_s;
+        let positive = [a.r > 0.0, a.g > 0.0, a.b > 0.0];
+        [0, 1, 2].map(|k| {
+            if positive[k] {
+                self.sigma_t[k] - self.sigma_s[k]
+            } else {
+                Vec3::ZERO
+            }
+        })
+    }
+}
+
 impl Coefficients {
     /// Absorption σ_t − σ_s.
     #[inline]
@@ -113,6 +141,38 @@ impl Medium {
             sigma_s: sigma_t * self.albedo.eval(p),
             emission: self.emission.as_ref().map_or(Rgb::ZERO, |e| e.eval(p)),
         }
+    }
+
+    /// [`Self::at`] and the coefficients' gradients per channel (r, g, b), exact for the
+    /// volumes' interpolants: ∇σ_t = scale ∇v, ∇σ_s = ∇σ_t a + σ_t ∇a (a the albedo).
+    #[inline]
+    #[must_use]
+    pub fn at_with_gradient(&self, p: Vec3) -> (Coefficients, CoefficientGradients) {
+        let (v, gv) = self.sigma_t.eval_with_gradient(p);
+        let (albedo, ga) = self.albedo.eval_with_gradient(p);
+        let (emission, ge) = self
+            .emission
+            .as_ref()
+            .map_or((Rgb::ZERO, [Vec3::ZERO; 3]), |e| e.eval_with_gradient(p));
+        let sigma_t = v * self.scale;
+        let (st, al) = (
+            [sigma_t.r, sigma_t.g, sigma_t.b],
+            [albedo.r, albedo.g, albedo.b],
+        );
+        let gt = gv.map(|g| g * self.scale);
+        let gs = [0, 1, 2].map(|c| gt[c] * al[c] + ga[c] * st[c]);
+        (
+            Coefficients {
+                sigma_t,
+                sigma_s: sigma_t * albedo,
+                emission,
+            },
+            CoefficientGradients {
+                sigma_t: gt,
+                sigma_s: gs,
+                emission: ge,
+            },
+        )
     }
 
     /// The coefficients where they are the same everywhere inside (constant extinction and

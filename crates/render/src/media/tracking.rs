@@ -380,9 +380,8 @@ const DEPTH_STRATA: u32 = 2;
 /// In heterogeneous `medium` along `o + t d`, t ∈ [0, `length`] (`start` from the shadow ray's
 /// origin, `r` its length): the optical depth inside the medium's box and the pivot integral
 /// ∫ (1 − t/r) ∇σ_t dt, each estimated without bias from [`DEPTH_STRATA`] jittered points
-/// (`rng`; a march fine enough for a dense grid cost twice the render), ∇σ_t by central
-/// differences at a hundredth of a stratum,
-/// plus the jumps of σ_t where the piece enters and leaves the medium: at the box's faces
+/// (`rng`; a march fine enough for a dense grid cost twice the render), ∇σ_t the interpolant's
+/// own ([`Medium::at_with_gradient`]), plus the jumps of σ_t where the piece enters and leaves the medium: at the box's faces
 /// inside the piece, else at the null boundaries it began or ended on (normals `from_boundary`,
 /// `to_boundary`; [`transmittance_with_depth_gradient`] then counts the grid as empty there).
 #[allow(clippy::too_many_arguments)]
@@ -403,14 +402,13 @@ fn grid_depth_gradient(
         return (tau, g);
     };
     let dt = (t1 - t0) / DEPTH_STRATA as f32;
-    let h = 0.01 * dt;
     for k in 0..DEPTH_STRATA {
         let t = t0 + (k as f32 + rng.next_f32()) * dt;
-        let x = o + d * t;
-        tau += medium.at(x).sigma_t * dt;
-        for e in [Vec3::X, Vec3::Y, Vec3::Z] {
-            let ds = (medium.at(x + e * h).sigma_t - medium.at(x - e * h).sigma_t) / (2.0 * h);
-            add_per_channel(&mut g, e * (lever(start + t, r) * dt), ds);
+        let (c, gradients) = medium.at_with_gradient(o + d * t);
+        tau += c.sigma_t * dt;
+        let weight = lever(start + t, r) * dt;
+        for (sum, grad) in g.iter_mut().zip(gradients.sigma_t) {
+            *sum += grad * weight;
         }
     }
     // The jumps where the piece enters (σ from 0 to σ(t0)) and leaves (σ(t1) to 0) the box:

@@ -50,6 +50,7 @@ use crate::media::tracking::{
     first_opaque, medium_after, sample_flight, transmittance_along,
     transmittance_with_depth_gradient, Flight, OpaqueHit,
 };
+use crate::media::{CoefficientGradients, Coefficients};
 use crate::scene::Scene;
 use ircache_math::sampling::Equiangular;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
@@ -186,6 +187,9 @@ pub struct SceneMedium<'a> {
     caustics_served: bool,
     /// The last source evaluated: point, direction, value and gradient.
     last_source: RefCell<Option<Source>>,
+    /// The last coefficients taken with their gradients (a march step's source and its σ_t
+    /// gradient ask at the same point).
+    last_gradients: std::cell::Cell<Option<(usize, DVec3, Coefficients, CoefficientGradients)>>,
     last: RefCell<Option<Traced>>,
     rays: RefCell<RayCounts>,
 }
@@ -213,6 +217,7 @@ impl<'a> SceneMedium<'a> {
             rotation: std::cell::Cell::new(None),
             march_step: std::cell::Cell::new(None),
             last_source: RefCell::new(None),
+            last_gradients: std::cell::Cell::new(None),
             last: RefCell::new(None),
             rays: RefCell::new(RayCounts::default()),
         }
@@ -742,6 +747,33 @@ impl<'a> SceneMedium<'a> {
         Some(m.at(p))
     }
 
+    /// [`Self::coefficients`] with their gradients in a grid (`None` in a homogeneous medium).
+    fn coefficients_with_gradients(
+        &self,
+        medium: Option<usize>,
+        p: DVec3,
+    ) -> Option<(Coefficients, Option<CoefficientGradients>)> {
+        let index = medium?;
+        let m = &self.scene.media[index];
+        if m.homogeneous {
+            return self.coefficients(medium, p).map(|c| (c, None));
+        }
+        if let Some((i, q, c, g)) = self.last_gradients.get() {
+            if i == index && q == p {
+                return Some((c, Some(g)));
+            }
+        }
+        let x = p.as_vec3();
+        if let Some((lo, hi)) = m.bounds {
+            if !(x.cmpge(lo).all() && x.cmple(hi).all()) {
+                return None;
+            }
+        }
+        let (c, g) = m.at_with_gradient(x);
+        self.last_gradients.set(Some((index, p, c, g)));
+        Some((c, Some(g)))
+    }
+
     /// The source q at `p` towards direction `-w` (the receiver) in `medium`; with
     /// `march_step`, the step's about `p` ([`GatherMedium::step_source`]).
     fn q(
@@ -789,20 +821,21 @@ impl<'a> SceneMedium<'a> {
             q: [0.0; 3],
             gradient: Some([DVec3::ZERO; 3]),
         };
-        let Some(c) = self.coefficients(medium, p) else {
+        // The coefficients with their own gradients, exact for the grids' interpolants.
+        let Some((c, coefficient_gradients)) = self.coefficients_with_gradients(medium, p) else {
             return out;
         };
         let m = &self.scene.media[medium.unwrap_or(0)];
         let emitted = c.sigma_a() * c.emission;
         let mut q = emitted;
         let mut gradient = [DVec3::ZERO; 3];
-        let h = self.step(medium, p, 0.0);
         let rgb = |v: Rgb| [v.r, v.g, v.b].map(f64::from);
-        if !m.homogeneous && !emitted.is_black() {
-            gradient = self.central(h, p, |x| {
-                rgb(self
-                    .coefficients(medium, x)
-                    .map_or(Rgb::ZERO, |c| c.sigma_a() * c.emission))
+        if let Some(cg) = coefficient_gradients.filter(|_| !emitted.is_black()) {
+            // ∇(σ_a L_e) = ∇σ_a L_e + σ_a ∇L_e.
+            let (sigma_a, ga) = (rgb(c.sigma_a()), cg.sigma_a(&c));
+            let le = rgb(c.emission);
+            gradient = [0, 1, 2].map(|k| {
+                self.along_axes(ga[k] * le[k] as f32 + cg.emission[k] * sigma_a[k] as f32)
             });
         }
         if !c.sigma_s.is_black() {
@@ -810,15 +843,9 @@ impl<'a> SceneMedium<'a> {
             q += c.sigma_s * li;
             let sigma_s = rgb(c.sigma_s);
             let li = rgb(li);
-            let sigma_s_gradient = if m.homogeneous {
-                [DVec3::ZERO; 3]
-            } else {
-                self.central(h, p, |x| {
-                    rgb(self
-                        .coefficients(medium, x)
-                        .map_or(Rgb::ZERO, |c| c.sigma_s))
-                })
-            };
+            let sigma_s_gradient = coefficient_gradients.map_or([DVec3::ZERO; 3], |cg| {
+                cg.sigma_s.map(|g| self.along_axes(g))
+            });
             for k in 0..3 {
                 gradient[k] += sigma_s_gradient[k] * li[k] + li_gradient[k] * sigma_s[k];
             }
@@ -941,6 +968,15 @@ impl<'a> SceneMedium<'a> {
         g
     }
 
+    /// A gradient as the estimator wants it: whole, or its part along the receiver's tangents.
+    fn along_axes(&self, g: Vec3) -> DVec3 {
+        let g = g.as_dvec3();
+        match &self.tangents {
+            Some(t) => t.iter().map(|&e| e * e.dot(g)).sum(),
+            None => g,
+        }
+    }
+
     /// Central differences of `f` at `p` with step `h`, along the world axes or the
     /// receiver's tangents.
     fn central(&self, h: f64, p: DVec3, f: impl Fn(DVec3) -> [f64; 3]) -> [DVec3; 3] {
@@ -1050,13 +1086,10 @@ impl GatherMedium for SceneMedium<'_> {
         if medium.is_none_or(|m| self.scene.media[m].homogeneous) {
             return [DVec3::ZERO; 3];
         }
-        let p = o + w * t;
-        let h = self.step(medium, p, t);
-        self.central(h, p, |q| {
-            self.coefficients(medium, q).map_or([0.0; 3], |c| {
-                [c.sigma_t.r, c.sigma_t.g, c.sigma_t.b].map(f64::from)
-            })
-        })
+        match self.coefficients_with_gradients(medium, o + w * t) {
+            Some((_, Some(g))) => g.sigma_t.map(|g| self.along_axes(g)),
+            _ => [DVec3::ZERO; 3],
+        }
     }
 
     fn source(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3] {
