@@ -497,7 +497,7 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
         if st.metric_replaced {
             eprintln!("note: {}", ircache_render::media_cache::cache::METRIC_NOTE);
         }
-        if let Some(map) = &st.caustic_map {
+        for map in st.global_map.iter().chain(&st.caustic_map) {
             eprintln!("{map}");
         }
     }
@@ -560,6 +560,17 @@ fn summary(desc: &SceneDesc, s: &RenderSettings, out: &RenderOutput, output: &Pa
     }
 }
 
+/// A photon map's figures in the statistics file.
+fn map_json(m: ircache_render::photon_map::MapSummary) -> serde_json::Value {
+    serde_json::json!({
+        "kind": format!("{:?}", m.kind).to_lowercase(),
+        "stored": m.stats.stored,
+        "emitted": m.stats.emitted,
+        "rays": m.stats.rays,
+        "seconds": m.seconds,
+    })
+}
+
 fn write_stats(
     path: &Path,
     desc: &SceneDesc,
@@ -612,15 +623,7 @@ fn write_stats(
             "photon_records": st.photon_records,
             "photon_record_seconds": st.photon_record_seconds,
             "photon_maps": c.cache.photons.as_ref().map(|m| {
-                m.maps()
-                    .map(|map| serde_json::json!({
-                        "kind": format!("{:?}", map.kind).to_lowercase(),
-                        "stored": map.stats.stored,
-                        "emitted": map.stats.emitted,
-                        "rays": map.stats.rays,
-                        "seconds": map.seconds,
-                    }))
-                    .collect::<Vec<_>>()
+                m.maps().map(|map| map_json(map.summary())).collect::<Vec<_>>()
             }),
             // Every cache parameter, from the parameter table.
             "cache_params": p
@@ -658,12 +661,8 @@ fn write_stats(
                 "shadow_rays": st.shadow_rays,
                 "march_steps": st.march_steps,
                 "seconds": st.seconds,
-                "caustic_map": st.caustic_map.map(|m| serde_json::json!({
-                    "stored": m.stats.stored,
-                    "emitted": m.stats.emitted,
-                    "rays": m.stats.rays,
-                    "seconds": m.seconds,
-                })),
+                "caustic_map": st.caustic_map.map(map_json),
+                "global_map": st.global_map.map(map_json),
             }),
         );
     }

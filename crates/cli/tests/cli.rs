@@ -633,7 +633,6 @@ fn media_scenes_refuse_what_their_cache_ignores() {
             &["--divisions", "64", "--supersamples", "8"][..],
             "--divisions, --supersamples are not used",
         ),
-        (&["--photons", "1000"][..], "a global photon map"),
         (&["--aov", "irradiance"][..], "--aov irradiance"),
     ] {
         let o = render(extra);
@@ -665,16 +664,50 @@ fn media_scenes_refuse_what_their_cache_ignores() {
         "{}",
         stderr(&o)
     );
-    let o = render(&["--caustic-photons", "2000"]);
+    let o = render(&["--caustic-photons", "2000", "--photons", "3000"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).contains("Caustic map: "), "{}", stderr(&o));
+    assert!(stderr(&o).contains("Global map: "), "{}", stderr(&o));
     let stats = stats_of(&d, "x.json");
-    assert!(
-        stats["media_cache"]["caustic_map"]["stored"]
-            .as_u64()
-            .is_some_and(|n| n >= 2000),
-        "{stats}"
+    for (map, wanted) in [("caustic_map", 2000), ("global_map", 3000)] {
+        assert!(
+            stats["media_cache"][map]["stored"]
+                .as_u64()
+                .is_some_and(|n| n >= wanted),
+            "{stats}"
+        );
+    }
+    // Photons leave the lights alone: where a medium emits, a global map is refused.
+    let text = std::fs::read_to_string(scene).unwrap().replace(
+        "<float name=\"sigma_t\" value=\"1\" />",
+        "<float name=\"sigma_t\" value=\"1\" /><rgb name=\"emission\" value=\"0.1\" />",
     );
+    assert!(text.contains("emission"));
+    std::fs::write(d.join("emitting.xml"), text).unwrap();
+    let o = ircache(
+        &[
+            "render",
+            "emitting.xml",
+            "--integrator",
+            "ic",
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--photons",
+            "1000",
+            "-o",
+            "z.exr",
+        ],
+        &d,
+    );
+    assert!(
+        !o.status.success(),
+        "a global map in emitting media was accepted"
+    );
+    assert!(stderr(&o).contains("whose media emit"), "{}", stderr(&o));
 }
 
 #[test]

@@ -885,8 +885,7 @@ fn media_cache_serves_the_lambertian_part_of_glossy_surfaces() {
         (32, 32),
         2,
         Vec::new(),
-        None,
-        None,
+        Default::default(),
     );
     let on_floor = cache
         .records()
@@ -1132,7 +1131,7 @@ fn caustic_photons_in_fog_replace_the_gathers_caustic_paths() {
     use ircache_render::irradiance_cache::prepare::media_caustic_map;
     use ircache_render::irradiance_cache::IcParams;
     use ircache_render::media::tracking::medium_at;
-    use ircache_render::media_cache::cache::{make_record, RecordSite};
+    use ircache_render::media_cache::cache::{make_record, RecordSite, RecordSources};
     let desc = project_scene(
         "glass-in-fog",
         &[
@@ -1161,11 +1160,24 @@ fn caustic_photons_in_fog_replace_the_gathers_caustic_paths() {
             medium: medium_at(&scene, p + up * 1e-3, up),
             footprint: 0.0,
         };
-        let whole = luminance(make_record(&scene, &params, &site, key, (None, None)).0.e);
-        let gathered = luminance(
-            make_record(&scene, &params, &site, key, (Some(&map), None))
+        let whole = luminance(
+            make_record(&scene, &params, &site, key, Default::default())
                 .0
                 .e,
+        );
+        let gathered = luminance(
+            make_record(
+                &scene,
+                &params,
+                &site,
+                key,
+                RecordSources {
+                    caustics: Some(&map),
+                    ..Default::default()
+                },
+            )
+            .0
+            .e,
         );
         (whole, gathered, luminance(map.irradiance(p, up, 2)))
     };
@@ -1224,7 +1236,7 @@ fn interpolation_errors(size: u32, reference_divisions: usize) -> Vec<(&'static 
         .iter()
         .enumerate()
         .map(|(i, s)| {
-            make_record(&scene, &fine, s, 7 + i as u64, (None, None))
+            make_record(&scene, &fine, s, 7 + i as u64, Default::default())
                 .0
                 .e
         })
@@ -1259,8 +1271,7 @@ fn interpolation_errors(size: u32, reference_divisions: usize) -> Vec<(&'static 
             (size as usize / 2, size as usize / 2),
             3,
             Vec::new(),
-            None,
-            None,
+            Default::default(),
         );
         let (mut sum, mut n) = (0.0f64, 0usize);
         for (s, r) in sites.iter().zip(&reference) {
@@ -1778,7 +1789,7 @@ fn marched_grid_single_scattering_agrees_with_volpath() {
 fn surface_records_take_the_light_in_the_medium_from_volumetric_records() {
     use ircache_render::integrators::volpath::VolPathIntegrator;
     use ircache_render::irradiance_cache::IcParams;
-    use ircache_render::media_cache::cache::{first_site, make_record};
+    use ircache_render::media_cache::cache::{first_site, make_record, RecordSources};
     use ircache_render::media_cache::volume_records::VolumeCache;
     for name in ["cornell-fog", "smoke-box"] {
         let scene = Scene::build(&fog_scene(name, "irrcache", 6, 16, 1)).expect("scene");
@@ -1818,7 +1829,11 @@ fn surface_records_take_the_light_in_the_medium_from_volumetric_records() {
                     .enumerate()
                     .map(|(i, s)| {
                         let k = 100 * key + i as u64;
-                        luminance(make_record(&scene, &params, s, k, (None, served)).0.e)
+                        let sources = RecordSources {
+                            volume: served,
+                            ..Default::default()
+                        };
+                        luminance(make_record(&scene, &params, s, k, sources).0.e)
                     })
                     .sum();
                 sums[way].push(total);
@@ -1842,6 +1857,100 @@ fn surface_records_take_the_light_in_the_medium_from_volumetric_records() {
             "{name}: spread {} against {}",
             served_var.sqrt(),
             traced_var.sqrt()
+        );
+    }
+}
+
+/// The global map serves the light the deeper bounces bring to a record's gather hits: the
+/// part of a record's irradiance beyond its first bounce (the same record at `max_depth` 6
+/// less at 3, on the same streams; the volumetric records serve the light along the rays
+/// either way) is the same whether the diffuse hits reflect the map's photons, which scatter
+/// in the media as paths do, or trace their paths on: in the fog box and the smoke box, the
+/// mean over 12 camera-seen sites × 6 keys agrees within three standard errors of the
+/// difference plus 3 % (the density estimate's bias), and within 6 %. (A map of photons that
+/// cross the fog without scattering reads 0.94 against the paths' 1.50 in the fog box.)
+#[test]
+fn the_global_map_serves_the_deeper_light_at_the_records_gather_hits() {
+    use ircache_render::integrators::volpath::VolPathIntegrator;
+    use ircache_render::irradiance_cache::prepare::media_global_map;
+    use ircache_render::irradiance_cache::IcParams;
+    use ircache_render::media_cache::cache::{first_site, make_record, RecordSources};
+    use ircache_render::media_cache::volume_records::VolumeCache;
+    for name in ["cornell-fog", "smoke-box"] {
+        let scene = Scene::build(&fog_scene(name, "irrcache", 6, 16, 1)).expect("scene");
+        let params = IcParams {
+            bounces: 4,
+            photons: Some(200_000),
+            ..IcParams::default()
+        };
+        let first = IcParams {
+            bounces: 1,
+            ..params.clone()
+        };
+        let map = Arc::new(media_global_map(&scene, &params, 3).expect("a global map"));
+        let volume = Arc::new(VolumeCache::build(
+            &VolPathIntegrator::plain(6),
+            &scene,
+            params.accuracy,
+            256,
+            16,
+            32,
+            32,
+            1,
+            Vec::new(),
+        ));
+        let sites: Vec<_> = (0..12)
+            .filter_map(|i| {
+                let film = ircache_math::Vec2::new(
+                    0.1 + 0.8 * (i % 4) as f32 / 3.0,
+                    0.15 + 0.7 * (i / 4) as f32 / 2.0,
+                );
+                first_site(&scene, scene.camera.generate_ray(film))
+            })
+            .collect();
+        assert!(sites.len() >= 10, "{name}: {} sites", sites.len());
+        let keys = 6u64;
+        // Per key, the sums over sites of the first bounce and of the deeper part each way.
+        let (mut first_sums, mut deeper) = (Vec::new(), [Vec::new(), Vec::new()]);
+        for key in 0..keys {
+            let mut sums = [0.0f64; 3];
+            for (i, s) in sites.iter().enumerate() {
+                let k = 100 * key + i as u64;
+                let e = |p: &IcParams, global| {
+                    let sources = RecordSources {
+                        global,
+                        volume: Some(&volume),
+                        ..Default::default()
+                    };
+                    luminance(make_record(&scene, p, s, k, sources).0.e)
+                };
+                let one = e(&first, None);
+                sums[0] += one;
+                sums[1] += e(&params, None) - one;
+                sums[2] += e(&params, Some(&map)) - one;
+            }
+            first_sums.push(sums[0]);
+            deeper[0].push(sums[1]);
+            deeper[1].push(sums[2]);
+        }
+        let stats = |v: &[f64]| {
+            let n = v.len() as f64;
+            let mean = v.iter().sum::<f64>() / n;
+            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            (mean, var)
+        };
+        let (once, _) = stats(&first_sums);
+        let (traced, traced_var) = stats(&deeper[0]);
+        let (photons, photons_var) = stats(&deeper[1]);
+        let error = ((traced_var + photons_var) / keys as f64).sqrt();
+        assert!(
+            traced > 0.1 * once,
+            "{name}: deeper {traced} against {once}"
+        );
+        assert!(
+            (photons - traced).abs() < 3.0 * error + 0.03 * traced
+                && (photons / traced - 1.0).abs() < 0.06,
+            "{name}: photons {photons}, paths {traced} ± {error}"
         );
     }
 }

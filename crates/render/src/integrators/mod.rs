@@ -272,6 +272,12 @@ fn media_cache_integrator(
         ))
     };
     crate::media_cache::cache::available(p).map_err(crate::scene::RenderError::Invalid)?;
+    if p.photons.is_some_and(|n| n > 0) && scene.media.iter().any(crate::media::Medium::emits) {
+        return refuse(
+            "a global photon map is not available in a scene whose media emit (photons leave \
+             the lights alone): give --photons 0",
+        );
+    }
     if ic.pixel_pass != ic::PixelPass::Lookup {
         return refuse("splatting is not available there yet");
     }
@@ -311,12 +317,18 @@ fn media_cache_integrator(
         p,
         caustics.is_some(),
     ));
+    // The light after a bounce at the Lambertian surfaces of the records' paths, from photons
+    // where asked (never at the camera paths' own).
+    let global = pool
+        .install(|| crate::irradiance_cache::prepare::media_global_map(scene, p, settings.seed))
+        .map(std::sync::Arc::new);
     // Volumetric records first: their paths are `volpath`'s own, and the surface records'
     // gathers take the light scattered along their rays from them.
     // `volpath` at the depth asked, as the records' paths take it (without records of any kind).
     let gatherer = volpath::VolPathIntegrator {
         hide_emitters: ic.hide_emitters,
         first_light_samples: p.direct_samples,
+        global: global.clone(),
         ..volpath::VolPathIntegrator::plain(volpath::VolPathIntegrator::depth_of_bounces(p.bounces))
     };
     let volume_records =
@@ -345,12 +357,16 @@ fn media_cache_integrator(
                 (settings.width, settings.height),
                 settings.seed,
                 surface,
-                caustics.as_ref(),
-                volume_records.as_ref(),
+                crate::media_cache::cache::RecordSources {
+                    caustics: caustics.as_ref(),
+                    global: global.as_ref(),
+                    volume: volume_records.as_ref(),
+                },
             )
         });
         cache.stats.notes = notes;
         cache.stats.caustic_map = caustics.as_ref().map(|c| c.map.summary());
+        cache.stats.global_map = global.as_ref().map(|g| g.map.summary());
         if let Some(f) = file.as_mut() {
             let new: Vec<_> = cache.made().map(|&r| (r, None)).collect();
             f.append(&new)?;
@@ -369,6 +385,7 @@ fn media_cache_integrator(
         }),
         caustics,
         volume_records,
+        global: None,
         ..gatherer
     };
     Ok(integrator)

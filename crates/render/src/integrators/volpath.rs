@@ -42,7 +42,11 @@ pub struct VolPathIntegrator {
     /// Volumetric records serving the in-scattered indirect light at the march's points.
     pub volume_records: Option<std::sync::Arc<crate::media_cache::volume_records::VolumeCache>>,
     /// Caustics at the paths' Lambertian surfaces from photons (see [`Self::trace`]).
-    pub caustics: Option<std::sync::Arc<crate::photon_map::CausticMap>>,
+    pub caustics: Option<std::sync::Arc<crate::photon_map::ServingMap>>,
+    /// The light after a bounce at the paths' Lambertian surfaces from photons (the records'
+    /// paths, behind a gather; see [`Self::trace`]). Never for camera paths: a density
+    /// estimate seen directly shows its blotches.
+    pub global: Option<std::sync::Arc<crate::photon_map::ServingMap>>,
 }
 
 /// Where a light sample is taken.
@@ -86,6 +90,7 @@ impl VolPathIntegrator {
             first_light_samples: 1,
             volume_records: None,
             caustics: None,
+            global: None,
         }
     }
 
@@ -374,6 +379,32 @@ impl VolPathIntegrator {
                     light_samples = n;
                 }
             }
+            // With a global map, a Lambertian vertex the cache did not serve takes the light
+            // after a bounce from it and ends the path, its light samples alone.
+            if let Some(map) = self
+                .global
+                .as_ref()
+                .filter(|_| strategy == BsdfStrategy::All)
+            {
+                let bounces = max_depth.saturating_sub(depth + 2);
+                let reflected = (bounces > 0)
+                    .then(|| {
+                        let b = crate::photon_map::bounce_limit(bounces);
+                        photon_reflected(scene, map, &it, &bsdf, ray.d, it.t, b)
+                    })
+                    .flatten();
+                if let Some((all, last_part)) = reflected {
+                    if bsdf.has_smooth() && !scene.lights.is_empty() {
+                        let vertex = Vertex::Surface(&it, &bsdf, wo_local);
+                        let direct =
+                            sample_light(scene, &vertex, medium, depth, None, sampler, rng, rays);
+                        add(&mut l, beta * direct, depth + 1);
+                    }
+                    l += beta * all;
+                    last += beta * last_part;
+                    break;
+                }
+            }
             // Caustics from the map at a Lambertian vertex the cache did not serve.
             let mut caustics_served = false;
             if strategy == BsdfStrategy::All && self.caustics.is_some() && bsdf.is_diffuse_only() {
@@ -424,6 +455,40 @@ impl VolPathIntegrator {
         }
         PathLight { all: l, last }
     }
+}
+
+/// What the surface `it`, whose BSDF `bsdf` is Lambertian alone, reflects towards `-d` of the
+/// light that reaches it after a bounce or more, from the global map's photons of up to
+/// `bounces` bounces: `k E/π` (Jensen's cached final gather), and apart the part of the photons
+/// of exactly `bounces` bounces, whose paths end at the last vertex a path may take
+/// ([`PathLight::last`]). `None` for any other BSDF, and where `it` lies nearer to the vertex
+/// before it (`distance`) than the estimate's disc is wide (Jensen's rule for short gather rays,
+/// as [`crate::irradiance_cache::IrradianceCache::photon_irradiance`]).
+pub(crate) fn photon_reflected(
+    scene: &Scene,
+    map: &crate::photon_map::ServingMap,
+    it: &Interaction,
+    bsdf: &crate::bsdf::Bsdf,
+    d: Vec3,
+    distance: f32,
+    bounces: u16,
+) -> Option<(Rgb, Rgb)> {
+    if !bsdf.is_diffuse_only() {
+        return None;
+    }
+    // The side the ray arrives on, as photons keep theirs.
+    let n = if it.frame.n.dot(d) < 0.0 {
+        it.frame.n
+    } else {
+        -it.frame.n
+    };
+    let (e, fewer, radius) = map.irradiance_pair(it.p, n, bounces);
+    if distance < crate::irradiance_cache::gather::SHORT_RAY * radius {
+        return None;
+    }
+    let k = bsdf.lambertian_albedo(it.frame.to_local(-d))
+        * (ircache_math::INV_PI * scene.perturbed_lambertian_share(it));
+    Some((k * e, k * (e - fewer)))
 }
 
 /// A path's light, and the part of it its last allowed vertex emits.

@@ -80,7 +80,7 @@ pub const PLANE_HALF_SIZE: f64 = 3.0;
 
 /// A ray shorter than this many photon-disc radii goes on past the photon map (see
 /// [`IrradianceCache::photon_irradiance`]).
-const SHORT_RAY: f32 = 1.0;
+pub(crate) const SHORT_RAY: f32 = 1.0;
 
 impl IrradianceCache {
     /// An empty cache for `scene`.

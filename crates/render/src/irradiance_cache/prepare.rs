@@ -270,7 +270,7 @@ pub fn media_caustic_map(
     scene: &Scene,
     params: &super::IcParams,
     seed: u64,
-) -> Option<crate::photon_map::CausticMap> {
+) -> Option<crate::photon_map::ServingMap> {
     if params.bounces == 0 {
         return None;
     }
@@ -281,10 +281,36 @@ pub fn media_caustic_map(
         bounces,
         photon_seed(seed),
     )?;
-    Some(crate::photon_map::CausticMap {
+    Some(crate::photon_map::ServingMap {
         map,
         lookup: photon_lookups(scene, params).1,
     })
+}
+
+/// The global map of the cache in media (`None` without global photons, with one bounce, or
+/// where a medium emits: photons leave the lights alone): photons of up to `bounces − 1`
+/// bounces, as the records' gather hits take them (a scattering in a medium counts), their
+/// irradiance estimated in advance.
+#[must_use]
+pub fn media_global_map(
+    scene: &Scene,
+    params: &super::IcParams,
+    seed: u64,
+) -> Option<crate::photon_map::ServingMap> {
+    let photons = params.global_photons();
+    if photons == 0 || params.bounces < 2 || scene.media.iter().any(|m| m.emits()) {
+        return None;
+    }
+    let lookup = photon_lookups(scene, params).0;
+    let map = crate::photon_map::PhotonMap::build(
+        scene,
+        crate::photon_map::MapKind::Global,
+        photons,
+        bounce_limit(params.bounces.saturating_sub(1)),
+        photon_seed(seed),
+        Some(&lookup),
+    );
+    (!map.tree.is_empty()).then_some(crate::photon_map::ServingMap { map, lookup })
 }
 
 /// The header of a cache file for `scene` rendered by `ic` at `width` pixels across, its records

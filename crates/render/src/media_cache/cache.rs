@@ -32,7 +32,7 @@ use crate::irradiance_cache::record::{
 use crate::irradiance_cache::store::RecordStore;
 use crate::irradiance_cache::IcParams;
 use crate::media::tracking::{first_opaque, medium_after};
-use crate::photon_map::CausticMap;
+use crate::photon_map::ServingMap;
 use crate::scene::Scene;
 use ircache_math::{offset_ray_origin, Frame, Rgb, Rng, Vec3};
 use rayon::prelude::*;
@@ -63,6 +63,8 @@ pub struct MediaCacheStats {
     pub metric_replaced: bool,
     /// The caustic map beside the records, if one was made.
     pub caustic_map: Option<crate::photon_map::MapSummary>,
+    /// The global map beside the records, if one was made.
+    pub global_map: Option<crate::photon_map::MapSummary>,
 }
 
 /// Records in media scenes, by level: level d serves surface vertices at depth d, each record
@@ -134,9 +136,6 @@ pub fn available(params: &IcParams) -> Result<(), String> {
     }
     let what = if params.bounces > 1 && params.deeper == Deeper::Cache {
         "a cache per bounce (--deeper-bounces cache) is not available there: give --deeper-bounces traced"
-    } else if params.photons.is_some_and(|n| n > 0) {
-        "a global photon map is not available there yet (photons do not scatter in media; the \
-         caustic map, --caustic-photons, is)"
     } else if params.radiance_cache == RadianceCaching::On {
         "radiance caching is not available there yet"
     } else if params.uses_ambient() {
@@ -145,6 +144,20 @@ pub fn available(params: &IcParams) -> Result<(), String> {
         return Ok(());
     };
     Err(unavailable(what))
+}
+
+/// What a record's gather takes from elsewhere instead of tracing it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RecordSources<'a> {
+    /// The caustic map: the receiver's caustics are the map's, left out of the gather, and the
+    /// deeper paths take those of their own Lambertian vertices from it.
+    pub caustics: Option<&'a Arc<ServingMap>>,
+    /// The global map: the light the deeper bounces bring to a gather ray's diffuse opaque hit
+    /// ([`SceneMedium::with_deeper_bounces`]).
+    pub global: Option<&'a Arc<ServingMap>>,
+    /// The volumetric records: the light the deeper bounces scatter along the gather rays
+    /// ([`SceneMedium::with_volume_records`]).
+    pub volume: Option<&'a Arc<VolumeCache>>,
 }
 
 /// Where a record is wanted: a surface point, the normal of the side it serves, the medium on
@@ -166,19 +179,17 @@ pub struct RecordSite {
 /// The key of a record's layout stream (beyond every cell's index).
 const LAYOUT_KEY: u64 = u64::MAX;
 
-/// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced; with
-/// `caustics`, without the caustics at `site`, which that map serves; with `volume`, the light
-/// its deeper bounces scatter along the gather rays from those records
-/// ([`SceneMedium::with_volume_records`]).
+/// Gathers a record at `site` (deterministic for a given `key`), with the rays it traced,
+/// taking from `sources` what they serve ([`RecordSources`]).
 #[must_use]
 pub fn make_record(
     scene: &Scene,
     params: &IcParams,
     site: &RecordSite,
     key: u64,
-    (caustics, volume): (Option<&Arc<CausticMap>>, Option<&Arc<VolumeCache>>),
+    sources: RecordSources,
 ) -> (Record, MediaCacheStats) {
-    make_record_at(scene, params, site, key, (caustics, volume), 0)
+    make_record_at(scene, params, site, key, sources, 0)
 }
 
 /// [`make_record`] for a surface vertex at `depth`: the bounces a path may still take there.
@@ -187,7 +198,7 @@ fn make_record_at(
     params: &IcParams,
     site: &RecordSite,
     key: u64,
-    (caustics, volume): (Option<&Arc<CausticMap>>, Option<&Arc<VolumeCache>>),
+    sources: RecordSources,
     depth: u32,
 ) -> (Record, MediaCacheStats) {
     let bounces = if params.bounces == crate::irradiance_cache::params::UNBOUNDED {
@@ -204,8 +215,13 @@ fn make_record_at(
     let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
         .with_tangents([frame.s.as_dvec3(), frame.t.as_dvec3()])
         .with_gradients(gradients)
-        .with_deeper_bounces(bounces, params.media_deeper_paths, caustics)
-        .with_volume_records(volume);
+        .with_deeper_bounces(
+            bounces,
+            params.media_deeper_paths,
+            sources.caustics,
+            sources.global,
+        )
+        .with_volume_records(sources.volume);
     let d = |v: Vec3| v.as_dvec3();
     let n = strata.azimuthal;
     let layout = params
@@ -367,7 +383,7 @@ impl MediaCache {
 
     /// Fills the cache from the camera paths through the centres of a `width` × `height` image
     /// (run inside a rayon pool), level by level, after the records `loaded` (from a cache
-    /// file); with `caustics`, records without the caustics that map serves.
+    /// file); their gathers take from `sources` what they serve.
     #[must_use]
     pub fn build(
         scene: &Scene,
@@ -375,8 +391,7 @@ impl MediaCache {
         (width, height): (usize, usize),
         seed: u64,
         loaded: Vec<Record>,
-        caustics: Option<&Arc<CausticMap>>,
-        volume: Option<&Arc<VolumeCache>>,
+        sources: RecordSources,
     ) -> MediaCache {
         let start = Instant::now();
         let mut cache = MediaCache::new(scene, params);
@@ -442,7 +457,7 @@ impl MediaCache {
                 let made: Vec<(Record, MediaCacheStats)> = wanted
                     .par_iter()
                     .map(|(key, site)| {
-                        make_record_at(scene, params, site, *key, (caustics, volume), level as u32)
+                        make_record_at(scene, params, site, *key, sources, level as u32)
                     })
                     .collect();
                 for (record, st) in made {

@@ -82,8 +82,13 @@ pub fn media_irradiance_at_points(
                 // No bounce (`-ab 0`): direct light alone.
                 _ if params.bounces == 0 => (Rgb::ZERO, [Vec3::ZERO; 3], [Vec3::ZERO; 3]),
                 PointMethod::Cache => {
-                    let (r, _) =
-                        make_record(scene, params, &site, rng.next_u32().into(), (None, None));
+                    let (r, _) = make_record(
+                        scene,
+                        params,
+                        &site,
+                        rng.next_u32().into(),
+                        Default::default(),
+                    );
                     (r.e, r.grad_t, r.grad_r)
                 }
                 PointMethod::BruteForce { samples } => {
@@ -118,7 +123,7 @@ fn brute_force(
     let at = |x| {
         let view = SceneMedium::new(scene, site.medium, false, params.media_light_samples)
             .with_gradients(false)
-            .with_deeper_bounces(params.bounces, params.media_deeper_paths, None);
+            .with_deeper_bounces(params.bounces, params.media_deeper_paths, None, None);
         let march = March {
             gradients: false,
             ..March::default()

@@ -43,7 +43,7 @@ use super::volume_records::VolumeCache;
 use crate::integrators::light_sampling::BsdfStrategy;
 use crate::integrators::media_march::{in_scattered_by_path, quadrature_points, MarchPoint};
 use crate::integrators::path_continuation::{count_and_roulette, sample_continuation, Arrival};
-use crate::integrators::volpath::{PathState, VolPathIntegrator};
+use crate::integrators::volpath::{photon_reflected, PathState, VolPathIntegrator};
 use crate::integrators::RayCounts;
 use crate::lights::LightSample;
 use crate::media::tracking::{
@@ -51,6 +51,7 @@ use crate::media::tracking::{
     transmittance_with_depth_gradient, Flight, OpaqueHit,
 };
 use crate::media::{CoefficientGradients, Coefficients};
+use crate::photon_map::{bounce_limit, ServingMap};
 use crate::scene::Scene;
 use ircache_math::sampling::Equiangular;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
@@ -185,6 +186,9 @@ pub struct SceneMedium<'a> {
     /// A caustic map serves the receiver's caustics: its deeper paths leave out the emission
     /// they reach through delta lobes alone, unscattered ([`VolPathIntegrator::trace`]).
     caustics_served: bool,
+    /// The global map, with the most bounces of the photons that may serve a gather ray's
+    /// opaque hit: the deeper bounces' light there ([`Self::with_deeper_bounces`]).
+    global: Option<(std::sync::Arc<ServingMap>, u16)>,
     /// The last source evaluated: point, direction, value and gradient.
     last_source: RefCell<Option<Source>>,
     /// The last coefficients taken with their gradients (a march step's source and its σ_t
@@ -214,6 +218,7 @@ impl<'a> SceneMedium<'a> {
             deeper_paths: 1,
             volume: None,
             caustics_served: false,
+            global: None,
             rotation: std::cell::Cell::new(None),
             march_step: std::cell::Cell::new(None),
             last_source: RefCell::new(None),
@@ -243,18 +248,25 @@ impl<'a> SceneMedium<'a> {
     /// Gathers `bounces` indirect bounces (`-ab`; unbounded: Russian roulette alone): the
     /// ones beyond the first by the mean of `paths` `volpath` paths per gather ray (see the
     /// module). With `caustics`, the receiver's caustics are the map's, left out of the
-    /// gather, and the paths take those of their own Lambertian vertices from it.
+    /// gather, and the paths take those of their own Lambertian vertices from it. With
+    /// `global`, a gather ray's diffuse opaque hit reflects the map's irradiance instead of
+    /// its paths (Jensen's cached final gather, through media).
     #[must_use]
     pub fn with_deeper_bounces(
         mut self,
         bounces: u32,
         paths: u32,
-        caustics: Option<&std::sync::Arc<crate::photon_map::CausticMap>>,
+        caustics: Option<&std::sync::Arc<ServingMap>>,
+        global: Option<&std::sync::Arc<ServingMap>>,
     ) -> Self {
         self.deeper_paths = paths.max(1);
         self.caustics_served = caustics.is_some();
+        self.global = global
+            .filter(|_| bounces > 1)
+            .map(|g| (g.clone(), bounce_limit(bounces.saturating_sub(1))));
         self.deeper = (bounces > 1).then(|| VolPathIntegrator {
             caustics: caustics.cloned(),
+            global: global.cloned(),
             ..VolPathIntegrator::plain(VolPathIntegrator::depth_of_bounces(bounces))
         });
         self
@@ -531,6 +543,11 @@ impl<'a> SceneMedium<'a> {
             .volume
             .as_ref()
             .and_then(|records| self.in_scattered_by_records(integrator, records, &traced));
+        if let Some((l, through)) = served {
+            if let Some(reflected) = self.reflected_photon_light(&traced) {
+                return Some(l + through * reflected);
+            }
+        }
         let (mut sum, through) = match served {
             Some((l, through)) => (l * self.deeper_paths as f32, Some(through)),
             None => (Rgb::ZERO, None),
@@ -539,6 +556,20 @@ impl<'a> SceneMedium<'a> {
             sum += self.deeper_path(integrator, &traced, k, through);
         }
         Some(sum / self.deeper_paths as f32)
+    }
+
+    /// The light of the bounces beyond the first that the opaque hit of `traced` reflects
+    /// towards its origin, from the global map ([`photon_reflected`]); `None` without a map,
+    /// and where that does not serve (the paths go on).
+    fn reflected_photon_light(&self, traced: &Traced) -> Option<Rgb> {
+        let (map, bounces) = self.global.as_ref()?;
+        let it = &traced.opaque.as_ref()?.it;
+        let d = traced.w.as_vec3();
+        let bsdf = it.bsdf(
+            &self.scene.materials[self.scene.shapes[it.shape as usize].material],
+            d,
+        );
+        photon_reflected(self.scene, map, it, &bsdf, d, traced.s as f32, *bounces).map(|l| l.0)
     }
 
     /// The light of the bounces beyond the first scattered along the ray `traced` towards its

@@ -152,3 +152,27 @@ pub fn irradiance(
     })
     .unwrap_or((Rgb::ZERO, lookup.max_radius))
 }
+
+/// [`irradiance`] at `max_bounces` and, over the same disc, from the photons of fewer bounces.
+#[must_use]
+pub fn irradiance_pair(
+    tree: &KdTree,
+    p: Vec3,
+    n: Vec3,
+    max_bounces: u16,
+    lookup: &Lookup,
+) -> (Rgb, Rgb, f32) {
+    let accept = |ph: &PhotonTag| ph.bounces() <= max_bounces && same_side(ph, n);
+    with_disc(tree, p, n, &accept, lookup, |found, area, r| {
+        let (mut all, mut fewer) = (Rgb::ZERO, Rgb::ZERO);
+        for f in found {
+            let photon = &tree.photons[f.index as usize];
+            all += photon.flux;
+            if photon.bounces < max_bounces {
+                fewer += photon.flux;
+            }
+        }
+        (all / area, fewer / area, r)
+    })
+    .unwrap_or((Rgb::ZERO, Rgb::ZERO, lookup.max_radius))
+}

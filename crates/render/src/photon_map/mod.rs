@@ -150,6 +150,31 @@ impl PhotonMap {
         estimate::irradiance(&self.tree, p, n, max_bounces, lookup)
     }
 
+    /// [`PhotonMap::irradiance_and_radius`] at `max_bounces` and at one bounce fewer, from the
+    /// same estimate: what photons of exactly `max_bounces` bounces bring is the difference.
+    #[must_use]
+    pub fn irradiance_pair(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        max_bounces: u16,
+        lookup: &Lookup,
+    ) -> (Rgb, Rgb, f32) {
+        if let Some(pre) = &self.precomputed {
+            let radius2 = lookup.max_radius * lookup.max_radius;
+            let same_side = |normal: &PackedUnit| normal.dot(n) > 0.5;
+            if let Some(i) = pre.tree.nearest_one(p.to_array(), radius2, &same_side) {
+                let column = |b: u16| usize::from(b).min(pre.columns - 1);
+                let row = &pre.irradiance[i * pre.columns..(i + 1) * pre.columns];
+                let fewer = max_bounces
+                    .checked_sub(1)
+                    .map_or(Rgb::ZERO, |b| row[column(b)]);
+                return (row[column(max_bounces)], fewer, pre.radii[i]);
+            }
+        }
+        estimate::irradiance_pair(&self.tree, p, n, max_bounces, lookup)
+    }
+
     /// The caustic map of `wanted` photons of up to `max_bounces` bounces, on a stream of its
     /// own of `seed`; `None` when `wanted` is 0 or nothing was stored, so that the paths keep
     /// the light it would hold. Caustics are sharp and seen directly: estimated where they are
@@ -175,22 +200,29 @@ impl PhotonMap {
     }
 }
 
-/// A caustic map with its lookup size: the caustics of the cache in media, read at the
-/// Lambertian surfaces of its paths (see [`crate::integrators::volpath`]).
+/// A photon map with its lookup size, as the cache in media reads it: the caustic map at the
+/// Lambertian surfaces of its paths (see [`crate::integrators::volpath`]), the global map at its
+/// records' gather hits (see [`crate::media_cache::scene_medium`]).
 #[derive(Clone, Debug)]
-pub struct CausticMap {
-    /// The photons (L S+ D, none scattered by a medium on the way: [`trace`]).
+pub struct ServingMap {
+    /// The photons ([`trace`] says which a medium scatters).
     pub map: PhotonMap,
     /// Its lookups.
     pub lookup: Lookup,
 }
 
-impl CausticMap {
-    /// Caustic irradiance at `p` on the side of `n` from photons of at most `max_bounces`
-    /// bounces.
+impl ServingMap {
+    /// Irradiance at `p` on the side of `n` from photons of at most `max_bounces` bounces.
     #[must_use]
     pub fn irradiance(&self, p: Vec3, n: Vec3, max_bounces: u16) -> Rgb {
         self.map.irradiance(p, n, max_bounces, &self.lookup)
+    }
+
+    /// [`Self::irradiance`] at `max_bounces` and at one bounce fewer, and the radius of the
+    /// disc they came from ([`PhotonMap::irradiance_pair`]).
+    #[must_use]
+    pub fn irradiance_pair(&self, p: Vec3, n: Vec3, max_bounces: u16) -> (Rgb, Rgb, f32) {
+        self.map.irradiance_pair(p, n, max_bounces, &self.lookup)
     }
 }
 

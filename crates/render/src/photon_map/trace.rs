@@ -15,12 +15,15 @@
 //! flux by `η²` as it scales radiance, so the sample's radiance factor is undone. Shading-normal
 //! asymmetry (Veach §5.3) is not corrected.
 //!
-//! In media (002; scenes with `null` boundaries), a photon crosses boundaries without a bounce
-//! and never scatters in a medium: each segment keeps the share that crosses it unscattered,
-//! the transmittance (closed form, or ratio tracking in grids), with Russian roulette. A map
-//! then holds the light that reached its surfaces without meeting the medium on the way; light
-//! the medium scattered is the paths' and the volumetric records' (so the cache takes only the
-//! caustic map in media, whose complement the paths hold exactly).
+//! In media (002; scenes with `null` boundaries), a photon crosses boundaries without a bounce.
+//! A global photon scatters in a medium as a `volpath` path does (free flight by delta tracking,
+//! the phase function sampled; each scattering a bounce), so the global map holds all the light
+//! that reaches its surfaces after a bounce, the medium's included (not a medium's own
+//! emission: media cache scenes with emitting media take no global map). A caustic photon never
+//! scatters in a medium: each segment keeps the share that crosses it unscattered, the
+//! transmittance (closed form, or ratio tracking in grids), with Russian roulette, so the
+//! caustic map holds L S+ D light that met no medium on the way, whose complement the paths
+//! hold exactly.
 //!
 //! Parallel and deterministic: photon `i` draws from its own random stream, keyed by the seed
 //! and `i`; photons are traced in fixed batches and kept in emission order, whatever the
@@ -33,7 +36,9 @@
 use super::photon::Photon;
 use crate::lights::emission::Targets;
 use crate::lights::is_positive_finite;
-use crate::media::tracking::{across_boundary, medium_after, medium_at, transmittance};
+use crate::media::tracking::{
+    across_boundary, medium_after, medium_at, sample_flight, transmittance, Flight,
+};
 use crate::scene::{Scene, ShapeGeometry};
 use ircache_math::ray::offset_ray_origin;
 use ircache_math::{Ray, Rgb, Rng, Vec2, Vec3};
@@ -202,7 +207,7 @@ fn trace_one(
     let mut delta_only = true;
     // Thin sheets and `null` boundaries met so far (a bound against a ray caught at one).
     let mut crossings = 0u32;
-    // The medium the photon travels in (see the module: it never scatters there).
+    // The medium the photon travels in (see the module for where it scatters).
     let mut medium = if scene.has_media() {
         medium_at(scene, origin, emitted.direction)
     } else {
@@ -214,14 +219,39 @@ fn trace_one(
             break;
         };
         if let Some(m) = medium {
-            // The share that crosses the segment unscattered, Russian roulette keeping the
-            // flux per photon even.
-            let tr = transmittance(&scene.media[m], ray.o, ray.d, it.t, &mut rng);
-            let q = tr.max_channel().min(1.0);
-            if !is_positive_finite(q) || rng.next_f32() >= q {
-                break;
+            let med = &scene.media[m];
+            if kind == MapKind::Caustic {
+                // The share that crosses the segment unscattered, Russian roulette keeping
+                // the flux per photon even.
+                let tr = transmittance(med, ray.o, ray.d, it.t, &mut rng);
+                let q = tr.max_channel().min(1.0);
+                if !is_positive_finite(q) || rng.next_f32() >= q {
+                    break;
+                }
+                flux = flux * tr / q;
+            } else {
+                // Free flight: a scattering in the medium is a bounce, as in `volpath`.
+                let (mut weight, mut emitted) = (Rgb::ONE, Rgb::ZERO);
+                let flight =
+                    sample_flight(med, ray.o, ray.d, it.t, &mut weight, &mut emitted, &mut rng);
+                if flight == Flight::Absorbed
+                    || (bounces + 1 > max_bounces && flight != Flight::Passed)
+                {
+                    break;
+                }
+                let q = weight.max_channel().min(1.0);
+                if !is_positive_finite(q) || rng.next_f32() >= q {
+                    break;
+                }
+                flux = flux * weight / q;
+                if let Flight::Scattered { t, .. } = flight {
+                    let (d, _) = med.phase.sample(ray.d, rng.next_2d());
+                    bounces += 1;
+                    delta_only = false;
+                    ray = Ray::new(ray.o + ray.d * t, d);
+                    continue;
+                }
             }
-            flux = flux * tr / q;
         }
         let incoming = -ray.d;
         let shape = &scene.shapes[it.shape as usize];
