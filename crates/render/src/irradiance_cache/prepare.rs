@@ -290,7 +290,9 @@ pub fn media_caustic_map(
 /// The global map of the cache in media (`None` without global photons, with one bounce, or
 /// where a medium emits: photons leave the lights alone): photons of up to `bounces − 1`
 /// bounces, as the records' gather hits take them (a scattering in a medium counts), their
-/// irradiance estimated in advance.
+/// irradiance estimated in advance. With `--photons auto`, only where it pays: emitting at
+/// most [`AUTO_EMITTED_PER_STORED`] photons per photon asked for, and dropped if that stored
+/// under half of them (lamps in open fog, where most light leaves the scene).
 #[must_use]
 pub fn media_global_map(
     scene: &Scene,
@@ -301,17 +303,29 @@ pub fn media_global_map(
     if photons == 0 || params.bounces < 2 || scene.media.iter().any(|m| m.emits()) {
         return None;
     }
+    let auto = params.photons.is_none();
+    let cap = if auto {
+        AUTO_EMITTED_PER_STORED
+    } else {
+        crate::photon_map::trace::MAX_EMITTED_PER_STORED
+    };
     let lookup = photon_lookups(scene, params).0;
-    let map = crate::photon_map::PhotonMap::build(
+    let map = crate::photon_map::PhotonMap::build_within(
         scene,
         crate::photon_map::MapKind::Global,
-        photons,
+        (photons, cap),
         bounce_limit(params.bounces.saturating_sub(1)),
         photon_seed(seed),
         Some(&lookup),
     );
-    (!map.tree.is_empty()).then_some(crate::photon_map::ServingMap { map, lookup })
+    let pays = !map.tree.is_empty() && (!auto || 2 * map.stats.stored >= photons);
+    pays.then_some(crate::photon_map::ServingMap { map, lookup })
 }
+
+/// Photons emitted per photon asked for, at most, by the media cache's global map at
+/// `--photons auto` (see [`media_global_map`]): the fog box stores two of every three it
+/// emits, open fog under-lit by its lamps one in 180.
+pub const AUTO_EMITTED_PER_STORED: u64 = 4;
 
 /// The header of a cache file for `scene` rendered by `ic` at `width` pixels across, its records
 /// holding the environment as `held` says.

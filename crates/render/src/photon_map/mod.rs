@@ -106,8 +106,24 @@ impl PhotonMap {
         seed: u64,
         precompute: Option<&Lookup>,
     ) -> Self {
+        let cap = trace::MAX_EMITTED_PER_STORED;
+        Self::build_within(scene, kind, (wanted, cap), max_bounces, seed, precompute)
+    }
+
+    /// [`PhotonMap::build`], emitting at most `emitted_per_stored` photons per photon wanted
+    /// ([`trace::trace_photons_within`]).
+    #[must_use]
+    pub fn build_within(
+        scene: &Scene,
+        kind: MapKind,
+        (wanted, emitted_per_stored): (u64, u64),
+        max_bounces: u16,
+        seed: u64,
+        precompute: Option<&Lookup>,
+    ) -> Self {
         let start = std::time::Instant::now();
-        let (photons, stats) = trace_photons(scene, kind, wanted, max_bounces, seed);
+        let (photons, stats) =
+            trace::trace_photons_within(scene, kind, wanted, max_bounces, seed, emitted_per_stored);
         let tree = KdTree::build(photons);
         let precomputed = precompute
             .filter(|_| !tree.is_empty())

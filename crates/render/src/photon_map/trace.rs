@@ -89,6 +89,26 @@ pub fn trace_photons(
     max_bounces: u16,
     seed: u64,
 ) -> (Vec<Photon>, TraceStats) {
+    trace_photons_within(
+        scene,
+        kind,
+        wanted,
+        max_bounces,
+        seed,
+        MAX_EMITTED_PER_STORED,
+    )
+}
+
+/// [`trace_photons`], emitting at most `emitted_per_stored` photons per photon wanted.
+#[must_use]
+pub fn trace_photons_within(
+    scene: &Scene,
+    kind: MapKind,
+    wanted: u64,
+    max_bounces: u16,
+    seed: u64,
+    emitted_per_stored: u64,
+) -> (Vec<Photon>, TraceStats) {
     let mut stats = TraceStats::default();
     let mut photons: Vec<Photon> = Vec::new();
     if wanted == 0 || scene.lights.is_empty() || (max_bounces == 0 && kind != MapKind::All) {
@@ -100,7 +120,7 @@ pub fn trace_photons(
     if targets.as_ref().is_some_and(Targets::is_empty) {
         return (photons, stats);
     }
-    let limit = wanted.saturating_mul(MAX_EMITTED_PER_STORED);
+    let limit = wanted.saturating_mul(emitted_per_stored);
     while (photons.len() as u64) < wanted && stats.emitted < limit {
         let first = stats.emitted;
         let batches: Vec<(Vec<Photon>, u64)> = (0..4u64)
