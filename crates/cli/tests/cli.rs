@@ -600,7 +600,7 @@ fn media_scenes_refuse_what_their_cache_ignores() {
         env!("CARGO_MANIFEST_DIR"),
         "/../../scenes/glass-in-fog/scene.xml"
     );
-    let render = |extra: &[&str]| {
+    let render_in = |scene: &str, extra: &[&str]| {
         let mut args = vec![
             "render",
             scene,
@@ -624,6 +624,7 @@ fn media_scenes_refuse_what_their_cache_ignores() {
         args.extend_from_slice(extra);
         ircache(&args, &d)
     };
+    let render = |extra: &[&str]| render_in(scene, extra);
     for (extra, named) in [
         (
             &["--photon-records", "on"][..],
@@ -684,25 +685,7 @@ fn media_scenes_refuse_what_their_cache_ignores() {
     );
     assert!(text.contains("emission"));
     std::fs::write(d.join("emitting.xml"), text).unwrap();
-    let o = ircache(
-        &[
-            "render",
-            "emitting.xml",
-            "--integrator",
-            "ic",
-            "--spp",
-            "1",
-            "--width",
-            "8",
-            "--height",
-            "8",
-            "--photons",
-            "1000",
-            "-o",
-            "z.exr",
-        ],
-        &d,
-    );
+    let o = render_in("emitting.xml", &["--photons", "1000"]);
     assert!(
         !o.status.success(),
         "a global map in emitting media was accepted"

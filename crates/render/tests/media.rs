@@ -1787,37 +1787,16 @@ fn marched_grid_single_scattering_agrees_with_volpath() {
 /// (between keys) does not grow.
 #[test]
 fn surface_records_take_the_light_in_the_medium_from_volumetric_records() {
-    use ircache_render::integrators::volpath::VolPathIntegrator;
     use ircache_render::irradiance_cache::IcParams;
-    use ircache_render::media_cache::cache::{first_site, make_record, RecordSources};
-    use ircache_render::media_cache::volume_records::VolumeCache;
+    use ircache_render::media_cache::cache::{make_record, RecordSources};
     for name in ["cornell-fog", "smoke-box"] {
         let scene = Scene::build(&fog_scene(name, "irrcache", 6, 16, 1)).expect("scene");
         let params = IcParams {
             bounces: 4,
             ..IcParams::default()
         };
-        let gatherer = VolPathIntegrator::plain(6);
-        let volume = Arc::new(VolumeCache::build(
-            &gatherer,
-            &scene,
-            params.accuracy,
-            256,
-            16,
-            32,
-            32,
-            1,
-            Vec::new(),
-        ));
-        let sites: Vec<_> = (0..12)
-            .filter_map(|i| {
-                let film = ircache_math::Vec2::new(
-                    0.1 + 0.8 * (i % 4) as f32 / 3.0,
-                    0.15 + 0.7 * (i / 4) as f32 / 2.0,
-                );
-                first_site(&scene, scene.camera.generate_ray(film))
-            })
-            .collect();
+        let volume = volume_records_of(&scene, params.accuracy);
+        let sites = camera_sites(&scene);
         assert!(sites.len() >= 10, "{name}: {} sites", sites.len());
         // Per key, the sum over sites of each way's irradiance (luminance).
         let keys = 8u64;
@@ -1839,14 +1818,8 @@ fn surface_records_take_the_light_in_the_medium_from_volumetric_records() {
                 sums[way].push(total);
             }
         }
-        let stats = |v: &[f64]| {
-            let n = v.len() as f64;
-            let mean = v.iter().sum::<f64>() / n;
-            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-            (mean, var)
-        };
-        let (traced, traced_var) = stats(&sums[0]);
-        let (served, served_var) = stats(&sums[1]);
+        let (traced, traced_var) = mean_and_variance(&sums[0]);
+        let (served, served_var) = mean_and_variance(&sums[1]);
         let error = ((traced_var + served_var) / keys as f64).sqrt();
         assert!(
             (served - traced).abs() < 3.0 * error && (served / traced - 1.0).abs() < 0.03,
@@ -1871,11 +1844,9 @@ fn surface_records_take_the_light_in_the_medium_from_volumetric_records() {
 /// cross the fog without scattering reads 0.94 against the paths' 1.50 in the fog box.)
 #[test]
 fn the_global_map_serves_the_deeper_light_at_the_records_gather_hits() {
-    use ircache_render::integrators::volpath::VolPathIntegrator;
     use ircache_render::irradiance_cache::prepare::media_global_map;
     use ircache_render::irradiance_cache::IcParams;
-    use ircache_render::media_cache::cache::{first_site, make_record, RecordSources};
-    use ircache_render::media_cache::volume_records::VolumeCache;
+    use ircache_render::media_cache::cache::{make_record, RecordSources};
     for name in ["cornell-fog", "smoke-box"] {
         let scene = Scene::build(&fog_scene(name, "irrcache", 6, 16, 1)).expect("scene");
         let params = IcParams {
@@ -1888,26 +1859,8 @@ fn the_global_map_serves_the_deeper_light_at_the_records_gather_hits() {
             ..params.clone()
         };
         let map = Arc::new(media_global_map(&scene, &params, 3).expect("a global map"));
-        let volume = Arc::new(VolumeCache::build(
-            &VolPathIntegrator::plain(6),
-            &scene,
-            params.accuracy,
-            256,
-            16,
-            32,
-            32,
-            1,
-            Vec::new(),
-        ));
-        let sites: Vec<_> = (0..12)
-            .filter_map(|i| {
-                let film = ircache_math::Vec2::new(
-                    0.1 + 0.8 * (i % 4) as f32 / 3.0,
-                    0.15 + 0.7 * (i / 4) as f32 / 2.0,
-                );
-                first_site(&scene, scene.camera.generate_ray(film))
-            })
-            .collect();
+        let volume = volume_records_of(&scene, params.accuracy);
+        let sites = camera_sites(&scene);
         assert!(sites.len() >= 10, "{name}: {} sites", sites.len());
         let keys = 6u64;
         // Per key, the sums over sites of the first bounce and of the deeper part each way.
@@ -1933,15 +1886,9 @@ fn the_global_map_serves_the_deeper_light_at_the_records_gather_hits() {
             deeper[0].push(sums[1]);
             deeper[1].push(sums[2]);
         }
-        let stats = |v: &[f64]| {
-            let n = v.len() as f64;
-            let mean = v.iter().sum::<f64>() / n;
-            let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-            (mean, var)
-        };
-        let (once, _) = stats(&first_sums);
-        let (traced, traced_var) = stats(&deeper[0]);
-        let (photons, photons_var) = stats(&deeper[1]);
+        let (once, _) = mean_and_variance(&first_sums);
+        let (traced, traced_var) = mean_and_variance(&deeper[0]);
+        let (photons, photons_var) = mean_and_variance(&deeper[1]);
         let error = ((traced_var + photons_var) / keys as f64).sqrt();
         assert!(
             traced > 0.1 * once,
@@ -1953,4 +1900,47 @@ fn the_global_map_serves_the_deeper_light_at_the_records_gather_hits() {
             "{name}: photons {photons}, paths {traced} ± {error}"
         );
     }
+}
+
+/// Volumetric records of `scene` at `max_depth` 6 for a 32 × 32 image, 256 paths each, 16 march
+/// points (the surface-record tests' stand-in for the pre-pass's).
+fn volume_records_of(
+    scene: &Scene,
+    accuracy: f32,
+) -> Arc<ircache_render::media_cache::volume_records::VolumeCache> {
+    use ircache_render::integrators::volpath::VolPathIntegrator;
+    Arc::new(
+        ircache_render::media_cache::volume_records::VolumeCache::build(
+            &VolPathIntegrator::plain(6),
+            scene,
+            accuracy,
+            256,
+            16,
+            32,
+            32,
+            1,
+            Vec::new(),
+        ),
+    )
+}
+
+/// The first record sites of 12 camera rays spread over the film (4 × 3).
+fn camera_sites(scene: &Scene) -> Vec<ircache_render::media_cache::cache::RecordSite> {
+    (0..12)
+        .filter_map(|i| {
+            let film = ircache_math::Vec2::new(
+                0.1 + 0.8 * (i % 4) as f32 / 3.0,
+                0.15 + 0.7 * (i / 4) as f32 / 2.0,
+            );
+            ircache_render::media_cache::cache::first_site(scene, scene.camera.generate_ray(film))
+        })
+        .collect()
+}
+
+/// The mean of `v` and its sample variance.
+fn mean_and_variance(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, var)
 }
