@@ -111,11 +111,17 @@ pub fn run_all(with_mitsuba: bool, case: Option<&str>) -> Result<()> {
         let best = measure(&out, &reference)?;
         show(&format!("{name}: ic"), &best);
         let (surface, volume) = (
-            out.media_cache.map_or(0.0, |st| st.seconds),
+            out.media_cache.as_ref().map_or(0.0, |st| st.seconds),
             out.volume_records.map_or(0.0, |st| st.seconds),
         );
+        let photons = out
+            .media_cache
+            .and_then(|st| st.global_map)
+            .map_or(String::new(), |m| {
+                format!(", global map {:.2} s", m.seconds)
+            });
         println!(
-            "    pre-passes: surface records {surface:.2} s, volumetric records {volume:.2} s"
+            "    pre-passes: surface records {surface:.2} s, volumetric records {volume:.2} s{photons}"
         );
         race(&scene, &desc, &reference, &best)?;
     }
