@@ -21,11 +21,12 @@
 //! at smooth glass and mirrors the march goes on along the lobe the sampler picks (its weight
 //! in the throughput, the vertices beyond one deeper each), so that fog seen through glass or in
 //! a mirror is marched as fog seen directly (scenes/glass-in-fog: relMSE_trim −10 %, blurred
-//! −27 %, same time). Beyond one such vertex the volumetric records serve with their light one
-//! bounce shorter, the light of paths one vertex shorter, which is what a point one vertex
-//! deeper receives ([`crate::media_cache::volume_records::VolumeCache::in_scattered_short`]);
-//! beyond two the records' depth is no longer the path's: they give way to one tracked
-//! collision. The surface behind is `volpath`'s.
+//! −27 %, same time). Beyond one or two such vertices the volumetric records serve with their
+//! light one or two bounces shorter, the light of paths as many vertices shorter, which is what
+//! a point as many vertices deeper receives
+//! ([`crate::media_cache::volume_records::VolumeCache::in_scattered_shorter`]); beyond that the
+//! records' depth is no longer the path's: they give way to one tracked collision. The surface
+//! behind is `volpath`'s.
 //!
 //! In homogeneous media the three are unbiased and their sum converges to `volpath` (tested
 //! against it). In grids the transmittance is the model's: the optical depth by midpoints of
@@ -36,7 +37,7 @@
 use super::equiangular::{DistanceDensity, Segment};
 use super::light_sampling::BsdfStrategy;
 use super::path_continuation::{count_and_roulette, sample_continuation, Arrival};
-use super::volpath::{light_sample_with, PathState, Vertex, VolPathIntegrator};
+use super::volpath::{light_sample_with, PathState, Vertex, VolPathIntegrator, SHORTER};
 use super::RayCounts;
 use crate::media::tracking::{medium_after, sample_flight, Flight, MAX_CROSSINGS};
 use crate::media::Medium;
@@ -66,8 +67,8 @@ pub fn lattice_point(shift: [f32; 3], i: u32) -> (f32, Vec2) {
 }
 
 /// Delta vertices past which the volumetric records still serve a camera path's march: their
-/// light, and that one bounce shorter.
-const RECORD_DEPTHS: u32 = 1;
+/// light, and that one and two bounces shorter.
+const RECORD_DEPTHS: u32 = SHORTER as u32;
 
 /// Radiance along the camera ray `ray` (closest hit `first_hit`), marched (see the module).
 #[allow(clippy::too_many_arguments)]
@@ -96,7 +97,7 @@ pub(crate) fn li(
     let mut collision_beta = Rgb::ONE;
     let mut collision: Option<MarchPoint> = None;
     // (The volumetric records serve it at the quadrature's points instead, where they exist:
-    // up to the first delta vertex, past it with their light one bounce shorter.)
+    // up to two delta vertices deep, with their light as many bounces shorter.)
     let mut tracking = max_depth > 2 && integrator.volume_records.is_none();
     let mut walk_begun = tracking;
     let mut crossings = 0u32;
@@ -173,7 +174,7 @@ pub(crate) fn li(
                         light_samples: 0,
                     };
                     depth += 1;
-                    // Past the second delta vertex the records' depth is not the path's:
+                    // Past the records' depths the records' depth is not the path's:
                     // from there the in-scattered indirect light is tracked to one collision,
                     // the walk weighted by the transmittance so far.
                     if !walk_begun && depth > RECORD_DEPTHS && depth + 2 < max_depth {
@@ -369,13 +370,12 @@ fn source(
         q += c.sigma_s * light_sample_with(scene, &vertex, Some(at.medium), None, u, rng, rays);
     }
     if at.depth + 2 < max_depth {
-        // Beyond two delta vertices the caller tracks the indirect light to one collision.
+        // Deeper, the caller tracks the indirect light to one collision.
         let records = integrator.volume_records.as_ref();
         if let Some(records) = records.filter(|_| at.depth <= RECORD_DEPTHS) {
-            let served = if at.depth == 0 {
-                records.in_scattered(at.p, at.medium, at.d, med.phase)
-            } else {
-                records.in_scattered_short(at.p, at.medium, at.d, med.phase)
+            let served = match at.depth {
+                0 => records.in_scattered(at.p, at.medium, at.d, med.phase),
+                k => records.in_scattered_shorter(at.p, at.medium, at.d, med.phase, k as usize),
             };
             let indirect = served.unwrap_or_else(|| {
                 let key = u64::from(rng.next_u32());

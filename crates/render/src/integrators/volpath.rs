@@ -168,9 +168,9 @@ impl VolPathIntegrator {
     /// [`crate::photon_map::trace`]), and the path on from it leaves out the emission it finds
     /// in the same way; any other vertex, and a scattering in a medium, ends that rule.
     ///
-    /// The part of the light that the path's last vertex (depth `max_depth` − 1) emits is also
-    /// kept apart ([`PathLight::last`]): what the same path brings with one vertex fewer allowed
-    /// is the difference. Light from the media cache's records and the caustic map is counted in
+    /// The parts of the light that the path's last two vertices (depths `max_depth` − 1 and − 2)
+    /// emit are also kept apart ([`PathLight::last`]): what the same path brings with one or two
+    /// vertices fewer allowed is the difference ([`PathLight::shorter`]). Light from the media cache's records and the caustic map is counted in
     /// full alone: the part is exact for an integrator without them.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn trace(
@@ -184,12 +184,14 @@ impl VolPathIntegrator {
         rays: &mut RayCounts,
     ) -> PathLight {
         let max_depth = self.depth_limit();
-        let mut last = Rgb::ZERO;
-        // Light emitted at vertex `at`: counted in full, and apart where `at` is the last.
+        let mut last = [Rgb::ZERO; SHORTER];
+        // Light emitted at vertex `at`: counted in full, and apart where `at` is one of the last.
         let mut add = |l: &mut Rgb, value: Rgb, at: u32| {
             *l += value;
-            if at.saturating_add(1) == max_depth {
-                last += value;
+            for (k, part) in last.iter_mut().enumerate() {
+                if at.saturating_add(k as u32 + 1) == max_depth {
+                    *part += value;
+                }
             }
         };
         let PathState {
@@ -393,7 +395,7 @@ impl VolPathIntegrator {
                         photon_reflected(scene, map, &it, &bsdf, ray.d, it.t, b)
                     })
                     .flatten();
-                if let Some((all, last_part)) = reflected {
+                if let Some((all, last_parts)) = reflected {
                     if bsdf.has_smooth() && !scene.lights.is_empty() {
                         let vertex = Vertex::Surface(&it, &bsdf, wo_local);
                         let direct =
@@ -401,7 +403,9 @@ impl VolPathIntegrator {
                         add(&mut l, beta * direct, depth + 1);
                     }
                     l += beta * all;
-                    last += beta * last_part;
+                    for (part, photons) in last.iter_mut().zip(last_parts) {
+                        *part += beta * photons;
+                    }
                     break;
                 }
             }
@@ -459,9 +463,9 @@ impl VolPathIntegrator {
 
 /// What the surface `it`, whose BSDF `bsdf` is Lambertian alone, reflects towards `-d` of the
 /// light that reaches it after a bounce or more, from the global map's photons of up to
-/// `bounces` bounces: `k E/π` (Jensen's cached final gather), and apart the part of the photons
-/// of exactly `bounces` bounces, whose paths end at the last vertex a path may take
-/// ([`PathLight::last`]). `None` for any other BSDF, and where `it` lies nearer to the vertex
+/// `bounces` bounces: `k E/π` (Jensen's cached final gather), and apart the parts of the photons
+/// of exactly `bounces` and `bounces` − 1 bounces, whose paths end at the last and the last but
+/// one vertex a path may take ([`PathLight::last`]). `None` for any other BSDF, and where `it` lies nearer to the vertex
 /// before it (`distance`) than the estimate's disc is wide (Jensen's rule for short gather rays,
 /// as [`crate::irradiance_cache::IrradianceCache::photon_irradiance`]).
 pub(crate) fn photon_reflected(
@@ -472,7 +476,7 @@ pub(crate) fn photon_reflected(
     d: Vec3,
     distance: f32,
     bounces: u16,
-) -> Option<(Rgb, Rgb)> {
+) -> Option<(Rgb, [Rgb; SHORTER])> {
     if !bsdf.is_diffuse_only() {
         return None;
     }
@@ -482,22 +486,34 @@ pub(crate) fn photon_reflected(
     } else {
         -it.frame.n
     };
-    let (e, fewer, radius) = map.irradiance_pair(it.p, n, bounces);
+    let ([e, fewer, fewer_2], radius) = map.irradiance_by_last_bounces(it.p, n, bounces);
     if distance < crate::irradiance_cache::gather::SHORT_RAY * radius {
         return None;
     }
     let k = bsdf.lambertian_albedo(it.frame.to_local(-d))
         * (ircache_math::INV_PI * scene.perturbed_lambertian_share(it));
-    Some((k * e, k * (e - fewer)))
+    Some((k * e, [k * (e - fewer), k * (fewer - fewer_2)]))
 }
 
-/// A path's light, and the part of it its last allowed vertex emits.
+/// How many of a path's last vertices [`PathLight`] keeps apart.
+pub(crate) const SHORTER: usize = 2;
+
+/// A path's light, and the parts of it its last allowed vertices emit.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct PathLight {
     /// All of it.
     pub all: Rgb,
-    /// What the vertex at depth `max_depth` − 1 emits (or the light samples before it take).
-    pub last: Rgb,
+    /// What the vertices at depth `max_depth` − 1 and `max_depth` − 2 emit (or the light
+    /// samples before them take).
+    pub last: [Rgb; SHORTER],
+}
+
+impl PathLight {
+    /// The light of the same path with `k` ≤ [`SHORTER`] vertices fewer allowed.
+    #[must_use]
+    pub fn shorter(&self, k: usize) -> Rgb {
+        self.last[..k].iter().fold(self.all, |l, &part| l - part)
+    }
 }
 
 /// How a light sample is weighed against the vertex's own phase or BSDF sample (power

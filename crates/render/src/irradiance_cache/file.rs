@@ -17,10 +17,10 @@
 //!   A record whose continuation is incomplete or damaged is skipped with it.
 //! - in scenes with media, volumetric records (`media_cache::volume_records`): a slot tagged
 //!   0xFD, 1 byte zero, 2 bytes zero, with position, radius, medium index and the first 24 of
-//!   the 27 spherical-harmonic values (9 coefficients × 3 channels), then two continuation
-//!   slots (numbers 0 and 1) with the last 3, the direction of the camera ray that placed the
+//!   the 27 spherical-harmonic values (9 coefficients × 3 channels), then three continuation
+//!   slots (numbers 0 to 2) with the last 3, the direction of the camera ray that placed the
 //!   record, the light bands above 2 scatter towards it (3 + 3; format 5) and the 27 values of
-//!   the light one bounce shorter (format 6). The media cache's surface records are ordinary
+//!   the light one bounce shorter (format 6), then 27 of it two bounces shorter (format 7). The media cache's surface records are ordinary
 //!   records.
 
 use super::params::{IcParams, PARAMS};
@@ -35,7 +35,7 @@ use std::path::{Path, PathBuf};
 /// Bytes that open every cache file.
 pub const MAGIC: &[u8; 8] = b"IRCACHE\0";
 /// The format version this build reads and writes.
-pub const VERSION: u32 = 6;
+pub const VERSION: u32 = 7;
 /// Header size in bytes.
 pub const HEADER_BYTES: usize = 1024;
 /// Record size in bytes (payload and checksum).
@@ -332,14 +332,14 @@ fn decode_radiance(slots: &[u8]) -> Option<(RadianceCoefficients, usize)> {
 
 /// A volumetric record's [`VOLUME_SLOTS`] slots.
 fn encode_volume(v: &VolumeRecord) -> Vec<u8> {
-    let mut values = Vec::with_capacity(11 + 3 * COEFFICIENTS);
+    let mut values = Vec::with_capacity(11 + 9 * COEFFICIENTS);
     values.extend_from_slice(&v.p.to_array());
     values.push(v.r);
     values.push(v.medium as f32);
     values.extend(v.radiance.iter().flat_map(|c| c.to_array()));
     values.extend_from_slice(&v.towards.to_array());
     values.extend_from_slice(&v.high_bands.to_array());
-    values.extend(v.short.iter().flat_map(|c| c.to_array()));
+    values.extend(v.shorter.iter().flatten().flat_map(|c| c.to_array()));
     let mut out = write_slot([VOLUME, 0, 0, 0], &values[..SLOT_FLOATS]).to_vec();
     for (k, chunk) in values[SLOT_FLOATS..].chunks(SLOT_FLOATS).enumerate() {
         let [lo, hi] = (k as u16).to_le_bytes();
@@ -350,8 +350,8 @@ fn encode_volume(v: &VolumeRecord) -> Vec<u8> {
 
 /// Slots a volumetric record takes: its own and [`VOLUME_CONTINUATIONS`].
 const VOLUME_SLOTS: usize = 1 + VOLUME_CONTINUATIONS;
-/// Continuation slots after a volumetric record's: 11 + 6 · 9 values, 29 a slot.
-const VOLUME_CONTINUATIONS: usize = 2;
+/// Continuation slots after a volumetric record's: 11 + 9 · 9 values, 29 a slot.
+const VOLUME_CONTINUATIONS: usize = 3;
 
 /// A volumetric record from the start of `slots`; `None` when it is not one, is damaged or
 /// lacks its continuation.
@@ -377,7 +377,9 @@ fn decode_volume(slots: &[u8]) -> Option<VolumeRecord> {
         radiance: std::array::from_fn(|i| rgb(5 + 3 * i)),
         towards: Vec3::from_slice(&values[end..end + 3]),
         high_bands: rgb(end + 3),
-        short: std::array::from_fn(|i| rgb(end + 6 + 3 * i)),
+        shorter: std::array::from_fn(|k| {
+            std::array::from_fn(|i| rgb(end + 6 + 3 * (k * COEFFICIENTS + i)))
+        }),
     })
 }
 
@@ -891,7 +893,9 @@ mod tests {
             radiance: std::array::from_fn(|k| Rgb::new(k as f32, -0.5 * k as f32, i as f32)),
             towards: Vec3::new(0.6, -0.8 * i as f32, 0.0),
             high_bands: Rgb::new(0.1, -0.2, i as f32),
-            short: std::array::from_fn(|k| Rgb::new(0.5 * k as f32, -(k as f32), i as f32)),
+            shorter: std::array::from_fn(|j| {
+                std::array::from_fn(|k| Rgb::new(0.5 * k as f32, -(k as f32), (i + j) as f32))
+            }),
         };
         let recs: Vec<Stored> = (0..3).map(|i| (record(i), None)).collect();
         let vols: Vec<VolumeRecord> = (0..3).map(volume).collect();

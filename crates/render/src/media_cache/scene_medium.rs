@@ -20,7 +20,7 @@
 //! Deeper bounces (`max_depth` above 3, [`SceneMedium::with_deeper_bounces`]) are in two parts.
 //! The light they scatter along the gather ray in a medium, ∫ T σ_s L_ind dt, comes from the
 //! volumetric records' light one bounce shorter (a point on a gather ray is one vertex deeper
-//! than the camera ray's points they were gathered for: [`VolumeCache::in_scattered_short`]) at
+//! than the camera ray's points they were gathered for: [`VolumeCache::in_scattered_shorter`]) at
 //! [`RECORD_POINTS`] quadrature points per segment, or a phase-sampled path at a point no record
 //! serves; the rest is `volpath`'s paths on from the opaque hit through the transmittance, a
 //! BSDF sample first. Where a medium on the ray scatters too far forward for bands 0–2, or
@@ -617,7 +617,7 @@ impl<'a> SceneMedium<'a> {
                     continue;
                 }
                 let l = records
-                    .in_scattered_short(p, m, d, med.phase)
+                    .in_scattered_shorter(p, m, d, med.phase, 1)
                     .unwrap_or_else(|| {
                         let at = MarchPoint {
                             p,

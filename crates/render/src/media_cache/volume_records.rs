@@ -17,11 +17,13 @@
 //! from directions near d₀ (the camera's rays through a record's neighbourhood arrive from about
 //! there; the share fades out by 30° away).
 //!
-//! A record also holds bands 0–2 of its light one bounce shorter, the light of its paths with
-//! one vertex fewer allowed (each path's last vertex's part kept apart:
-//! [`VolPathIntegrator::trace`]): a point on a surface record's gather ray is one vertex
+//! A record also holds bands 0–2 of its light one and two bounces shorter, the light of its
+//! paths with one or two vertices fewer allowed (each path's last two vertices' parts kept
+//! apart: [`VolPathIntegrator::trace`]): a point on a surface record's gather ray is one vertex
 //! deeper than the camera ray's points, so that is what it receives
-//! ([`VolumeCache::in_scattered_short`], [`crate::media_cache::scene_medium`]).
+//! ([`VolumeCache::in_scattered_shorter`], [`crate::media_cache::scene_medium`]), and so is fog
+//! seen in a mirror; fog seen through a glass sphere is two deeper
+//! ([`crate::integrators::media_march`]).
 //!
 //! Records are placed by a pre-pass along camera rays at the pixel pass's own quadrature points
 //! (one row at a time, gathered in parallel, inserted in row order: the same cache at any
@@ -35,7 +37,7 @@
 //! the fog box; the bias that remains is the interpolation's (BENCHMARKS.md).
 
 use crate::integrators::media_march::{indirect_arrival, quadrature_points};
-use crate::integrators::volpath::{PathState, VolPathIntegrator};
+use crate::integrators::volpath::{PathState, VolPathIntegrator, SHORTER};
 use crate::integrators::RayCounts;
 use crate::irradiance_cache::record::{CachedRecord, ErrorMetric};
 use crate::irradiance_cache::store::RecordStore;
@@ -61,9 +63,10 @@ pub struct VolumeRecord {
     pub medium: usize,
     /// L_ind's spherical-harmonic coefficients, index l² + l + m.
     pub radiance: [Rgb; COEFFICIENTS],
-    /// The same of L_ind one bounce shorter: the in-scattered indirect light of a point one
-    /// vertex deeper on a path (a surface record's gather ray), whose bounces are one fewer.
-    pub short: [Rgb; COEFFICIENTS],
+    /// The same of L_ind one and two bounces shorter: the in-scattered indirect light of a
+    /// point one or two vertices deeper on a path (a surface record's gather ray, fog seen in
+    /// a mirror or through glass), whose bounces are as many fewer.
+    pub shorter: [[Rgb; COEFFICIENTS]; SHORTER],
     /// The direction d₀ of the camera ray that placed it (unit).
     pub towards: Vec3,
     /// The light scattered towards −d₀ that bands above 2 hold: the gather's estimate of it
@@ -217,7 +220,7 @@ pub fn gather(
         (l, t_hit)
     };
     let mut sum = [Rgb::ZERO; COEFFICIENTS];
-    let mut short = [Rgb::ZERO; COEFFICIENTS];
+    let mut shorter = [[Rgb::ZERO; COEFFICIENTS]; SHORTER];
     let mut inverse_distances = 0.0f64;
     // Σ f_p L / (n p_sphere + n f_p) over both halves: the light scattered towards −`towards`.
     let n = count as f32;
@@ -247,9 +250,15 @@ pub fn gather(
             if reach.is_finite() {
                 inverse_distances += 1.0 / f64::from(reach.max(f32::MIN_POSITIVE));
             }
-            for ((s, h), &b) in sum.iter_mut().zip(&mut short).zip(&bands_0_to_2(w)) {
+            let bands = bands_0_to_2(w);
+            for (s, &b) in sum.iter_mut().zip(&bands) {
                 *s += l * b;
-                *h += (l - light.last) * b;
+            }
+            for (k, coefficients) in shorter.iter_mut().enumerate() {
+                let l = light.shorter(k + 1);
+                for (h, &b) in coefficients.iter_mut().zip(&bands) {
+                    *h += l * b;
+                }
             }
             scattered += balance(l, w);
         }
@@ -281,7 +290,7 @@ pub fn gather(
         r: harmonic.min(lamp).clamp(size / 64.0, size / 4.0),
         medium,
         radiance: sum.map(|s| s * solid_angle),
-        short: short.map(|s| s * solid_angle),
+        shorter: shorter.map(|c| c.map(|s| s * solid_angle)),
         towards,
         high_bands: Rgb::ZERO,
     };
@@ -374,13 +383,22 @@ impl VolumeCache {
         self.fit(p, medium, |rec| rec.in_scattered(&weights, d))
     }
 
-    /// The in-scattered indirect light one bounce shorter ([`VolumeRecord::short`]) at `p`
-    /// towards a ray along `d` per unit scattering coefficient, bands 0–2 alone, as
-    /// [`Self::in_scattered`] reads the whole.
+    /// The in-scattered indirect light `bounces` (1 or 2) bounces shorter
+    /// ([`VolumeRecord::shorter`]) at `p` towards a ray along `d` per unit scattering
+    /// coefficient, bands 0–2 alone, as [`Self::in_scattered`] reads the whole.
     #[must_use]
-    pub fn in_scattered_short(&self, p: Vec3, medium: usize, d: Vec3, phase: Phase) -> Option<Rgb> {
+    pub fn in_scattered_shorter(
+        &self,
+        p: Vec3,
+        medium: usize,
+        d: Vec3,
+        phase: Phase,
+        bounces: usize,
+    ) -> Option<Rgb> {
         let weights = scattering_weights(d, phase);
-        self.fit(p, medium, |rec| weighed(&rec.short, &weights))
+        self.fit(p, medium, |rec| {
+            weighed(&rec.shorter[bounces - 1], &weights)
+        })
     }
 
     /// The value at `p` of the weighted least-squares plane through `value` of the records of
@@ -821,11 +839,12 @@ mod tests {
         }
     }
 
-    /// A record's light one bounce shorter ([`VolumeRecord::short`], from the part of each
-    /// path's light its last vertex emits) is the light of the same paths with one vertex fewer
-    /// allowed: a record gathered on the same streams by `volpath` at `max_depth` − 1 holds it
-    /// (to rounding), in the fog box and in the smoke grid, at depths 4 and 6, where the last
-    /// bounce is more than 1 % of the light; unbounded paths have no last vertex. (Scenes with
+    /// A record's light one and two bounces shorter ([`VolumeRecord::shorter`], from the parts
+    /// of each path's light its last two vertices emit) is the light of the same paths with one
+    /// or two vertices fewer allowed: records gathered on the same streams by `volpath` at
+    /// `max_depth` − 1 and − 2 hold it (to rounding), in the fog box and in the smoke grid, at
+    /// depths 4 and 6, where each of the last two bounces is more than 1 % of the light;
+    /// unbounded paths have no last vertex. (Scenes with
     /// point or spot lights draw the last vertex's equiangular sample before the free flight
     /// that finds it, so there the two gathers' paths part.)
     #[test]
@@ -841,32 +860,43 @@ mod tests {
                     let integrator = VolPathIntegrator::plain(max_depth);
                     gather(&integrator, &scene, p, 0, 64, 0x5eed, Vec3::Z).0
                 };
-                let (whole, shorter) = (at(depth), at(depth - 1));
+                let whole = at(depth);
                 let scale = band_0(&whole.radiance);
-                for (i, (a, b)) in whole.short.iter().zip(&shorter.radiance).enumerate() {
-                    let off = (*a - *b).map(f32::abs).max_channel();
-                    assert!(
-                        off <= 1e-4 * scale,
-                        "{name}, depth {depth}, coefficient {i}: {a:?} against {b:?}"
-                    );
+                for k in 1..=SHORTER {
+                    let shorter = at(depth - k as i32);
+                    let ours = &whole.shorter[k - 1];
+                    for (i, (a, b)) in ours.iter().zip(&shorter.radiance).enumerate() {
+                        let off = (*a - *b).map(f32::abs).max_channel();
+                        assert!(
+                            off <= 1e-4 * scale,
+                            "{name}, depth {depth} less {k}, coefficient {i}: {a:?} against {b:?}"
+                        );
+                    }
                 }
                 assert!(
-                    band_0(&whole.radiance) > 1.01 * band_0(&whole.short),
+                    band_0(&whole.radiance) > 1.01 * band_0(&whole.shorter[0]),
                     "{name}, depth {depth}: the last bounce holds no light"
+                );
+                assert!(
+                    band_0(&whole.shorter[0]) > 1.01 * band_0(&whole.shorter[1]),
+                    "{name}, depth {depth}: the last bounce but one holds no light"
                 );
             }
             let unbounded = gather(&VolPathIntegrator::plain(-1), &scene, p, 0, 64, 7, Vec3::Z).0;
-            assert_eq!(unbounded.short, unbounded.radiance, "{name}: unbounded");
+            assert_eq!(
+                unbounded.shorter, [unbounded.radiance; 2],
+                "{name}: unbounded"
+            );
         }
     }
 
     /// With a global map ending the paths at their Lambertian vertices, a record's shorter
-    /// light keeps its meaning: the part of the photons of exactly the last allowed bounce is
-    /// left out ([`PhotonMap::irradiance_pair`](crate::photon_map::PhotonMap::irradiance_pair)),
-    /// so it matches a record gathered at `max_depth` − 1 with the same map within 1 % in band
-    /// 0 (512 paths; the two part at the vertex where only the longer one may read the map, so
-    /// not to rounding: they read 1.000002). Taking the photons' whole light as the last
-    /// vertex's reads 0.70.
+    /// light keeps its meaning: the parts of the photons of exactly the last allowed bounces are
+    /// left out ([`crate::photon_map::PhotonMap::irradiance_by_last_bounces`]), so it matches
+    /// records gathered at `max_depth` − 1 and − 2 with the same map within 1 % in band 0 (512
+    /// paths; they part at the vertex where only the longer one may read the map, so not to
+    /// rounding: one shorter read 1.000002). Taking the photons' whole light as the last
+    /// vertex's read 0.70.
     #[test]
     fn a_records_short_light_with_a_global_map() {
         use crate::irradiance_cache::prepare::media_global_map;
@@ -886,10 +916,16 @@ mod tests {
             };
             gather(&integrator, &scene, p, 0, 512, 0x5eed, Vec3::Z).0
         };
-        let (whole, shorter) = (at(6), at(5));
+        let whole = at(6);
         let band_0 = |c: &[Rgb; COEFFICIENTS]| f64::from(c[0].luminance());
-        let (a, b) = (band_0(&whole.short), band_0(&shorter.radiance));
-        assert!((a / b - 1.0).abs() < 0.01, "short {a} against {b}");
+        for k in 1..=SHORTER {
+            let (a, b) = (
+                band_0(&whole.shorter[k - 1]),
+                band_0(&at(6 - k as i32).radiance),
+            );
+            assert!((a / b - 1.0).abs() < 0.01, "{k} shorter {a} against {b}");
+        }
+        let a = band_0(&whole.shorter[0]);
         assert!(
             band_0(&whole.radiance) > 1.05 * a,
             "the last bounce holds no light"
@@ -1009,7 +1045,7 @@ mod tests {
             radiance,
             towards: Vec3::X,
             high_bands: Rgb::splat(1.0),
-            short: [Rgb::ZERO; COEFFICIENTS],
+            shorter: [[Rgb::ZERO; COEFFICIENTS]; SHORTER],
         };
         let fine = quadrature::sphere(200);
         for phase in [

@@ -153,26 +153,28 @@ pub fn irradiance(
     .unwrap_or((Rgb::ZERO, lookup.max_radius))
 }
 
-/// [`irradiance`] at `max_bounces` and, over the same disc, from the photons of fewer bounces.
+/// [`irradiance`] at `max_bounces` and, over the same disc, from the photons of one and of two
+/// bounces fewer at most.
 #[must_use]
-pub fn irradiance_pair(
+pub fn irradiance_by_last_bounces(
     tree: &KdTree,
     p: Vec3,
     n: Vec3,
     max_bounces: u16,
     lookup: &Lookup,
-) -> (Rgb, Rgb, f32) {
+) -> ([Rgb; 3], f32) {
     let accept = |ph: &PhotonTag| ph.bounces() <= max_bounces && same_side(ph, n);
     with_disc(tree, p, n, &accept, lookup, |found, area, r| {
-        let (mut all, mut fewer) = (Rgb::ZERO, Rgb::ZERO);
+        let mut sums = [Rgb::ZERO; 3];
         for f in found {
             let photon = &tree.photons[f.index as usize];
-            all += photon.flux;
-            if photon.bounces < max_bounces {
-                fewer += photon.flux;
+            for (fewer, sum) in sums.iter_mut().enumerate() {
+                if u32::from(photon.bounces) + fewer as u32 <= u32::from(max_bounces) {
+                    *sum += photon.flux;
+                }
             }
         }
-        (all / area, fewer / area, r)
+        (sums.map(|s| s / area), r)
     })
-    .unwrap_or((Rgb::ZERO, Rgb::ZERO, lookup.max_radius))
+    .unwrap_or(([Rgb::ZERO; 3], lookup.max_radius))
 }

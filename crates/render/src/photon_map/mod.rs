@@ -166,29 +166,31 @@ impl PhotonMap {
         estimate::irradiance(&self.tree, p, n, max_bounces, lookup)
     }
 
-    /// [`PhotonMap::irradiance_and_radius`] at `max_bounces` and at one bounce fewer, from the
-    /// same estimate: what photons of exactly `max_bounces` bounces bring is the difference.
+    /// [`PhotonMap::irradiance_and_radius`] at `max_bounces` and at one and two bounces fewer,
+    /// from the same estimate: what photons of exactly `max_bounces` (or one fewer) bounces bring
+    /// is a difference.
     #[must_use]
-    pub fn irradiance_pair(
+    pub fn irradiance_by_last_bounces(
         &self,
         p: Vec3,
         n: Vec3,
         max_bounces: u16,
         lookup: &Lookup,
-    ) -> (Rgb, Rgb, f32) {
+    ) -> ([Rgb; 3], f32) {
         if let Some(pre) = &self.precomputed {
             let radius2 = lookup.max_radius * lookup.max_radius;
             let same_side = |normal: &PackedUnit| normal.dot(n) > 0.5;
             if let Some(i) = pre.tree.nearest_one(p.to_array(), radius2, &same_side) {
-                let column = |b: u16| usize::from(b).min(pre.columns - 1);
                 let row = &pre.irradiance[i * pre.columns..(i + 1) * pre.columns];
-                let fewer = max_bounces
-                    .checked_sub(1)
-                    .map_or(Rgb::ZERO, |b| row[column(b)]);
-                return (row[column(max_bounces)], fewer, pre.radii[i]);
+                let at = |fewer: u16| {
+                    max_bounces
+                        .checked_sub(fewer)
+                        .map_or(Rgb::ZERO, |b| row[usize::from(b).min(pre.columns - 1)])
+                };
+                return ([at(0), at(1), at(2)], pre.radii[i]);
             }
         }
-        estimate::irradiance_pair(&self.tree, p, n, max_bounces, lookup)
+        estimate::irradiance_by_last_bounces(&self.tree, p, n, max_bounces, lookup)
     }
 
     /// The caustic map of `wanted` photons of up to `max_bounces` bounces, on a stream of its
@@ -234,11 +236,17 @@ impl ServingMap {
         self.map.irradiance(p, n, max_bounces, &self.lookup)
     }
 
-    /// [`Self::irradiance`] at `max_bounces` and at one bounce fewer, and the radius of the
-    /// disc they came from ([`PhotonMap::irradiance_pair`]).
+    /// [`Self::irradiance`] at `max_bounces` and at one and two bounces fewer, and the radius
+    /// of the disc they came from ([`PhotonMap::irradiance_by_last_bounces`]).
     #[must_use]
-    pub fn irradiance_pair(&self, p: Vec3, n: Vec3, max_bounces: u16) -> (Rgb, Rgb, f32) {
-        self.map.irradiance_pair(p, n, max_bounces, &self.lookup)
+    pub fn irradiance_by_last_bounces(
+        &self,
+        p: Vec3,
+        n: Vec3,
+        max_bounces: u16,
+    ) -> ([Rgb; 3], f32) {
+        self.map
+            .irradiance_by_last_bounces(p, n, max_bounces, &self.lookup)
     }
 }
 
