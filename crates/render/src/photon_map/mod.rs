@@ -155,15 +155,23 @@ impl PhotonMap {
         max_bounces: u16,
         lookup: &Lookup,
     ) -> (Rgb, f32) {
-        if let Some(pre) = &self.precomputed {
-            let radius2 = lookup.max_radius * lookup.max_radius;
-            let same_side = |normal: &PackedUnit| normal.dot(n) > 0.5;
-            if let Some(i) = pre.tree.nearest_one(p.to_array(), radius2, &same_side) {
-                let column = usize::from(max_bounces).min(pre.columns - 1);
-                return (pre.irradiance[i * pre.columns + column], pre.radii[i]);
-            }
+        if let Some((row, radius)) = self.precomputed_row(p, n, lookup) {
+            return (row[usize::from(max_bounces).min(row.len() - 1)], radius);
         }
         estimate::irradiance(&self.tree, p, n, max_bounces, lookup)
+    }
+
+    /// The precomputed estimates nearest `p` on the side of `n` (one per bounce limit) and
+    /// their disc's radius; `None` where none lies within the lookup's reach.
+    fn precomputed_row(&self, p: Vec3, n: Vec3, lookup: &Lookup) -> Option<(&[Rgb], f32)> {
+        let pre = self.precomputed.as_ref()?;
+        let radius2 = lookup.max_radius * lookup.max_radius;
+        let same_side = |normal: &PackedUnit| normal.dot(n) > 0.5;
+        let i = pre.tree.nearest_one(p.to_array(), radius2, &same_side)?;
+        Some((
+            &pre.irradiance[i * pre.columns..(i + 1) * pre.columns],
+            pre.radii[i],
+        ))
     }
 
     /// [`PhotonMap::irradiance_and_radius`] at `max_bounces` and at one and two bounces fewer,
@@ -177,18 +185,13 @@ impl PhotonMap {
         max_bounces: u16,
         lookup: &Lookup,
     ) -> ([Rgb; 3], f32) {
-        if let Some(pre) = &self.precomputed {
-            let radius2 = lookup.max_radius * lookup.max_radius;
-            let same_side = |normal: &PackedUnit| normal.dot(n) > 0.5;
-            if let Some(i) = pre.tree.nearest_one(p.to_array(), radius2, &same_side) {
-                let row = &pre.irradiance[i * pre.columns..(i + 1) * pre.columns];
-                let at = |fewer: u16| {
-                    max_bounces
-                        .checked_sub(fewer)
-                        .map_or(Rgb::ZERO, |b| row[usize::from(b).min(pre.columns - 1)])
-                };
-                return ([at(0), at(1), at(2)], pre.radii[i]);
-            }
+        if let Some((row, radius)) = self.precomputed_row(p, n, lookup) {
+            let at = |fewer: u16| {
+                max_bounces
+                    .checked_sub(fewer)
+                    .map_or(Rgb::ZERO, |b| row[usize::from(b).min(row.len() - 1)])
+            };
+            return ([at(0), at(1), at(2)], radius);
         }
         estimate::irradiance_by_last_bounces(&self.tree, p, n, max_bounces, lookup)
     }
