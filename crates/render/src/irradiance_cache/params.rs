@@ -845,7 +845,10 @@ pub const PARAMS: &[ParamSpec] = &[
                rays read the indirect light of the surfaces they hit from it instead of tracing \
                on (Jensen's cached final gather, Radiance's -ap); 0: off; auto: 100000 where \
                the surfaces gather rays hit have indirect light of their own (-ab 2 or more \
-               with the deeper bounces traced) or with --photon-records on, else none",
+               with the deeper bounces traced) or with --photon-records on, else none; in \
+               participating media the photons scatter in the medium too, and auto makes the \
+               map only where 4 photons emitted per photon asked store half (not where a \
+               medium emits, whose light photons do not carry)",
         shapes_records: true,
         get: |p| photons_text(p.photons),
         set: |p, v| {
