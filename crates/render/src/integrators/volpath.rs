@@ -383,35 +383,25 @@ impl VolPathIntegrator {
             }
             // With a global map, a Lambertian vertex the cache did not serve takes the light
             // after a bounce from it and ends the path, its light samples alone.
-            if let Some(map) = self
+            let photons = self
                 .global
                 .as_ref()
                 .filter(|_| strategy == BsdfStrategy::All)
-            {
-                let bounces = max_depth.saturating_sub(depth + 2);
-                let reflected = (bounces > 0)
-                    .then(|| {
-                        let b = crate::photon_map::bounce_limit(bounces);
-                        photon_reflected(scene, map, &it, &bsdf, ray.d, it.t, b)
-                    })
-                    .flatten();
-                if let Some((all, last_parts)) = reflected {
-                    if bsdf.has_smooth() && !scene.lights.is_empty() {
-                        let vertex = Vertex::Surface(&it, &bsdf, wo_local);
-                        let direct =
-                            sample_light(scene, &vertex, medium, depth, None, sampler, rng, rays);
-                        add(&mut l, beta * direct, depth + 1);
-                    }
-                    l += beta * all;
-                    for (part, photons) in last.iter_mut().zip(last_parts) {
-                        *part += beta * photons;
-                    }
-                    break;
-                }
-            }
-            // Caustics from the map at a Lambertian vertex the cache did not serve.
+                .and_then(|map| {
+                    let bounces = max_depth.saturating_sub(depth + 2);
+                    let b = crate::photon_map::bounce_limit(bounces);
+                    (bounces > 0)
+                        .then(|| photon_reflected(scene, map, &it, &bsdf, ray.d, it.t, b))
+                        .flatten()
+                });
+            // Caustics from the map at a Lambertian vertex the cache did not serve (the global
+            // map's photons hold them where it serves).
             let mut caustics_served = false;
-            if strategy == BsdfStrategy::All && self.caustics.is_some() && bsdf.is_diffuse_only() {
+            if strategy == BsdfStrategy::All
+                && photons.is_none()
+                && self.caustics.is_some()
+                && bsdf.is_diffuse_only()
+            {
                 let k = bsdf.lambertian_albedo(wo_local);
                 let n = ShadingPoint::facing(it, wo).n;
                 l += beta * k * self.caustic_irradiance(&it, n, depth) * ircache_math::INV_PI;
@@ -419,19 +409,28 @@ impl VolPathIntegrator {
             }
             if strategy == BsdfStrategy::All {
                 // Without media, the last light samples stand alone where `path`'s do (a medium
-                // would emit or scatter along the last ray, which must then be traced).
-                let alone = !scene.has_media()
-                    && super::light_sampling::light_samples_suffice(
-                        scene,
-                        &bsdf,
-                        depth + 2 >= max_depth,
-                    );
+                // would emit or scatter along the last ray, which must then be traced); so do
+                // those of a vertex the global map serves.
+                let alone = photons.is_some()
+                    || (!scene.has_media()
+                        && super::light_sampling::light_samples_suffice(
+                            scene,
+                            &bsdf,
+                            depth + 2 >= max_depth,
+                        ));
                 if bsdf.has_smooth() && !scene.lights.is_empty() {
                     let vertex = Vertex::Surface(&it, &bsdf, wo_local);
                     let weighing = (!alone).then_some(Weighing::ONE);
                     let direct =
                         sample_light(scene, &vertex, medium, depth, weighing, sampler, rng, rays);
                     add(&mut l, beta * direct, depth + 1);
+                }
+                if let Some((all, last_parts)) = photons {
+                    l += beta * all;
+                    for (part, photons) in last.iter_mut().zip(last_parts) {
+                        *part += beta * photons;
+                    }
+                    break;
                 }
                 if alone {
                     break;

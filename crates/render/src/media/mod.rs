@@ -175,6 +175,14 @@ impl Medium {
         )
     }
 
+    /// True for a point inside the medium's box (everywhere for a medium without one).
+    #[inline]
+    #[must_use]
+    pub fn contains(&self, p: Vec3) -> bool {
+        self.bounds
+            .is_none_or(|(lo, hi)| p.cmpge(lo).all() && p.cmple(hi).all())
+    }
+
     /// The coefficients where they are the same everywhere inside (constant extinction and
     /// albedo): the densities of free-flight sampling are then closed forms.
     #[must_use]

@@ -147,14 +147,13 @@ impl Traced {
     }
 }
 
-/// A source evaluated at a point towards a direction: its value and, where the light samples
-/// could be differentiated in closed form, its gradient.
+/// A source evaluated at a point towards a direction: its value and its gradient.
 #[derive(Clone, Copy, Debug)]
 struct Source {
     p: DVec3,
     w: DVec3,
     q: [f64; 3],
-    gradient: Option<[DVec3; 3]>,
+    gradient: [DVec3; 3],
 }
 
 /// A scene seen by a gather from one receiver.
@@ -228,9 +227,8 @@ impl<'a> SceneMedium<'a> {
         }
     }
 
-    /// Differentiates along the receiver's tangents `[s, t]` only, by forward differences from
-    /// the source just evaluated (the gradients' normal components are then zero; the estimator
-    /// drops them anyway): two extra source evaluations per march step instead of six.
+    /// Keeps the gradients' parts along the receiver's tangents `[s, t]` only (the estimator
+    /// drops the normal components anyway).
     #[must_use]
     pub fn with_tangents(mut self, tangents: [DVec3; 2]) -> Self {
         self.tangents = Some(tangents);
@@ -770,12 +768,7 @@ impl<'a> SceneMedium<'a> {
     fn coefficients(&self, medium: Option<usize>, p: DVec3) -> Option<crate::media::Coefficients> {
         let m = &self.scene.media[medium?];
         let p = p.as_vec3();
-        if let Some((lo, hi)) = m.bounds {
-            if !(p.cmpge(lo).all() && p.cmple(hi).all()) {
-                return None;
-            }
-        }
-        Some(m.at(p))
+        m.contains(p).then(|| m.at(p))
     }
 
     /// [`Self::coefficients`] with their gradients in a grid (`None` in a homogeneous medium).
@@ -795,10 +788,8 @@ impl<'a> SceneMedium<'a> {
             }
         }
         let x = p.as_vec3();
-        if let Some((lo, hi)) = m.bounds {
-            if !(x.cmpge(lo).all() && x.cmple(hi).all()) {
-                return None;
-            }
+        if !m.contains(x) {
+            return None;
         }
         let (c, g) = m.at_with_gradient(x);
         self.last_gradients.set(Some((index, p, c, g)));
@@ -850,7 +841,7 @@ impl<'a> SceneMedium<'a> {
             p,
             w,
             q: [0.0; 3],
-            gradient: Some([DVec3::ZERO; 3]),
+            gradient: [DVec3::ZERO; 3],
         };
         // The coefficients with their own gradients, exact for the grids' interpolants.
         let Some((c, coefficient_gradients)) = self.coefficients_with_gradients(medium, p) else {
@@ -882,7 +873,7 @@ impl<'a> SceneMedium<'a> {
             }
         }
         out.q = rgb(q);
-        out.gradient = Some(gradient);
+        out.gradient = gradient;
         out
     }
 
@@ -977,26 +968,10 @@ impl<'a> SceneMedium<'a> {
         let medium = self.medium_along(o, w, t);
         let p = o + w * t;
         let known = *self.last_source.borrow();
-        let source = match known {
-            Some(s) if s.p == p && s.w == w => s,
-            _ => self.q_with_gradient(medium, p, w, march_step),
-        };
-        if let Some(g) = source.gradient {
-            return g;
+        match known {
+            Some(s) if s.p == p && s.w == w => s.gradient,
+            _ => self.q_with_gradient(medium, p, w, march_step).gradient,
         }
-        // Spot lights: differences of the whole source, its light samples drawn anew.
-        let h = self.step(medium, p, t);
-        let Some(tangents) = self.tangents else {
-            return self.central(h, p, |q| self.q(medium, q, w, march_step));
-        };
-        let mut g = [DVec3::ZERO; 3];
-        for e in tangents {
-            let a = self.q(medium, p + e * h, w, march_step);
-            for c in 0..3 {
-                g[c] += e * ((a[c] - source.q[c]) / h);
-            }
-        }
-        g
     }
 
     /// A gradient as the estimator wants it: whole, or its part along the receiver's tangents.
@@ -1006,38 +981,6 @@ impl<'a> SceneMedium<'a> {
             Some(t) => t.iter().map(|&e| e * e.dot(g)).sum(),
             None => g,
         }
-    }
-
-    /// Central differences of `f` at `p` with step `h`, along the world axes or the
-    /// receiver's tangents.
-    fn central(&self, h: f64, p: DVec3, f: impl Fn(DVec3) -> [f64; 3]) -> [DVec3; 3] {
-        let world = [DVec3::X, DVec3::Y, DVec3::Z];
-        let axes: &[DVec3] = match &self.tangents {
-            Some(t) => t,
-            None => &world,
-        };
-        let mut g = [DVec3::ZERO; 3];
-        for &e in axes {
-            let (a, b) = (f(p + e * h), f(p - e * h));
-            for c in 0..3 {
-                g[c] += e * ((a[c] - b[c]) / (2.0 * h));
-            }
-        }
-        g
-    }
-
-    /// A difference step at `p`: a small fraction of the mean free path, or of the distance (at
-    /// least a thousandth of the scene's radius).
-    fn step(&self, medium: Option<usize>, p: DVec3, t: f64) -> f64 {
-        let sigma = self
-            .coefficients(medium, p)
-            .map_or(0.0, |c| f64::from(c.sigma_t.max_channel()));
-        let scale = if sigma > 0.0 {
-            1.0 / sigma
-        } else {
-            t.max(1e-3 * f64::from(self.scene.radius))
-        };
-        1e-3 * scale.min(t.max(f64::MIN_POSITIVE) + scale)
     }
 }
 

@@ -167,6 +167,18 @@ pub fn trace_photons_within(
     (photons, stats)
 }
 
+/// Russian roulette on a photon whose flux a step scales by `weight`: it goes on with
+/// probability min(max(`weight`), 1), its flux times `weight` over that, so that the flux per
+/// photon stays about even (Jensen §5.2.1); false where it ends.
+fn survives(flux: &mut Rgb, weight: Rgb, rng: &mut Rng) -> bool {
+    let q = weight.max_channel().min(1.0);
+    if !is_positive_finite(q) || rng.next_f32() >= q {
+        return false;
+    }
+    *flux = *flux * weight / q;
+    true
+}
+
 /// The bounding spheres of the shapes whose material has a delta lobe (emitters left out).
 #[must_use]
 pub fn caustic_targets(scene: &Scene) -> Targets {
@@ -241,14 +253,11 @@ fn trace_one(
         if let Some(m) = medium {
             let med = &scene.media[m];
             if kind == MapKind::Caustic {
-                // The share that crosses the segment unscattered, Russian roulette keeping
-                // the flux per photon even.
+                // The share that crosses the segment unscattered.
                 let tr = transmittance(med, ray.o, ray.d, it.t, &mut rng);
-                let q = tr.max_channel().min(1.0);
-                if !is_positive_finite(q) || rng.next_f32() >= q {
+                if !survives(&mut flux, tr, &mut rng) {
                     break;
                 }
-                flux = flux * tr / q;
             } else {
                 // Free flight: a scattering in the medium is a bounce, as in `volpath`.
                 let (mut weight, mut emitted) = (Rgb::ONE, Rgb::ZERO);
@@ -259,11 +268,9 @@ fn trace_one(
                 {
                     break;
                 }
-                let q = weight.max_channel().min(1.0);
-                if !is_positive_finite(q) || rng.next_f32() >= q {
+                if !survives(&mut flux, weight, &mut rng) {
                     break;
                 }
-                flux = flux * weight / q;
                 if let Flight::Scattered { t, .. } = flight {
                     let (d, _) = med.phase.sample(ray.d, rng.next_2d());
                     bounces += 1;
@@ -312,11 +319,9 @@ fn trace_one(
             } else {
                 (choice.weight, ray.d)
             };
-            let q = scale.max_channel().min(1.0);
-            if !is_positive_finite(q) || rng.next_f32() >= q {
+            if !survives(&mut flux, scale, &mut rng) {
                 break;
             }
-            flux = flux * scale / q;
             bounces += u16::from(reflected);
             medium = medium_after(shape.media, it.ng, d, medium);
             ray = scene.spawn_ray(&it, d);
@@ -369,12 +374,9 @@ fn trace_one(
         delta_only &= bs.delta;
         // Flux is not scaled by η² across a refraction (radiance is).
         let weight = bs.weight * (bs.eta * bs.eta) * scene.perturbed_shadowing(&it, wo);
-        // Russian roulette keeps the flux per photon about even (Jensen §5.2.1).
-        let q = weight.max_channel().min(1.0);
-        if !is_positive_finite(q) || rng.next_f32() >= q {
+        if !survives(&mut flux, weight, &mut rng) {
             break;
         }
-        flux = flux * weight / q;
         if direct_through {
             crossings += 1;
             if crossings > crate::scene::MAX_SHEET_CROSSINGS {
