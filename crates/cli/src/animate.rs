@@ -8,8 +8,10 @@ use crate::render::{
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use ircache_render::integrators::Integrator;
-use ircache_render::render::render;
+use ircache_render::irradiance_cache::params::on_off;
+use ircache_render::render::{render, render_rounds};
 use ircache_render::scene::Scene;
+use ircache_render::temporal::pixel_reuse::{still_pixels, Change, StillRuns};
 use ircache_render::temporal::record::SlopeKind;
 use ircache_render::temporal::{CacheMode, FrameStats, NextFrame, SequenceCache, TemporalParams};
 use ircache_scene::animation::{is_animation, load_animation, Animation};
@@ -47,6 +49,13 @@ pub struct AnimateArgs {
     /// the same random numbers: no holes, about twice the rays; BENCHMARKS.md).
     #[arg(long, default_value = NextFrame::default().name(), value_parser = NextFrame::parse)]
     pub next_frame: NextFrame,
+    /// `on`: where nothing that moved since the last frame can reach a pixel's sampled light
+    /// (emission, direct light: a static camera, static lights, Lambertian surfaces out of the
+    /// moving shapes' paths and shadows), the pixel keeps the mean of it over the frames since
+    /// it last changed, with new samples each frame, and adds the frame's cached light; `off`:
+    /// every frame's pixels on their own. Not with --adaptive or the splat integrator.
+    #[arg(long, default_value = "on", value_parser = on_off, action = clap::ArgAction::Set)]
+    pub accumulate: bool,
     /// Everything `ircache render` takes; SCENE is an `<animation>` file or a still scene
     /// (which then needs --frames; none: the built-in Cornell box), and -o a file name whose
     /// run of `#` is the frame number (default: the scene's name, `-####.exr`).
@@ -178,21 +187,83 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         .build()?;
     let mut cache =
         SequenceCache::new(ic, params, (settings.width, settings.height), settings.seed)?;
+    let accumulate = args.accumulate
+        && settings.sampling.adaptive.is_none()
+        && ic.pixel_pass != ircache_render::integrators::ic::PixelPass::Splat;
+    if args.accumulate && !accumulate {
+        say("note: --accumulate is off with --adaptive and the splat integrator".into());
+    }
+    let mut runs = StillRuns::new(settings.width * settings.height);
+    // The frame the runs end at so far.
+    let mut last_rendered: Option<u32> = None;
+    // Each frame's cached and sampled parts, until the runs are whole.
+    let parts = std::env::temp_dir().join(format!(
+        "ircache-animate-{}-{}",
+        std::process::id(),
+        t0.elapsed().as_nanos()
+    ));
+    let part_path = |frame: u32, part: &str| parts.join(format!("{part}-{frame}.exr"));
+    if accumulate {
+        std::fs::create_dir_all(&parts).with_context(|| {
+            format!(
+                "{}: cannot make a folder for the frames' parts",
+                parts.display()
+            )
+        })?;
+    }
     let mut fills: Vec<FrameStats> = Vec::new();
-    // Each frame's pixel pass: seconds and pixel samples taken.
-    let mut pixel_passes: Vec<(f64, u64)> = Vec::new();
+    // Each frame's pixel pass: seconds, pixel samples taken and pixels still since the frame
+    // before (`--accumulate`).
+    let mut pixel_passes: Vec<(f64, u64, usize)> = Vec::new();
     let mut render_frame = |cache: &SequenceCache, frame: u32, scene: &Scene| -> Result<()> {
         let mut ic = ic.clone();
         ic.seed = settings.seed;
         ic.cache = Some(std::sync::Arc::new(
             cache.cache_at(frame, scene, &animation, &pool)?,
         ));
-        let out = render(scene, &Integrator::Ic(ic), &settings, &|_| {})?;
-        let path = write(frame, &out.image)?;
-        pixel_passes.push((out.seconds, out.samples));
+        let integrator = Integrator::Ic(ic);
+        if !accumulate {
+            let out = render(scene, &integrator, &settings, &|_| {})?;
+            let path = write(frame, &out.image)?;
+            pixel_passes.push((out.seconds, out.samples, 0));
+            say(format!(
+                "frame {frame}: pixels {:.2} s -> {}",
+                out.seconds,
+                path.display()
+            ));
+            return Ok(());
+        }
+        let t = Instant::now();
+        let still = match last_rendered {
+            Some(f) if f + 1 == frame => {
+                let change = Change::between(&animation, &base, f as f32, frame as f32);
+                still_pixels(
+                    scene,
+                    &change,
+                    (settings.width, settings.height),
+                    settings.filter.radius(),
+                )
+            }
+            _ => vec![false; settings.width * settings.height],
+        };
+        let rounds = runs.rounds(&still);
+        let out = render_rounds(scene, &integrator, &settings, &|_| {}, Some(&rounds))?;
+        let cached = out.cached.as_ref().context("the frame's cached light")?;
+        let mut sampled = out.image.clone();
+        for (s, c) in sampled.pixels.iter_mut().zip(&cached.pixels) {
+            *s = *s - *c;
+        }
+        runs.add(frame, &still, &sampled);
+        last_rendered = Some(frame);
+        ircache_image::write_image(&part_path(frame, "cached"), cached, 0.0)?;
+        ircache_image::write_image(&part_path(frame, "sampled"), &sampled, 0.0)?;
+        let path = write(frame, &runs.so_far(cached))?;
+        let seconds = t.elapsed().as_secs_f64();
+        let kept = still.iter().filter(|&&s| s).count();
+        pixel_passes.push((seconds, out.samples, kept));
         say(format!(
-            "frame {frame}: pixels {:.2} s -> {}",
-            out.seconds,
+            "frame {frame}: pixels {seconds:.2} s, {:.1} % kept -> {}",
+            100.0 * kept as f64 / still.len().max(1) as f64,
             path.display()
         ));
         Ok(())
@@ -220,6 +291,19 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             render_frame(&cache, frame, &scene_at(frame)?)?;
         }
     }
+    if accumulate {
+        // Each frame again with its pixels' whole still runs.
+        for frame in first..=last {
+            let read = |part| ircache_image::read_image(&part_path(frame, part));
+            let image = runs.whole(frame, &read("cached")?, &read("sampled")?);
+            write(frame, &image)?;
+        }
+        std::fs::remove_dir_all(&parts)
+            .with_context(|| format!("{}: cannot remove", parts.display()))?;
+        say(format!(
+            "frames {first}..{last} written again with their pixels' whole still runs"
+        ));
+    }
     let wall = t0.elapsed().as_secs_f64();
     let gathers: usize = fills.iter().map(FrameStats::gathers).sum();
     let records: usize = fills.iter().map(|f| f.renewed + f.new).sum();
@@ -243,19 +327,19 @@ fn write_stats(
     path: &Path,
     args: &AnimateArgs,
     fills: &[FrameStats],
-    pixel_passes: &[(f64, u64)],
+    pixel_passes: &[(f64, u64, usize)],
     wall: f64,
 ) -> Result<()> {
     let frames: Vec<serde_json::Value> = fills
         .iter()
         .zip(pixel_passes)
-        .map(|(f, &(px, samples))| {
+        .map(|(f, &(px, samples, still))| {
             serde_json::json!({
                 "frame": f.frame, "live": f.live, "carried": f.carried, "renewed": f.renewed,
                 "new": f.new, "dropped": f.dropped, "estimates": f.estimates,
                 "estimate_rays": f.estimate_rays,
                 "gather_rays": f.gather_rays, "cache_seconds": f.seconds, "pixel_seconds": px,
-                "pixel_samples": samples,
+                "pixel_samples": samples, "still_pixels": still,
             })
         })
         .collect();
@@ -266,6 +350,7 @@ fn write_stats(
         "records_gathered": fills.iter().map(|f| f.renewed + f.new).sum::<usize>(),
         "estimates": fills.iter().map(|f| f.estimates).sum::<usize>(),
         "next_frame": args.next_frame.name(),
+        "accumulate": args.accumulate,
         "estimate_rays": fills.iter().map(|f| f.estimate_rays).sum::<u64>(),
         "gather_rays": fills.iter().map(|f| f.gather_rays).sum::<u64>(),
         "cache_seconds": fills.iter().map(|f| f.seconds).sum::<f64>(),

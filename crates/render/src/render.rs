@@ -175,6 +175,9 @@ pub struct RenderOutput {
     pub media_cache: Option<crate::media_cache::cache::MediaCacheStats>,
     /// What building the volumetric records did (`ic` in a scene with media).
     pub volume_records: Option<crate::media_cache::volume_records::VolumeCacheStats>,
+    /// The part of [`Self::image`] the cache gave ([`Integrator::li_deferring`]'s second
+    /// part), where [`render_rounds`] asked for it.
+    pub cached: Option<Image>,
 }
 
 /// The irradiance cache after a render.
@@ -200,6 +203,27 @@ pub fn render(
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderOutput, RenderError> {
+    render_rounds(scene, integrator, settings, progress, None)
+}
+
+/// [`render`], each pixel's samples drawn in its round of `rounds` (row by row; round 0 is
+/// [`render`]'s, each other a seed of its own: the fresh samples of a pixel whose earlier
+/// rounds are kept, [`crate::temporal::pixel_reuse`]), and the part the cache gave kept in
+/// [`RenderOutput::cached`]. Not with adaptive sampling or splatting.
+pub fn render_rounds(
+    scene: &Scene,
+    integrator: &Integrator,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+    rounds: Option<&[u32]>,
+) -> Result<RenderOutput, RenderError> {
+    if rounds.is_some()
+        && (settings.sampling.adaptive.is_some() || integrator.splatting().is_some())
+    {
+        return Err(RenderError::Invalid(
+            "pixel rounds are not available with --adaptive or the splat integrator".into(),
+        ));
+    }
     let (w, h) = (settings.width, settings.height);
     let tiles_x = w.div_ceil(TILE);
     let tiles_y = h.div_ceil(TILE);
@@ -243,7 +267,7 @@ pub fn render(
                                     integrator,
                                     settings,
                                     &sampler,
-                                    (x, y),
+                                    (x, y, rounds.map_or(0, |r| r[y * w + x])),
                                     (&mut state, to),
                                     &mut deferred,
                                     &mut rays,
@@ -292,7 +316,7 @@ pub fn render(
                     for (state, l) in states.iter_mut().zip(values) {
                         if let Some(l) = l {
                             // Splatting takes only filters of weight 1 (`Integrator::prepare`).
-                            state.add(l, 1.0, state.sums.samples, sampler.spp);
+                            state.add((l, Rgb::ZERO), 1.0, state.sums.samples, sampler.spp);
                             state.sums.samples += 1;
                         }
                     }
@@ -340,9 +364,17 @@ pub fn render(
         None => (integrator, None),
     };
     let mut image = Image::new(w, h);
+    let mut cached = rounds.map(|_| Image::new(w, h));
     let (mut invalid_samples, mut samples) = (0, 0);
     for (i, state) in states.iter().enumerate() {
         image.set(i % w, i / w, state.value());
+        if let Some(c) = &mut cached {
+            c.set(
+                i % w,
+                i / w,
+                state.cached / state.sums.samples.max(1) as f32,
+            );
+        }
         invalid_samples += state.invalid;
         samples += u64::from(state.sums.samples);
     }
@@ -379,6 +411,7 @@ pub fn render(
         cache,
         media_cache,
         volume_records,
+        cached,
     })
 }
 
@@ -396,6 +429,8 @@ const MAX_ROUNDS: usize = 32;
 struct PixelState {
     /// Sum of the samples' values.
     sum: Rgb,
+    /// Sum of the parts of them the cache gave.
+    cached: Rgb,
     /// The samples taken and their luminance sums (for adaptive sampling).
     sums: SampleSums,
     /// Samples dropped as invalid (counted in `samples`, as zero).
@@ -405,10 +440,11 @@ struct PixelState {
 impl PixelState {
     /// Adds sample `index` of `0..to` with its filter weight to the sums (an invalid one is
     /// counted and left out).
-    fn add(&mut self, l: Rgb, weight: f32, index: u32, to: u32) {
-        if l.is_valid_radiance() {
+    fn add(&mut self, (l, cached): (Rgb, Rgb), weight: f32, index: u32, to: u32) {
+        if l.is_valid_radiance() && cached.is_valid_radiance() {
             let l = l * weight;
             self.sum += l;
+            self.cached += cached * weight;
             self.sums.add(index, to, Some(f64::from(l.luminance())));
         } else {
             self.invalid += 1;
@@ -447,7 +483,8 @@ pub fn camera_ray(
     (scene.camera.generate_ray(film), weight)
 }
 
-/// Takes pixel (x, y)'s samples `state.sums.samples..to`: filter-importance-sampled estimates,
+/// Takes pixel (x, y)'s samples `state.sums.samples..to` in its `round` (0: the render's own
+/// samples; another, those of a seed of its own): filter-importance-sampled estimates,
 /// with their luminance sums for adaptive sampling. Samples that the integrator returns as
 /// non-finite or negative count as zero and are counted (Mitsuba drops them too).
 #[allow(clippy::too_many_arguments)]
@@ -456,17 +493,29 @@ fn extend_pixel(
     integrator: &Integrator,
     settings: &RenderSettings,
     samplers: &SamplerSettings,
-    (x, y): (usize, usize),
+    (x, y, round): (usize, usize, u32),
     (state, to): (&mut PixelState, u32),
     deferred: &mut DeferredShadows,
     rays: &mut RayCounts,
 ) {
+    let in_round;
+    let samplers = if round == 0 {
+        samplers
+    } else {
+        let mut s = samplers.clone();
+        s.seed = ircache_math::rng::mix64(
+            samplers.seed ^ u64::from(round).wrapping_mul(0xA24B_AED4_963E_E407),
+        );
+        in_round = s;
+        &in_round
+    };
     let mut sampler = samplers.pixel(x as u32, y as u32);
     // Camera rays of one pixel are nearly parallel, and the shadow rays of their first
     // vertices head for the same lights: both are traced in 16-wide packets.
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
     let mut hits = [None; 16];
     let mut l = [Rgb::ZERO; 16];
+    let mut cached = [Rgb::ZERO; 16];
     let mut weights = [1.0f32; 16];
     state.sums.extend_to(to);
     let mut done = state.sums.samples;
@@ -482,7 +531,7 @@ fn extend_pixel(
         for (i, ((k, ray), hit)) in (done..).zip(&camera[..n]).zip(&hits[..n]).enumerate() {
             sampler.set_sample(k, dims::vertex(0, 0));
             deferred.owner = i as u32;
-            l[i] = integrator.li_deferring(
+            (l[i], cached[i]) = integrator.li_deferring(
                 scene,
                 ray,
                 hit.as_ref(),
@@ -492,8 +541,9 @@ fn extend_pixel(
             );
         }
         deferred.resolve(scene, &mut l[..n]);
-        for ((k, &li), &weight) in (done..).zip(&l[..n]).zip(&weights[..n]) {
-            state.add(li, weight, k, to);
+        for (((k, &li), &c), &weight) in (done..).zip(&l[..n]).zip(&cached[..n]).zip(&weights[..n])
+        {
+            state.add((li, c), weight, k, to);
         }
         done += n as u32;
     }

@@ -331,3 +331,46 @@ fn radiance_records_keep_their_coefficients_over_time_and_renew_on_moving_shapes
         assert!(img.pixels.iter().all(|p| p.is_finite()));
     }
 }
+
+/// The pixels the reuse test calls still between two frames of the moving cube
+/// (`temporal::pixel_reuse`) render the same direct light in both frames, bit for bit (the
+/// `direct` integrator with the same seed: emission, light samples and BSDF samples, rendered
+/// on its own), at the start, the middle and the end of the move; what changed lies among the
+/// others. The cube's pixels and its shadow's are not still; most of the room is.
+#[test]
+fn still_pixels_render_the_same_direct_light_in_both_frames() {
+    use ircache_render::temporal::pixel_reuse::{still_pixels, Change};
+    let (mut desc, anim) = load("animation.xml", 48, 4);
+    desc.integrator.kind = "direct".into();
+    let s = settings(&desc);
+    let integrator = Integrator::from_desc(&desc.integrator).expect("direct");
+    let frame = |f: u32| {
+        let scene = Scene::build(&anim.scene_at(&desc, f as f32)).expect("scene");
+        let image = render(&scene, &integrator, &s, &|_| {})
+            .expect("renders")
+            .image;
+        (scene, image)
+    };
+    for f in [0, 23, 46] {
+        let (_, before) = frame(f);
+        let (scene, after) = frame(f + 1);
+        let change = Change::between(&anim, &desc, f as f32, (f + 1) as f32);
+        let still = still_pixels(&scene, &change, (s.width, s.height), s.filter.radius());
+        let (mut kept, mut changed) = (0, 0);
+        for (i, &st) in still.iter().enumerate() {
+            let (x, y) = (i % s.width, i / s.width);
+            let same = before.get(x, y) == after.get(x, y);
+            changed += usize::from(!same);
+            if st {
+                kept += 1;
+                assert!(same, "frame {f}: pixel ({x}, {y}) called still changed");
+            }
+        }
+        let share = kept as f64 / still.len() as f64;
+        assert!(changed > 20, "frame {f}: {changed} pixels changed");
+        assert!((0.6..0.98).contains(&share), "frame {f}: {share} kept");
+        // Nothing moves between two equal poses past the last key.
+        let change = Change::between(&anim, &desc, 47.0, 48.0);
+        assert!(change.is_none());
+    }
+}

@@ -2,11 +2,12 @@
 //! rendering whole sequences, in the same run.
 //!
 //! For each animation: per-frame references from Mitsuba 3 (`multijitter`, two independent
-//! halves of `REFERENCE_SPP` each, the frames' motions applied to the shapes through
+//! halves of [`Case::reference_spp`] each, the frames' motions applied to the shapes through
 //! `mi.traverse`, the matrices computed by ircache's own animation code); `ircache animate` (a
 //! process each, wall time) with the temporal cache (interpolated and extrapolated temporal
-//! gradients; next frames estimated by reprojection, the default, and by gathering again; and
-//! with `--adaptive` pixel sampling), the age-based cache and a cache per frame; the measures of
+//! gradients; next frames estimated by reprojection, the default, and by gathering again; with
+//! still pixels' sampled light kept over frames, the default, and without; and with
+//! `--adaptive` pixel sampling), the age-based cache and a cache per frame; the measures of
 //! `ircache_image::flicker`; then Mitsuba `multijitter` per frame at 4, 16, 64, … spp
 //! ([`super::next_sample_count`]) until its mean relMSE reaches both temporal caches' (uniform and
 //! adaptive), the equal-error times interpolated between the two sequences that bracket them
@@ -22,8 +23,6 @@ use ircache_scene::animation::{load_animation, Target};
 use std::path::Path;
 use std::time::Instant;
 
-/// Samples per pixel of each half of the references.
-const REFERENCE_SPP: u32 = 512;
 /// Samples per pixel of the cache's renders.
 const SPP: u32 = 16;
 /// `--adaptive` of the adaptive row (pilot 4 spp; `ic`'s target scale, as `bench --only adaptive`).
@@ -39,6 +38,9 @@ struct Case {
     frames: (u32, u32),
     /// Image size.
     size: (u32, u32),
+    /// Samples per pixel of each half of the references: enough that their noise stays
+    /// below the still pixels' error once the frames have kept their samples for a while.
+    reference_spp: u32,
     /// Why Mitsuba's equal-error search is not run, if it is not.
     no_search: Option<&'static str>,
 }
@@ -84,6 +86,7 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             file: "cube-in-box/still.xml",
             frames: (0, 29),
             size: (128, 128),
+            reference_spp: 2048,
             no_search: None,
         },
         Case {
@@ -91,6 +94,7 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             file: "cube-in-box/animation.xml",
             frames: (0, 47),
             size: (128, 128),
+            reference_spp: 2048,
             no_search: None,
         },
         Case {
@@ -98,6 +102,7 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             file: "cube-in-box/moving-light.xml",
             frames: (0, 47),
             size: (128, 128),
+            reference_spp: 2048,
             no_search: None,
         },
         Case {
@@ -105,6 +110,7 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             file: "lamp-room/animation.xml",
             frames: (0, 23),
             size: (128, 96),
+            reference_spp: 512,
             no_search: Some(
                 "its references (2 × 512 spp) are too noisy: Mitsuba's own relMSE_trim at 32 spp \
                  is 0.32, and the cache's 1.7e-2 is near the references' own noise",
@@ -115,7 +121,7 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
     std::fs::create_dir_all(&work)?;
     let exe = std::env::current_exe()?;
     println!(
-        "\nanimations ({SPP} spp; references Mitsuba multijitter 2 × {REFERENCE_SPP} spp per frame; \
+        "\nanimations ({SPP} spp; references Mitsuba multijitter, two halves per frame; \
          FI flicker index, FHP high-pass temporal error (emitters in view left out), relMSE_trim per frame, near motion: pixels \
          within 1/32 width of a >10 % change; probe: the largest step and error of 16 probes on a 4×4 grid, those no moving silhouette crosses)"
     );
@@ -167,13 +173,20 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
             )
         };
         // References: reused when a run with the same settings made them.
-        let (ra, rb) = (dir.join("ref-a-###.exr"), dir.join("ref-b-###.exr"));
+        let spp = case.reference_spp;
+        let (ra, rb) = (
+            dir.join(format!("ref-a-{spp}-###.exr")),
+            dir.join(format!("ref-b-{spp}-###.exr")),
+        );
         let last = crate::animate::frame_path(&rb, case.frames.1)?;
         if !last.exists() {
             let t = Instant::now();
-            mitsuba(REFERENCE_SPP, 1, &ra)?;
-            mitsuba(REFERENCE_SPP, 2, &rb)?;
-            println!("  references made in {:.0} s", t.elapsed().as_secs_f64());
+            mitsuba(spp, 1, &ra)?;
+            mitsuba(spp, 2, &rb)?;
+            println!(
+                "  references (2 × {spp} spp) made in {:.0} s",
+                t.elapsed().as_secs_f64()
+            );
         }
         let reference = ReferenceSequence::new(
             read_frames(&ra, case.frames)?,
@@ -184,6 +197,7 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
         let mut adaptive = None;
         // (label, mode, temporal gradients, next frame, pixel sampling: spp and more arguments)
         let adaptive_args = ["--adaptive", ADAPTIVE_TARGET, "--max-spp", "128"];
+        let per_frame_pixels = ["--accumulate", "off"];
         for (label, mode, gradients, next_frame, (spp, more)) in [
             (
                 "temporal, interpolated",
@@ -191,6 +205,13 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
                 "interpolated",
                 "reproject",
                 (SPP, &[][..]),
+            ),
+            (
+                "  … --accumulate off (every frame's pixels on their own)",
+                "temporal",
+                "interpolated",
+                "reproject",
+                (SPP, &per_frame_pixels[..]),
             ),
             (
                 "  … next frames gathered again",
@@ -222,7 +243,11 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
                 (SPP, &[][..]),
             ),
         ] {
-            let tag = if more.is_empty() { "" } else { "-adaptive" };
+            let tag = match more.first() {
+                None => "",
+                Some(&"--accumulate") => "-own-pixels",
+                Some(_) => "-adaptive",
+            };
             let pattern = dir.join(format!("{mode}-{gradients}-{next_frame}{tag}-###.exr"));
             let stats = dir.join(format!("{mode}-{gradients}-{next_frame}{tag}.json"));
             let t = Instant::now();
@@ -260,9 +285,9 @@ pub fn run_all(with_mitsuba: bool, only: Option<&str>) -> Result<()> {
                     s["cache_seconds"].as_f64().unwrap_or(0.0)
                 ),
             );
-            if !more.is_empty() {
+            if tag == "-adaptive" {
                 adaptive = Some(m);
-            } else if mode == "temporal" && temporal.is_none() {
+            } else if mode == "temporal" && temporal.is_none() && tag.is_empty() {
                 temporal = Some(m);
             }
         }

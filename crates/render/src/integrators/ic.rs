@@ -181,7 +181,7 @@ impl IcIntegrator {
     /// path traced to `max_depth` = bounces + 2 whose vertices take their Lambertian indirect
     /// light from the cache of their depth where it has records, and continue through the
     /// glossy part of the BSDF. With `deferred`, the first vertex's light samples wait there for
-    /// their shadow rays.
+    /// their shadow rays. Second, the part the cache gave ([`IcIntegrator::li_parts`]).
     pub fn li<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
@@ -190,7 +190,7 @@ impl IcIntegrator {
         sampler: &mut S,
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
-    ) -> Rgb {
+    ) -> (Rgb, Rgb) {
         let fresh;
         let cache = match &self.cache {
             Some(c) => c.as_ref(),
@@ -199,7 +199,7 @@ impl IcIntegrator {
                 &fresh
             }
         };
-        self.li_splatted(scene, cache, ray, first_hit, None, sampler, rays, deferred)
+        self.li_parts(scene, cache, ray, first_hit, None, sampler, rays, deferred)
     }
 
     /// [`IcIntegrator::li`] with the cache `cache` and, for the first vertex, what splatting
@@ -216,6 +216,28 @@ impl IcIntegrator {
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
     ) -> Rgb {
+        self.li_parts(
+            scene, cache, ray, first_hit, splatted, sampler, rays, deferred,
+        )
+        .0
+    }
+
+    /// [`IcIntegrator::li_splatted`] and, second, the part of it that came from the cache (the
+    /// records' irradiance and glossy light, caustic and global maps, the ambient value): the
+    /// rest, emission and direct light and the lobes traced, is what the path sampled. Light
+    /// samples left to `deferred` add to the first part only.
+    #[allow(clippy::too_many_arguments)]
+    pub fn li_parts<S: Sampler + ?Sized>(
+        &self,
+        scene: &Scene,
+        cache: &IrradianceCache,
+        ray: &Ray,
+        first_hit: Option<&Hit>,
+        splatted: Option<Splatted>,
+        sampler: &mut S,
+        rays: &mut RayCounts,
+        deferred: Option<&mut DeferredShadows>,
+    ) -> (Rgb, Rgb) {
         // One light sample when the only light is a delta light (all samples are alike).
         let first_light_samples = if scene.lights.all_delta() && scene.lights.len() == 1 {
             1
@@ -232,9 +254,10 @@ impl IcIntegrator {
             ic: self,
             cache,
             splatted: splatted.unwrap_or_default(),
+            took: Rgb::ZERO,
         };
         let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
-        trace_path_deferring(
+        let l = trace_path_deferring(
             scene,
             start,
             first,
@@ -243,7 +266,8 @@ impl IcIntegrator {
             sampler,
             rays,
             deferred,
-        )
+        );
+        (l, source.took)
     }
 }
 
@@ -259,9 +283,15 @@ struct PixelLookup<'a> {
     ic: &'a IcIntegrator,
     cache: &'a IrradianceCache,
     splatted: Splatted,
+    /// The path's radiance from what it served so far.
+    took: Rgb,
 }
 
 impl IndirectSource for PixelLookup<'_> {
+    fn took(&mut self, light: Rgb) {
+        self.took += light;
+    }
+
     fn irradiance(
         &mut self,
         scene: &Scene,

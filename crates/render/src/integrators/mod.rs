@@ -219,11 +219,13 @@ impl Integrator {
         rays: &mut RayCounts,
     ) -> Rgb {
         self.li_deferring(scene, ray, first_hit, sampler, rays, None)
+            .0
     }
 
     /// [`Integrator::li`], the first vertex's light samples leaving their shadow rays to
     /// `deferred` where the integrator can (`path`, `ic`: [`DeferredShadows::resolve`] adds
-    /// their light); the others trace them at once.
+    /// their light); the others trace them at once. Second, the part of the radiance a cache
+    /// gave (`ic`: [`ic::IcIntegrator::li_parts`]; zero for the others): the rest was traced.
     pub fn li_deferring<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
@@ -232,12 +234,13 @@ impl Integrator {
         sampler: &mut S,
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
-    ) -> Rgb {
+    ) -> (Rgb, Rgb) {
+        let traced = |l| (l, Rgb::ZERO);
         match self {
-            Integrator::Direct(d) => d.li(scene, ray, first_hit, sampler.as_dyn(), rays),
-            Integrator::Path(p) => p.li(scene, ray, first_hit, sampler, rays, deferred),
+            Integrator::Direct(d) => traced(d.li(scene, ray, first_hit, sampler.as_dyn(), rays)),
+            Integrator::Path(p) => traced(p.li(scene, ray, first_hit, sampler, rays, deferred)),
             Integrator::Ic(c) => c.li(scene, ray, first_hit, sampler, rays, deferred),
-            Integrator::VolPath(v) => v.li(scene, ray, first_hit, sampler.as_dyn(), rays),
+            Integrator::VolPath(v) => traced(v.li(scene, ray, first_hit, sampler.as_dyn(), rays)),
         }
     }
 

@@ -79,6 +79,12 @@ pub trait IndirectSource {
     fn serves(&self) -> bool {
         true
     }
+
+    /// Told of each part of the path's radiance that came from what it served (irradiance,
+    /// glossy light or the ambient value, with the path's throughput): the rest was traced.
+    fn took(&mut self, light: Rgb) {
+        let _ = light;
+    }
 }
 
 /// No cache: plain path tracing.
@@ -333,7 +339,9 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
                         // On a bump or normal map, the share of the perturbed lobe that light
                         // from above the surface reaches: the cache holds irradiance, not its
                         // directions.
-                        l += beta * k * e * (INV_PI * scene.perturbed_lambertian_share(it));
+                        let served = beta * k * e * (INV_PI * scene.perturbed_lambertian_share(it));
+                        l += served;
+                        source.took(served);
                         strategy = BsdfStrategy::Glossy;
                         lambertian_served = true;
                         if source.irradiance_holds_environment(sp) {
@@ -341,12 +349,15 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
                         }
                     }
                 } else {
-                    l += beta * k * source.ambient();
+                    let served = beta * k * source.ambient();
+                    l += served;
+                    source.took(served);
                 }
             }
             if let Some(sp) = sp.filter(|_| lambertian_served && bsdf.has_glossy()) {
                 if let Some(glossy) = source.glossy(scene, &sp, depth, wo) {
                     l += beta * glossy;
+                    source.took(beta * glossy);
                     all_served = true;
                     environment_served.glossy =
                         source.held_environment(&sp) != HeldEnvironment::None;

@@ -413,7 +413,8 @@ fn photons_text(count: Option<u64>) -> String {
     count.map_or("auto".into(), |n| n.to_string())
 }
 
-fn on_off(v: &str) -> Result<bool, String> {
+/// Parses a switch: `on` or `off` (or `true`/`1`, `false`/`0`).
+pub fn on_off(v: &str) -> Result<bool, String> {
     match v.trim() {
         "on" | "true" | "1" => Ok(true),
         "off" | "false" | "0" => Ok(false),

@@ -3,6 +3,8 @@
 //! - [`lifespan`]: how long a record serves, from its change over one frame (5.1–5.8).
 //! - [`record`]: a record over time: temporal gradients (5.9–5.17), motion with its shape.
 //! - [`reprojection`]: a record's next frame by reprojecting its gather (§5.2.4).
+//! - [`pixel_reuse`]: pixels nothing moving reaches, and their sampled light's running mean
+//!   over the frames.
 //! - [`sequence`]: the frame loop: temporal caching, age-based invalidation, or a new cache each
 //!   frame (`--cache-mode`).
 //!
@@ -10,6 +12,7 @@
 //! format in `ircache_scene::animation`.
 
 pub mod lifespan;
+pub mod pixel_reuse;
 pub mod record;
 pub mod reprojection;
 pub mod sequence;
