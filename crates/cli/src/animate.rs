@@ -49,11 +49,13 @@ pub struct AnimateArgs {
     /// the same random numbers: no holes, about twice the rays; BENCHMARKS.md).
     #[arg(long, default_value = NextFrame::default().name(), value_parser = NextFrame::parse)]
     pub next_frame: NextFrame,
-    /// `on`: where nothing that moved since the last frame can reach a pixel's sampled light
-    /// (emission, direct light: a static camera, static lights, Lambertian surfaces out of the
-    /// moving shapes' paths and shadows), the pixel keeps the mean of it over the frames since
-    /// it last changed, with new samples each frame, and adds the frame's cached light; `off`:
-    /// every frame's pixels on their own. Not with --adaptive or the splat integrator.
+    /// `on`: where nothing that moved between two frames can reach a pixel's sampled light
+    /// (emission, direct light: a still camera and lights, Lambertian surfaces out of the moving
+    /// shapes' views and shadows), the frames are one still run for the pixel: each draws new
+    /// samples, and each is written with its own cached light plus the mean sampled light of
+    /// the whole run (frames are written as they render with the run so far, then again at the
+    /// end); `off`: every frame's pixels on their own. Not with --adaptive or the splat
+    /// integrator.
     #[arg(long, default_value = "on", value_parser = on_off, action = clap::ArgAction::Set)]
     pub accumulate: bool,
     /// Everything `ircache render` takes; SCENE is an `<animation>` file or a still scene

@@ -209,7 +209,8 @@ pub fn render(
 /// [`render`], each pixel's samples drawn in its round of `rounds` (row by row; round 0 is
 /// [`render`]'s, each other a seed of its own: the fresh samples of a pixel whose earlier
 /// rounds are kept, [`crate::temporal::pixel_reuse`]), and the part the cache gave kept in
-/// [`RenderOutput::cached`]. Not with adaptive sampling or splatting.
+/// [`RenderOutput::cached`]: in every round the part round 0's samples take from the cache, so
+/// that it does not change with the round. Not with adaptive sampling or splatting.
 pub fn render_rounds(
     scene: &Scene,
     integrator: &Integrator,
@@ -484,7 +485,8 @@ pub fn camera_ray(
 }
 
 /// Takes pixel (x, y)'s samples `state.sums.samples..to` in its `round` (0: the render's own
-/// samples; another, those of a seed of its own): filter-importance-sampled estimates,
+/// samples; another, samples of a seed of its own, less what the cache gives them, plus what
+/// the cache gives round 0's): filter-importance-sampled estimates,
 /// with their luminance sums for adaptive sampling. Samples that the integrator returns as
 /// non-finite or negative count as zero and are counted (Mitsuba drops them too).
 #[allow(clippy::too_many_arguments)]
@@ -498,18 +500,19 @@ fn extend_pixel(
     deferred: &mut DeferredShadows,
     rays: &mut RayCounts,
 ) {
-    let in_round;
-    let samplers = if round == 0 {
-        samplers
-    } else {
+    // A round's own seed draws all its samples' dimensions, film and lens too (the run's
+    // frames average over where the pixel's samples fall: its edges); what the cache gives is
+    // taken at round 0's samples, the same sum in every round (no flicker from where samples
+    // fall), and the round's own samples give the rest.
+    let in_round = (round > 0).then(|| {
         let mut s = samplers.clone();
         s.seed = ircache_math::rng::mix64(
             samplers.seed ^ u64::from(round).wrapping_mul(0xA24B_AED4_963E_E407),
         );
-        in_round = s;
-        &in_round
-    };
-    let mut sampler = samplers.pixel(x as u32, y as u32);
+        s
+    });
+    let mut first = samplers.pixel(x as u32, y as u32);
+    let mut own = in_round.as_ref().map(|s| s.pixel(x as u32, y as u32));
     // Camera rays of one pixel are nearly parallel, and the shadow rays of their first
     // vertices head for the same lights: both are traced in 16-wide packets.
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
@@ -521,26 +524,64 @@ fn extend_pixel(
     let mut done = state.sums.samples;
     while done < to {
         let n = (to - done).min(16);
-        sampler.begin_batch(done, n);
-        for ((k, ray), weight) in (done..done + n).zip(&mut camera).zip(&mut weights) {
-            (*ray, *weight) = camera_ray(scene, settings, &mut sampler, x, y, k);
+        let mut batch = |sampler: &mut PixelSampler,
+                         l: &mut [Rgb; 16],
+                         cached: &mut [Rgb; 16],
+                         weights: &mut [f32; 16],
+                         deferred: &mut DeferredShadows,
+                         resolve: bool| {
+            sampler.begin_batch(done, n);
+            for ((k, ray), weight) in (done..done + n).zip(&mut camera).zip(weights.iter_mut()) {
+                (*ray, *weight) = camera_ray(scene, settings, sampler, x, y, k);
+            }
+            let n = n as usize;
+            scene.accel.intersect16(&camera[..n], &mut hits[..n]);
+            rays.camera += n as u64;
+            for (i, ((k, ray), hit)) in (done..).zip(&camera[..n]).zip(&hits[..n]).enumerate() {
+                sampler.set_sample(k, dims::vertex(0, 0));
+                deferred.owner = i as u32;
+                (l[i], cached[i]) = integrator.li_deferring(
+                    scene,
+                    ray,
+                    hit.as_ref(),
+                    sampler,
+                    rays,
+                    Some(deferred),
+                );
+            }
+            if resolve {
+                deferred.resolve(scene, &mut l[..n]);
+            } else {
+                deferred.clear();
+            }
+        };
+        batch(
+            &mut first,
+            &mut l,
+            &mut cached,
+            &mut weights,
+            deferred,
+            own.is_none(),
+        );
+        if let Some(own) = own.as_mut() {
+            // Each part with its own sample's filter weight.
+            let mut first_cached = cached;
+            for (c, &w) in first_cached.iter_mut().zip(&weights) {
+                *c *= w;
+            }
+            batch(own, &mut l, &mut cached, &mut weights, deferred, true);
+            for (((l, c), w), &c0) in l
+                .iter_mut()
+                .zip(&mut cached)
+                .zip(&mut weights)
+                .zip(&first_cached)
+            {
+                *l = (*l - *c) * *w + c0;
+                *c = c0;
+                *w = 1.0;
+            }
         }
         let n = n as usize;
-        scene.accel.intersect16(&camera[..n], &mut hits[..n]);
-        rays.camera += n as u64;
-        for (i, ((k, ray), hit)) in (done..).zip(&camera[..n]).zip(&hits[..n]).enumerate() {
-            sampler.set_sample(k, dims::vertex(0, 0));
-            deferred.owner = i as u32;
-            (l[i], cached[i]) = integrator.li_deferring(
-                scene,
-                ray,
-                hit.as_ref(),
-                &mut sampler,
-                rays,
-                Some(deferred),
-            );
-        }
-        deferred.resolve(scene, &mut l[..n]);
         for (((k, &li), &c), &weight) in (done..).zip(&l[..n]).zip(&cached[..n]).zip(&weights[..n])
         {
             state.add((li, c), weight, k, to);
