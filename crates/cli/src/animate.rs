@@ -109,6 +109,16 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
     )))
 }
 
+/// A temporary folder, removed with what it holds when dropped.
+struct PartsFolder(PathBuf);
+
+impl Drop for PartsFolder {
+    fn drop(&mut self) {
+        // Nothing to report if it was never made.
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
 /// Loads the animation (or a still scene as one that does not move) with the overrides.
 fn load(args: &RenderArgs) -> Result<(SceneDesc, Animation)> {
     let defines = parse_defines(&args.define)?;
@@ -198,18 +208,19 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let mut runs = StillRuns::new(settings.width * settings.height);
     // The frame the runs end at so far.
     let mut last_rendered: Option<u32> = None;
-    // Each frame's cached and sampled parts, until the runs are whole.
-    let parts = std::env::temp_dir().join(format!(
+    // Each frame's cached and sampled parts, until the runs are whole (removed however the
+    // command ends).
+    let parts = PartsFolder(std::env::temp_dir().join(format!(
         "ircache-animate-{}-{}",
         std::process::id(),
         t0.elapsed().as_nanos()
-    ));
-    let part_path = |frame: u32, part: &str| parts.join(format!("{part}-{frame}.exr"));
+    )));
+    let part_path = |frame: u32, part: &str| parts.0.join(format!("{part}-{frame}.exr"));
     if accumulate {
-        std::fs::create_dir_all(&parts).with_context(|| {
+        std::fs::create_dir_all(&parts.0).with_context(|| {
             format!(
                 "{}: cannot make a folder for the frames' parts",
-                parts.display()
+                parts.0.display()
             )
         })?;
     }
@@ -300,8 +311,6 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             let image = runs.whole(frame, &read("cached")?, &read("sampled")?);
             write(frame, &image)?;
         }
-        std::fs::remove_dir_all(&parts)
-            .with_context(|| format!("{}: cannot remove", parts.display()))?;
         say(format!(
             "frames {first}..{last} written again with their pixels' whole still runs"
         ));

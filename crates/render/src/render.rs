@@ -5,6 +5,7 @@
 
 use crate::adaptive::SampleSums;
 use crate::film::Filter;
+use crate::integrators::ic::Parts;
 use crate::integrators::light_sampling::DeferredShadows;
 use crate::integrators::{Integrator, RayCounts};
 use crate::irradiance_cache::{CacheStats, IrradianceCache};
@@ -502,8 +503,9 @@ fn extend_pixel(
 ) {
     // A round's own seed draws all its samples' dimensions, film and lens too (the run's
     // frames average over where the pixel's samples fall: its edges); what the cache gives is
-    // taken at round 0's samples, the same sum in every round (no flicker from where samples
-    // fall), and the round's own samples give the rest.
+    // taken at round 0's samples (`Parts::Served`: no light samples), the same sum in every
+    // round (no flicker from where samples fall), and the round's own samples give the rest
+    // (`Parts::Sampled`: no lookups at the first vertex).
     let in_round = (round > 0).then(|| {
         let mut s = samplers.clone();
         s.seed = ircache_math::rng::mix64(
@@ -529,7 +531,7 @@ fn extend_pixel(
                          cached: &mut [Rgb; 16],
                          weights: &mut [f32; 16],
                          deferred: &mut DeferredShadows,
-                         resolve: bool| {
+                         parts: Parts| {
             sampler.begin_batch(done, n);
             for ((k, ray), weight) in (done..done + n).zip(&mut camera).zip(weights.iter_mut()) {
                 (*ray, *weight) = camera_ray(scene, settings, sampler, x, y, k);
@@ -547,13 +549,10 @@ fn extend_pixel(
                     sampler,
                     rays,
                     Some(deferred),
+                    parts,
                 );
             }
-            if resolve {
-                deferred.resolve(scene, &mut l[..n]);
-            } else {
-                deferred.clear();
-            }
+            deferred.resolve(scene, &mut l[..n]);
         };
         batch(
             &mut first,
@@ -561,7 +560,11 @@ fn extend_pixel(
             &mut cached,
             &mut weights,
             deferred,
-            own.is_none(),
+            if own.is_some() {
+                Parts::Served
+            } else {
+                Parts::All
+            },
         );
         if let Some(own) = own.as_mut() {
             // Each part with its own sample's filter weight.
@@ -569,7 +572,14 @@ fn extend_pixel(
             for (c, &w) in first_cached.iter_mut().zip(&weights) {
                 *c *= w;
             }
-            batch(own, &mut l, &mut cached, &mut weights, deferred, true);
+            batch(
+                own,
+                &mut l,
+                &mut cached,
+                &mut weights,
+                deferred,
+                Parts::Sampled,
+            );
             for (((l, c), w), &c0) in l
                 .iter_mut()
                 .zip(&mut cached)

@@ -50,6 +50,20 @@ pub struct IcIntegrator {
     pub plane_source: Option<Arc<dyn crate::irradiance_cache::plane::PlaneSource>>,
 }
 
+/// Which parts of a pixel sample's light [`IcIntegrator::li`] computes (its second value is
+/// always what the cache gave of what it computed).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Parts {
+    /// All of it.
+    #[default]
+    All,
+    /// What the cache gives, alone: no light samples.
+    Served,
+    /// All but what the cache gives the first vertex's Lambertian part (taken as zero, not
+    /// looked up: the cache serves that part wherever it is asked, `PixelLookup::cached`).
+    Sampled,
+}
+
 /// How the pixel pass finds the records serving a camera path's first vertex.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PixelPass {
@@ -182,6 +196,7 @@ impl IcIntegrator {
     /// light from the cache of their depth where it has records, and continue through the
     /// glossy part of the BSDF. With `deferred`, the first vertex's light samples wait there for
     /// their shadow rays. Second, the part the cache gave ([`IcIntegrator::li_parts`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn li<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
@@ -190,6 +205,7 @@ impl IcIntegrator {
         sampler: &mut S,
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
+        parts: Parts,
     ) -> (Rgb, Rgb) {
         let fresh;
         let cache = match &self.cache {
@@ -199,7 +215,9 @@ impl IcIntegrator {
                 &fresh
             }
         };
-        self.li_parts(scene, cache, ray, first_hit, None, sampler, rays, deferred)
+        self.li_parts(
+            scene, cache, ray, first_hit, None, sampler, rays, deferred, parts,
+        )
     }
 
     /// [`IcIntegrator::li`] with the cache `cache` and, for the first vertex, what splatting
@@ -217,7 +235,15 @@ impl IcIntegrator {
         deferred: Option<&mut DeferredShadows>,
     ) -> Rgb {
         self.li_parts(
-            scene, cache, ray, first_hit, splatted, sampler, rays, deferred,
+            scene,
+            cache,
+            ray,
+            first_hit,
+            splatted,
+            sampler,
+            rays,
+            deferred,
+            Parts::All,
         )
         .0
     }
@@ -225,7 +251,7 @@ impl IcIntegrator {
     /// [`IcIntegrator::li_splatted`] and, second, the part of it that came from the cache (the
     /// records' irradiance and glossy light, caustic and global maps, the ambient value): the
     /// rest, emission and direct light and the lobes traced, is what the path sampled. Light
-    /// samples left to `deferred` add to the first part only.
+    /// samples left to `deferred` add to the first part only. `parts` may leave some out.
     #[allow(clippy::too_many_arguments)]
     pub fn li_parts<S: Sampler + ?Sized>(
         &self,
@@ -237,6 +263,7 @@ impl IcIntegrator {
         sampler: &mut S,
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
+        parts: Parts,
     ) -> (Rgb, Rgb) {
         // One light sample when the only light is a delta light (all samples are alike).
         let first_light_samples = if scene.lights.all_delta() && scene.lights.len() == 1 {
@@ -255,6 +282,7 @@ impl IcIntegrator {
             cache,
             splatted: splatted.unwrap_or_default(),
             took: Rgb::ZERO,
+            parts,
         };
         let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
         let l = trace_path_deferring(
@@ -285,11 +313,17 @@ struct PixelLookup<'a> {
     splatted: Splatted,
     /// The path's radiance from what it served so far.
     took: Rgb,
+    /// Which parts of the light are asked for.
+    parts: Parts,
 }
 
 impl IndirectSource for PixelLookup<'_> {
     fn took(&mut self, light: Rgb) {
         self.took += light;
+    }
+
+    fn samples_lights(&self) -> bool {
+        self.parts != Parts::Served
     }
 
     fn irradiance(
@@ -300,6 +334,9 @@ impl IndirectSource for PixelLookup<'_> {
         sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Option<Rgb> {
+        if depth == 0 && self.parts == Parts::Sampled {
+            return Some(Rgb::ZERO);
+        }
         let cache = self.cache;
         if cache.is_excluded(sp.it.shape) {
             return Some(cache.ambient * std::f32::consts::PI);

@@ -218,7 +218,7 @@ impl Integrator {
         sampler: &mut S,
         rays: &mut RayCounts,
     ) -> Rgb {
-        self.li_deferring(scene, ray, first_hit, sampler, rays, None)
+        self.li_deferring(scene, ray, first_hit, sampler, rays, None, ic::Parts::All)
             .0
     }
 
@@ -226,6 +226,8 @@ impl Integrator {
     /// `deferred` where the integrator can (`path`, `ic`: [`DeferredShadows::resolve`] adds
     /// their light); the others trace them at once. Second, the part of the radiance a cache
     /// gave (`ic`: [`ic::IcIntegrator::li_parts`]; zero for the others): the rest was traced.
+    /// `parts` is for `ic` alone (the others compute all of it).
+    #[allow(clippy::too_many_arguments)]
     pub fn li_deferring<S: Sampler + ?Sized>(
         &self,
         scene: &Scene,
@@ -234,12 +236,13 @@ impl Integrator {
         sampler: &mut S,
         rays: &mut RayCounts,
         deferred: Option<&mut DeferredShadows>,
+        parts: ic::Parts,
     ) -> (Rgb, Rgb) {
         let traced = |l| (l, Rgb::ZERO);
         match self {
             Integrator::Direct(d) => traced(d.li(scene, ray, first_hit, sampler.as_dyn(), rays)),
             Integrator::Path(p) => traced(p.li(scene, ray, first_hit, sampler, rays, deferred)),
-            Integrator::Ic(c) => c.li(scene, ray, first_hit, sampler, rays, deferred),
+            Integrator::Ic(c) => c.li(scene, ray, first_hit, sampler, rays, deferred, parts),
             Integrator::VolPath(v) => traced(v.li(scene, ray, first_hit, sampler.as_dyn(), rays)),
         }
     }

@@ -80,6 +80,12 @@ pub trait IndirectSource {
         true
     }
 
+    /// False when the caller wants only what it serves ([`Self::took`]): the light samples,
+    /// which add nothing to that, are left out.
+    fn samples_lights(&self) -> bool {
+        true
+    }
+
     /// Told of each part of the path's radiance that came from what it served (irradiance,
     /// glossy light or the ambient value, with the path's throughput): the rest was traced.
     fn took(&mut self, light: Rgb) {
@@ -381,7 +387,7 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
                 && (!last
                     || (scene.has_hittable_emitters
                         && !light_samples_suffice(scene, &bsdf, last))));
-        if !caustics_only {
+        if !caustics_only && source.samples_lights() {
             let shadows = match deferred.as_deref_mut().filter(|_| depth == start.depth) {
                 Some(d) => Shadows::Deferred(d, beta),
                 None => Shadows::Traced,
