@@ -7,6 +7,7 @@ use crate::render::{
 };
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use ircache_image::Image;
 use ircache_render::integrators::Integrator;
 use ircache_render::irradiance_cache::params::on_off;
 use ircache_render::render::{render, render_rounds};
@@ -109,13 +110,86 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
     )))
 }
 
-/// A temporary folder, removed with what it holds when dropped.
-struct PartsFolder(PathBuf);
+/// Bytes of frames' parts `--accumulate` holds in memory; more go to a temporary folder.
+const PARTS_IN_MEMORY: usize = 512 << 20;
 
-impl Drop for PartsFolder {
+/// Each frame's cached and sampled light until its pixels' still runs are whole: in memory
+/// while they take under [`PARTS_IN_MEMORY`], else in a temporary folder, removed however the
+/// command ends.
+enum FrameParts {
+    /// Nothing kept (no `--accumulate`).
+    None,
+    /// By frame.
+    Memory(std::collections::HashMap<u32, (Image, Image)>),
+    /// Two OpenEXR files a frame.
+    Folder(PathBuf),
+}
+
+impl FrameParts {
+    /// Where the parts of frames of `pixels` pixels in all will go.
+    fn new(accumulate: bool, pixels: usize) -> Result<FrameParts> {
+        if !accumulate {
+            return Ok(FrameParts::None);
+        }
+        if pixels.saturating_mul(2 * std::mem::size_of::<ircache_math::Rgb>()) <= PARTS_IN_MEMORY {
+            return Ok(FrameParts::Memory(std::collections::HashMap::new()));
+        }
+        let folder = std::env::temp_dir().join(format!(
+            "ircache-animate-{}-{}",
+            std::process::id(),
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos())
+        ));
+        std::fs::create_dir_all(&folder).with_context(|| {
+            format!(
+                "{}: cannot make a folder for the frames' parts",
+                folder.display()
+            )
+        })?;
+        Ok(FrameParts::Folder(folder))
+    }
+
+    fn path(folder: &Path, frame: u32, part: &str) -> PathBuf {
+        folder.join(format!("{part}-{frame}.exr"))
+    }
+
+    /// Keeps frame `frame`'s parts.
+    fn put(&mut self, frame: u32, cached: &Image, sampled: Image) -> Result<()> {
+        match self {
+            FrameParts::None => {}
+            FrameParts::Memory(m) => {
+                m.insert(frame, (cached.clone(), sampled));
+            }
+            FrameParts::Folder(f) => {
+                ircache_image::write_image(&Self::path(f, frame, "cached"), cached, 0.0)?;
+                ircache_image::write_image(&Self::path(f, frame, "sampled"), &sampled, 0.0)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Frame `frame`'s parts, cached and sampled, given up.
+    fn take(&mut self, frame: u32) -> Result<(Image, Image)> {
+        match self {
+            FrameParts::None => bail!("frame {frame}'s parts were not kept"),
+            FrameParts::Memory(m) => m
+                .remove(&frame)
+                .with_context(|| format!("frame {frame}'s parts were not kept")),
+            FrameParts::Folder(f) => Ok((
+                ircache_image::read_image(&Self::path(f, frame, "cached"))?,
+                ircache_image::read_image(&Self::path(f, frame, "sampled"))?,
+            )),
+        }
+    }
+}
+
+impl Drop for FrameParts {
     fn drop(&mut self) {
-        // Nothing to report if it was never made.
-        let _ = std::fs::remove_dir_all(&self.0);
+        if let FrameParts::Folder(f) = self {
+            // A temporary folder: nothing to report if it is gone already.
+            let _ = std::fs::remove_dir_all(f);
+        }
     }
 }
 
@@ -208,22 +282,10 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let mut runs = StillRuns::new(settings.width * settings.height);
     // The frame the runs end at so far.
     let mut last_rendered: Option<u32> = None;
-    // Each frame's cached and sampled parts, until the runs are whole (removed however the
-    // command ends).
-    let parts = PartsFolder(std::env::temp_dir().join(format!(
-        "ircache-animate-{}-{}",
-        std::process::id(),
-        t0.elapsed().as_nanos()
-    )));
-    let part_path = |frame: u32, part: &str| parts.0.join(format!("{part}-{frame}.exr"));
-    if accumulate {
-        std::fs::create_dir_all(&parts.0).with_context(|| {
-            format!(
-                "{}: cannot make a folder for the frames' parts",
-                parts.0.display()
-            )
-        })?;
-    }
+    let mut parts = FrameParts::new(
+        accumulate,
+        settings.width * settings.height * (last - first + 1) as usize,
+    )?;
     let mut fills: Vec<FrameStats> = Vec::new();
     // Each frame's pixel pass: seconds, pixel samples taken and pixels still since the frame
     // before (`--accumulate`).
@@ -268,9 +330,8 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         }
         runs.add(frame, &still, &sampled);
         last_rendered = Some(frame);
-        ircache_image::write_image(&part_path(frame, "cached"), cached, 0.0)?;
-        ircache_image::write_image(&part_path(frame, "sampled"), &sampled, 0.0)?;
         let path = write(frame, &runs.so_far(cached))?;
+        parts.put(frame, cached, sampled)?;
         let seconds = t.elapsed().as_secs_f64();
         let kept = still.iter().filter(|&&s| s).count();
         pixel_passes.push((seconds, out.samples, kept));
@@ -304,12 +365,11 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             render_frame(&cache, frame, &scene_at(frame)?)?;
         }
     }
-    if accumulate {
+    if accumulate && runs.any_kept() {
         // Each frame again with its pixels' whole still runs.
         for frame in first..=last {
-            let read = |part| ircache_image::read_image(&part_path(frame, part));
-            let image = runs.whole(frame, &read("cached")?, &read("sampled")?);
-            write(frame, &image)?;
+            let (cached, sampled) = parts.take(frame)?;
+            write(frame, &runs.whole(frame, &cached, &sampled))?;
         }
         say(format!(
             "frames {first}..{last} written again with their pixels' whole still runs"

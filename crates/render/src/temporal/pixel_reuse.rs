@@ -356,6 +356,12 @@ impl StillRuns {
         }
     }
 
+    /// True when some pixel has a run of two frames or more (else every frame is its own).
+    #[must_use]
+    pub fn any_kept(&self) -> bool {
+        self.open.iter().any(|o| o.2 > 1) || self.ended.iter().any(|e| !e.is_empty())
+    }
+
     /// The last added frame's image while the sequence goes on: its `cached` part plus each
     /// pixel's mean over its run so far.
     #[must_use]
@@ -462,6 +468,7 @@ mod tests {
         let pair = |i: &Image| (i.get(0, 0).r, i.get(1, 0).r);
         let mut runs = StillRuns::new(2);
         assert_eq!(runs.rounds(&[true, true]), vec![0, 0]);
+        assert!(!runs.any_kept());
         // Pixel 0 still throughout; pixel 1 changes at frames 2 and 3.
         let sampled = [
             image(2.0, 10.0),
@@ -484,6 +491,7 @@ mod tests {
             so_far,
             vec![(3.0, 11.0), (4.0, 16.0), (5.0, 31.0), (6.0, 41.0)]
         );
+        assert!(runs.any_kept());
         let whole: Vec<_> = (0..4)
             .map(|f| pair(&runs.whole(f, &cached, &sampled[f as usize])))
             .collect();
