@@ -126,12 +126,13 @@ enum FrameParts {
 }
 
 impl FrameParts {
-    /// Where the parts of frames of `pixels` pixels in all will go.
-    fn new(accumulate: bool, pixels: usize) -> Result<FrameParts> {
+    /// Where the parts of frames of `pixels` pixels in all will go: memory up to `budget`
+    /// bytes.
+    fn new(accumulate: bool, pixels: usize, budget: usize) -> Result<FrameParts> {
         if !accumulate {
             return Ok(FrameParts::None);
         }
-        if pixels.saturating_mul(2 * std::mem::size_of::<ircache_math::Rgb>()) <= PARTS_IN_MEMORY {
+        if pixels.saturating_mul(2 * std::mem::size_of::<ircache_math::Rgb>()) <= budget {
             return Ok(FrameParts::Memory(std::collections::HashMap::new()));
         }
         let folder = std::env::temp_dir().join(format!(
@@ -285,6 +286,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let mut parts = FrameParts::new(
         accumulate,
         settings.width * settings.height * (last - first + 1) as usize,
+        PARTS_IN_MEMORY,
     )?;
     let mut fills: Vec<FrameStats> = Vec::new();
     // Each frame's pixel pass: seconds, pixel samples taken and pixels still since the frame
@@ -444,6 +446,29 @@ mod tests {
         assert_eq!(p("a#b-##.png", 123).unwrap(), "a#b-123.png");
         assert_eq!(p("x-#.exr", 42).unwrap(), "x-42.exr");
         assert!(p("frame.exr", 1).is_err());
+    }
+
+    /// The parts come back as they were put, from memory or from the temporary folder, which
+    /// goes with them.
+    #[test]
+    fn frame_parts_round_trip() {
+        let mut a = Image::new(3, 2);
+        a.set(2, 1, ircache_math::Rgb::new(0.25, 1.5e-7, 3e4));
+        let mut b = Image::new(3, 2);
+        b.set(0, 0, ircache_math::Rgb::splat(0.1));
+        for budget in [PARTS_IN_MEMORY, 0] {
+            let mut parts = FrameParts::new(true, 12, budget).unwrap();
+            parts.put(4, &a, b.clone()).unwrap();
+            let (c, s) = parts.take(4).unwrap();
+            assert!(c.pixels == a.pixels && s.pixels == b.pixels, "budget {budget}");
+            if let FrameParts::Folder(f) = &parts {
+                let f = f.clone();
+                assert!(f.is_dir());
+                drop(parts);
+                assert!(!f.exists());
+            }
+        }
+        assert!(FrameParts::new(false, 12, 0).unwrap().take(0).is_err());
     }
 
     #[test]
