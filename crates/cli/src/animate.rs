@@ -460,7 +460,10 @@ mod tests {
             let mut parts = FrameParts::new(true, 12, budget).unwrap();
             parts.put(4, &a, b.clone()).unwrap();
             let (c, s) = parts.take(4).unwrap();
-            assert!(c.pixels == a.pixels && s.pixels == b.pixels, "budget {budget}");
+            assert!(
+                c.pixels == a.pixels && s.pixels == b.pixels,
+                "budget {budget}"
+            );
             if let FrameParts::Folder(f) = &parts {
                 let f = f.clone();
                 assert!(f.is_dir());
