@@ -221,34 +221,8 @@ impl IcIntegrator {
     }
 
     /// [`IcIntegrator::li`] with the cache `cache` and, for the first vertex, what splatting
-    /// found there (`splatted`; where it found nothing, the vertex looks up as any other).
-    #[allow(clippy::too_many_arguments)]
-    pub fn li_splatted<S: Sampler + ?Sized>(
-        &self,
-        scene: &Scene,
-        cache: &IrradianceCache,
-        ray: &Ray,
-        first_hit: Option<&Hit>,
-        splatted: Option<Splatted>,
-        sampler: &mut S,
-        rays: &mut RayCounts,
-        deferred: Option<&mut DeferredShadows>,
-    ) -> Rgb {
-        self.li_parts(
-            scene,
-            cache,
-            ray,
-            first_hit,
-            splatted,
-            sampler,
-            rays,
-            deferred,
-            Parts::All,
-        )
-        .0
-    }
-
-    /// [`IcIntegrator::li_splatted`] and, second, the part of it that came from the cache (the
+    /// found there (`splatted`; where it found nothing, the vertex looks up as any other), and,
+    /// second, the part of it that came from the cache (the
     /// records' irradiance and glossy light, caustic and global maps, the ambient value): the
     /// rest, emission and direct light and the lobes traced, is what the path sampled. Light
     /// samples left to `deferred` add to the first part only. `parts` may leave some out.

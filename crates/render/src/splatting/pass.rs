@@ -13,14 +13,14 @@
 //!
 //! The pixel pass renders one layer of samples at a time (sample k of every pixel): G-buffer,
 //! splat every level-0 record, fill the misses, then shade each sample with
-//! [`IcIntegrator::li_splatted`], which takes the first vertex's indirect light from the splat
+//! [`IcIntegrator::li_parts`], which takes the first vertex's indirect light from the splat
 //! buffer. The cache is filled first by the same pre-pass as `ic` (records at pixel centres,
 //! deeper levels, the cache file, the re-gathering of noisy records); the layers' misses are
 //! the samples off those centres that it left uncovered.
 
 use super::buffer::{CpuSplatter, SplatBuffer, Splatter};
 use super::gbuffer::GBuffer;
-use crate::integrators::ic::{IcIntegrator, Splatted};
+use crate::integrators::ic::{IcIntegrator, Parts, Splatted};
 use crate::integrators::RayCounts;
 use crate::irradiance_cache::build::{phase_pixels, phases, run_batch, Sites};
 use crate::irradiance_cache::gather::{mix, IrradianceCache, ShadingPoint};
@@ -267,7 +267,7 @@ impl Layer {
                             glossy: px.glossy(),
                             trace_misses,
                         });
-                        Some(ic.li_splatted(
+                        let (l, _) = ic.li_parts(
                             scene,
                             cache,
                             &s.ray,
@@ -276,7 +276,9 @@ impl Layer {
                             &mut sampler,
                             &mut r,
                             None,
-                        ))
+                            Parts::All,
+                        );
+                        Some(l)
                     })
                     .collect();
                 (values, r)
