@@ -55,8 +55,8 @@ pub struct AnimateArgs {
     /// shapes' views and shadows), the frames are one still run for the pixel: each draws new
     /// samples, and each is written with its own cached light plus the mean sampled light of
     /// the whole run (frames are written as they render with the run so far, then again at the
-    /// end); `off`: every frame's pixels on their own. Not with --adaptive or the splat
-    /// integrator.
+    /// end; with --adaptive each frame weighs by its samples); `off`: every frame's pixels on
+    /// their own. Not with the splat integrator.
     #[arg(long, default_value = "on", value_parser = on_off, action = clap::ArgAction::Set)]
     pub accumulate: bool,
     /// Everything `ircache render` takes; SCENE is an `<animation>` file or a still scene
@@ -274,11 +274,10 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         .build()?;
     let mut cache =
         SequenceCache::new(ic, params, (settings.width, settings.height), settings.seed)?;
-    let accumulate = args.accumulate
-        && settings.sampling.adaptive.is_none()
-        && ic.pixel_pass != ircache_render::integrators::ic::PixelPass::Splat;
+    let accumulate =
+        args.accumulate && ic.pixel_pass != ircache_render::integrators::ic::PixelPass::Splat;
     if args.accumulate && !accumulate {
-        say("note: --accumulate is off with --adaptive and the splat integrator".into());
+        say("note: --accumulate is off with the splat integrator".into());
     }
     let mut runs = StillRuns::new(settings.width * settings.height);
     // The frame the runs end at so far.
@@ -330,7 +329,11 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         for (s, c) in sampled.pixels.iter_mut().zip(&cached.pixels) {
             *s = *s - *c;
         }
-        runs.add(frame, &still, &sampled);
+        let samples = out
+            .samples_per_pixel
+            .as_ref()
+            .context("the frame's samples per pixel")?;
+        runs.add(frame, &still, &sampled, samples);
         last_rendered = Some(frame);
         let path = write(frame, &runs.so_far(cached))?;
         parts.put(frame, cached, sampled)?;

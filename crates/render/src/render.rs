@@ -179,6 +179,8 @@ pub struct RenderOutput {
     /// The part of [`Self::image`] the cache gave ([`Integrator::li_deferring`]'s second
     /// part), where [`render_rounds`] asked for it.
     pub cached: Option<Image>,
+    /// Each pixel's samples (row by row), where [`render_rounds`] asked for the cached part.
+    pub samples_per_pixel: Option<Vec<u32>>,
 }
 
 /// The irradiance cache after a render.
@@ -211,7 +213,7 @@ pub fn render(
 /// [`render`]'s, each other a seed of its own: the fresh samples of a pixel whose earlier
 /// rounds are kept, [`crate::temporal::pixel_reuse`]), and the part the cache gave kept in
 /// [`RenderOutput::cached`]: in every round the part round 0's samples take from the cache, so
-/// that it does not change with the round. Not with adaptive sampling or splatting.
+/// that it does not change with the round. Not with splatting.
 pub fn render_rounds(
     scene: &Scene,
     integrator: &Integrator,
@@ -219,11 +221,9 @@ pub fn render_rounds(
     progress: &(dyn Fn(u64) + Sync),
     rounds: Option<&[u32]>,
 ) -> Result<RenderOutput, RenderError> {
-    if rounds.is_some()
-        && (settings.sampling.adaptive.is_some() || integrator.splatting().is_some())
-    {
+    if rounds.is_some() && integrator.splatting().is_some() {
         return Err(RenderError::Invalid(
-            "pixel rounds are not available with --adaptive or the splat integrator".into(),
+            "pixel rounds are not available with the splat integrator".into(),
         ));
     }
     let (w, h) = (settings.width, settings.height);
@@ -414,6 +414,7 @@ pub fn render_rounds(
         media_cache,
         volume_records,
         cached,
+        samples_per_pixel: rounds.map(|_| states.iter().map(|s| s.sums.samples).collect()),
     })
 }
 

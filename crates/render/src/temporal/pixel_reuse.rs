@@ -308,12 +308,30 @@ pub fn still_pixels(
 /// has every frame's samples in every frame.
 #[derive(Clone, Debug, Default)]
 pub struct StillRuns {
-    /// Per pixel, the current run: its first frame, the sum of its sampled light and its
-    /// frames (0 before the first frame).
-    open: Vec<(u32, Rgb, u32)>,
+    /// Per pixel, the current run (frames 0 before the first frame).
+    open: Vec<Run>,
     /// Per pixel, its ended runs of two frames or more, in order: first and last frame, mean.
     /// (A run of one frame is that frame's own sampled light.)
     ended: Vec<Vec<(u32, u32, Rgb)>>,
+}
+
+/// A pixel's current run.
+#[derive(Clone, Copy, Debug, Default)]
+struct Run {
+    /// Its first frame.
+    first: u32,
+    /// The sum of its frames' sampled light, each weighted by its samples.
+    sum: Rgb,
+    /// The samples.
+    samples: f32,
+    /// Its frames.
+    frames: u32,
+}
+
+impl Run {
+    fn mean(&self) -> Rgb {
+        self.sum / self.samples.max(f32::MIN_POSITIVE)
+    }
 }
 
 impl StillRuns {
@@ -321,7 +339,7 @@ impl StillRuns {
     #[must_use]
     pub fn new(pixels: usize) -> StillRuns {
         StillRuns {
-            open: vec![(0, Rgb::ZERO, 0); pixels],
+            open: vec![Run::default(); pixels],
             ended: vec![Vec::new(); pixels],
         }
     }
@@ -334,24 +352,33 @@ impl StillRuns {
         self.open
             .iter()
             .zip(still)
-            .map(|(&(_, _, n), &s)| if s { n } else { 0 })
+            .map(|(run, &s)| if s { run.frames } else { 0 })
             .collect()
     }
 
     /// Adds frame `frame` (the one after the last added), rendered in [`Self::rounds`], whose
-    /// `sampled` light (the image less its cached part) continues each pixel's run where the
-    /// frame is `still` for it and begins a new run elsewhere.
-    pub fn add(&mut self, frame: u32, still: &[bool], sampled: &Image) {
+    /// `sampled` light (the image less its cached part), the mean of each pixel's `samples`,
+    /// continues each pixel's run where the frame is `still` for it and begins a new run
+    /// elsewhere. A run's mean weighs its frames by their samples (adaptive sampling gives
+    /// frames different counts).
+    pub fn add(&mut self, frame: u32, still: &[bool], sampled: &Image, samples: &[u32]) {
         for (i, (open, ended)) in self.open.iter_mut().zip(&mut self.ended).enumerate() {
-            let l = sampled.get(i % sampled.width, i / sampled.width);
-            if still[i] && open.2 > 0 {
-                open.1 += l;
-                open.2 += 1;
+            let n = samples[i] as f32;
+            let l = sampled.get(i % sampled.width, i / sampled.width) * n;
+            if still[i] && open.frames > 0 {
+                open.sum += l;
+                open.samples += n;
+                open.frames += 1;
             } else {
-                if open.2 > 1 {
-                    ended.push((open.0, frame - 1, open.1 / open.2 as f32));
+                if open.frames > 1 {
+                    ended.push((open.first, frame - 1, open.mean()));
                 }
-                *open = (frame, l, 1);
+                *open = Run {
+                    first: frame,
+                    sum: l,
+                    samples: n,
+                    frames: 1,
+                };
             }
         }
     }
@@ -359,7 +386,7 @@ impl StillRuns {
     /// True when some pixel has a run of two frames or more (else every frame is its own).
     #[must_use]
     pub fn any_kept(&self) -> bool {
-        self.open.iter().any(|o| o.2 > 1) || self.ended.iter().any(|e| !e.is_empty())
+        self.open.iter().any(|o| o.frames > 1) || self.ended.iter().any(|e| !e.is_empty())
     }
 
     /// The last added frame's image while the sequence goes on: its `cached` part plus each
@@ -367,8 +394,8 @@ impl StillRuns {
     #[must_use]
     pub fn so_far(&self, cached: &Image) -> Image {
         let mut out = cached.clone();
-        for (c, &(_, sum, n)) in out.pixels.iter_mut().zip(&self.open) {
-            *c += sum / n.max(1) as f32;
+        for (c, run) in out.pixels.iter_mut().zip(&self.open) {
+            *c += run.mean();
         }
         out
     }
@@ -380,11 +407,11 @@ impl StillRuns {
     pub fn whole(&self, frame: u32, cached: &Image, sampled: &Image) -> Image {
         let mut out = cached.clone();
         for (i, c) in out.pixels.iter_mut().enumerate() {
-            let (first, sum, n) = self.open[i];
+            let run = &self.open[i];
             let ended = &self.ended[i];
             let k = ended.partition_point(|&(_, last, _)| last < frame);
-            *c += if n > 1 && frame >= first {
-                sum / n as f32
+            *c += if run.frames > 1 && frame >= run.first {
+                run.mean()
             } else if let Some(&(_, _, mean)) = ended.get(k).filter(|r| r.0 <= frame) {
                 mean
             } else {
@@ -455,8 +482,8 @@ mod tests {
     }
 
     /// Runs: a pixel still over every frame has every frame's samples in each; one that
-    /// changes takes its runs apart; the image so far is the run so far; the cached part is the
-    /// frame's own.
+    /// changes takes its runs apart; frames weigh by their samples; the image so far is the run
+    /// so far; the cached part is the frame's own.
     #[test]
     fn still_runs() {
         let image = |a: f32, b: f32| {
@@ -484,22 +511,22 @@ mod tests {
                 runs.rounds(st),
                 vec![f as u32 * u32::from(st[0]), [0, 1, 0, 0][f]]
             );
-            runs.add(f as u32, st, s);
+            runs.add(f as u32, st, s, &[4, [4, 12, 4, 4][f]]);
             so_far.push(pair(&runs.so_far(&cached)));
         }
         assert_eq!(
             so_far,
-            vec![(3.0, 11.0), (4.0, 16.0), (5.0, 31.0), (6.0, 41.0)]
+            vec![(3.0, 11.0), (4.0, 18.5), (5.0, 31.0), (6.0, 41.0)]
         );
         assert!(runs.any_kept());
         let whole: Vec<_> = (0..4)
             .map(|f| pair(&runs.whole(f, &cached, &sampled[f as usize])))
             .collect();
-        // Pixel 0: 1 + mean(2, 4, 6, 8) = 6 in every frame; pixel 1: frames 0–1 one run (16),
-        // then runs of one frame.
+        // Pixel 0: 1 + mean(2, 4, 6, 8) = 6 in every frame; pixel 1: frames 0–1 one run, its
+        // frames weighed by their samples (4 and 12: 1 + 17.5), then runs of one frame.
         assert_eq!(
             whole,
-            vec![(6.0, 16.0), (6.0, 16.0), (6.0, 31.0), (6.0, 41.0)]
+            vec![(6.0, 18.5), (6.0, 18.5), (6.0, 31.0), (6.0, 41.0)]
         );
     }
 }
