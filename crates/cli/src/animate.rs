@@ -277,7 +277,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     let accumulate =
         args.accumulate && ic.pixel_pass != ircache_render::integrators::ic::PixelPass::Splat;
     if args.accumulate && !accumulate {
-        say("note: --accumulate is off with the splat integrator".into());
+        eprintln!("note: --accumulate is off with the splat integrator");
     }
     let mut runs = StillRuns::new(settings.width * settings.height);
     // The frame the runs end at so far.
