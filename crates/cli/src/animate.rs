@@ -113,7 +113,7 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
 /// Bytes of frames' parts `--accumulate` holds in memory; more go to a temporary folder.
 const PARTS_IN_MEMORY: usize = 512 << 20;
 
-/// Each frame's cached and sampled light until its pixels' still runs are whole: in memory
+/// Each frame's image and cached light until its pixels' still runs are whole: in memory
 /// while they take under [`PARTS_IN_MEMORY`], else in a temporary folder, removed however the
 /// command ends.
 enum FrameParts {
@@ -155,22 +155,22 @@ impl FrameParts {
         folder.join(format!("{part}-{frame}.exr"))
     }
 
-    /// Keeps frame `frame`'s parts.
-    fn put(&mut self, frame: u32, cached: &Image, sampled: Image) -> Result<()> {
+    /// Keeps frame `frame`'s image and cached part.
+    fn put(&mut self, frame: u32, image: Image, cached: Image) -> Result<()> {
         match self {
             FrameParts::None => {}
             FrameParts::Memory(m) => {
-                m.insert(frame, (cached.clone(), sampled));
+                m.insert(frame, (image, cached));
             }
             FrameParts::Folder(f) => {
-                ircache_image::write_image(&Self::path(f, frame, "cached"), cached, 0.0)?;
-                ircache_image::write_image(&Self::path(f, frame, "sampled"), &sampled, 0.0)?;
+                ircache_image::write_image(&Self::path(f, frame, "image"), &image, 0.0)?;
+                ircache_image::write_image(&Self::path(f, frame, "cached"), &cached, 0.0)?;
             }
         }
         Ok(())
     }
 
-    /// Frame `frame`'s parts, cached and sampled, given up.
+    /// Frame `frame`'s image and cached part, given up.
     fn take(&mut self, frame: u32) -> Result<(Image, Image)> {
         match self {
             FrameParts::None => bail!("frame {frame}'s parts were not kept"),
@@ -178,8 +178,8 @@ impl FrameParts {
                 .remove(&frame)
                 .with_context(|| format!("frame {frame}'s parts were not kept")),
             FrameParts::Folder(f) => Ok((
+                ircache_image::read_image(&Self::path(f, frame, "image"))?,
                 ircache_image::read_image(&Self::path(f, frame, "cached"))?,
-                ircache_image::read_image(&Self::path(f, frame, "sampled"))?,
             )),
         }
     }
@@ -324,19 +324,16 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         };
         let rounds = runs.rounds(&still);
         let out = render_rounds(scene, &integrator, &settings, &|_| {}, Some(&rounds))?;
-        let cached = out.cached.as_ref().context("the frame's cached light")?;
-        let mut sampled = out.image.clone();
-        for (s, c) in sampled.pixels.iter_mut().zip(&cached.pixels) {
-            *s = *s - *c;
-        }
+        let cached = out.cached.context("the frame's cached light")?;
         let samples = out
             .samples_per_pixel
             .as_ref()
             .context("the frame's samples per pixel")?;
-        runs.add(frame, &still, &sampled, samples);
+        let parts_of_frame = (&out.image, &cached);
+        runs.add(frame, &still, parts_of_frame, samples);
         last_rendered = Some(frame);
-        let path = write(frame, &runs.so_far(cached))?;
-        parts.put(frame, cached, sampled)?;
+        let path = write(frame, &runs.so_far(parts_of_frame))?;
+        parts.put(frame, out.image, cached)?;
         let seconds = t.elapsed().as_secs_f64();
         let kept = still.iter().filter(|&&s| s).count();
         pixel_passes.push((seconds, out.samples, kept));
@@ -373,8 +370,8 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
     if accumulate && runs.any_kept() {
         // Each frame again with its pixels' whole still runs.
         for frame in first..=last {
-            let (cached, sampled) = parts.take(frame)?;
-            write(frame, &runs.whole(frame, &cached, &sampled))?;
+            let (image, cached) = parts.take(frame)?;
+            write(frame, &runs.whole(frame, (&image, &cached)))?;
         }
         say(format!(
             "frames {first}..{last} written again with their pixels' whole still runs"
@@ -461,7 +458,7 @@ mod tests {
         b.set(0, 0, ircache_math::Rgb::splat(0.1));
         for budget in [PARTS_IN_MEMORY, 0] {
             let mut parts = FrameParts::new(true, 12, budget).unwrap();
-            parts.put(4, &a, b.clone()).unwrap();
+            parts.put(4, a.clone(), b.clone()).unwrap();
             let (c, s) = parts.take(4).unwrap();
             assert!(
                 c.pixels == a.pixels && s.pixels == b.pixels,

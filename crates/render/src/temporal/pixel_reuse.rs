@@ -291,10 +291,9 @@ pub fn still_pixels(
             LightReach::Distant(d) => meets(&hits, &hits.moved(-d * far)),
         })
     };
-    (0..height)
+    (0..width * height)
         .into_par_iter()
-        .flat_map_iter(|y| (0..width).map(move |x| (x, y)).collect::<Vec<_>>())
-        .map(|(x, y)| pixel(x, y))
+        .map(|i| pixel(i % width, i / width))
         .collect()
 }
 
@@ -356,15 +355,21 @@ impl StillRuns {
             .collect()
     }
 
-    /// Adds frame `frame` (the one after the last added), rendered in [`Self::rounds`], whose
-    /// `sampled` light (the image less its cached part), the mean of each pixel's `samples`,
+    /// Adds frame `frame` (the one after the last added), rendered in [`Self::rounds`]: its
+    /// sampled light (its `image` less the `cached` part), the mean of each pixel's `samples`,
     /// continues each pixel's run where the frame is `still` for it and begins a new run
     /// elsewhere. A run's mean weighs its frames by their samples (adaptive sampling gives
     /// frames different counts).
-    pub fn add(&mut self, frame: u32, still: &[bool], sampled: &Image, samples: &[u32]) {
+    pub fn add(
+        &mut self,
+        frame: u32,
+        still: &[bool],
+        (image, cached): (&Image, &Image),
+        samples: &[u32],
+    ) {
         for (i, (open, ended)) in self.open.iter_mut().zip(&mut self.ended).enumerate() {
             let n = samples[i] as f32;
-            let l = sampled.get(i % sampled.width, i / sampled.width) * n;
+            let l = (image.pixels[i] - cached.pixels[i]) * n;
             if still[i] && open.frames > 0 {
                 open.sum += l;
                 open.samples += n;
@@ -390,33 +395,36 @@ impl StillRuns {
     }
 
     /// The last added frame's image while the sequence goes on: its `cached` part plus each
-    /// pixel's mean over its run so far.
+    /// pixel's mean over its run so far (a run of one frame: the frame's own `image`).
     #[must_use]
-    pub fn so_far(&self, cached: &Image) -> Image {
-        let mut out = cached.clone();
-        for (c, run) in out.pixels.iter_mut().zip(&self.open) {
-            *c += run.mean();
+    pub fn so_far(&self, (image, cached): (&Image, &Image)) -> Image {
+        let mut out = image.clone();
+        for ((o, c), run) in out.pixels.iter_mut().zip(&cached.pixels).zip(&self.open) {
+            if run.frames > 1 {
+                *o = *c + run.mean();
+            }
         }
         out
     }
 
     /// Frame `frame`'s image once the sequence has ended (at the last frame added): its
     /// `cached` part plus each pixel's mean over the whole run holding the frame (a run of one
-    /// frame: its own `sampled` light).
+    /// frame: the frame's own `image`).
     #[must_use]
-    pub fn whole(&self, frame: u32, cached: &Image, sampled: &Image) -> Image {
-        let mut out = cached.clone();
-        for (i, c) in out.pixels.iter_mut().enumerate() {
+    pub fn whole(&self, frame: u32, (image, cached): (&Image, &Image)) -> Image {
+        let mut out = image.clone();
+        for (i, o) in out.pixels.iter_mut().enumerate() {
             let run = &self.open[i];
             let ended = &self.ended[i];
             let k = ended.partition_point(|&(_, last, _)| last < frame);
-            *c += if run.frames > 1 && frame >= run.first {
-                run.mean()
-            } else if let Some(&(_, _, mean)) = ended.get(k).filter(|r| r.0 <= frame) {
-                mean
+            let mean = if run.frames > 1 && frame >= run.first {
+                Some(run.mean())
             } else {
-                sampled.pixels[i]
+                ended.get(k).filter(|r| r.0 <= frame).map(|r| r.2)
             };
+            if let Some(mean) = mean {
+                *o = cached.pixels[i] + mean;
+            }
         }
         out
     }
@@ -496,23 +504,24 @@ mod tests {
         let mut runs = StillRuns::new(2);
         assert_eq!(runs.rounds(&[true, true]), vec![0, 0]);
         assert!(!runs.any_kept());
-        // Pixel 0 still throughout; pixel 1 changes at frames 2 and 3.
-        let sampled = [
-            image(2.0, 10.0),
-            image(4.0, 20.0),
-            image(6.0, 30.0),
-            image(8.0, 40.0),
+        // Pixel 0 still throughout; pixel 1 changes at frames 2 and 3. Sampled light 2, 4, 6,
+        // 8 and 10, 20, 30, 40 over a cached part of 1.
+        let images = [
+            image(3.0, 11.0),
+            image(5.0, 21.0),
+            image(7.0, 31.0),
+            image(9.0, 41.0),
         ];
         let still = [[false, false], [true, true], [true, false], [true, false]];
         let cached = image(1.0, 1.0);
         let mut so_far = Vec::new();
-        for (f, (s, st)) in sampled.iter().zip(&still).enumerate() {
+        for (f, (im, st)) in images.iter().zip(&still).enumerate() {
             assert_eq!(
                 runs.rounds(st),
                 vec![f as u32 * u32::from(st[0]), [0, 1, 0, 0][f]]
             );
-            runs.add(f as u32, st, s, &[4, [4, 12, 4, 4][f]]);
-            so_far.push(pair(&runs.so_far(&cached)));
+            runs.add(f as u32, st, (im, &cached), &[4, [4, 12, 4, 4][f]]);
+            so_far.push(pair(&runs.so_far((im, &cached))));
         }
         assert_eq!(
             so_far,
@@ -520,7 +529,7 @@ mod tests {
         );
         assert!(runs.any_kept());
         let whole: Vec<_> = (0..4)
-            .map(|f| pair(&runs.whole(f, &cached, &sampled[f as usize])))
+            .map(|f| pair(&runs.whole(f, (&images[f as usize], &cached))))
             .collect();
         // Pixel 0: 1 + mean(2, 4, 6, 8) = 6 in every frame; pixel 1: frames 0–1 one run, its
         // frames weighed by their samples (4 and 12: 1 + 17.5), then runs of one frame.
