@@ -322,8 +322,8 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             }
             _ => vec![false; settings.width * settings.height],
         };
-        let rounds = runs.rounds(&still);
-        let out = render_rounds(scene, &integrator, &settings, &|_| {}, Some(&rounds))?;
+        let drawn = runs.drawn(&still);
+        let out = render_rounds(scene, &integrator, &settings, &|_| {}, Some(&drawn))?;
         let cached = out.cached.context("the frame's cached light")?;
         let samples = out
             .samples_per_pixel

@@ -209,19 +209,20 @@ pub fn render(
     render_rounds(scene, integrator, settings, progress, None)
 }
 
-/// [`render`], each pixel's samples drawn in its round of `rounds` (row by row; round 0 is
-/// [`render`]'s, each other a seed of its own: the fresh samples of a pixel whose earlier
-/// rounds are kept, [`crate::temporal::pixel_reuse`]), and the part the cache gave kept in
-/// [`RenderOutput::cached`]: in every round the part round 0's samples take from the cache, so
-/// that it does not change with the round. Not with splatting.
+/// [`render`] for a pixel whose earlier frames' samples are kept
+/// ([`crate::temporal::pixel_reuse`]): `drawn` holds, row by row, the samples each pixel has
+/// drawn before (0: none, the pixel renders as in [`render`]; `k`: its samples are those from
+/// `k` on of a sequence of the pixel's own, [`run_sampler`]), and the part the cache gave is
+/// kept in [`RenderOutput::cached`]: where `k > 0`, the part [`render`]'s own samples take from
+/// the cache, so that it does not change from frame to frame. Not with splatting.
 pub fn render_rounds(
     scene: &Scene,
     integrator: &Integrator,
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
-    rounds: Option<&[u32]>,
+    drawn: Option<&[u32]>,
 ) -> Result<RenderOutput, RenderError> {
-    if rounds.is_some() && integrator.splatting().is_some() {
+    if drawn.is_some() && integrator.splatting().is_some() {
         return Err(RenderError::Invalid(
             "pixel rounds are not available with the splat integrator".into(),
         ));
@@ -268,8 +269,8 @@ pub fn render_rounds(
                                     scene,
                                     integrator,
                                     settings,
-                                    &sampler,
-                                    (x, y, rounds.map_or(0, |r| r[y * w + x])),
+                                    (&sampler, first),
+                                    (x, y, drawn.map_or(0, |r| r[y * w + x])),
                                     (&mut state, to),
                                     &mut deferred,
                                     &mut rays,
@@ -318,7 +319,7 @@ pub fn render_rounds(
                     for (state, l) in states.iter_mut().zip(values) {
                         if let Some(l) = l {
                             // Splatting takes only filters of weight 1 (`Integrator::prepare`).
-                            state.add((l, Rgb::ZERO), 1.0, state.sums.samples, sampler.spp);
+                            state.add((l, None), 1.0, state.sums.samples, sampler.spp);
                             state.sums.samples += 1;
                         }
                     }
@@ -366,16 +367,12 @@ pub fn render_rounds(
         None => (integrator, None),
     };
     let mut image = Image::new(w, h);
-    let mut cached = rounds.map(|_| Image::new(w, h));
+    let mut cached = drawn.map(|_| Image::new(w, h));
     let (mut invalid_samples, mut samples) = (0, 0);
     for (i, state) in states.iter().enumerate() {
         image.set(i % w, i / w, state.value());
         if let Some(c) = &mut cached {
-            c.set(
-                i % w,
-                i / w,
-                state.cached / state.sums.samples.max(1) as f32,
-            );
+            c.set(i % w, i / w, state.cached.0 / state.cached.1.max(1) as f32);
         }
         invalid_samples += state.invalid;
         samples += u64::from(state.sums.samples);
@@ -414,7 +411,7 @@ pub fn render_rounds(
         media_cache,
         volume_records,
         cached,
-        samples_per_pixel: rounds.map(|_| states.iter().map(|s| s.sums.samples).collect()),
+        samples_per_pixel: drawn.map(|_| states.iter().map(|s| s.sums.samples).collect()),
     })
 }
 
@@ -432,8 +429,8 @@ const MAX_ROUNDS: usize = 32;
 struct PixelState {
     /// Sum of the samples' values.
     sum: Rgb,
-    /// Sum of the parts of them the cache gave.
-    cached: Rgb,
+    /// Sum of the parts the cache gave the samples whose part is kept, and their count.
+    cached: (Rgb, u32),
     /// The samples taken and their luminance sums (for adaptive sampling).
     sums: SampleSums,
     /// Samples dropped as invalid (counted in `samples`, as zero).
@@ -443,11 +440,14 @@ struct PixelState {
 impl PixelState {
     /// Adds sample `index` of `0..to` with its filter weight to the sums (an invalid one is
     /// counted and left out).
-    fn add(&mut self, (l, cached): (Rgb, Rgb), weight: f32, index: u32, to: u32) {
-        if l.is_valid_radiance() && cached.is_valid_radiance() {
+    fn add(&mut self, (l, cached): (Rgb, Option<Rgb>), weight: f32, index: u32, to: u32) {
+        if l.is_valid_radiance() && cached.is_none_or(Rgb::is_valid_radiance) {
             let l = l * weight;
             self.sum += l;
-            self.cached += cached * weight;
+            if let Some(c) = cached {
+                self.cached.0 += c * weight;
+                self.cached.1 += 1;
+            }
             self.sums.add(index, to, Some(f64::from(l.luminance())));
         } else {
             self.invalid += 1;
@@ -486,36 +486,51 @@ pub fn camera_ray(
     (scene.camera.generate_ray(film), weight)
 }
 
-/// Takes pixel (x, y)'s samples `state.sums.samples..to` in its `round` (0: the render's own
-/// samples; another, samples of a seed of its own, less what the cache gives them, plus what
-/// the cache gives round 0's): filter-importance-sampled estimates,
-/// with their luminance sums for adaptive sampling. Samples that the integrator returns as
-/// non-finite or negative count as zero and are counted (Mitsuba drops them too).
+/// The length of a run's sequence of samples ([`run_sampler`]).
+const RUN_SAMPLES: u32 = 1 << 31;
+
+/// The sequence of samples of pixel (x, y)'s run of frames whose samples are kept
+/// ([`render_rounds`]): a progressive Owen-scrambled Sobol' sequence of the pixel's own (drawn
+/// with `pixel(0, 0)`), whose every aligned block of a power-of-two length is a net, so that a
+/// run's frames, each taking the next samples, together stratify the pixel as one render of
+/// all their samples would.
+fn run_sampler(samplers: &SamplerSettings, x: u32, y: u32) -> SamplerSettings {
+    let seed = ircache_math::rng::mix64(
+        samplers.seed ^ 0xA24B_AED4_963E_E407 ^ (u64::from(y) << 32 | u64::from(x)),
+    );
+    let mut s = SamplerSettings::new(SamplerKind::Sobol, RUN_SAMPLES, seed, 1, 1);
+    s.jitter = samplers.jitter;
+    s.progressive = true;
+    s
+}
+
+/// Takes pixel (x, y)'s samples `state.sums.samples..to`, `drawn` samples into its run's
+/// sequence (0: the render's own samples; else the run's): filter-importance-sampled
+/// estimates, with their luminance sums for adaptive sampling, and the part the cache gives the
+/// render's own first `served` samples. Samples that the integrator returns as non-finite or
+/// negative count as zero and are counted (Mitsuba drops them too).
 #[allow(clippy::too_many_arguments)]
 fn extend_pixel(
     scene: &Scene,
     integrator: &Integrator,
     settings: &RenderSettings,
-    samplers: &SamplerSettings,
-    (x, y, round): (usize, usize, u32),
+    (samplers, served): (&SamplerSettings, u32),
+    (x, y, drawn): (usize, usize, u32),
     (state, to): (&mut PixelState, u32),
     deferred: &mut DeferredShadows,
     rays: &mut RayCounts,
 ) {
-    // A round's own seed draws all its samples' dimensions, film and lens too (the run's
-    // frames average over where the pixel's samples fall: its edges); what the cache gives is
-    // taken at round 0's samples (`Parts::Served`: no light samples), the same sum in every
-    // round (no flicker from where samples fall), and the round's own samples give the rest
-    // (`Parts::Sampled`: no lookups at the first vertex).
-    let in_round = (round > 0).then(|| {
-        let mut s = samplers.clone();
-        s.seed = ircache_math::rng::mix64(
-            samplers.seed ^ u64::from(round).wrapping_mul(0xA24B_AED4_963E_E407),
-        );
-        s
-    });
+    // A later frame of a run draws all its samples' dimensions, film and lens too, from the
+    // run's sequence (the run averages over where the pixel's samples fall: its edges). What
+    // the cache gives is taken at the render's own first samples (`Parts::Served`: no light
+    // samples), the same sum in every frame of the run whatever its count (no flicker from
+    // where samples fall); the run's mean keeps the rest: the frames' light at the run's
+    // samples less the cache's at the render's own.
+    let run = (drawn > 0).then(|| run_sampler(samplers, x as u32, y as u32));
+    // (A run past the sequence's length takes some of its samples again.)
+    let run_start = drawn.min(RUN_SAMPLES - to);
     let mut first = samplers.pixel(x as u32, y as u32);
-    let mut own = in_round.as_ref().map(|s| s.pixel(x as u32, y as u32));
+    let mut own = run.as_ref().map(|s| s.pixel(0, 0));
     // Camera rays of one pixel are nearly parallel, and the shadow rays of their first
     // vertices head for the same lights: both are traced in 16-wide packets.
     let mut camera = [Ray::new(Vec3::ZERO, Vec3::Z); 16];
@@ -523,81 +538,114 @@ fn extend_pixel(
     let mut l = [Rgb::ZERO; 16];
     let mut cached = [Rgb::ZERO; 16];
     let mut weights = [1.0f32; 16];
+    let mut batch = |sampler: &mut PixelSampler,
+                     (l, cached, weights): (&mut [Rgb; 16], &mut [Rgb; 16], &mut [f32; 16]),
+                     deferred: &mut DeferredShadows,
+                     (start, n, parts): (u32, u32, Parts)| {
+        sampler.begin_batch(start, n);
+        for ((k, ray), weight) in (start..start + n).zip(&mut camera).zip(weights.iter_mut()) {
+            (*ray, *weight) = camera_ray(scene, settings, sampler, x, y, k);
+        }
+        let n = n as usize;
+        scene.accel.intersect16(&camera[..n], &mut hits[..n]);
+        rays.camera += n as u64;
+        for (i, ((k, ray), hit)) in (start..).zip(&camera[..n]).zip(&hits[..n]).enumerate() {
+            sampler.set_sample(k, dims::vertex(0, 0));
+            deferred.owner = i as u32;
+            (l[i], cached[i]) = integrator.li_deferring(
+                scene,
+                ray,
+                hit.as_ref(),
+                sampler,
+                rays,
+                Some(deferred),
+                parts,
+            );
+        }
+        deferred.resolve(scene, &mut l[..n]);
+    };
     state.sums.extend_to(to);
     let mut done = state.sums.samples;
     while done < to {
         let n = (to - done).min(16);
-        let mut batch = |sampler: &mut PixelSampler,
-                         l: &mut [Rgb; 16],
-                         cached: &mut [Rgb; 16],
-                         weights: &mut [f32; 16],
-                         deferred: &mut DeferredShadows,
-                         parts: Parts| {
-            sampler.begin_batch(done, n);
-            for ((k, ray), weight) in (done..done + n).zip(&mut camera).zip(weights.iter_mut()) {
-                (*ray, *weight) = camera_ray(scene, settings, sampler, x, y, k);
-            }
-            let n = n as usize;
-            scene.accel.intersect16(&camera[..n], &mut hits[..n]);
-            rays.camera += n as u64;
-            for (i, ((k, ray), hit)) in (done..).zip(&camera[..n]).zip(&hits[..n]).enumerate() {
-                sampler.set_sample(k, dims::vertex(0, 0));
-                deferred.owner = i as u32;
-                (l[i], cached[i]) = integrator.li_deferring(
-                    scene,
-                    ray,
-                    hit.as_ref(),
-                    sampler,
-                    rays,
-                    Some(deferred),
-                    parts,
-                );
-            }
-            deferred.resolve(scene, &mut l[..n]);
-        };
-        batch(
-            &mut first,
-            &mut l,
-            &mut cached,
-            &mut weights,
-            deferred,
-            if own.is_some() {
-                Parts::Served
-            } else {
-                Parts::All
-            },
-        );
-        if let Some(own) = own.as_mut() {
-            // Each part with its own sample's filter weight.
-            let mut first_cached = cached;
-            for (c, &w) in first_cached.iter_mut().zip(&weights) {
-                *c *= w;
-            }
-            batch(
-                own,
-                &mut l,
-                &mut cached,
-                &mut weights,
-                deferred,
-                Parts::Sampled,
-            );
-            for (((l, c), w), &c0) in l
-                .iter_mut()
-                .zip(&mut cached)
-                .zip(&mut weights)
-                .zip(&first_cached)
-            {
-                *l = (*l - *c) * *w + c0;
-                *c = c0;
-                *w = 1.0;
+        let parts = (&mut l, &mut cached, &mut weights);
+        match own.as_mut() {
+            None => batch(&mut first, parts, deferred, (done, n, Parts::All)),
+            Some(own) => {
+                let m = served.saturating_sub(done).min(n);
+                let mut first_cached = [Rgb::ZERO; 16];
+                if m > 0 {
+                    batch(&mut first, parts, deferred, (done, m, Parts::Served));
+                    // Each part with its own sample's filter weight.
+                    for ((c0, c), &w) in first_cached.iter_mut().zip(&cached).zip(&weights) {
+                        *c0 = *c * w;
+                    }
+                }
+                let parts = (&mut l, &mut cached, &mut weights);
+                batch(own, parts, deferred, (run_start + done, n, Parts::All));
+                for (((l, c), w), &c0) in l
+                    .iter_mut()
+                    .zip(&mut cached)
+                    .zip(&mut weights)
+                    .zip(&first_cached)
+                {
+                    *l *= *w;
+                    *c = c0;
+                    *w = 1.0;
+                }
             }
         }
         let n = n as usize;
         for (((k, &li), &c), &weight) in (done..).zip(&l[..n]).zip(&cached[..n]).zip(&weights[..n])
         {
-            state.add((li, c), weight, k, to);
+            state.add((li, (k < served).then_some(c)), weight, k, to);
         }
         done += n as u32;
     }
     state.sums.samples = to;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The frames of a run, each taking the next 16 samples of the run's sequence (as
+    /// `StillRuns::drawn` counts them), stratify the pixel together: the 496 samples of
+    /// frames 1–31 in the film's and a light sample's dimensions put at most one point in
+    /// each elementary box of area 1/512 (the net that their sequence's first 512 form), so a
+    /// sliver of a pixel is hit as often as its area says. Frames with seeds of their own
+    /// would put two in one box many times over.
+    #[test]
+    fn a_runs_frames_stratify_the_pixel_together() {
+        let samplers = SamplerSettings::new(SamplerKind::MultiJitter, 16, 9, 64, 64);
+        for (x, y) in [(0, 0), (13, 40), (63, 63)] {
+            let run = run_sampler(&samplers, x, y);
+            for dim in [dims::FILM, dims::vertex(0, dims::LIGHT + 1)] {
+                let mut points = Vec::new();
+                for frame in 1..32u32 {
+                    let mut sampler = run.pixel(0, 0);
+                    let drawn = 16 * frame;
+                    sampler.begin_batch(drawn, 16);
+                    for k in drawn..drawn + 16 {
+                        sampler.set_sample(k, dim);
+                        points.push(sampler.next_2d());
+                    }
+                }
+                for log2_columns in 0..=9 {
+                    let (columns, rows) = (1u32 << log2_columns, 1u32 << (9 - log2_columns));
+                    let mut boxes = vec![0u8; 512];
+                    for p in &points {
+                        let (i, j) = ((p.x * columns as f32) as u32, (p.y * rows as f32) as u32);
+                        let b =
+                            &mut boxes[(j.min(rows - 1) * columns + i.min(columns - 1)) as usize];
+                        *b += 1;
+                        assert!(
+                            *b <= 1,
+                            "pixel ({x}, {y}) dim {dim}: two points in a box of {columns} × {rows}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

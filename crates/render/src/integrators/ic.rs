@@ -59,9 +59,6 @@ pub enum Parts {
     All,
     /// What the cache gives, alone: no light samples.
     Served,
-    /// All but what the cache gives the first vertex's Lambertian part (taken as zero, not
-    /// looked up: the cache serves that part wherever it is asked, `PixelLookup::cached`).
-    Sampled,
 }
 
 /// How the pixel pass finds the records serving a camera path's first vertex.
@@ -308,9 +305,6 @@ impl IndirectSource for PixelLookup<'_> {
         sampler: &mut dyn Sampler,
         rays: &mut RayCounts,
     ) -> Option<Rgb> {
-        if depth == 0 && self.parts == Parts::Sampled {
-            return Some(Rgb::ZERO);
-        }
         let cache = self.cache;
         if cache.is_excluded(sp.it.shape) {
             return Some(cache.ambient * std::f32::consts::PI);

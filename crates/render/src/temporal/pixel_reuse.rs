@@ -8,9 +8,11 @@
 //! noise, which a per-frame render draws afresh each frame. Where nothing that moved between
 //! two frames can reach a pixel's sampled light, that light is the same random variable in
 //! both, so the pixel keeps the mean of it over the frames since it last changed, draws each
-//! frame's samples from a seed of their own ([`crate::render::render_rounds`]) and adds the
-//! frame's cached part: the still parts of a view converge over the sequence as a progressive
-//! renderer's do, and what moves is rendered as before.
+//! later frame's samples as the next of one sequence for the run ([`crate::render::render_rounds`]:
+//! stratified over the run, where frames of seeds of their own were not, and slivers of a bright
+//! lamp at the edge of a pixel stayed noisy) and adds the frame's cached part: the still parts
+//! of a view converge over the sequence as a progressive renderer's do, and what moves is
+//! rendered as before.
 //!
 //! Which pixels are still, conservatively, between frames `from` and `to`:
 //! - nothing at all where the camera moved, where a moving shape emits, where shapes move in a
@@ -321,15 +323,15 @@ struct Run {
     first: u32,
     /// The sum of its frames' sampled light, each weighted by its samples.
     sum: Rgb,
-    /// The samples.
-    samples: f32,
+    /// Its samples.
+    samples: u32,
     /// Its frames.
     frames: u32,
 }
 
 impl Run {
     fn mean(&self) -> Rgb {
-        self.sum / self.samples.max(f32::MIN_POSITIVE)
+        self.sum / self.samples.max(1) as f32
     }
 }
 
@@ -343,19 +345,19 @@ impl StillRuns {
         }
     }
 
-    /// The round each pixel's samples take in the next frame
-    /// ([`crate::render::render_rounds`]): the frames its run holds where the frame is `still`
-    /// for it, else 0 (a run begins).
+    /// The samples each pixel's run has drawn before the next frame, where the frame is `still`
+    /// for it, else 0 (a run begins): where the pixel's samples in that frame begin in its
+    /// run's sequence ([`crate::render::render_rounds`]).
     #[must_use]
-    pub fn rounds(&self, still: &[bool]) -> Vec<u32> {
+    pub fn drawn(&self, still: &[bool]) -> Vec<u32> {
         self.open
             .iter()
             .zip(still)
-            .map(|(run, &s)| if s { run.frames } else { 0 })
+            .map(|(run, &s)| if s { run.samples } else { 0 })
             .collect()
     }
 
-    /// Adds frame `frame` (the one after the last added), rendered in [`Self::rounds`]: its
+    /// Adds frame `frame` (the one after the last added), rendered from [`Self::drawn`]: its
     /// sampled light (its `image` less the `cached` part), the mean of each pixel's `samples`,
     /// continues each pixel's run where the frame is `still` for it and begins a new run
     /// elsewhere. A run's mean weighs its frames by their samples (adaptive sampling gives
@@ -368,8 +370,8 @@ impl StillRuns {
         samples: &[u32],
     ) {
         for (i, (open, ended)) in self.open.iter_mut().zip(&mut self.ended).enumerate() {
-            let n = samples[i] as f32;
-            let l = (image.pixels[i] - cached.pixels[i]) * n;
+            let n = samples[i];
+            let l = (image.pixels[i] - cached.pixels[i]) * n as f32;
             if still[i] && open.frames > 0 {
                 open.sum += l;
                 open.samples += n;
@@ -502,7 +504,7 @@ mod tests {
         };
         let pair = |i: &Image| (i.get(0, 0).r, i.get(1, 0).r);
         let mut runs = StillRuns::new(2);
-        assert_eq!(runs.rounds(&[true, true]), vec![0, 0]);
+        assert_eq!(runs.drawn(&[true, true]), vec![0, 0]);
         assert!(!runs.any_kept());
         // Pixel 0 still throughout; pixel 1 changes at frames 2 and 3. Sampled light 2, 4, 6,
         // 8 and 10, 20, 30, 40 over a cached part of 1.
@@ -517,8 +519,8 @@ mod tests {
         let mut so_far = Vec::new();
         for (f, (im, st)) in images.iter().zip(&still).enumerate() {
             assert_eq!(
-                runs.rounds(st),
-                vec![f as u32 * u32::from(st[0]), [0, 1, 0, 0][f]]
+                runs.drawn(st),
+                vec![4 * f as u32 * u32::from(st[0]), [0, 4, 0, 0][f]]
             );
             runs.add(f as u32, st, (im, &cached), &[4, [4, 12, 4, 4][f]]);
             so_far.push(pair(&runs.so_far((im, &cached))));
