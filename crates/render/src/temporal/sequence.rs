@@ -370,8 +370,12 @@ impl SequenceCache {
         // Temporal mode: the next frame's scene and photon maps, for the estimates; with
         // `--next-frame reproject` they are made during the pre-pass from a copy of this frame's
         // cache lit by those maps.
+        // Where no shape moves (the camera may), a record's light is the same in every frame:
+        // it lives on, with no estimate of its next frame (a renewal would only draw its noise
+        // again, and flicker).
+        let light_moves = !motion.moving_shapes().is_empty();
         let ahead = match (self.params.mode, next) {
-            (CacheMode::Temporal, Some(next)) => {
+            (CacheMode::Temporal, Some(next)) if light_moves => {
                 Some((next, self.next_photon_maps(&cache, next, frame, pool)))
             }
             _ => None,
@@ -500,6 +504,11 @@ impl SequenceCache {
             }
         }
 
+        if self.params.mode == CacheMode::Temporal && !light_moves {
+            for tr in &mut self.records[first_new..] {
+                tr.last = u32::MAX;
+            }
+        }
         self.set_lives(
             frame, first_new, &cache, ahead, motion, pool, &mut stats, pending,
         );
