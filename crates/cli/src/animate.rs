@@ -10,7 +10,7 @@ use clap::Args;
 use ircache_image::Image;
 use ircache_render::integrators::Integrator;
 use ircache_render::irradiance_cache::params::on_off;
-use ircache_render::render::{render, render_rounds};
+use ircache_render::render::{render, render_runs};
 use ircache_render::scene::Scene;
 use ircache_render::temporal::pixel_reuse::{still_pixels, Change, StillRuns};
 use ircache_render::temporal::record::SlopeKind;
@@ -323,7 +323,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
             _ => vec![false; settings.width * settings.height],
         };
         let drawn = runs.drawn(&still);
-        let out = render_rounds(scene, &integrator, &settings, &|_| {}, Some(&drawn))?;
+        let out = render_runs(scene, &integrator, &settings, &|_| {}, Some(&drawn))?;
         let cached = out.cached.context("the frame's cached light")?;
         let samples = out
             .samples_per_pixel

@@ -177,9 +177,9 @@ pub struct RenderOutput {
     /// What building the volumetric records did (`ic` in a scene with media).
     pub volume_records: Option<crate::media_cache::volume_records::VolumeCacheStats>,
     /// The part the cache gives each pixel's first samples ([`Integrator::li_deferring`]'s
-    /// second part), where [`render_rounds`] asked for it.
+    /// second part), where [`render_runs`] asked for it.
     pub cached: Option<Image>,
-    /// Each pixel's samples (row by row), where [`render_rounds`] asked for the cached part.
+    /// Each pixel's samples (row by row), where [`render_runs`] asked for the cached part.
     pub samples_per_pixel: Option<Vec<u32>>,
 }
 
@@ -206,7 +206,7 @@ pub fn render(
     settings: &RenderSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderOutput, RenderError> {
-    render_rounds(scene, integrator, settings, progress, None)
+    render_runs(scene, integrator, settings, progress, None)
 }
 
 /// [`render`] for pixels whose earlier frames' samples are kept
@@ -215,7 +215,7 @@ pub fn render(
 /// `k` on of a sequence of the pixel's own, [`run_sampler`]). [`RenderOutput::cached`] holds
 /// the part the cache gives [`render`]'s own first [`SERVED_SAMPLES`] of every pixel, the same
 /// samples in every frame whatever `drawn` says. Not with splatting.
-pub fn render_rounds(
+pub fn render_runs(
     scene: &Scene,
     integrator: &Integrator,
     settings: &RenderSettings,
@@ -489,14 +489,14 @@ pub fn camera_ray(
 /// The length of a run's sequence of samples ([`run_sampler`]).
 const RUN_SAMPLES: u32 = 1 << 31;
 
-/// The render's own first samples whose part from the cache [`render_rounds`] keeps. Few are
+/// The render's own first samples whose part from the cache [`render_runs`] keeps. Few are
 /// enough: a run's mean has the cache's part at the run's samples less at these, so that the
 /// frames' parts at these differ only as the cache does over time. (Four against all 16: the
 /// boxes' errors and flicker the same to 1 %, 10 % less time.)
 const SERVED_SAMPLES: u32 = 4;
 
 /// The sequence of samples of pixel (x, y)'s run of frames whose samples are kept
-/// ([`render_rounds`]): a progressive Owen-scrambled Sobol' sequence of the pixel's own (drawn
+/// ([`render_runs`]): a progressive Owen-scrambled Sobol' sequence of the pixel's own (drawn
 /// with `pixel(0, 0)`), whose every aligned block of a power-of-two length is a net, so that a
 /// run's frames, each taking the next samples, together stratify the pixel as one render of
 /// all their samples would.

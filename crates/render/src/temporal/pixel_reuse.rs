@@ -8,7 +8,7 @@
 //! noise, which a per-frame render draws afresh each frame. Where nothing that moved between
 //! two frames can reach a pixel's sampled light, that light is the same random variable in
 //! both, so the pixel keeps the mean of it over the frames since it last changed, draws each
-//! later frame's samples as the next of one sequence for the run ([`crate::render::render_rounds`]:
+//! later frame's samples as the next of one sequence for the run ([`crate::render::render_runs`]:
 //! stratified over the run, where frames of seeds of their own were not, and slivers of a bright
 //! lamp at the edge of a pixel stayed noisy) and adds the frame's cached part: the still parts
 //! of a view converge over the sequence as a progressive renderer's do, and what moves is
@@ -347,7 +347,7 @@ impl StillRuns {
 
     /// The samples each pixel's run has drawn before the next frame, where the frame is `still`
     /// for it, else 0 (a run begins): where the pixel's samples in that frame begin in its
-    /// run's sequence ([`crate::render::render_rounds`]).
+    /// run's sequence ([`crate::render::render_runs`]).
     #[must_use]
     pub fn drawn(&self, still: &[bool]) -> Vec<u32> {
         self.open
