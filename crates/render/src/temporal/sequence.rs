@@ -244,6 +244,9 @@ pub struct SequenceCache {
     /// The photon maps of the frame after the last filled, traced for its estimates and
     /// reused by its own cache.
     next_photons: Option<(u32, Arc<PhotonMaps>)>,
+    /// Where no shape moves, every frame's photon maps (they do not depend on the view): traced
+    /// once.
+    still_photons: std::sync::OnceLock<Option<Arc<PhotonMaps>>>,
 }
 
 impl SequenceCache {
@@ -278,6 +281,7 @@ impl SequenceCache {
             used: Vec::new(),
             tables: std::sync::OnceLock::new(),
             next_photons: None,
+            still_photons: std::sync::OnceLock::new(),
         })
     }
 
@@ -311,14 +315,21 @@ impl SequenceCache {
     ) -> Result<(IrradianceCache, Vec<Vec<u32>>), RenderError> {
         // Radiance caching's tables depend on the materials only, which do not move.
         let tables = self.tables.get();
-        let maps = self
-            .next_photons
-            .as_ref()
-            .filter(|(f, _)| *f == frame)
-            .map(|(_, m)| m.clone());
+        let still = self.params.mode != CacheMode::PerFrame && motion.moving_shapes().is_empty();
+        let maps = match self.still_photons.get() {
+            Some(maps) if still => maps.clone(),
+            _ => self
+                .next_photons
+                .as_ref()
+                .filter(|(f, _)| *f == frame)
+                .map(|(_, m)| m.clone()),
+        };
         let cache = empty_cache(scene, &self.ic, self.size.0, tables, maps, self.seed, pool)?;
         if let (None, Some(t)) = (tables, &cache.radiance) {
             let _ = self.tables.set(t.clone());
+        }
+        if still {
+            let _ = self.still_photons.set(cache.photons.clone());
         }
         let mut cache = cache;
         let mut slots = vec![Vec::new(); cache.levels.len()];
@@ -362,6 +373,10 @@ impl SequenceCache {
             ..FrameStats::default()
         };
         let renew = self.expire(frame, scene, motion, &mut stats);
+        // Where no shape moves (the camera may), a record's light is the same in every frame:
+        // it lives on, with no estimate of its next frame (a renewal would only draw its noise
+        // again, and flicker); the photon maps are traced once (`Self::seeded`).
+        let light_moves = !motion.moving_shapes().is_empty();
         let (mut cache, mut slots) = self.seeded(frame, scene, motion, pool)?;
         stats.carried = slots.iter().map(Vec::len).sum();
         let seed = self.frame_seed(frame);
@@ -370,10 +385,6 @@ impl SequenceCache {
         // Temporal mode: the next frame's scene and photon maps, for the estimates; with
         // `--next-frame reproject` they are made during the pre-pass from a copy of this frame's
         // cache lit by those maps.
-        // Where no shape moves (the camera may), a record's light is the same in every frame:
-        // it lives on, with no estimate of its next frame (a renewal would only draw its noise
-        // again, and flicker).
-        let light_moves = !motion.moving_shapes().is_empty();
         let ahead = match (self.params.mode, next) {
             (CacheMode::Temporal, Some(next)) if light_moves => {
                 Some((next, self.next_photon_maps(&cache, next, frame, pool)))
@@ -879,6 +890,61 @@ fn movers(scene: &Scene, motion: &dyn Motion) -> Vec<Mover> {
 mod tests {
     use super::*;
     use crate::integrators::Integrator;
+
+    /// Where no shape moves, the photon maps are traced once: the caches of the frames filled
+    /// and of those asked for afterwards hold the same maps, whose photons are those a frame
+    /// traces alone (the maps do not depend on the frame).
+    #[test]
+    fn a_still_scenes_photon_maps_are_traced_once() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenes/cube-in-box/still.xml"
+        );
+        let (mut desc, _) =
+            ircache_scene::animation::load_animation(std::path::Path::new(path), &[])
+                .expect("loads");
+        desc.sensor.film.width = 24;
+        desc.sensor.film.height = 24;
+        desc.integrator.max_depth = 4;
+        let Integrator::Ic(mut ic) = Integrator::from_desc(&desc.integrator).expect("ic") else {
+            panic!("the scene's integrator is the cache");
+        };
+        ic.params.set("divisions", "64").unwrap();
+        assert!(ic.params.global_photons() > 0);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let scene = Scene::build(&desc).expect("scene");
+        let mut seq =
+            SequenceCache::new(&ic, TemporalParams::default(), (24, 24), 1).expect("cache");
+        for f in 0..3 {
+            seq.fill_frame(f, &scene, (f < 2).then_some(&scene), &(), &pool)
+                .expect("fills");
+        }
+        let maps = |f: u32| {
+            seq.cache_at(f, &scene, &(), &pool)
+                .expect("cache")
+                .photons
+                .expect("maps")
+        };
+        let (first, last) = (maps(0), maps(2));
+        assert!(Arc::ptr_eq(&first, &last), "the maps traced again");
+        let alone = empty_cache(&scene, &ic, 24, None, None, seq.seed, &pool)
+            .expect("cache")
+            .photons
+            .expect("maps");
+        assert_eq!(first.global.stats, alone.global.stats);
+        for (p, n) in [
+            (Vec3::new(0.0, 0.0, 0.0), Vec3::Y),
+            (Vec3::new(-0.6, 0.0, -0.5), Vec3::Y),
+        ] {
+            let lookup = &first.global_lookup;
+            let e = first.global.irradiance(p, n, 8, lookup);
+            assert!(e.max_channel() > 0.0, "no photons at {p}");
+            assert_eq!(e, alone.global.irradiance(p, n, 8, lookup));
+        }
+    }
 
     /// With photons (two bounces), a record's estimate of the next frame gathered again is
     /// exactly what the next frame's cache gathers at the moved site with the same key: the next frame's photon
