@@ -147,6 +147,17 @@ impl<T: Located> KdTree<T> {
         self.photons.len()
     }
 
+    /// Bytes its arrays hold.
+    #[must_use]
+    pub fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        self.photons.capacity() * size_of::<T>()
+            + self.points.capacity() * size_of::<[f32; 3]>()
+            + self.tags.capacity() * size_of::<T::Tag>()
+            + self.splits.capacity() * size_of::<Split>()
+            + self.leaf_start.capacity() * size_of::<u32>()
+    }
+
     /// True when it holds no photon.
     #[must_use]
     pub fn is_empty(&self) -> bool {

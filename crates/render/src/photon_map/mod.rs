@@ -338,6 +338,20 @@ impl std::fmt::Display for PhotonMap {
 }
 
 impl PhotonMaps {
+    /// Bytes the maps hold (their trees and precomputed estimates).
+    #[must_use]
+    pub fn bytes(&self) -> usize {
+        let map = |m: &PhotonMap| {
+            m.tree.bytes()
+                + m.precomputed.as_ref().map_or(0, |p| {
+                    p.tree.bytes()
+                        + p.irradiance.capacity() * std::mem::size_of::<Rgb>()
+                        + p.radii.capacity() * std::mem::size_of::<f32>()
+                })
+        };
+        map(&self.global) + self.caustic.as_ref().map_or(0, map)
+    }
+
     /// The global map, then the caustic map if there is one.
     pub fn maps(&self) -> impl Iterator<Item = &PhotonMap> {
         std::iter::once(&self.global).chain(&self.caustic)

@@ -247,7 +247,14 @@ pub struct SequenceCache {
     /// Where no shape moves, every frame's photon maps (they do not depend on the view): traced
     /// once.
     still_photons: std::sync::OnceLock<Option<Arc<PhotonMaps>>>,
+    /// The maps of frames filled and not yet asked for ([`Self::cache_at`] takes them), up to
+    /// [`PHOTON_MAPS_HELD`] bytes.
+    frame_photons: std::sync::Mutex<std::collections::BTreeMap<u32, Arc<PhotonMaps>>>,
 }
+
+/// Bytes of frames' photon maps a [`SequenceCache`] holds between filling the frames and
+/// rendering them (beyond, a frame's maps are traced again for its render).
+const PHOTON_MAPS_HELD: usize = 512 << 20;
 
 impl SequenceCache {
     /// A cache for frames of `size` pixels.
@@ -282,6 +289,7 @@ impl SequenceCache {
             tables: std::sync::OnceLock::new(),
             next_photons: None,
             still_photons: std::sync::OnceLock::new(),
+            frame_photons: std::sync::Mutex::default(),
         })
     }
 
@@ -316,13 +324,20 @@ impl SequenceCache {
         // Radiance caching's tables depend on the materials only, which do not move.
         let tables = self.tables.get();
         let still = self.params.mode != CacheMode::PerFrame && motion.moving_shapes().is_empty();
+        let held = || {
+            self.frame_photons
+                .lock()
+                .ok()
+                .and_then(|mut held| held.remove(&frame))
+        };
         let maps = match self.still_photons.get() {
             Some(maps) if still => maps.clone(),
-            _ => self
-                .next_photons
-                .as_ref()
-                .filter(|(f, _)| *f == frame)
-                .map(|(_, m)| m.clone()),
+            _ => held().or_else(|| {
+                self.next_photons
+                    .as_ref()
+                    .filter(|(f, _)| *f == frame)
+                    .map(|(_, m)| m.clone())
+            }),
         };
         let cache = empty_cache(scene, &self.ic, self.size.0, tables, maps, self.seed, pool)?;
         if let (None, Some(t)) = (tables, &cache.radiance) {
@@ -378,6 +393,15 @@ impl SequenceCache {
         // again, and flicker); the photon maps are traced once (`Self::seeded`).
         let light_moves = !motion.moving_shapes().is_empty();
         let (mut cache, mut slots) = self.seeded(frame, scene, motion, pool)?;
+        // The frame's maps, kept for its render.
+        if let (true, Some(maps), Ok(held)) =
+            (light_moves, &cache.photons, self.frame_photons.get_mut())
+        {
+            let bytes: usize = held.values().map(|m| m.bytes()).sum();
+            if bytes + maps.bytes() <= PHOTON_MAPS_HELD {
+                held.insert(frame, maps.clone());
+            }
+        }
         stats.carried = slots.iter().map(Vec::len).sum();
         let seed = self.frame_seed(frame);
         let first_new = self.records.len();
@@ -943,6 +967,55 @@ mod tests {
             let e = first.global.irradiance(p, n, 8, lookup);
             assert!(e.max_channel() > 0.0, "no photons at {p}");
             assert_eq!(e, alone.global.irradiance(p, n, 8, lookup));
+        }
+    }
+
+    /// Where shapes move, each frame's maps are kept from its filling for its render (once:
+    /// the render takes them), the same maps a frame traces alone.
+    #[test]
+    fn a_frames_photon_maps_serve_its_render() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenes/cube-in-box/animation.xml"
+        );
+        let (mut desc, anim) =
+            ircache_scene::animation::load_animation(std::path::Path::new(path), &[])
+                .expect("loads");
+        desc.sensor.film.width = 16;
+        desc.sensor.film.height = 16;
+        desc.integrator.max_depth = 4;
+        let Integrator::Ic(mut ic) = Integrator::from_desc(&desc.integrator).expect("ic") else {
+            panic!("the scene's integrator is the cache");
+        };
+        ic.params.set("divisions", "64").unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let scene_at = |f: u32| Scene::build(&anim.scene_at(&desc, f as f32)).expect("scene");
+        for mode in [CacheMode::Temporal, CacheMode::PerFrame] {
+            let params = TemporalParams {
+                mode,
+                gradients: SlopeKind::Extrapolated,
+                ..TemporalParams::default()
+            };
+            let mut seq = SequenceCache::new(&ic, params, (16, 16), 1).expect("cache");
+            for f in 0..3 {
+                let next = (f < 2).then(|| scene_at(f + 1));
+                seq.fill_frame(f, &scene_at(f), next.as_ref(), &anim, &pool)
+                    .expect("fills");
+            }
+            let held = |f: u32| seq.frame_photons.lock().unwrap().get(&f).cloned();
+            let kept = held(1).expect("frame 1's maps held");
+            let scene = scene_at(1);
+            let maps = seq.cache_at(1, &scene, &anim, &pool).unwrap().photons;
+            assert!(Arc::ptr_eq(&kept, &maps.expect("maps")), "{mode:?}");
+            assert!(held(1).is_none() && held(2).is_some());
+            let alone = empty_cache(&scene, &ic, 16, None, None, seq.seed, &pool)
+                .unwrap()
+                .photons
+                .expect("maps");
+            assert_eq!(kept.global.stats, alone.global.stats);
         }
     }
 
