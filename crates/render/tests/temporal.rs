@@ -131,6 +131,53 @@ fn still_box_temporal_cache_flickers_a_tenth_of_a_cache_per_frame() {
     assert!(t <= 0.1 * p, "temporal {t} against per frame {p}");
 }
 
+/// Records at deeper levels serve pixels past delta vertices (through cornell-glass's sphere,
+/// here moving): at their end those that served a pixel centre are renewed at their place and
+/// the others dropped, as at the first level (counted as used whatever they served, they were
+/// renewed without end).
+#[test]
+fn deeper_levels_records_end_as_they_serve() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../scenes/cornell-glass/scene.xml"
+    );
+    let dir = std::env::temp_dir().join(format!("ircache-temporal-glass-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("glass.xml");
+    std::fs::write(
+        &path,
+        format!(
+            "<animation version=\"1\" scene=\"{scene}\" frames=\"8\">\n\
+             <move shape=\"GlassSphere\"><key frame=\"0\"/><key frame=\"7\" translate=\"0.3 0 0\"/></move>\n\
+             </animation>\n"
+        ),
+    )
+    .unwrap();
+    let (mut desc, anim) = load_animation(&path, &[]).expect("loads");
+    let _ = std::fs::remove_dir_all(&dir);
+    desc.integrator.kind = "irrcache".into();
+    desc.sensor.film.width = 24;
+    desc.sensor.film.height = 24;
+    desc.sensor.spp = 1;
+    let p = TemporalParams {
+        max_lifespan: 2,
+        ..params(CacheMode::Temporal)
+    };
+    let (cache, _, _) = run(&desc, &anim, p, 8, false);
+    let deeper_ended = || {
+        cache
+            .records
+            .iter()
+            .filter(|r| r.record.level > 0 && r.last < 7)
+    };
+    let renewed = deeper_ended().filter(|r| r.successor.is_some()).count();
+    let dropped = deeper_ended().filter(|r| r.successor.is_none()).count();
+    assert!(
+        renewed > 0 && dropped > 0,
+        "deeper records renewed {renewed}, dropped {dropped}"
+    );
+}
+
 #[test]
 fn still_box_records_live_the_longest_life() {
     let (desc, still) = load("still.xml", 32, 1);

@@ -775,9 +775,11 @@ impl SequenceCache {
         }
     }
 
-    /// Marks the records that serve some pixel centre's level-0 record site in the frame of
-    /// `scene` (the CPU's stand-in for §5.3's occlusion query); deeper levels' records count as
-    /// used.
+    /// Marks the records that serve some pixel centre's record site in the frame of `scene`
+    /// (the CPU's stand-in for §5.3's occlusion query), at every level: deeper levels' sites lie
+    /// past the pixel's delta vertices (in mirrors, through glass). (Deeper records counted as
+    /// used whatever they served were renewed without end: the lamp room's live records grew
+    /// from 1 603 to 3 681 over 23 frames.)
     fn mark_used(
         &mut self,
         scene: &Scene,
@@ -788,16 +790,25 @@ impl SequenceCache {
         let (w, h) = self.size;
         let levels = cache.levels.len() as u32;
         let inv = Vec2::new(1.0 / w as f32, 1.0 / h as f32);
-        let hits: Vec<u32> = pool.install(|| {
+        let hits: Vec<(usize, u32)> = pool.install(|| {
             (0..w * h)
                 .into_par_iter()
                 .fold(Vec::new, |mut acc, i| {
                     let film = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5) * inv;
                     let ray = scene.camera.generate_ray(film);
-                    // The pixel's level-0 sites, radiance-cached glossy surfaces included.
+                    // The pixel's sites at every level (past delta vertices), radiance-cached
+                    // glossy surfaces included.
                     let sites = record_sites(scene, &ray, levels, cache.radiance.as_deref());
-                    for (_, sp) in sites.iter().filter(|(depth, _)| *depth == 0) {
-                        acc.extend(cache.levels[0].serving(sp.it.p, sp.n, 1.0));
+                    for (depth, sp) in &sites {
+                        let level = *depth as usize;
+                        if let Some(store) = cache.levels.get(level) {
+                            acc.extend(
+                                store
+                                    .serving(sp.it.p, sp.n, 1.0)
+                                    .into_iter()
+                                    .map(|id| (level, id)),
+                            );
+                        }
                     }
                     acc
                 })
@@ -807,13 +818,8 @@ impl SequenceCache {
                 })
         });
         self.used = vec![false; self.records.len()];
-        for id in hits {
-            self.used[slots[0][id as usize] as usize] = true;
-        }
-        for ids in slots.iter().skip(1) {
-            for &id in ids {
-                self.used[id as usize] = true;
-            }
+        for (level, id) in hits {
+            self.used[slots[level][id as usize] as usize] = true;
         }
     }
 }
