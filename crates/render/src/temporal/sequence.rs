@@ -587,7 +587,12 @@ impl SequenceCache {
                     if !self.records[i].live_at(prev) || self.records[i].last != u32::MAX {
                         continue;
                     }
-                    if used(i) {
+                    // Dropped the frame they serve no pixel centre; deeper levels' records
+                    // (past delta vertices, where the centres are a sparse sample of the
+                    // pixels' paths) only when their turn to be renewed comes, as in the
+                    // temporal mode: dropped each frame they were made again the next (the
+                    // lamp room's FHP 1.5×).
+                    if used(i) || self.records[i].record.level > 0 {
                         live.push(i);
                     } else {
                         self.records[i].last = prev;
@@ -605,7 +610,11 @@ impl SequenceCache {
                 for (rank, &i) in live.iter().enumerate() {
                     if rank < share || frame - self.records[i].born >= too_old {
                         self.records[i].last = prev;
-                        renew.push(i);
+                        if used(i) {
+                            renew.push(i);
+                        } else {
+                            stats.dropped += 1;
+                        }
                     }
                 }
                 renew.sort_unstable();
