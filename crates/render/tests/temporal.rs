@@ -131,31 +131,47 @@ fn still_box_temporal_cache_flickers_a_tenth_of_a_cache_per_frame() {
     assert!(t <= 0.1 * p, "temporal {t} against per frame {p}");
 }
 
+/// `scenes/{scene}/scene.xml` with the shape `shape` sliding by `translate` ("x y z") over
+/// `frames` frames, from an animation file written to a temporary folder (removed once read;
+/// its path returned), with `overrides` and the cache as its integrator.
+fn sliding(
+    scene: &str,
+    shape: &str,
+    translate: &str,
+    frames: u32,
+    overrides: &[(String, String)],
+) -> (SceneDesc, Animation, std::path::PathBuf) {
+    let scene = format!(
+        "{}/../../scenes/{scene}/scene.xml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let dir = std::env::temp_dir().join(format!("ircache-temporal-{shape}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("animation.xml");
+    std::fs::write(
+        &path,
+        format!(
+            "<animation version=\"1\" scene=\"{scene}\" frames=\"{frames}\">\n\
+             <move shape=\"{shape}\"><key frame=\"0\"/><key frame=\"{}\" translate=\"{translate}\"/></move>\n\
+             </animation>\n",
+            frames - 1
+        ),
+    )
+    .unwrap();
+    let loaded = load_animation(&path, overrides);
+    let _ = std::fs::remove_dir_all(&dir);
+    let (mut desc, anim) = loaded.expect("loads");
+    desc.integrator.kind = "irrcache".into();
+    (desc, anim, path)
+}
+
 /// Records at deeper levels serve pixels past delta vertices (through cornell-glass's sphere,
 /// here moving): at their end those that served a pixel centre are renewed at their place and
 /// the others dropped, as at the first level (counted as used whatever they served, they were
 /// renewed without end).
 #[test]
 fn deeper_levels_records_end_as_they_serve() {
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/cornell-glass/scene.xml"
-    );
-    let dir = std::env::temp_dir().join(format!("ircache-temporal-glass-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("glass.xml");
-    std::fs::write(
-        &path,
-        format!(
-            "<animation version=\"1\" scene=\"{scene}\" frames=\"8\">\n\
-             <move shape=\"GlassSphere\"><key frame=\"0\"/><key frame=\"7\" translate=\"0.3 0 0\"/></move>\n\
-             </animation>\n"
-        ),
-    )
-    .unwrap();
-    let (mut desc, anim) = load_animation(&path, &[]).expect("loads");
-    let _ = std::fs::remove_dir_all(&dir);
-    desc.integrator.kind = "irrcache".into();
+    let (mut desc, anim, _) = sliding("cornell-glass", "GlassSphere", "0.3 0 0", 8, &[]);
     desc.sensor.film.width = 24;
     desc.sensor.film.height = 24;
     desc.sensor.spp = 1;
@@ -316,31 +332,18 @@ fn moving_cube_temporal_cache_gathers_under_a_third_of_a_cache_per_frame() {
 /// `scenes/cornell-rough` (rough metal, rough plastics) with radiance caching on, its short box
 /// sliding 0.1 over `frames` frames.
 fn rough_with_radiance(frames: u32) -> (SceneDesc, Animation) {
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/cornell-rough/scene.xml"
+    let (mut desc, anim, path) = sliding(
+        "cornell-rough",
+        "ShortBox",
+        "0.1 0 0",
+        frames,
+        &[("max_depth".into(), "3".into())],
     );
-    let dir = std::env::temp_dir().join(format!("ircache-temporal-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("rough.xml");
-    std::fs::write(
-        &path,
-        format!(
-            "<animation version=\"1\" scene=\"{scene}\" frames=\"{frames}\">\n\
-             <move shape=\"ShortBox\"><key frame=\"0\"/><key frame=\"{}\" translate=\"0.1 0 0\"/></move>\n\
-             </animation>\n",
-            frames - 1
-        ),
-    )
-    .unwrap();
-    let (mut desc, anim) =
-        load_animation(&path, &[("max_depth".into(), "3".into())]).expect("loads");
-    desc.integrator.kind = "irrcache".into();
     desc.integrator.extra.push((
         "radiance_cache".into(),
         ircache_scene::ParamValue::String("on".into()),
         ircache_scene::SourceLocation {
-            file: std::sync::Arc::new(path.clone()),
+            file: std::sync::Arc::new(path),
             line: 1,
             column: 1,
         },

@@ -930,30 +930,48 @@ mod tests {
     use super::*;
     use crate::integrators::Integrator;
 
-    /// Where no shape moves, the photon maps are traced once: the caches of the frames filled
-    /// and of those asked for afterwards hold the same maps, whose photons are those a frame
-    /// traces alone (the maps do not depend on the frame).
-    #[test]
-    fn a_still_scenes_photon_maps_are_traced_once() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/cube-in-box/still.xml"
+    /// `scenes/cube-in-box/FILE` at `size`² with photons (`max_depth` 4), the cache at 64
+    /// divisions, and a pool of two threads.
+    fn cube_in_box(
+        file: &str,
+        size: u32,
+    ) -> (
+        ircache_scene::SceneDesc,
+        ircache_scene::animation::Animation,
+        IcIntegrator,
+        rayon::ThreadPool,
+    ) {
+        let path = format!(
+            "{}/../../scenes/cube-in-box/{file}",
+            env!("CARGO_MANIFEST_DIR")
         );
-        let (mut desc, _) =
-            ircache_scene::animation::load_animation(std::path::Path::new(path), &[])
+        let (mut desc, anim) =
+            ircache_scene::animation::load_animation(std::path::Path::new(&path), &[])
                 .expect("loads");
-        desc.sensor.film.width = 24;
-        desc.sensor.film.height = 24;
+        desc.sensor.film.width = size;
+        desc.sensor.film.height = size;
         desc.integrator.max_depth = 4;
         let Integrator::Ic(mut ic) = Integrator::from_desc(&desc.integrator).expect("ic") else {
             panic!("the scene's integrator is the cache");
         };
         ic.params.set("divisions", "64").unwrap();
-        assert!(ic.params.global_photons() > 0);
+        assert!(
+            ic.params.global_photons() > 0,
+            "photons by default at two bounces"
+        );
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .build()
             .unwrap();
+        (desc, anim, ic, pool)
+    }
+
+    /// Where no shape moves, the photon maps are traced once: the caches of the frames filled
+    /// and of those asked for afterwards hold the same maps, whose photons are those a frame
+    /// traces alone (the maps do not depend on the frame).
+    #[test]
+    fn a_still_scenes_photon_maps_are_traced_once() {
+        let (desc, _, ic, pool) = cube_in_box("still.xml", 24);
         let scene = Scene::build(&desc).expect("scene");
         let mut seq =
             SequenceCache::new(&ic, TemporalParams::default(), (24, 24), 1).expect("cache");
@@ -989,24 +1007,7 @@ mod tests {
     /// the render takes them), the same maps a frame traces alone.
     #[test]
     fn a_frames_photon_maps_serve_its_render() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/cube-in-box/animation.xml"
-        );
-        let (mut desc, anim) =
-            ircache_scene::animation::load_animation(std::path::Path::new(path), &[])
-                .expect("loads");
-        desc.sensor.film.width = 16;
-        desc.sensor.film.height = 16;
-        desc.integrator.max_depth = 4;
-        let Integrator::Ic(mut ic) = Integrator::from_desc(&desc.integrator).expect("ic") else {
-            panic!("the scene's integrator is the cache");
-        };
-        ic.params.set("divisions", "64").unwrap();
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
+        let (desc, anim, ic, pool) = cube_in_box("animation.xml", 16);
         let scene_at = |f: u32| Scene::build(&anim.scene_at(&desc, f as f32)).expect("scene");
         for mode in [CacheMode::Temporal, CacheMode::PerFrame] {
             let params = TemporalParams {
@@ -1040,35 +1041,14 @@ mod tests {
     /// before).
     #[test]
     fn next_frame_estimates_read_the_next_frames_photons() {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/cube-in-box/animation.xml"
-        );
-        let (mut desc, anim) =
-            ircache_scene::animation::load_animation(std::path::Path::new(path), &[])
-                .expect("loads");
-        desc.sensor.film.width = 24;
-        desc.sensor.film.height = 24;
-        desc.integrator.max_depth = 4;
-        let Integrator::Ic(mut ic) = Integrator::from_desc(&desc.integrator).expect("ic") else {
-            panic!("the scene's integrator is the cache");
-        };
-        ic.params.set("divisions", "64").unwrap();
+        let (desc, anim, mut ic, pool) = cube_in_box("animation.xml", 24);
         ic.params.set("supersamples", "0").unwrap();
-        assert!(
-            ic.params.global_photons() > 0,
-            "photons by default at two bounces"
-        );
         let params = TemporalParams {
             mode: CacheMode::Temporal,
             gradients: SlopeKind::Extrapolated,
             next_frame: NextFrame::Regather,
             ..TemporalParams::default()
         };
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
         let scene_at = |f: u32| Scene::build(&anim.scene_at(&desc, f as f32)).expect("scene");
         let (now, next) = (scene_at(5), scene_at(6));
         let mut seq = SequenceCache::new(&ic, params, (24, 24), 1).expect("cache");
