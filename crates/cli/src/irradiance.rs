@@ -12,7 +12,7 @@
 //! attenuated by the media.
 
 use crate::cache_args::CacheArgs;
-use crate::render::{parse_defines, BUILTIN_CORNELL_BOX};
+use crate::render::parse_defines;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use ircache_math::Vec3;
@@ -129,15 +129,7 @@ pub(crate) fn load_desc(
     let defines = parse_defines(define)?;
     Ok(match scene {
         Some(p) => ircache_scene::load_scene(p, &defines, &ObjCamera::default())?,
-        None => {
-            let dir = std::env::temp_dir().join(format!("ircache-irr-{}", std::process::id()));
-            std::fs::create_dir_all(&dir)?;
-            let path = dir.join("cornell-box.xml");
-            std::fs::write(&path, BUILTIN_CORNELL_BOX)?;
-            let r = ircache_scene::mitsuba::load(&path, &defines);
-            let _ = std::fs::remove_dir_all(&dir);
-            r?
-        }
+        None => crate::render::load_builtin(&defines)?,
     })
 }
 

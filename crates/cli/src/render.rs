@@ -226,7 +226,7 @@ pub fn apply_overrides(args: &RenderArgs, mut desc: SceneDesc) -> Result<SceneDe
 
 /// Loads the built-in Cornell box. It references no other file, so it is written to a private
 /// temporary file and read by the ordinary XML loader.
-fn load_builtin(defines: &[(String, String)]) -> Result<SceneDesc> {
+pub(crate) fn load_builtin(defines: &[(String, String)]) -> Result<SceneDesc> {
     let dir = std::env::temp_dir().join(format!("ircache-builtin-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
     let path = dir.join("cornell-box.xml");
