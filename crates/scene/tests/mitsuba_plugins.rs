@@ -26,7 +26,9 @@ fn load_full(text: &str) -> SceneDesc {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("scene.xml");
     std::fs::write(&path, text).unwrap();
-    mitsuba::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"))
+    let loaded = mitsuba::load(&path, &[]);
+    let _ = std::fs::remove_dir_all(&dir);
+    loaded.unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn close(a: Mat4, b: Mat4) -> bool {
