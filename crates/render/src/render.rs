@@ -224,7 +224,8 @@ pub fn render_runs(
 ) -> Result<RenderOutput, RenderError> {
     if drawn.is_some() && integrator.splatting().is_some() {
         return Err(RenderError::Invalid(
-            "pixel rounds are not available with the splat integrator".into(),
+            "pixels that keep earlier frames' samples are not available with the splat integrator"
+                .into(),
         ));
     }
     let (w, h) = (settings.width, settings.height);

@@ -161,6 +161,11 @@ pub trait Motion: Sync {
     fn motion(&self, shape: u32, from: u32, to: u32) -> Option<Mat4>;
     /// The shapes that move.
     fn moving_shapes(&self) -> Vec<u32>;
+    /// Whether any shape moves (else the scene's light is the same in every frame: only the
+    /// camera may move).
+    fn moves_shapes(&self) -> bool {
+        !self.moving_shapes().is_empty()
+    }
 }
 
 impl Motion for ircache_scene::animation::Animation {
@@ -176,6 +181,9 @@ impl Motion for ircache_scene::animation::Animation {
                 ircache_scene::animation::Target::Camera => None,
             })
             .collect()
+    }
+    fn moves_shapes(&self) -> bool {
+        ircache_scene::animation::Animation::moves_shapes(self)
     }
 }
 
@@ -313,6 +321,12 @@ impl SequenceCache {
         Ok(self.seeded(frame, scene, motion, pool)?.0)
     }
 
+    /// Whether every frame takes the same photon maps, traced once: no shape moves (the maps do
+    /// not depend on the view), and the frames share a cache's work (not per frame).
+    fn shares_photons(&self, motion: &dyn Motion) -> bool {
+        self.params.mode != CacheMode::PerFrame && !motion.moves_shapes()
+    }
+
     /// [`Self::cache_at`] and, per level, the record behind each store index.
     fn seeded(
         &self,
@@ -323,7 +337,7 @@ impl SequenceCache {
     ) -> Result<(IrradianceCache, Vec<Vec<u32>>), RenderError> {
         // Radiance caching's tables depend on the materials only, which do not move.
         let tables = self.tables.get();
-        let still = self.params.mode != CacheMode::PerFrame && motion.moving_shapes().is_empty();
+        let still = self.shares_photons(motion);
         let held = || {
             self.frame_photons
                 .lock()
@@ -391,12 +405,14 @@ impl SequenceCache {
         // Where no shape moves (the camera may), a record's light is the same in every frame:
         // it lives on, with no estimate of its next frame (a renewal would only draw its noise
         // again, and flicker); the photon maps are traced once (`Self::seeded`).
-        let light_moves = !motion.moving_shapes().is_empty();
+        let light_moves = motion.moves_shapes();
         let (mut cache, mut slots) = self.seeded(frame, scene, motion, pool)?;
         // The frame's maps, kept for its render.
-        if let (true, Some(maps), Ok(held)) =
-            (light_moves, &cache.photons, self.frame_photons.get_mut())
-        {
+        if let (false, Some(maps), Ok(held)) = (
+            self.shares_photons(motion),
+            &cache.photons,
+            self.frame_photons.get_mut(),
+        ) {
             let bytes: usize = held.values().map(|m| m.bytes()).sum();
             if bytes + maps.bytes() <= PHOTON_MAPS_HELD {
                 held.insert(frame, maps.clone());
