@@ -1294,44 +1294,20 @@ fn gradient_forms_interpolation_quality() {
     }
 }
 
-/// 002's gradients in the fog Cornell box against central differences (NOTES-002 §3.3): at
-/// points on the floor and on two walls, two of them in the boxes' volumetric shadows, the
+/// 002's gradients against central differences (NOTES-002 §3.3) at `points` of `desc`: the
 /// consistent form's gradient (20 000 cells) and the brute force's differences (100 000 cells,
 /// common random numbers), each the mean of 8 seeds; four light samples per march step (with
-/// one the source-gradient term is too noisy to tell). Each component must lie within 15 % of
-/// the differences' length or three standard errors of the two means, and media-blind
-/// Ward–Heckbert (`none`, 18–64 % off) must fail that. The protocol asks 5 %: the floor point
-/// reads 12 % off (its small ∂E/∂z) and the back wall 6 %, the left wall within. Without the
-/// shadow-edge term of the sources' gradients the floor point is 25 % off. `FOG_NO_BOXES=1`
-/// takes the two boxes out (no volumetric shadows); `FOG_SEEDS=1` prints each seed's
+/// one the source-gradient term is too noisy to tell). Each component must lie within
+/// `tolerance` of the differences' length or three standard errors of the two means, and
+/// media-blind Ward–Heckbert (`none`) must fail that somewhere. `FOG_SEEDS=1` prints each seed's
 /// gradients.
-#[test]
-#[ignore = "the fog Cornell box's gradients against finite differences (a minute): cargo test --release -- --ignored"]
-fn fog_cornell_gradients_against_finite_differences() {
+fn gradients_against_finite_differences(desc: &SceneDesc, points: &[(Vec3, Vec3)], tolerance: f32) {
+    use ircache_render::irradiance_cache::params::GatherPattern;
     use ircache_render::irradiance_cache::points::PointMethod;
     use ircache_render::irradiance_cache::IcParams;
     use ircache_render::media_cache::gradient::MediaGradient;
     use ircache_render::media_cache::points::media_irradiance_at_points;
-    let mut desc = cornell_fog("irrcache", 3, 8, 1);
-    if std::env::var("FOG_NO_BOXES").is_ok() {
-        desc.shapes
-            .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
-    }
-    if let Some(albedo) = std::env::var("FOG_ALBEDO")
-        .ok()
-        .and_then(|v| v.parse().ok())
-    {
-        desc.media[0].albedo = VolumeDesc::constant(Rgb::splat(albedo));
-    }
-    if let Some(scale) = std::env::var("FOG_SCALE").ok().and_then(|v| v.parse().ok()) {
-        desc.media[0].scale = scale;
-    }
-    let scene = Scene::build(&desc).expect("scene");
-    let points = [
-        (Vec3::new(-0.5, 0.001, 0.5), Vec3::Y),
-        (Vec3::new(-0.99, 1.0, 0.0), Vec3::X),
-        (Vec3::new(0.0, 1.0, -0.99), Vec3::Z),
-    ];
+    let scene = Scene::build(desc).expect("scene");
     const SEEDS: u64 = 8;
     // The mean of the seeds' green gradients at each point and its standard error per axis.
     let mean_and_error = |method: PointMethod, form: MediaGradient| -> Vec<(Vec3, Vec3)> {
@@ -1341,11 +1317,14 @@ fn fog_cornell_gradients_against_finite_differences() {
             media_divisions: 20_000,
             media_gradient: form,
             media_light_samples: 4,
+            // The differences' gathers jitter each cell's ray on its own: so do the records'
+            // here (multi-jittered cells read the walls' gradients up to 12 % higher).
+            gather_pattern: GatherPattern::Jittered,
             ..IcParams::default()
         };
         let runs: Vec<Vec<Vec3>> = (0..SEEDS)
             .map(|seed| {
-                let r = media_irradiance_at_points(&scene, &params, &points, method, 0, seed);
+                let r = media_irradiance_at_points(&scene, &params, points, method, 0, seed);
                 let g: Vec<Vec3> = r.iter().map(|r| r.grad_t[1]).collect();
                 if std::env::var("FOG_SEEDS").is_ok() {
                     eprintln!("{form:?} {method:?} seed {seed}: {g:?}");
@@ -1375,14 +1354,15 @@ fn fog_cornell_gradients_against_finite_differences() {
         let cache = mean_and_error(PointMethod::Cache, form);
         for (i, (p, _)) in points.iter().enumerate() {
             let ((g, g_se), (fd, fd_se)) = (cache[i], differences[i]);
-            let tolerance = (0.15 * fd.length())
+            let allowed = (tolerance * fd.length())
                 .max(3.0 * (g_se * g_se + fd_se * fd_se).map(f32::sqrt).max_element());
             let off = (g - fd).abs().max_element();
             eprintln!(
                 "{p}: {form:>10?} {g} ± {g_se}, differences {fd} ± {fd_se}: off {off:.4} \
-                 (tolerance {tolerance:.4})"
+                 ({:.1} % of its length; allowed {allowed:.4})",
+                100.0 * off / fd.length()
             );
-            if off > tolerance {
+            if off > allowed {
                 failures.push((form, i));
             }
         }
@@ -1397,6 +1377,54 @@ fn fog_cornell_gradients_against_finite_differences() {
         !failures.is_empty(),
         "media-blind Ward–Heckbert should be off the differences somewhere"
     );
+}
+
+/// The fog Cornell box ([`gradients_against_finite_differences`]) at points on the floor and on
+/// two walls, two of them in the boxes' volumetric shadows: within 5 % (4.5–4.8 %); `none` reads
+/// 18–64 % off. Without the shadow-edge term of the sources' gradients the floor point read 25 %
+/// off, and 60 % before. `FOG_NO_BOXES=1` takes the two boxes out (no volumetric shadows: 6–9 %
+/// off, not met).
+#[test]
+#[ignore = "the fog Cornell box's gradients against finite differences (a minute): cargo test --release -- --ignored"]
+fn fog_cornell_gradients_against_finite_differences() {
+    let mut desc = cornell_fog("irrcache", 3, 8, 1);
+    if std::env::var("FOG_NO_BOXES").is_ok() {
+        desc.shapes
+            .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
+    }
+    if let Some(albedo) = std::env::var("FOG_ALBEDO")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        desc.media[0].albedo = VolumeDesc::constant(Rgb::splat(albedo));
+    }
+    if let Some(scale) = std::env::var("FOG_SCALE").ok().and_then(|v| v.parse().ok()) {
+        desc.media[0].scale = scale;
+    }
+    let points = [
+        (Vec3::new(-0.5, 0.001, 0.5), Vec3::Y),
+        (Vec3::new(-0.99, 1.0, 0.0), Vec3::X),
+        (Vec3::new(0.0, 1.0, -0.99), Vec3::Z),
+    ];
+    gradients_against_finite_differences(&desc, &points, 0.05);
+}
+
+/// The smoke box ([`gradients_against_finite_differences`]): a heterogeneous medium in a null box
+/// round the two boxes, at points on the floor in front of it and on the left and back walls
+/// behind it (4 % and 21 % off, the latter within three standard errors: the shadow-edge term is
+/// noisy here; `none` reads 45 % off). With each light sample's visibility held, 53–62 % off; and
+/// with the sources beside the null box's faces read within a few ulps of them, twice the
+/// differences.
+#[test]
+#[ignore = "the smoke box's gradients against finite differences (minutes): cargo test --release -- --ignored"]
+fn smoke_box_gradients_against_finite_differences() {
+    let desc = project_scene("smoke-box", &[]);
+    let points = [
+        (Vec3::new(-0.6, 0.001, 0.6), Vec3::Y),
+        (Vec3::new(-0.99, 1.0, 0.0), Vec3::X),
+        (Vec3::new(0.0, 1.0, -0.99), Vec3::Z),
+    ];
+    gradients_against_finite_differences(&desc, &points, 0.05);
 }
 
 /// The medium's source and its gradient in closed form, each light sample's point on the light
@@ -2016,4 +2044,67 @@ fn marched_camera_rays_in_a_mirror_take_the_records_shorter_light() {
         "in the mirror: luminance ratio {ratio}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A gather ray through a null box of homogeneous fog (the smoke box's, made homogeneous, σ_t 3,
+/// its boxes taken out) from a receiver on the wall outside it: the consistent form's medium
+/// gradient along the wall's vertical tangent (the march inside, the jumps at the faces it
+/// enters and leaves by) against central differences of the medium irradiance, common random
+/// numbers, within 5 % for each of eight rays' groups (1 024 light samples). The sources on the
+/// faces' two sides must be read clear of the faces: within a few ulps the light samples' shadow rays miss the face,
+/// and the leaving ray's jump came out a third of its size (0.53 against 0.15).
+#[test]
+fn medium_gradient_through_a_null_box_matches_differences() {
+    use ircache_math::{DVec3, Frame, Rng};
+    use ircache_render::irradiance_cache::hemisphere::Stratification;
+    use ircache_render::media_cache::gradient::{gather, March};
+    use ircache_render::media_cache::scene_medium::SceneMedium;
+    let mut desc = project_scene("smoke-box", &[]);
+    desc.media[0].kind = ircache_scene::desc::MediumKind::Homogeneous;
+    desc.media[0].sigma_t = VolumeDesc::constant(Rgb::splat(3.0));
+    desc.media[0].scale = 1.0;
+    desc.shapes
+        .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
+    let scene = Scene::build(&desc).expect("scene");
+    let n = Vec3::X;
+    let frame = Frame::from_z(n);
+    let axes = [frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3()];
+    let origin = DVec3::new(-0.99, 1.0, 0.0);
+    // One division: four rays a quarter turn apart about the normal.
+    let strata = Stratification::from_divisions(1);
+    let mut rng = Rng::new(3, 4);
+    let mut crossing = 0;
+    for _ in 0..8 {
+        let u = rng.next_2d();
+        let view = SceneMedium::new(&scene, None, false, 1024).with_tangents([axes[0], axes[1]]);
+        let g = gather(&view, origin, axes, strata, &March::default(), |_, _| u);
+        let parts = g.gradient_parts();
+        let closed = [
+            parts.interior_rigid,
+            parts.interfaces,
+            parts.medium_walls,
+            parts.radial,
+        ]
+        .iter()
+        .map(|p| f64::from(p[1].y))
+        .sum::<f64>();
+        crossing += usize::from(parts.interfaces[1].y != 0.0);
+        let medium_at = |x: DVec3| {
+            let view = SceneMedium::new(&scene, None, false, 1024).with_gradients(false);
+            let march = March {
+                gradients: false,
+                ..March::default()
+            };
+            gather(&view, x, axes, strata, &march, |_, _| u)
+                .irradiance()
+                .1[1]
+        };
+        let h = 0.01;
+        let fd = (medium_at(origin + axes[1] * h) - medium_at(origin - axes[1] * h)) / (2.0 * h);
+        assert!(
+            (closed - fd).abs() <= 0.05 * fd.abs().max(0.05),
+            "u {u}: {closed} against differences {fd}"
+        );
+    }
+    assert!(crossing >= 4, "rays leave by the top or bottom face");
 }

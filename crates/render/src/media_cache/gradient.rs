@@ -296,6 +296,10 @@ pub fn gather(
     }
 }
 
+/// How far from a medium boundary its two sides' sources are read, relative to the distance and
+/// the coordinates' size: some 100 single-precision ulps.
+const INTERFACE_OFFSET: f64 = 1e-5;
+
 /// One cell's ray: the opaque hit, then the march through the medium up to it.
 fn trace_cell(scene: &dyn GatherMedium, x: DVec3, w: DVec3, march: &March) -> Cell {
     let (s, radiance) = scene.surface(x, w);
@@ -390,8 +394,12 @@ fn trace_cell(scene: &dyn GatherMedium, x: DVec3, w: DVec3, march: &March) -> Ce
         if tb >= s || tb.is_nan() || steps >= march.max_steps {
             break;
         }
-        // Crossing a boundary: the jumps of σ and q, just before and after it.
-        let eps = 1e-7 * tb.max(f64::MIN_POSITIVE);
+        // Crossing a boundary: the jumps of σ and q, just before and after it. Far enough
+        // from it for the single-precision scene: a point within a few ulps of a null face
+        // sends its light samples' shadow rays through the face unseen, as if the medium went
+        // on to the light (the smoke box's q read a third of its value at its top face, and
+        // the records' vertical gradients twice the finite differences).
+        let eps = INTERFACE_OFFSET * (tb + x.abs().max_element()).max(f64::MIN_POSITIVE);
         let (before, after) = (tb - eps, tb + eps);
         let (s1, s2) = (scene.sigma_t(x, w, before), scene.sigma_t(x, w, after));
         let (q1, q2) = (scene.source(x, w, before), scene.source(x, w, after));

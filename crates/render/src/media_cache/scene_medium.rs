@@ -84,7 +84,7 @@ const VISIBILITY_STREAM: u64 = 0x0076_6973_6962;
 /// The shift of a light sample's visibility difference, as a fraction of its distance to the
 /// light (of the scene's scale for distant lights): small beside a penumbra, and its noise
 /// grows as its inverse.
-const VISIBILITY_SHIFT: f32 = 0.01;
+const VISIBILITY_SHIFT: f32 = 0.03;
 
 /// Coordinates `u` moved into stratum `k` of `n`: a √n × √n grid where `n` is a square, else
 /// `n` strata of the first coordinate.
@@ -1016,7 +1016,14 @@ impl<'a> SceneMedium<'a> {
         };
         rays.shadow += 1;
         let mut traced = 0;
-        if first_opaque(self.scene, ray, medium, &mut traced, |_, _, _| {}).is_none() {
+        // The light's own surface does not count: the held point, reached from elsewhere, lies
+        // off its plane by the sampler's rounding.
+        let own = |hit: &OpaqueHit| {
+            self.scene.lights.area_light_of_shape(hit.it.shape as usize) == Some(ls.light)
+        };
+        if first_opaque(self.scene, ray, medium, &mut traced, |_, _, _| {})
+            .is_none_or(|hit| own(&hit))
+        {
             return DVec3::ZERO;
         }
         // Blocked: by a shadow's edge, unless the shift itself went through a surface.
