@@ -298,7 +298,7 @@ pub fn gather(
 
 /// How far from a medium boundary its two sides' sources are read, relative to the distance and
 /// the coordinates' size: some 100 single-precision ulps.
-const INTERFACE_OFFSET: f64 = 1e-5;
+pub(crate) const INTERFACE_OFFSET: f64 = 1e-5;
 
 /// One cell's ray: the opaque hit, then the march through the medium up to it.
 fn trace_cell(scene: &dyn GatherMedium, x: DVec3, w: DVec3, march: &March) -> Cell {

@@ -38,7 +38,7 @@
 //! and grids ([`transmittance_with_depth_gradient`]), and a spot light's falloff, linear in the
 //! angle from its axis; no extra shadow rays.
 
-use super::gradient::{DVec3, GatherMedium, StepExtent};
+use super::gradient::{DVec3, GatherMedium, StepExtent, INTERFACE_OFFSET};
 use super::volume_records::VolumeCache;
 use crate::integrators::light_sampling::BsdfStrategy;
 use crate::integrators::media_march::{in_scattered_by_path, quadrature_points, MarchPoint};
@@ -1114,9 +1114,13 @@ impl GatherMedium for SceneMedium<'_> {
             ) else {
                 continue;
             };
+            // A box face on the segment's own end (a grid filling its null box) is that end,
+            // not a second boundary beside it: its jump would count twice (the smoke box's
+            // records read vertical gradients 2.5× their differences).
+            let near = INTERFACE_OFFSET * (t1.max(t0) + o.abs().max_element());
             for (t, inside) in [(f64::from(a), true), (f64::from(b), false)] {
                 let t = t0 + t;
-                let is_end = (inside && t <= t0) || (!inside && t >= t1);
+                let is_end = (inside && t <= t0 + near) || (!inside && t >= t1 - near);
                 if !is_end {
                     out.push((t, m.box_face_normal((o + w * t).as_vec3()).as_dvec3()));
                 }
