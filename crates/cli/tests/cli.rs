@@ -1,6 +1,7 @@
 //! End-to-end tests of the `ircache` binary: outputs, statistics, determinism, and bad input
 //! (clear message with a location, non-zero exit, no panic, nothing written).
 
+use ircache_testing::ScratchDir;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -14,32 +15,8 @@ fn ircache(args: &[&str], dir: &Path) -> Output {
 
 /// A test's own folder under the system's temporary folder, removed when the test ends
 /// (passed or not).
-struct TempDir(PathBuf);
-
-impl std::ops::Deref for TempDir {
-    type Target = Path;
-    fn deref(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl AsRef<Path> for TempDir {
-    fn as_ref(&self) -> &Path {
-        &self.0
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-fn temp_dir(name: &str) -> TempDir {
-    let d = std::env::temp_dir().join(format!("ircache-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    TempDir(d)
+fn temp_dir(name: &str) -> ScratchDir {
+    ScratchDir::new(&format!("cli-{name}"))
 }
 
 fn stderr(o: &Output) -> String {

@@ -320,8 +320,7 @@ mod tests {
     /// up: the colours Mitsuba 3.9.1's own `eval` gives at six points (`scalar_rgb`).
     #[test]
     fn checkerboard_matches_mitsuba() {
-        let dir = std::env::temp_dir().join(format!("ircache-checkerboard-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = ircache_testing::ScratchDir::new("checkerboard");
         let path = dir.join("scene.xml");
         std::fs::write(
             &path,

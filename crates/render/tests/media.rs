@@ -2005,8 +2005,7 @@ fn mean_and_variance(v: &[f64]) -> (f64, f64) {
 #[test]
 fn marched_camera_rays_in_a_mirror_take_the_records_shorter_light() {
     let size = 48u32;
-    let dir = std::env::temp_dir().join(format!("ircache-mirror-fog-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ircache_testing::ScratchDir::new("mirror-fog");
     let text = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../scenes/glass-in-fog/scene.xml"),
@@ -2046,7 +2045,6 @@ fn marched_camera_rays_in_a_mirror_take_the_records_shorter_light() {
         (ratio - 1.0).abs() < 0.025,
         "in the mirror: luminance ratio {ratio}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A gather ray through a null box of homogeneous fog (the smoke box's, made homogeneous, σ_t 3,

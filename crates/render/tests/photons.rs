@@ -714,8 +714,7 @@ fn a_pass_that_keeps_nothing_stops_early() {
 /// count the sunlit floor twice; light the floor sends back up and the roof returns is kept.
 #[test]
 fn sunlight_straight_through_a_smooth_trans_is_in_no_photon_map() {
-    let dir = std::env::temp_dir().join(format!("ircache-trans-sun-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ircache_testing::ScratchDir::new("trans-sun");
     let path = dir.join("roof.rad");
     std::fs::write(
         &path,

@@ -275,8 +275,7 @@ fn a_mesh_s_uv_maps_a_picture_as_radiance_does() {
 /// definition, named `tr`) over a black floor, under a uniform sky of radiance 1: two bounces,
 /// brute force.
 fn under_a_roof(material: &str, name: &str) -> Rgb {
-    let dir = std::env::temp_dir().join(format!("ircache-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ircache_testing::ScratchDir::new(name);
     let path = dir.join("roof.rad");
     std::fs::write(
         &path,
@@ -473,8 +472,7 @@ fn mixtures_blend_their_materials_as_radiance_does() {
 fn a_sky_of_a_user_s_function_file_has_its_closed_form_irradiance() {
     // A glow source all round with brightfunc 10 (2 + Dx + Dy/2) from a .cal file: facing up,
     // E = 10 · 2π (the linear terms cancel); facing +x, E = 10 (2π + 2π/3).
-    let dir = std::env::temp_dir().join(format!("ircache-customsky-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ircache_testing::ScratchDir::new("customsky");
     std::fs::write(dir.join("smooth.cal"), "skyb = 2 + Dx + 0.5*Dy;\n").unwrap();
     std::fs::write(
         dir.join("sky.rad"),
@@ -609,8 +607,7 @@ fn a_klems_diffuser_transmits_its_closed_form() {
     // The same data tinted by CIE X and Z channels transmits, per channel, the fractions
     // Radiance 6.0 gives (`rtrace -I -ab 2 -aa 0 -ad 100000`: 6.4994, 3.0094, 2.1101 under a
     // top of 11.0698).
-    let dir = std::env::temp_dir().join(format!("ircache-klems-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ircache_testing::ScratchDir::new("klems");
     let tinted = [6.4994f32 / 11.0698, 3.0094 / 11.0698, 2.1101 / 11.0698];
     for (file, below, above) in [
         ("diffuser.xml", [0.35; 3], [0.2; 3]),
@@ -719,8 +716,7 @@ fn a_sun_lights_through_a_smooth_trans_as_radiance_s_shadow_rays_do() {
     // Fresnel estimate at the sun's angle (normal.c passes shadow rays so). With the sky and
     // two bounces, rtrace -I -ab 2 -ad 65536 -st 0 gives (3.8478, 3.3668, 2.8858) (measured
     // 1.1 % below it: ircache applies the Fresnel loss to diffuse light from the sky as well).
-    let dir = std::env::temp_dir().join(format!("ircache-trans-sun-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ircache_testing::ScratchDir::new("trans-sun");
     let path = dir.join("trans.rad");
     let sun = Vec3::new(0.3, 0.2, 0.9327).normalize();
     std::fs::write(

@@ -8,8 +8,7 @@ use ircache_math::{Ray, Vec2, Vec3};
 use ircache_render::scene::Scene;
 
 fn sphere_scene(transform: &str) -> Scene {
-    let dir = std::env::temp_dir().join(format!("ircache-sphere-uv-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ircache_testing::ScratchDir::new("sphere-uv");
     let path = dir.join(format!("scene-{}.xml", transform.len()));
     std::fs::write(
         &path,

@@ -145,8 +145,7 @@ fn sliding(
         "{}/../../scenes/{scene}/scene.xml",
         env!("CARGO_MANIFEST_DIR")
     );
-    let dir = std::env::temp_dir().join(format!("ircache-temporal-{shape}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ircache_testing::ScratchDir::new(&format!("temporal-{shape}"));
     let path = dir.join("animation.xml");
     std::fs::write(
         &path,
@@ -159,7 +158,7 @@ fn sliding(
     )
     .unwrap();
     let loaded = load_animation(&path, overrides);
-    let _ = std::fs::remove_dir_all(&dir);
+    drop(dir);
     let (mut desc, anim) = loaded.expect("loads");
     desc.integrator.kind = "irrcache".into();
     (desc, anim, path)

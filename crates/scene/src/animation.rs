@@ -543,14 +543,14 @@ mod tests {
         assert_eq!(anim.shape_motion(1, 3.0, 6.0), Mat4::IDENTITY);
     }
 
-    /// Writes an animation of the repository's cube-in-box scene with `body` as its tracks.
-    fn animation_file(name: &str, body: &str) -> std::path::PathBuf {
+    /// Writes an animation of the repository's cube-in-box scene with `body` as its tracks, in a
+    /// scratch directory that goes when the first of the pair is dropped.
+    fn animation_file(name: &str, body: &str) -> (ircache_testing::ScratchDir, std::path::PathBuf) {
         let scene = concat!(
             env!("CARGO_MANIFEST_DIR"),
             "/../../scenes/cube-in-box/scene.xml"
         );
-        let dir = std::env::temp_dir().join(format!("ircache-anim-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = ircache_testing::ScratchDir::new("anim");
         let path = dir.join(name);
         std::fs::write(
             &path,
@@ -559,12 +559,12 @@ mod tests {
             ),
         )
         .unwrap();
-        path
+        (dir, path)
     }
 
     #[test]
     fn camera_and_shape_tracks_move_the_scene() {
-        let path = animation_file(
+        let (_dir, path) = animation_file(
             "camera.xml",
             "<camera><key frame=\"0\"/><key frame=\"4\" translate=\"0 0.4 0\"/></camera>\n\
              <move shape=\"Light\"><key frame=\"0\"/><key frame=\"4\" translate=\"0.2 0 0\"/></move>\n",
@@ -603,7 +603,7 @@ mod tests {
 
     #[test]
     fn animation_files_are_told_from_scenes_by_their_root() {
-        let anim = animation_file("root.xml", "");
+        let (_dir, anim) = animation_file("root.xml", "");
         assert!(is_animation(&anim).unwrap());
         let scene = concat!(
             env!("CARGO_MANIFEST_DIR"),
@@ -644,7 +644,7 @@ mod tests {
             ),
         ];
         for (i, (body, line, what)) in cases.iter().enumerate() {
-            let path = animation_file(&format!("bad{i}.xml"), body);
+            let (_dir, path) = animation_file(&format!("bad{i}.xml"), body);
             let e = load_animation(&path, &[]).unwrap_err().to_string();
             assert!(
                 e.contains(&format!("bad{i}.xml:{line}")) && e.contains(what),

@@ -3,13 +3,12 @@
 use ircache_math::{Vec2, Vec3};
 use ircache_scene::mesh::{parse_ply, read_ply};
 use ircache_scene::TriangleMesh;
+use ircache_testing::ScratchDir;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ircache-mesh-ply-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn temp_dir(name: &str) -> ScratchDir {
+    ScratchDir::new(&format!("mesh-ply-{name}"))
 }
 
 fn sample() -> TriangleMesh {

@@ -3,15 +3,13 @@
 use ircache_math::{Rgb, Vec3};
 use ircache_scene::obj_scene::{load, ObjCamera};
 use ircache_scene::{BsdfDesc, EmitterDesc, FilterDesc, FovAxis, Geometry, TextureDesc};
-use std::path::{Path, PathBuf};
+use ircache_testing::ScratchDir;
+use std::path::Path;
 
 const SCENES: &str = "/work/shared/scenes";
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("ircache-mesh-scene-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn temp_dir(name: &str) -> ScratchDir {
+    ScratchDir::new(&format!("mesh-scene-{name}"))
 }
 
 const TRIANGLE: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";

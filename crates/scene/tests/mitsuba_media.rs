@@ -5,16 +5,10 @@
 use ircache_math::{Rgb, Vec3};
 use ircache_scene::volume_file::{write_vol, VolFile};
 use ircache_scene::{mitsuba, BsdfDesc, MediumKind, PhaseDesc, SceneDesc, SceneError, VolumeDesc};
-use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use ircache_testing::ScratchDir;
 
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
-
-fn dir() -> PathBuf {
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("ircache-media-{}-{n}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn dir() -> ScratchDir {
+    ScratchDir::new("media")
 }
 
 fn try_load(body: &str, sensor_extra: &str) -> Result<SceneDesc, SceneError> {

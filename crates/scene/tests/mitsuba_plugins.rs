@@ -6,10 +6,8 @@ use ircache_scene::{
     mitsuba, BsdfDesc, EmitterDesc, FilterDesc, FovAxis, Geometry, MicrofacetDistribution,
     ParamValue, SceneDesc, TextureDesc,
 };
+use ircache_testing::ScratchDir;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-static COUNTER: AtomicUsize = AtomicUsize::new(0);
 
 fn load(body: &str) -> SceneDesc {
     load_full(&format!(
@@ -18,17 +16,10 @@ fn load(body: &str) -> SceneDesc {
 }
 
 fn load_full(text: &str) -> SceneDesc {
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!(
-        "ircache-mitsuba-plugins-{}-{n}",
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ScratchDir::new("mitsuba-plugins");
     let path = dir.join("scene.xml");
     std::fs::write(&path, text).unwrap();
-    let loaded = mitsuba::load(&path, &[]);
-    let _ = std::fs::remove_dir_all(&dir);
-    loaded.unwrap_or_else(|e| panic!("{e}"))
+    mitsuba::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn close(a: Mat4, b: Mat4) -> bool {
@@ -349,8 +340,7 @@ fn textured_sponza() {
 
 #[test]
 fn normalmap_and_bumpmap_wrap_a_bsdf_with_a_texture() {
-    let dir = std::env::temp_dir().join(format!("ircache-bump-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ScratchDir::new("bump");
     let mut img = ircache_image::Image::new(4, 4);
     img.pixels.fill(Rgb::new(0.5, 0.5, 1.0));
     ircache_image::write_image(&dir.join("n.exr"), &img, 0.0).unwrap();
@@ -413,9 +403,7 @@ fn serialized_meshes_by_index_with_normals_as_mitsuba() {
         uvs: None,
         indices: vec![[0, 1, 2]],
     };
-    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-    let dir = std::env::temp_dir().join(format!("ircache-serialized-{}-{n}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ScratchDir::new("serialized");
     std::fs::write(
         dir.join("m.serialized"),
         write_serialized(&[("one", &single, false), ("fan", &fan, false)]),
@@ -835,8 +823,7 @@ fn wavelength_spectra_take_mitsubas_colours() {
 fn ply_texture_coordinates_flip_only_when_asked() {
     // Mitsuba 3's `ply` keeps the file's (s, t) unless `flip_tex_coords` is true (its default
     // is false, where `obj`'s is true).
-    let dir = std::env::temp_dir().join(format!("ircache-ply-flip-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ScratchDir::new("ply-flip");
     std::fs::write(
         dir.join("tri.ply"),
         "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
@@ -878,8 +865,7 @@ fn ply_texture_coordinates_flip_only_when_asked() {
 fn bump_and_normal_maps_read_mitsubas_shading_flags() {
     // `use_shadowing_function` and `flip_invalid_normals`, both true by default as in Mitsuba 3.
     use ircache_scene::PerturbedShading;
-    let dir = std::env::temp_dir().join(format!("ircache-bump-flags-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = ScratchDir::new("bump-flags");
     let height = dir.join("height.exr");
     ircache_image::write_image(&height, &ircache_image::Image::new(2, 2), 1.0).unwrap();
     let scene = |ty: &str, texture: &str, flags: &str| {

@@ -6,12 +6,11 @@ use ircache_scene::obj_scene::ObjCamera;
 use ircache_scene::radiance::sky::SkyBrightness;
 use ircache_scene::radiance::view::View;
 use ircache_scene::{BsdfDesc, EmitterDesc, Geometry, SceneDesc, SceneError};
+use ircache_testing::ScratchDir;
 use std::path::{Path, PathBuf};
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ircache-rad-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> ScratchDir {
+    ScratchDir::new(&format!("rad-{name}"))
 }
 
 fn load(d: &Path, files: &[(&str, &str)]) -> Result<SceneDesc, SceneError> {

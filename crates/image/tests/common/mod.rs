@@ -7,14 +7,11 @@ use ircache_math::Rgb;
 use std::path::{Path, PathBuf};
 
 /// A fresh, empty scratch directory for one test, removed on drop.
-pub struct Scratch(pub PathBuf);
+pub struct Scratch(pub ircache_testing::ScratchDir);
 
 impl Scratch {
     pub fn new(name: &str) -> Scratch {
-        let dir = std::env::temp_dir().join(format!("ircache-image-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("scratch directory");
-        Scratch(dir)
+        Scratch(ircache_testing::ScratchDir::new(&format!("image-{name}")))
     }
     pub fn path(&self, file: &str) -> PathBuf {
         self.0.join(file)
@@ -27,12 +24,6 @@ impl Scratch {
             .collect();
         v.sort();
         v
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
     }
 }
 

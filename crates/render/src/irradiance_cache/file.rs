@@ -748,13 +748,16 @@ mod tests {
         }
     }
 
-    fn temp(name: &str) -> PathBuf {
-        std::env::temp_dir().join(format!("ircache-file-{name}-{}", std::process::id()))
+    /// A cache file's path in a scratch directory that goes when the first of the pair drops.
+    fn temp(name: &str) -> (ircache_testing::ScratchDir, PathBuf) {
+        let dir = ircache_testing::ScratchDir::new(&format!("file-{name}"));
+        let path = dir.join("cache");
+        (dir, path)
     }
 
     #[test]
     fn round_trip_of_header_and_records() {
-        let path = temp("round-trip");
+        let (_path_dir, path) = temp("round-trip");
         let _ = std::fs::remove_file(&path);
         let (mut f, c) = CacheFile::open(&path, &header(), false).unwrap();
         assert!(c.records.is_empty());
@@ -848,7 +851,7 @@ mod tests {
     /// loses the last record and is cut off by the next write.
     #[test]
     fn radiance_continuations_are_checked_with_their_record() {
-        let path = temp("radiance");
+        let (_path_dir, path) = temp("radiance");
         let _ = std::fs::remove_file(&path);
         let recs: Vec<Stored> = (0..6).map(stored).collect();
         let (mut f, _) = CacheFile::open(&path, &header(), false).unwrap();
@@ -860,7 +863,7 @@ mod tests {
         let continuation = HEADER_BYTES + 2 * RECORD_BYTES;
         let mut bad = full.clone();
         bad[continuation + 40] ^= 2;
-        let cut = temp("radiance-cut");
+        let (_cut_dir, cut) = temp("radiance-cut");
         std::fs::write(&cut, &bad).unwrap();
         let c = read(&cut).unwrap();
         let mut expect = recs.clone();
@@ -884,7 +887,7 @@ mod tests {
     /// continuation is damaged is skipped with it, and the records around it stay.
     #[test]
     fn volumetric_records_round_trip_and_are_checked_with_their_continuation() {
-        let path = temp("volume");
+        let (_path_dir, path) = temp("volume");
         let _ = std::fs::remove_file(&path);
         let volume = |i: usize| VolumeRecord {
             p: Vec3::new(i as f32, 0.5, -2.0),
@@ -923,7 +926,7 @@ mod tests {
 
     #[test]
     fn a_torn_last_record_leaves_every_earlier_one() {
-        let path = temp("torn");
+        let (_path_dir, path) = temp("torn");
         let recs: Vec<Stored> = (0..6).map(|i| (record(i), None)).collect();
         let _ = std::fs::remove_file(&path);
         let (mut f, _) = CacheFile::open(&path, &header(), false).unwrap();
@@ -931,7 +934,7 @@ mod tests {
         drop(f);
         let full = std::fs::read(&path).unwrap();
         let last = HEADER_BYTES + 5 * RECORD_BYTES;
-        let cut = temp("torn-cut");
+        let (_cut_dir, cut) = temp("torn-cut");
         for len in last..full.len() {
             std::fs::write(&cut, &full[..len]).unwrap();
             let c = read(&cut).unwrap();
