@@ -1180,7 +1180,8 @@ fn light_samples_and_bsdf_samples_agree_on_bump_maps() {
         text.contains("value=\"0, 0, 0\""),
         "the sun is in the scene file"
     );
-    let path = std::env::temp_dir().join(format!("ircache-bumps-sky-{}.xml", std::process::id()));
+    let dir = ircache_testing::ScratchDir::new("bumps-sky");
+    let path = dir.join("scene.xml");
     std::fs::write(&path, text).unwrap();
     let mean = |integrator: &str| -> f64 {
         let defines: Vec<(String, String)> = [
@@ -1203,7 +1204,6 @@ fn light_samples_and_bsdf_samples_agree_on_bump_maps() {
             / out.image.pixels.len() as f64
     };
     let (direct, path_traced) = (mean("irrcache"), mean("path"));
-    let _ = std::fs::remove_file(&path);
     assert!(
         (direct / path_traced - 1.0).abs() < 3e-3,
         "direct {direct:.5} against path {path_traced:.5}"

@@ -296,9 +296,12 @@ pub fn gather(
     }
 }
 
-/// How far from a medium boundary its two sides' sources are read, relative to the distance and
-/// the coordinates' size: some 100 single-precision ulps.
-pub(crate) const INTERFACE_OFFSET: f64 = 1e-5;
+/// How far from a medium boundary at distance `t` along a ray from `origin` its two sides are
+/// told apart: 1e-5 of the distance and the coordinates' size, some 100 single-precision ulps
+/// (the scene is traced in single precision; within a few ulps of a face, rays miss it).
+pub(crate) fn interface_offset(t: f64, origin: DVec3) -> f64 {
+    1e-5 * (t + origin.abs().max_element()).max(f64::MIN_POSITIVE)
+}
 
 /// One cell's ray: the opaque hit, then the march through the medium up to it.
 fn trace_cell(scene: &dyn GatherMedium, x: DVec3, w: DVec3, march: &March) -> Cell {
@@ -399,7 +402,7 @@ fn trace_cell(scene: &dyn GatherMedium, x: DVec3, w: DVec3, march: &March) -> Ce
         // sends its light samples' shadow rays through the face unseen, as if the medium went
         // on to the light (the smoke box's q read a third of its value at its top face, and
         // the records' vertical gradients twice the finite differences).
-        let eps = INTERFACE_OFFSET * (tb + x.abs().max_element()).max(f64::MIN_POSITIVE);
+        let eps = interface_offset(tb, x);
         let (before, after) = (tb - eps, tb + eps);
         let (s1, s2) = (scene.sigma_t(x, w, before), scene.sigma_t(x, w, after));
         let (q1, q2) = (scene.source(x, w, before), scene.source(x, w, after));

@@ -38,7 +38,7 @@
 //! and grids ([`transmittance_with_depth_gradient`]), and a spot light's falloff, linear in the
 //! angle from its axis; no extra shadow rays.
 
-use super::gradient::{DVec3, GatherMedium, StepExtent, INTERFACE_OFFSET};
+use super::gradient::{interface_offset, DVec3, GatherMedium, StepExtent};
 use super::volume_records::VolumeCache;
 use crate::integrators::light_sampling::BsdfStrategy;
 use crate::integrators::media_march::{in_scattered_by_path, quadrature_points, MarchPoint};
@@ -1018,9 +1018,8 @@ impl<'a> SceneMedium<'a> {
         let mut traced = 0;
         // The light's own surface does not count: the held point, reached from elsewhere, lies
         // off its plane by the sampler's rounding.
-        let own = |hit: &OpaqueHit| {
-            self.scene.lights.area_light_of_shape(hit.it.shape as usize) == Some(ls.light)
-        };
+        let own =
+            |hit: &OpaqueHit| self.scene.shapes[hit.it.shape as usize].area_light == Some(ls.light);
         if first_opaque(self.scene, ray, medium, &mut traced, |_, _, _| {})
             .is_none_or(|hit| own(&hit))
         {
@@ -1117,7 +1116,7 @@ impl GatherMedium for SceneMedium<'_> {
             // A box face on the segment's own end (a grid filling its null box) is that end,
             // not a second boundary beside it: its jump would count twice (the smoke box's
             // records read vertical gradients 2.5× their differences).
-            let near = INTERFACE_OFFSET * (t1.max(t0) + o.abs().max_element());
+            let near = interface_offset(t1.max(t0), o);
             for (t, inside) in [(f64::from(a), true), (f64::from(b), false)] {
                 let t = t0 + t;
                 let is_end = (inside && t <= t0 + near) || (!inside && t >= t1 - near);
