@@ -256,9 +256,14 @@ impl MeshLight {
     #[inline]
     #[must_use]
     pub fn rectangle_seen_from(&self, p_ref: Vec3) -> Option<Seen> {
-        self.rectangle
-            .as_ref()
-            .map(|(rect, _)| rect.seen_from(p_ref))
+        // Behind the emitting side nothing arrives, however it is sampled: by area, cheapest.
+        self.rectangle.as_ref().map(|(rect, n)| {
+            if n.dot(p_ref - rect.point(Vec2::ZERO)) > 0.0 {
+                rect.seen_from(p_ref)
+            } else {
+                Seen::Area
+            }
+        })
     }
 
     /// [`Self::sample`] with `seen`, [`Self::rectangle_seen_from`] at the same `p_ref`, given.
