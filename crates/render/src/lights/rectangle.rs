@@ -5,9 +5,10 @@
 //! beside a ceiling lamp, a desk under its lamp).
 //!
 //! A mesh light uses it when the mesh is one rectangle (two triangles, four corners, a right
-//! angle; Mitsuba's `rectangle` shape) without bent vertex normals, and only where the solid
-//! angle lies in `[MIN_SOLID_ANGLE, MAX_SOLID_ANGLE]`: below, the rectangle is small enough that
-//! area sampling is as good and the parametrisation loses precision; above (a point almost on
+//! angle; Mitsuba's `rectangle` shape) without bent vertex normals, for points within the
+//! rectangle's diagonal of it or whose cheap guess of the solid angle is large, and only where
+//! the solid angle lies in `[MIN_SOLID_ANGLE, MAX_SOLID_ANGLE]`: below, the rectangle is small
+//! enough that area sampling is as good and the parametrisation loses precision; above (a point almost on
 //! the light), the angles it is built from do, and there directions are drawn uniformly over
 //! the hemisphere facing the light ([`Seen::Nearly`]: the rectangle covers all but 1 % of it;
 //! directions past its edge carry nothing), where pbrt-v4 samples by area, whose weight
