@@ -4,17 +4,17 @@
 //! area sampling's `cos θ_light / d²`, which varies most for points near a large light (walls
 //! beside a ceiling lamp, a desk under its lamp).
 //!
-//! A mesh light uses it when the mesh is one rectangle (two triangles, four corners, a right
-//! angle; Mitsuba's `rectangle` shape) without bent vertex normals, for points within the
-//! rectangle's diagonal of it or whose cheap guess of the solid angle is large, and only where
-//! the solid angle lies in `[MIN_SOLID_ANGLE, MAX_SOLID_ANGLE]`: below, the rectangle is small
-//! enough that area sampling is as good and the parametrisation loses precision; above (a point almost on
-//! the light), the angles it is built from do, and there directions are drawn uniformly over
-//! the hemisphere facing the light ([`Seen::Nearly`]: the rectangle covers all but 1 % of it;
-//! directions past its edge carry nothing), where pbrt-v4 samples by area, whose weight
-//! `A cos θ/d²` grows without bound as the point nears the light (a medium's march point a
-//! millimetre below a ceiling lamp weighed 10⁵). The density follows the same rule at the same
-//! point, so sampling and MIS agree. The bounds are pbrt-v4's.
+//! A mesh light uses it when the mesh is one rectangle (two triangles, four corners, a right angle;
+//! Mitsuba's `rectangle` shape) without bent vertex normals, for points within the rectangle's
+//! diagonal of it or whose cheap guess of the solid angle is large, and only where the solid angle
+//! lies in `[MIN_SOLID_ANGLE, MAX_SOLID_ANGLE]`: below, the rectangle is small enough that area
+//! sampling is as good and the parametrisation loses precision; above (a point almost on the
+//! light), the angles it is built from do, and there directions are drawn uniformly over the
+//! hemisphere facing the light ([`Seen::Nearly`]: the rectangle covers all but 1 % of it;
+//! directions past its edge carry nothing), where pbrt-v4 samples by area, whose weight `A cos
+//! θ/d²` grows without bound as the point nears the light (a medium's march point a millimetre
+//! below a ceiling lamp weighed 10⁵). The density follows the same rule at the same point, so
+//! sampling and MIS agree. The bounds are pbrt-v4's.
 
 use ircache_math::{Vec2, Vec3, PI};
 

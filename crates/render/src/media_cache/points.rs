@@ -204,3 +204,425 @@ fn volpath_irradiance(
     }
     sum * (PI / strata.cells() as f32)
 }
+
+#[cfg(test)]
+mod diag {
+    use super::*;
+    use crate::media_cache::gradient::{GatherMedium, StepExtent};
+
+    struct Probe<'a> {
+        inner: &'a SceneMedium<'a>,
+        base: DVec3,
+        freeze_sigma: bool,
+        freeze_q: bool,
+        zero_gq: bool,
+        zero_gs: bool,
+    }
+    use ircache_math::DVec3;
+    impl GatherMedium for Probe<'_> {
+        fn surface(&self, _o: DVec3, w: DVec3) -> (f64, [f64; 3]) {
+            self.inner.surface(self.base, w)
+        }
+        fn boundaries(&self, _o: DVec3, w: DVec3, t: f64) -> Vec<(f64, DVec3)> {
+            self.inner.boundaries(self.base, w, t)
+        }
+        fn sigma_t(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3] {
+            self.inner
+                .sigma_t(if self.freeze_sigma { self.base } else { o }, w, t)
+        }
+        fn sigma_t_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3] {
+            if self.zero_gs {
+                [DVec3::ZERO; 3]
+            } else {
+                self.inner.sigma_t_gradient(o, w, t)
+            }
+        }
+        fn step_extent(&self, _o: DVec3, w: DVec3, t: f64, b: f64) -> (f64, f64) {
+            self.inner.step_extent(self.base, w, t, b)
+        }
+        fn source(&self, o: DVec3, w: DVec3, t: f64) -> [f64; 3] {
+            self.inner
+                .source(if self.freeze_q { self.base } else { o }, w, t)
+        }
+        fn source_gradient(&self, o: DVec3, w: DVec3, t: f64) -> [DVec3; 3] {
+            if self.zero_gq {
+                [DVec3::ZERO; 3]
+            } else {
+                self.inner.source_gradient(o, w, t)
+            }
+        }
+        fn step_source(&self, o: DVec3, w: DVec3, st: &StepExtent) -> [f64; 3] {
+            self.inner
+                .step_source(if self.freeze_q { self.base } else { o }, w, st)
+        }
+        fn step_source_gradient(&self, o: DVec3, w: DVec3, st: &StepExtent) -> [DVec3; 3] {
+            if self.zero_gq {
+                [DVec3::ZERO; 3]
+            } else {
+                self.inner.step_source_gradient(o, w, st)
+            }
+        }
+    }
+
+    fn scene(no_boxes: bool) -> Scene {
+        let name = std::env::var("DIAG_SCENE").unwrap_or("smoke-box".into());
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join(format!("../../scenes/{name}/scene.xml"));
+        let mut desc = ircache_scene::mitsuba::load(&path, &[]).unwrap();
+        if no_boxes {
+            desc.shapes
+                .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
+        }
+        if std::env::var("DIAG_HOMOG").is_ok() {
+            desc.media[0].kind = ircache_scene::desc::MediumKind::Homogeneous;
+            desc.media[0].sigma_t = ircache_scene::desc::VolumeDesc::constant(Rgb::splat(3.0));
+            desc.media[0].scale = 1.0;
+        }
+        Scene::build(&desc).unwrap()
+    }
+
+    #[test]
+    #[ignore]
+    fn parts() {
+        let scene = scene(std::env::var("DIAG_BOXES").is_err());
+        let (p, nrm) = match std::env::var("DIAG_POINT").as_deref() {
+            Ok("left") => (Vec3::new(-0.99, 1.0, 0.0), Vec3::X),
+            Ok("floor") => (Vec3::new(-0.5, 0.001, 0.5), Vec3::Y),
+            _ => (Vec3::new(0.0, 1.0, -0.99), Vec3::Z),
+        };
+        let frame = Frame::from_z(nrm);
+        let axes = [frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3()];
+        eprintln!("axes {:?}", axes);
+        let origin = offset_ray_origin(p, nrm, nrm, scene.scale).as_dvec3();
+        let medium = medium_at(&scene, offset_ray_origin(p, nrm, nrm, scene.scale), nrm);
+        let ls: u32 = std::env::var("DIAG_LS")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(4);
+        let div: usize = std::env::var("DIAG_DIV")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(20000);
+        let hfrac: f64 = std::env::var("DIAG_H")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(0.01);
+        let strata = Stratification::from_divisions(div);
+        let n = strata.azimuthal;
+        let seeds = 8u64;
+        let c = 1;
+        let ostep: f64 = std::env::var("DIAG_STEP")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(0.1);
+        let rows: Vec<Vec<(&'static str, [f64; 2])>> = (0..seeds)
+            .into_par_iter()
+            .map(|seed| {
+                let mut out = Vec::new();
+                let view = SceneMedium::new(&scene, medium, false, ls)
+                    .with_tangents([axes[0], axes[1]])
+                    .with_gradients(true)
+                    .with_deeper_bounces(1, 0, None, None);
+                let v = |l: crate::irradiance_cache::hemisphere::LocalGradient| {
+                    [f64::from(l[c].x), f64::from(l[c].y)]
+                };
+                {
+                    let g = gather(
+                        &view,
+                        origin,
+                        axes,
+                        strata,
+                        &March {
+                            optical_step: ostep,
+                            max_steps: 4096,
+                            ..March::default()
+                        },
+                        |j, k| Rng::keyed(seed, &[(j * n + k) as u64]).next_2d(),
+                    );
+                    let parts = g.gradient_parts();
+                    out.push(("p surface_walls", v(parts.surface_walls)));
+                    out.push(("p absorption", v(parts.absorption)));
+                    out.push(("p medium_walls", v(parts.medium_walls)));
+                    out.push(("p interior_rigid", v(parts.interior_rigid)));
+                    out.push(("p radial", v(parts.radial)));
+                    out.push(("p interfaces", v(parts.interfaces)));
+                    let (a, b) = (v(parts.surface_walls), v(parts.absorption));
+                    out.push(("q analytic surface", [a[0] + b[0], a[1] + b[1]]));
+                    let m = [
+                        parts.medium_walls,
+                        parts.interior_rigid,
+                        parts.radial,
+                        parts.interfaces,
+                    ]
+                    .map(v);
+                    out.push((
+                        "q analytic medium",
+                        [m.iter().map(|x| x[0]).sum(), m.iter().map(|x| x[1]).sum()],
+                    ));
+                }
+                for (name, zq, zs) in [
+                    ("a rigid: gq only", false, true),
+                    ("b rigid: gs only", true, false),
+                ] {
+                    let probe = Probe {
+                        inner: &view,
+                        base: origin,
+                        freeze_sigma: false,
+                        freeze_q: false,
+                        zero_gq: zq,
+                        zero_gs: zs,
+                    };
+                    let g = gather(
+                        &probe,
+                        origin,
+                        axes,
+                        strata,
+                        &March {
+                            optical_step: ostep,
+                            max_steps: 4096,
+                            ..March::default()
+                        },
+                        |j, k| Rng::keyed(seed, &[(j * n + k) as u64]).next_2d(),
+                    );
+                    out.push((name, v(g.gradient_parts().interior_rigid)));
+                }
+                let fstrata = Stratification::from_divisions(100_000);
+                let fnn = fstrata.azimuthal;
+                let fview = SceneMedium::new(&scene, medium, false, ls)
+                    .with_gradients(false)
+                    .with_deeper_bounces(1, 0, None, None);
+                let at = |x: DVec3, fs: bool, fq: bool| {
+                    let probe = Probe {
+                        inner: &fview,
+                        base: origin,
+                        freeze_sigma: fs,
+                        freeze_q: fq,
+                        zero_gq: true,
+                        zero_gs: true,
+                    };
+                    let march = March {
+                        gradients: false,
+                        optical_step: ostep,
+                        max_steps: 4096,
+                        ..March::default()
+                    };
+                    gather(&probe, x, axes, fstrata, &march, |j, k| {
+                        Rng::keyed(seed + 100, &[(j * fnn + k) as u64]).next_2d()
+                    })
+                };
+                let h = hfrac;
+                {
+                    let full = |x: DVec3| {
+                        let march = March {
+                            gradients: false,
+                            optical_step: ostep,
+                            max_steps: 4096,
+                            ..March::default()
+                        };
+                        gather(&fview, x, axes, fstrata, &march, |j, k| {
+                            Rng::keyed(seed + 100, &[(j * fnn + k) as u64]).next_2d()
+                        })
+                        .irradiance()
+                    };
+                    let (mut fs, mut fm) = ([0.0; 2], [0.0; 2]);
+                    for (i, axis) in [axes[0], axes[1]].into_iter().enumerate() {
+                        let (pl, mi) = (full(origin + axis * h), full(origin - axis * h));
+                        fs[i] = (pl.0[c] - mi.0[c]) / (2.0 * h);
+                        fm[i] = (pl.1[c] - mi.1[c]) / (2.0 * h);
+                    }
+                    out.push(("r fd surface", fs));
+                    out.push(("r fd medium", fm));
+                }
+                for (name, fs, fq) in [
+                    ("c fd q only", true, false),
+                    ("d fd sigma only", false, true),
+                ] {
+                    let mut fm = [0.0; 2];
+                    for (i, axis) in [axes[0], axes[1]].into_iter().enumerate() {
+                        let (pl, mi) = (
+                            at(origin + axis * h, fs, fq).irradiance(),
+                            at(origin - axis * h, fs, fq).irradiance(),
+                        );
+                        fm[i] = (pl.1[c] - mi.1[c]) / (2.0 * h);
+                    }
+                    out.push((name, fm));
+                }
+                out
+            })
+            .collect();
+        let mut acc = std::collections::BTreeMap::<&str, [f64; 4]>::new();
+        for r in rows {
+            for (k, v) in r {
+                let e = acc.entry(k).or_insert([0.0; 4]);
+                e[0] += v[0];
+                e[1] += v[1];
+                e[2] += v[0] * v[0];
+                e[3] += v[1] * v[1];
+            }
+        }
+        let ns = seeds as f64;
+        for (k, v) in &acc {
+            let (m0, m1) = (v[0] / ns, v[1] / ns);
+            let se = |sq: f64, m: f64| ((sq / ns - m * m).max(0.0) / (ns - 1.0)).sqrt();
+            eprintln!(
+                "{k:20} {:+.5} ± {:.5}  {:+.5} ± {:.5}",
+                m0,
+                se(v[2], m0),
+                m1,
+                se(v[3], m1)
+            );
+        }
+    }
+
+    #[test]
+    #[ignore]
+    fn sigma_grad() {
+        let scene = scene(true);
+        let p = Vec3::new(0.0, 1.0, -0.99);
+        let nrm = Vec3::Z;
+        let frame = Frame::from_z(nrm);
+        let axes = [frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3()];
+        let origin = offset_ray_origin(p, nrm, nrm, scene.scale).as_dvec3();
+        let medium = medium_at(&scene, offset_ray_origin(p, nrm, nrm, scene.scale), nrm);
+        let view = SceneMedium::new(&scene, medium, false, 4).with_tangents([axes[0], axes[1]]);
+        let mut rng = Rng::new(3, 4);
+        let h = 1e-4;
+        let (mut sa, mut sf) = (DVec3::ZERO, DVec3::ZERO);
+        for _ in 0..2000 {
+            let u = rng.next_2d();
+            let w = (axes[2]
+                + axes[0] * (f64::from(u.x) - 0.5) * 1.5
+                + axes[1] * (f64::from(u.y) - 0.5) * 1.5)
+                .normalize();
+            let t = 0.5 + 1.8 * f64::from(rng.next_f32());
+            let g = view.sigma_t_gradient(origin, w, t)[1];
+            let mut f = DVec3::ZERO;
+            for a in [axes[0], axes[1]] {
+                let d = (view.sigma_t(origin + a * h, w, t)[1]
+                    - view.sigma_t(origin - a * h, w, t)[1])
+                    / (2.0 * h);
+                f += a * d;
+            }
+            sa += g.abs();
+            sf += f.abs();
+            if (g - f).length() > 0.05 * f.length().max(1.0) {
+                eprintln!(
+                    "t {t:.3} w {w:?}: analytic {g:?} fd {f:?} sigma {:?}",
+                    view.sigma_t(origin, w, t)
+                );
+            }
+        }
+        eprintln!("sum |analytic| {sa:?} sum |fd| {sf:?}");
+    }
+
+    #[test]
+    #[ignore]
+    fn single_rays() {
+        let scene = scene(true);
+        let p = Vec3::new(0.0, 1.0, -0.99);
+        let nrm = Vec3::Z;
+        let frame = Frame::from_z(nrm);
+        let axes = [frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3()];
+        let origin = offset_ray_origin(p, nrm, nrm, scene.scale).as_dvec3();
+        let medium = medium_at(&scene, offset_ray_origin(p, nrm, nrm, scene.scale), nrm);
+        let strata = Stratification::from_divisions(1);
+        let h: f64 = std::env::var("DIAG_H")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(1e-4);
+        let mut rng = Rng::new(7, 1);
+        let (mut sa, mut sf) = (0.0, 0.0);
+        for i in 0..400 {
+            let u = rng.next_2d();
+            if std::env::var("DIAG_ONLY").is_ok() && i != 0 {
+                continue;
+            }
+            let view = SceneMedium::new(&scene, medium, false, 4)
+                .with_tangents([axes[0], axes[1]])
+                .with_gradients(true);
+            let probe = Probe {
+                inner: &view,
+                base: origin,
+                freeze_sigma: false,
+                freeze_q: true,
+                zero_gq: true,
+                zero_gs: false,
+            };
+            let key = 1000 + i as u64;
+            let g = gather(&probe, origin, axes, strata, &March::default(), |_, _| u);
+            let a = g.gradient_parts().interior_rigid[1].x as f64;
+            let fview = SceneMedium::new(&scene, medium, false, 4).with_gradients(false);
+            let fprobe = Probe {
+                inner: &fview,
+                base: origin,
+                freeze_sigma: false,
+                freeze_q: true,
+                zero_gq: true,
+                zero_gs: true,
+            };
+            let march = March {
+                gradients: false,
+                ..March::default()
+            };
+            let e = |x: DVec3| {
+                gather(&fprobe, x, axes, strata, &march, |_, _| u)
+                    .irradiance()
+                    .1[1]
+            };
+            let f = (e(origin + axes[0] * h) - e(origin - axes[0] * h)) / (2.0 * h);
+            let _ = key;
+            sa += a;
+            sf += f;
+            if (a - f).abs() > 0.02 * f.abs().max(0.01) {
+                eprintln!(
+                    "{i} u {u:?}: analytic {a:.5} fd {f:.5} steps {}",
+                    g.march_steps
+                );
+            }
+        }
+        eprintln!("sum analytic {sa:.4} fd {sf:.4}");
+    }
+
+    #[test]
+    #[ignore]
+    fn outlier() {
+        let scene = scene(std::env::var("DIAG_BOXES").is_err());
+        let (p, nrm) = (Vec3::new(-0.5, 0.001, 0.5), Vec3::Y);
+        let medium = medium_at(&scene, offset_ray_origin(p, nrm, nrm, scene.scale), nrm);
+        let frame = Frame::from_z(nrm);
+        let axes = [frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3()];
+        let origin = offset_ray_origin(p, nrm, nrm, scene.scale).as_dvec3();
+        let seed: u64 = std::env::var("DIAG_SEED")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(3);
+        let div: usize = std::env::var("DIAG_DIV")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(80000);
+        let mut rng = Rng::keyed(seed, &[0x006d_6564_6961, 0]);
+        let key: u64 = rng.next_u32().into();
+        let strata = Stratification::from_divisions(div);
+        let n = strata.azimuthal;
+        let view = SceneMedium::new(&scene, medium, false, 4)
+            .with_tangents([axes[0], axes[1]])
+            .with_gradients(true)
+            .with_deeper_bounces(1, 0, None, None);
+        let g = gather(&view, origin, axes, strata, &March::default(), |j, k| {
+            Rng::keyed(key, &[(j * n + k) as u64]).next_2d()
+        });
+        let parts = g.gradient_parts();
+        eprintln!("{parts:#?}");
+        let (j, k) = (16561 / n, 16561 % n);
+        let local = strata
+            .direction(j, k, Rng::keyed(key, &[(j * n + k) as u64]).next_2d())
+            .as_dvec3();
+        let w = (axes[0] * local.x + axes[1] * local.y + axes[2] * local.z).normalize();
+        for i in 0..40 {
+            let t = 1.9 + 0.0088 * f64::from(i);
+            let q = view.source(origin, w, t)[1];
+            let gq = view.source_gradient(origin, w, t)[1];
+            eprintln!("t {t:.4} x {:?} q {q:.4} gq {gq:.2?}", (origin + w * t));
+        }
+    }
+}
