@@ -1437,6 +1437,22 @@ fn fog_cornell_gradients_against_finite_differences() {
     );
 }
 
+/// The project's smoke box, its plume replaced by homogeneous fog (σ_t 3) filling the null box
+/// when `homogeneous`, its two boxes taken out unless `boxes`.
+fn smoke_box(homogeneous: bool, boxes: bool) -> SceneDesc {
+    let mut desc = project_scene("smoke-box", &[]);
+    if homogeneous {
+        desc.media[0].kind = ircache_scene::desc::MediumKind::Homogeneous;
+        desc.media[0].sigma_t = VolumeDesc::constant(Rgb::splat(3.0));
+        desc.media[0].scale = 1.0;
+    }
+    if !boxes {
+        desc.shapes
+            .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
+    }
+    desc
+}
+
 /// The smoke box ([`gradients_against_finite_differences`]): its plume, a 32³ grid filling its
 /// null box, round the two boxes, which cast volumetric shadows in it and hide parts of it; at
 /// points on the left and back walls behind it, within 5 % (1.7 % and 4.1 %; without the boxes
@@ -1448,16 +1464,10 @@ fn fog_cornell_gradients_against_finite_differences() {
 #[test]
 #[ignore = "the smoke box's gradients against finite differences (minutes): cargo test --release -- --ignored"]
 fn smoke_box_gradients_against_finite_differences() {
-    let mut desc = project_scene("smoke-box", &[]);
-    if std::env::var("SMOKE_HOMOGENEOUS").is_ok() {
-        desc.media[0].kind = ircache_scene::desc::MediumKind::Homogeneous;
-        desc.media[0].sigma_t = VolumeDesc::constant(Rgb::splat(3.0));
-        desc.media[0].scale = 1.0;
-    }
-    if std::env::var("SMOKE_NO_BOXES").is_ok() {
-        desc.shapes
-            .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
-    }
+    let desc = smoke_box(
+        std::env::var("SMOKE_HOMOGENEOUS").is_ok(),
+        std::env::var("SMOKE_NO_BOXES").is_err(),
+    );
     let points = [
         (Vec3::new(-0.99, 1.0, 0.0), Vec3::X),
         (Vec3::new(0.0, 1.0, -0.99), Vec3::Z),
@@ -2095,19 +2105,7 @@ fn medium_gradient_through_a_null_box_matches_differences() {
     use ircache_render::irradiance_cache::hemisphere::Stratification;
     use ircache_render::media_cache::gradient::{gather, March};
     use ircache_render::media_cache::scene_medium::SceneMedium;
-    let mut desc = project_scene("smoke-box", &[]);
-    if std::env::var("SMOKE_GRID").is_err() {
-        desc.media[0].kind = ircache_scene::desc::MediumKind::Homogeneous;
-        desc.media[0].sigma_t = VolumeDesc::constant(Rgb::splat(3.0));
-        desc.media[0].scale = 1.0;
-    }
-    if std::env::var("SMOKE_NO_BOXES").is_ok() {
-        desc.shapes
-            .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
-    }
-    desc.shapes
-        .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
-    let scene = Scene::build(&desc).expect("scene");
+    let scene = Scene::build(&smoke_box(true, false)).expect("scene");
     let n = Vec3::X;
     let frame = Frame::from_z(n);
     let axes = [frame.s.as_dvec3(), frame.t.as_dvec3(), frame.n.as_dvec3()];
@@ -2160,10 +2158,7 @@ fn a_grid_filling_its_null_box_crosses_each_face_once() {
     use ircache_math::DVec3;
     use ircache_render::media_cache::gradient::GatherMedium;
     use ircache_render::media_cache::scene_medium::SceneMedium;
-    let mut desc = project_scene("smoke-box", &[]);
-    desc.shapes
-        .retain(|s| !matches!(s.id.as_deref(), Some("ShortBox" | "TallBox")));
-    let scene = Scene::build(&desc).expect("scene");
+    let scene = Scene::build(&smoke_box(false, false)).expect("scene");
     let view = SceneMedium::new(&scene, None, false, 1);
     let o = DVec3::new(-0.99, 1.0, 0.0);
     let mut crossed = 0;
