@@ -584,6 +584,26 @@ fn simpson_rec(
     )
 }
 
+/// The project's scene `scenes/NAME/scene.xml` with `defines`, as loaded (unit tests).
+#[cfg(test)]
+pub(crate) fn project_scene_desc(
+    name: &str,
+    defines: &[(String, String)],
+) -> ircache_scene::SceneDesc {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes")
+        .join(name)
+        .join("scene.xml");
+    ircache_scene::mitsuba::load(&path, defines)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// [`project_scene_desc`], built.
+#[cfg(test)]
+pub(crate) fn project_scene(name: &str, defines: &[(String, String)]) -> crate::scene::Scene {
+    crate::scene::Scene::build(&project_scene_desc(name, defines)).expect("the scene builds")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1197,7 +1197,7 @@ impl GatherMedium for SceneMedium<'_> {
 #[cfg(test)]
 mod tests {
     use super::{first_stratum, DVec3, GatherMedium, SceneMedium};
-    use crate::scene::Scene;
+    use crate::testing::project_scene;
     use ircache_math::{Rng, Vec2};
 
     /// A march step begun where a gather ray enters the smoke's grid (its box is its null box:
@@ -1206,10 +1206,7 @@ mod tests {
     /// budget. Sized by σ_t = 0 at the face, such steps strode the whole grid at one midpoint.
     #[test]
     fn a_step_begun_on_a_grids_box_stays_within_its_budget() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes/smoke-box/scene.xml");
-        let desc = ircache_scene::mitsuba::load(&path, &[]).expect("the scene loads");
-        let scene = Scene::build(&desc).expect("the scene builds");
+        let scene = project_scene("smoke-box", &[]);
         let view = SceneMedium::new(&scene, None, false, 1);
         let budget = 0.3;
         let mut rng = Rng::new(11, 3);

@@ -631,18 +631,9 @@ fn for_each_quadrature_point(scene: &Scene, ray: Ray, points: u32, mut f: impl F
 mod tests {
     use super::*;
     use crate::media::phase::henyey_greenstein;
+    use crate::testing::{project_scene, project_scene_desc};
     use ircache_math::harmonics::quadrature;
     use ircache_math::harmonics::sh::ShBasis;
-
-    /// The project's scene `scenes/NAME/scene.xml` with `defines`, built.
-    fn project_scene(name: &str, defines: &[(String, String)]) -> Scene {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes")
-            .join(name)
-            .join("scene.xml");
-        let desc = ircache_scene::mitsuba::load(&path, defines).expect("the scene loads");
-        Scene::build(&desc).expect("the scene builds")
-    }
 
     /// A gather direction's reach for the radius ([`optical_reach`]): the first hit in the
     /// homogeneous fog; in the smoke grid never past the hit, never short of [`REACH_DEPTH`] over
@@ -789,9 +780,7 @@ mod tests {
         // lamp have heavy tails (single values 30 000 times the mean; 250 000 paths' means
         // spread ±8 %).
         for (g, floor, miss) in [(0.5, 0.0, 0.1), (0.8, 0.25, 0.5)] {
-            let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join("../../scenes/open-fog/scene.xml");
-            let mut desc = ircache_scene::mitsuba::load(&path, &[]).expect("the scene loads");
+            let mut desc = project_scene_desc("open-fog", &[]);
             desc.media[0].phase = ircache_scene::PhaseDesc::HenyeyGreenstein { g };
             let scene = Scene::build(&desc).expect("the scene builds");
             let integrator = VolPathIntegrator::plain(5);
