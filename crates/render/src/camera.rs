@@ -129,6 +129,7 @@ impl Camera {
 
     /// The ray through film position `film` (each coordinate in [0, 1], top-left origin) and
     /// the lens's centre, with a unit direction, starting at the near clip plane.
+    #[inline]
     #[must_use]
     pub fn generate_ray(&self, film: Vec2) -> Ray {
         self.generate_ray_through_lens(film, Vec2::splat(0.5))
@@ -136,7 +137,9 @@ impl Camera {
 
     /// The ray through film position `film` and the point of the aperture that `lens` (in
     /// [0, 1]²) maps to by the concentric disc map, as Mitsuba's thin lens; other projections
-    /// ignore `lens`. Unit direction, starting at the near clip plane.
+    /// ignore `lens`. Unit direction, starting at the near clip plane. Inlined: a ray returned
+    /// through memory stalled the pixel loop on store forwarding.
+    #[inline]
     #[must_use]
     pub fn generate_ray_through_lens(&self, film: Vec2, lens: Vec2) -> Ray {
         let x = (1.0 - 2.0 * film.x) * self.tan_half_x;

@@ -464,6 +464,8 @@ impl PixelState {
 /// The camera ray of sample `sample` of pixel (x, y): its film position from the sampler's film
 /// dimensions through the pixel filter, with the sample's filter weight (1 but for filters with
 /// negative lobes, [`crate::film`]). The pixel pass and the splatting G-buffer both trace it.
+// Inlined: its ray and weight, returned through memory, stalled the caller on store forwarding.
+#[inline(always)]
 pub fn camera_ray(
     scene: &Scene,
     settings: &RenderSettings,

@@ -443,7 +443,7 @@ impl Scene {
     }
 
     /// The closest surface along `ray`.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
         let hit = self.accel.intersect(ray)?;
         Some(self.interaction(ray, &hit))

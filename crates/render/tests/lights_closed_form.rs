@@ -890,7 +890,7 @@ fn environment_relative_variance_has_its_closed_form() {
 fn light_samples_stand_alone_at_a_lambertian_last_vertex() {
     use ircache_math::ray::Ray;
     use ircache_render::integrators::path_continuation::{
-        trace_path, PathSettings, PathStart, Traced,
+        trace_path, FirstVertex, PathSettings, PathStart, Traced,
     };
     use ircache_render::integrators::RayCounts;
     use ircache_render::scene::Scene;
@@ -956,7 +956,7 @@ fn light_samples_stand_alone_at_a_lambertian_last_vertex() {
                 trace_path(
                     &scene,
                     start,
-                    None,
+                    FirstVertex::Trace,
                     &mut Traced,
                     &settings,
                     &mut rng,

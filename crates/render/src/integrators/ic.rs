@@ -8,7 +8,9 @@
 //! [`crate::irradiance_cache::build`]).
 
 use super::light_sampling::DeferredShadows;
-use super::path_continuation::{trace_path_deferring, IndirectSource, PathSettings, PathStart};
+use super::path_continuation::{
+    trace_path_deferring, FirstVertex, IndirectSource, PathSettings, PathStart,
+};
 use super::RayCounts;
 use crate::irradiance_cache::environment::HeldEnvironment;
 use crate::irradiance_cache::gather::{mix, Gatherer, SceneRadiance, ShadingPoint, WorkState};
@@ -255,11 +257,10 @@ impl IcIntegrator {
             took: Rgb::ZERO,
             parts,
         };
-        let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
         let l = trace_path_deferring(
             scene,
             start,
-            first,
+            FirstVertex::Hit(first_hit),
             &mut source,
             &settings,
             sampler,

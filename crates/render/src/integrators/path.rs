@@ -8,7 +8,9 @@
 //! [`super::path_continuation::trace_path`] with no cache.
 
 use super::light_sampling::DeferredShadows;
-use super::path_continuation::{trace_path_deferring, PathSettings, PathStart, Traced};
+use super::path_continuation::{
+    trace_path_deferring, FirstVertex, PathSettings, PathStart, Traced,
+};
 use super::RayCounts;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
@@ -44,11 +46,10 @@ impl PathIntegrator {
             first_light_samples: 1,
         };
         let start = PathStart::camera(*ray, self.hide_emitters);
-        let first = Some(first_hit.map(|h| scene.interaction(ray, h)));
         trace_path_deferring(
             scene,
             start,
-            first,
+            FirstVertex::Hit(first_hit),
             &mut Traced,
             &settings,
             sampler,

@@ -202,12 +202,25 @@ impl PathStart {
     }
 }
 
+/// The first vertex of a path, where the caller has found it already.
+#[derive(Clone, Copy, Debug)]
+pub enum FirstVertex<'a> {
+    /// Not yet: the path traces its ray.
+    Trace,
+    /// Embree's closest hit along the ray (`None`: it escapes), made an interaction in the
+    /// path's own slot: built by the caller and moved in, its fields' separate stores were read
+    /// back whole and stalled on store forwarding.
+    Hit(Option<&'a ircache_embree::Hit>),
+    /// The interaction itself (`None`: the ray escapes).
+    Interaction(Option<&'a Interaction>),
+}
+
 /// Radiance arriving along `start.ray`, whose first intersection the caller may have traced
 /// already (`first`, which is then used as the first vertex).
 pub fn trace_path<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
     scene: &Scene,
     start: PathStart,
-    first: Option<Option<Interaction>>,
+    first: FirstVertex,
     source: &mut I,
     settings: &PathSettings,
     sampler: &mut S,
@@ -223,7 +236,7 @@ pub fn trace_path<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
 pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
     scene: &Scene,
     start: PathStart,
-    first: Option<Option<Interaction>>,
+    first: FirstVertex,
     source: &mut I,
     settings: &PathSettings,
     sampler: &mut S,
@@ -258,16 +271,24 @@ pub fn trace_path_deferring<S: Sampler + ?Sized, I: IndirectSource + ?Sized>(
         if depth >= max_depth {
             break;
         }
-        let hit = match first.take() {
-            Some(h) => h,
-            None => scene.intersect(&ray),
+        let traced;
+        let hit = match std::mem::replace(&mut first, FirstVertex::Trace) {
+            FirstVertex::Interaction(it) => it,
+            FirstVertex::Hit(h) => {
+                traced = h.map(|h| scene.interaction(&ray, h));
+                traced.as_ref()
+            }
+            FirstVertex::Trace => {
+                traced = scene.intersect(&ray);
+                traced.as_ref()
+            }
         };
         // Emission the path leaves out here: a gather's caustic, or on a caustics-only path
         // what a non-delta sample finds (the light samples beside it counted that in full).
         let left_out = caustic_chain || (caustics_only && !arrival.is_delta());
         // Borrowed, not moved out: a copy of the whole interaction right after `intersect`
         // wrote it field by field stalled on store forwarding (a tenth of this loop's time).
-        let Some(it) = &hit else {
+        let Some(it) = hit else {
             if scene.lights.has_environment() && !left_out {
                 let w = arrival.emission_weight(|p| scene.lights.pdf_environment(p, ray.d));
                 if w > 0.0 {

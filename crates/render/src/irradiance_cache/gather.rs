@@ -17,7 +17,7 @@ use super::plane::{HemispherePlane, PlaneMeasure, PlaneSource};
 use super::record::{ErrorMetric, Record, NO_RADIANCE};
 use super::store::RecordStore;
 use crate::integrators::path_continuation::{
-    trace_path, Arrival, IndirectSource, PathSettings, PathStart,
+    trace_path, Arrival, FirstVertex, IndirectSource, PathSettings, PathStart,
 };
 use crate::integrators::RayCounts;
 use crate::photon_map::PhotonMaps;
@@ -1192,7 +1192,8 @@ impl<'a> SceneRadiance<'a> {
                     beta: tau * passage.weight,
                     arrival,
                 };
-                let radiance = self.trace_from(cache, seed, st, start, None, level, key, rng);
+                let radiance =
+                    self.trace_from(cache, seed, st, start, FirstVertex::Trace, level, key, rng);
                 return Incident {
                     radiance,
                     distance: first.0,
@@ -1279,7 +1280,16 @@ impl<'a> SceneRadiance<'a> {
             beta: Rgb::ONE,
             arrival: Arrival::Gather,
         };
-        self.trace_from(cache, seed, st, start, Some(Some(*hit)), level, key, rng)
+        self.trace_from(
+            cache,
+            seed,
+            st,
+            start,
+            FirstVertex::Interaction(Some(hit)),
+            level,
+            key,
+            rng,
+        )
     }
 
     /// The light a gather's path from `start` brings (its first hit `first`, as
@@ -1291,7 +1301,7 @@ impl<'a> SceneRadiance<'a> {
         seed: u64,
         st: &mut WorkState,
         start: PathStart,
-        first: Option<Option<Interaction>>,
+        first: FirstVertex,
         level: u32,
         key: u64,
         rng: &mut Rng,

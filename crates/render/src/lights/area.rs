@@ -253,16 +253,15 @@ impl MeshLight {
     /// How `p_ref` samples the light when it is one rectangle ([`Rectangle::seen_from`]; `None`
     /// for other meshes, sampled by area): what several light samples from one point share
     /// ([`Self::sample_seen`]).
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn rectangle_seen_from(&self, p_ref: Vec3) -> Option<Seen> {
+        let (rect, n) = self.rectangle.as_ref()?;
         // Behind the emitting side nothing arrives, however it is sampled: by area, cheapest.
-        self.rectangle.as_ref().map(|(rect, n)| {
-            if n.dot(p_ref - rect.point(Vec2::ZERO)) > 0.0 {
-                rect.seen_from(p_ref)
-            } else {
-                Seen::Area
-            }
+        Some(if n.dot(p_ref - rect.point(Vec2::ZERO)) > 0.0 {
+            rect.seen_from(p_ref)
+        } else {
+            Seen::Area
         })
     }
 

@@ -179,7 +179,7 @@ impl Rectangle {
     }
 
     /// How `p` is to sample the rectangle: by area, by solid angle, or over the hemisphere.
-    #[inline]
+    #[inline(always)]
     #[must_use]
     pub fn seen_from(&self, p: Vec3) -> Seen {
         self.classify(p).unwrap_or(Seen::Area)
@@ -216,7 +216,7 @@ impl Rectangle {
         da * da + db * db + z * z < diagonal2
     }
 
-    #[inline]
+    #[inline(always)]
     fn classify(&self, p: Vec3) -> Option<Seen> {
         // A cheap first guess of the solid angle (the rectangle as a point at its centre): where
         // it is small, area sampling is as good and costs less.
