@@ -640,7 +640,10 @@ impl Scene {
         Some(self.interaction(ray, &hit))
     }
 
-    /// Builds the surface interaction of an Embree hit.
+    /// Builds the surface interaction of an Embree hit. Inlined: returned through memory, the
+    /// interaction was copied whole out of its fields' separate stores (a store-forwarding stall
+    /// at every vertex).
+    #[inline(always)]
     pub fn interaction(&self, ray: &Ray, hit: &ircache_embree::Hit) -> Interaction {
         let shape = &self.shapes[hit.geom_id as usize];
         match &shape.geometry {
