@@ -65,10 +65,12 @@ pub struct RenderArgs {
     /// Maximum path depth (overrides the scene's; Mitsuba's meaning: 2 = direct light only).
     #[arg(long)]
     pub max_depth: Option<i32>,
-    /// Image width (overrides the film's).
+    /// Image width (overrides the film's; without --height, the height follows at the film's
+    /// aspect ratio).
     #[arg(long)]
     pub width: Option<u32>,
-    /// Image height (overrides the film's).
+    /// Image height (overrides the film's; without --width, the width follows at the film's
+    /// aspect ratio).
     #[arg(long)]
     pub height: Option<u32>,
     /// Exposure in stops for PNG output.
@@ -184,6 +186,24 @@ pub fn load(args: &RenderArgs) -> Result<SceneDesc> {
     apply_overrides(args, desc)
 }
 
+/// The film's size with the command line's width and height: one of them alone keeps the
+/// film's aspect ratio (rounded, at least a pixel), as a smaller preview of the same view.
+fn resized((w, h): (u32, u32), width: Option<u32>, height: Option<u32>) -> (u32, u32) {
+    let follow = |given: u32, this: u32, other: u32| -> u32 {
+        if this == 0 {
+            return other;
+        }
+        let scaled = (f64::from(given) * f64::from(other) / f64::from(this)).round();
+        (scaled as u32).max(1)
+    };
+    match (width, height) {
+        (Some(width), Some(height)) => (width, height),
+        (Some(width), None) => (width, follow(width, w, h)),
+        (None, Some(height)) => (follow(height, h, w), height),
+        (None, None) => (w, h),
+    }
+}
+
 /// Applies the command line's overrides (size, samples, sampler, integrator, depth) to a
 /// loaded scene.
 pub fn apply_overrides(args: &RenderArgs, mut desc: SceneDesc) -> Result<SceneDesc> {
@@ -192,11 +212,9 @@ pub fn apply_overrides(args: &RenderArgs, mut desc: SceneDesc) -> Result<SceneDe
         .source
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("rad") || e.eq_ignore_ascii_case("oct"));
-    if let Some(w) = args.width.filter(|_| !fitted) {
-        desc.sensor.film.width = w;
-    }
-    if let Some(h) = args.height.filter(|_| !fitted) {
-        desc.sensor.film.height = h;
+    if !fitted {
+        let film = &mut desc.sensor.film;
+        (film.width, film.height) = resized((film.width, film.height), args.width, args.height);
     }
     if desc.sensor.film.width == 0 || desc.sensor.film.height == 0 {
         bail!(
@@ -725,4 +743,20 @@ fn write_aovs(
         ircache_image::write_image(&path, &img, 0.0)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::resized;
+
+    #[test]
+    fn one_side_given_keeps_the_films_aspect_ratio() {
+        assert_eq!(resized((640, 480), Some(320), None), (320, 240));
+        assert_eq!(resized((640, 480), None, Some(96)), (128, 96));
+        assert_eq!(resized((1280, 720), Some(96), None), (96, 54));
+        assert_eq!(resized((640, 480), Some(100), Some(100)), (100, 100));
+        assert_eq!(resized((640, 480), None, None), (640, 480));
+        // Never below a pixel on the side that follows.
+        assert_eq!(resized((1000, 1), Some(10), None), (10, 1));
+    }
 }
