@@ -590,8 +590,7 @@ pub(crate) fn project_scene_desc(
     name: &str,
     defines: &[(String, String)],
 ) -> ircache_scene::SceneDesc {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
+    let path = ircache_testing::project_scenes()
         .join(name)
         .join("scene.xml");
     ircache_scene::mitsuba::load(&path, defines)

@@ -247,8 +247,7 @@ pub fn grid(res: [usize; 3], lo: Vec3, hi: Vec3, f: impl Fn(Vec3) -> f32) -> Vol
 
 /// The project's scene `scenes/NAME/scene.xml` (Mitsuba XML) with `defines`.
 pub fn project_scene(name: &str, defines: &[(String, String)]) -> SceneDesc {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
+    let path = ircache_testing::project_scenes()
         .join(name)
         .join("scene.xml");
     ircache_scene::mitsuba::load(&path, defines)

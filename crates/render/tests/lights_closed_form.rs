@@ -1164,7 +1164,7 @@ fn patterned_emitter_samples_hits_and_power_agree() {
 /// the bumped ground.
 #[test]
 fn light_samples_and_bsdf_samples_agree_on_bump_maps() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/bumps");
+    let dir = ircache_testing::project_scenes().join("bumps");
     let text = std::fs::read_to_string(dir.join("scene.xml"))
         .unwrap()
         .replace("value=\"3, 2.8, 2.5\"", "value=\"0, 0, 0\"")

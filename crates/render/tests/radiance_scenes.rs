@@ -15,10 +15,7 @@ use ircache_scene::{EmitterDesc, SceneDesc};
 use std::path::PathBuf;
 
 fn scene_file(dir: &str, file: &str) -> SceneDesc {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(dir)
-        .join(file);
+    let path = ircache_testing::project_scenes().join(dir).join(file);
     ircache_scene::load_scene(&path, &[], &Default::default()).expect("the scene loads")
 }
 
@@ -33,10 +30,7 @@ fn reference(name: &str) -> Vec<(Vec3, Vec3, Rgb)> {
 
 /// `(point, normal, Radiance's irradiance)` of reference file `name` in scene folder `dir`.
 fn reference_in(dir: &str, name: &str) -> Vec<(Vec3, Vec3, Rgb)> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(dir)
-        .join(name);
+    let path = ircache_testing::project_scenes().join(dir).join(name);
     std::fs::read_to_string(path)
         .unwrap()
         .lines()
@@ -178,10 +172,7 @@ fn octrees_and_instances_match_radiance() {
 /// `E ρ / π`: E at the hit with its shading normal, ρ the material's albedo at the hit.
 fn check_reflected_along_rays(desc: &SceneDesc, dir: &str, reference: &str, tolerance: f32) {
     let scene = Scene::build(desc).unwrap();
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(dir)
-        .join(reference);
+    let path = ircache_testing::project_scenes().join(dir).join(reference);
     let text = std::fs::read_to_string(path).unwrap();
     let rays: Vec<(Vec3, Vec3, Rgb)> = text
         .lines()

@@ -546,10 +546,8 @@ mod tests {
     /// Writes an animation of the repository's cube-in-box scene with `body` as its tracks, in a
     /// scratch directory that goes when the first of the pair is dropped.
     fn animation_file(name: &str, body: &str) -> (ircache_testing::ScratchDir, std::path::PathBuf) {
-        let scene = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/cube-in-box/scene.xml"
-        );
+        let scene = ircache_testing::project_scenes().join("cube-in-box/scene.xml");
+        let scene = scene.display();
         let dir = ircache_testing::ScratchDir::new("anim");
         let path = dir.join(name);
         std::fs::write(
@@ -605,11 +603,8 @@ mod tests {
     fn animation_files_are_told_from_scenes_by_their_root() {
         let (_dir, anim) = animation_file("root.xml", "");
         assert!(is_animation(&anim).unwrap());
-        let scene = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/cube-in-box/scene.xml"
-        );
-        assert!(!is_animation(Path::new(scene)).unwrap());
+        let scene = ircache_testing::project_scenes().join("cube-in-box/scene.xml");
+        assert!(!is_animation(&scene).unwrap());
         // A scene whose comment mentions <animation> at a line's start is still a scene.
         let dir = anim.parent().unwrap().to_path_buf();
         let commented = dir.join("commented.xml");

@@ -503,7 +503,7 @@ fn gensky_prints_what_radiance_prints() {
 
 /// The octree of `scenes/radiance-octrees`.
 fn stool_octree() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/radiance-octrees/stool.oct")
+    ircache_testing::project_scenes().join("radiance-octrees/stool.oct")
 }
 
 fn ward_color(b: &BsdfDesc) -> Rgb {
@@ -599,8 +599,7 @@ fn damaged_octrees_and_instances_are_errors_naming_the_file() {
 #[test]
 fn meshes_keep_their_materials_normals_and_uvs_and_damaged_ones_are_errors() {
     let d = dir("meshes");
-    let rtm =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/radiance-octrees/bowl.rtm");
+    let rtm = ircache_testing::project_scenes().join("radiance-octrees/bowl.rtm");
     std::fs::copy(&rtm, d.join("bowl.rtm")).unwrap();
     let s = load(
         &d,
@@ -671,8 +670,8 @@ fn meshes_keep_their_materials_normals_and_uvs_and_damaged_ones_are_errors() {
 fn klems_bsdf_files_load_with_their_sides_and_errors_name_the_place() {
     use ircache_scene::klems::KlemsComponent;
     let d = dir("klems");
-    let xml = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes/radiance-bsdf/diffuser.xml")
+    let xml = ircache_testing::project_scenes()
+        .join("radiance-bsdf/diffuser.xml")
         .canonicalize()
         .unwrap();
     let text = std::fs::read_to_string(&xml).unwrap();

@@ -1,6 +1,6 @@
 //! What the tests of every ircache crate share (a dev-dependency only): scratch directories that
 //! a test writes its scene files, images and caches into, removed when the test ends, so a test
-//! run leaves nothing behind in the temporary directory.
+//! run leaves nothing behind in the temporary directory; and where the project's scenes lie.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -53,6 +53,13 @@ impl Drop for ScratchDir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
     }
+}
+
+/// The repository's own scenes folder (`scenes/`), where the tests find the project's scenes
+/// and their reference files.
+#[must_use]
+pub fn project_scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
 }
 
 #[cfg(test)]
