@@ -771,7 +771,7 @@ pub const PARAMS: &[ParamSpec] = &[
         aliases: &[],
         value: "N",
         help: "light samples per pixel sample at the first surface (one when the only light \
-               is a delta light)",
+               is a delta light, and in a still run's later frames of an animation)",
         shapes_records: false,
         get: |p| p.direct_samples.to_string(),
         set: |p, v| {
