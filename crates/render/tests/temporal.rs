@@ -465,19 +465,20 @@ fn still_pixels_render_the_same_direct_light_in_both_frames() {
 
 /// A still run's later frames take one light sample at each pixel sample's first vertex, where
 /// a pixel of its own takes `direct_samples` (4): the run's many pixel samples stratify the
-/// light already (BENCHMARKS.md, thirty-first session). Counted by the pixel pass's shadow
-/// rays on the still box (every first vertex diffuse and served by the cache, so no deeper
-/// vertex samples the light), and the two renders agree in the mean.
+/// light already (BENCHMARKS.md, thirty-first session); under adaptive sampling they keep
+/// all four. Counted by the pixel pass's shadow rays on the still box (every first vertex
+/// diffuse and served by the cache, so no deeper vertex samples the light), and the two
+/// renders agree in the mean.
 #[test]
 fn a_still_runs_later_frames_take_one_light_sample_a_pixel_sample() {
-    use ircache_render::render::render_runs;
+    use ircache_render::render::{render_runs, Adaptive};
     let (desc, anim) = load("still.xml", 32, 16);
-    let s = settings(&desc);
+    let mut s = settings(&desc);
     let integrator = Integrator::from_desc(&desc.integrator).expect("ic");
     let scene = Scene::build(&anim.scene_at(&desc, 0.0)).expect("scene");
     let pixels = s.width * s.height;
-    let pass = |drawn: u32| {
-        let out = render_runs(&scene, &integrator, &s, &|_| {}, Some(&vec![drawn; pixels]))
+    let pass = |s: &RenderSettings, drawn: u32| {
+        let out = render_runs(&scene, &integrator, s, &|_| {}, Some(&vec![drawn; pixels]))
             .expect("renders");
         let pre_pass = out.cache.as_ref().expect("the cache").stats.shadow_rays;
         let per_sample = (out.rays.shadow - pre_pass) as f64 / out.samples as f64;
@@ -490,8 +491,8 @@ fn a_still_runs_later_frames_take_one_light_sample_a_pixel_sample() {
             / pixels as f64;
         (per_sample, mean)
     };
-    let (own, own_mean) = pass(0);
-    let (continuing, continuing_mean) = pass(16);
+    let (own, own_mean) = pass(&s, 0);
+    let (continuing, continuing_mean) = pass(&s, 16);
     assert!(own > 2.5, "a pixel of its own: {own} shadow rays a sample");
     assert!(
         continuing > 0.5 && continuing <= 1.0,
@@ -501,4 +502,10 @@ fn a_still_runs_later_frames_take_one_light_sample_a_pixel_sample() {
         (continuing_mean / own_mean - 1.0).abs() < 0.02,
         "means {continuing_mean} and {own_mean}"
     );
+    s.sampling.adaptive = Some(Adaptive {
+        target: 0.01,
+        max_spp: 64,
+    });
+    let (adaptive, _) = pass(&s, 16);
+    assert!(adaptive > 2.5, "adaptive: {adaptive} shadow rays a sample");
 }

@@ -62,8 +62,8 @@ pub enum Parts {
     /// What the cache gives, alone: no light samples.
     Served,
     /// All of it for a pixel whose earlier frames' samples are kept (a still run's later
-    /// frames, [`crate::render::render_runs`]): one light sample at the first vertex, not
-    /// `direct_samples`, for the run's many pixel samples already stratify the light.
+    /// frames, [`crate::render::render_runs`]): a quarter of `direct_samples` at the first
+    /// vertex (one by default), for the run's many pixel samples stratify the light already.
     Continuing,
 }
 
@@ -243,12 +243,13 @@ impl IcIntegrator {
         parts: Parts,
     ) -> (Rgb, Rgb) {
         // One light sample when the only light is a delta light (all samples are alike).
-        let first_light_samples =
-            if parts == Parts::Continuing || scene.lights.all_delta() && scene.lights.len() == 1 {
-                1
-            } else {
-                self.params.direct_samples.max(1)
-            };
+        let first_light_samples = if scene.lights.all_delta() && scene.lights.len() == 1 {
+            1
+        } else if parts == Parts::Continuing {
+            self.params.direct_samples.div_ceil(4)
+        } else {
+            self.params.direct_samples.max(1)
+        };
         let settings = PathSettings {
             max_depth: self.params.max_depth(),
             rr_depth: RR_DEPTH,
