@@ -771,7 +771,8 @@ pub const PARAMS: &[ParamSpec] = &[
         aliases: &[],
         value: "N",
         help: "light samples per pixel sample at the first surface (one when the only light \
-               is a delta light, and in a still run's later frames of an animation)",
+               is a delta light; a quarter, rounded up, in the later frames of an animation's \
+               still runs unless --adaptive)",
         shapes_records: false,
         get: |p| p.direct_samples.to_string(),
         set: |p, v| {
