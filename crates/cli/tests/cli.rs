@@ -2,7 +2,7 @@
 //! (clear message with a location, non-zero exit, no panic, nothing written).
 
 use ircache_testing::ScratchDir;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn ircache(args: &[&str], dir: &Path) -> Output {
@@ -515,10 +515,8 @@ fn cache_file_is_reused_across_runs_and_views_and_refused_when_stale() {
 #[test]
 fn cache_file_holds_the_records_of_a_media_scene() {
     let d = temp_dir("cache-file-media");
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/cornell-fog/scene.xml"
-    );
+    let scene = ircache_testing::project_scenes().join("cornell-fog/scene.xml");
+    let scene = scene.to_str().unwrap();
     let render = |out: &str, extra: &[&str]| {
         let stats = format!("{out}.json");
         let mut args = vec![
@@ -596,10 +594,8 @@ fn cache_file_holds_the_records_of_a_media_scene() {
 #[test]
 fn media_scenes_refuse_what_their_cache_ignores() {
     let d = temp_dir("media-settings");
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/glass-in-fog/scene.xml"
-    );
+    let scene = ircache_testing::project_scenes().join("glass-in-fog/scene.xml");
+    let scene = scene.to_str().unwrap();
     let render_in = |scene: &str, extra: &[&str]| {
         let mut args = vec![
             "render",
@@ -949,10 +945,8 @@ fn unbounded_depth_and_other_renderers_integrators() {
 #[test]
 fn radiance_cache_renders_reports_and_reuses_its_records() {
     let d = temp_dir("radiance");
-    let scene = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/cornell-rough/scene.xml"
-    );
+    let scene = ircache_testing::project_scenes().join("cornell-rough/scene.xml");
+    let scene = scene.to_str().unwrap();
     let args = |out: &str, stats: &str| -> Vec<String> {
         one_bounce_at_32(
             scene,
@@ -1035,10 +1029,8 @@ fn automatic_radiance_caching_takes_metals_and_leaves_coatings() {
                 .to_string(),
         )
     };
-    let rough = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/cornell-rough/scene.xml"
-    );
+    let rough = ircache_testing::project_scenes().join("cornell-rough/scene.xml");
+    let rough = rough.to_str().unwrap();
     let (metals, mode) = radiance_records(rough, "rough.json");
     assert_eq!(mode, "auto");
     assert!(metals > 0, "cornell-rough: {metals} radiance records");
@@ -1242,10 +1234,11 @@ fn irradiance_at_points_under_a_sky_is_the_same_whether_the_records_hold_it() {
 
 /// The repository's `scenes/cube-in-box`.
 fn cube_in_box(file: &str) -> String {
-    format!(
-        "{}/../../scenes/cube-in-box/{file}",
-        env!("CARGO_MANIFEST_DIR")
-    )
+    ircache_testing::project_scenes()
+        .join("cube-in-box")
+        .join(file)
+        .display()
+        .to_string()
 }
 
 #[test]
@@ -1499,8 +1492,8 @@ fn rays_give_the_radiance_along_them() {
 fn rpict_command_lines_read_as_they_are() {
     // rpict's view options, -x and -y and -ab: the same picture as --view, --width, --height.
     let d = temp_dir("rpict");
-    let office = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes/radiance-office/office.rad")
+    let office = ircache_testing::project_scenes()
+        .join("radiance-office/office.rad")
         .canonicalize()
         .unwrap();
     let office = office.to_str().unwrap();
@@ -1545,8 +1538,8 @@ fn rpict_command_lines_read_as_they_are() {
 fn rays_through_stained_glass_match_radiance() {
     // What a ray sees through a pane whose pattern tints its transmission (Radiance's -ab 0
     // follows the pane's reflection to the lit floor: max_depth 3). Measured within 0.03 %.
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes/radiance-patterns")
+    let dir = ircache_testing::project_scenes()
+        .join("radiance-patterns")
         .canonicalize()
         .unwrap();
     let text = std::fs::read_to_string(dir.join("reference-stain-rays.txt")).unwrap();

@@ -2051,16 +2051,14 @@ fn mean_and_variance(v: &[f64]) -> (f64, f64) {
 fn marched_camera_rays_in_a_mirror_take_the_records_shorter_light() {
     let size = 48u32;
     let dir = ircache_testing::ScratchDir::new("mirror-fog");
-    let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes/glass-in-fog/scene.xml"),
-    )
-    .unwrap()
-    .replace(
-        "<bsdf type=\"roughconductor\">",
-        "<bsdf type=\"conductor\">",
-    )
-    .replace("<float name=\"alpha\" value=\"0.2\" />", "");
+    let text =
+        std::fs::read_to_string(ircache_testing::project_scenes().join("glass-in-fog/scene.xml"))
+            .unwrap()
+            .replace(
+                "<bsdf type=\"roughconductor\">",
+                "<bsdf type=\"conductor\">",
+            )
+            .replace("<float name=\"alpha\" value=\"0.2\" />", "");
     assert!(text.contains("<bsdf type=\"conductor\">"));
     let path = dir.join("scene.xml");
     std::fs::write(&path, text).unwrap();

@@ -12,7 +12,6 @@ use ircache_render::irradiance_cache::points::{irradiance_at_points, PointMethod
 use ircache_render::irradiance_cache::IcParams;
 use ircache_render::scene::Scene;
 use ircache_scene::{EmitterDesc, SceneDesc};
-use std::path::PathBuf;
 
 fn scene_file(dir: &str, file: &str) -> SceneDesc {
     let path = ircache_testing::project_scenes().join(dir).join(file);
@@ -314,8 +313,7 @@ fn light_through_a_trans_roof_matches_its_closed_form_and_radiance() {
 fn fisheye_and_panoramic_views_trace_radiance_s_rays() {
     // vwrays' rays for hemispherical, angular, planisphere and cylindrical views: the picture
     // size rpict fits, each pixel centre's direction, the pixels outside a fisheye's circle.
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes/radiance-office/reference-views.txt");
+    let path = ircache_testing::project_scenes().join("radiance-office/reference-views.txt");
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines().filter(|l| !l.starts_with('#')).peekable();
     let mut views = 0;
@@ -335,8 +333,7 @@ fn fisheye_and_panoramic_views_trace_radiance_s_rays() {
             height: Some(12),
             ..Default::default()
         };
-        let office = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes/radiance-office/office.rad");
+        let office = ircache_testing::project_scenes().join("radiance-office/office.rad");
         let desc = ircache_scene::load_scene(&office, &[], &camera).unwrap();
         let (w, h) = (desc.sensor.film.width, desc.sensor.film.height);
         assert_eq!((w, h), (size[0], size[1]), "{view}: the picture rpict fits");
@@ -395,8 +392,7 @@ fn a_hemispherical_fisheye_sees_the_irradiance_at_its_eye() {
         height: Some(48),
         ..Default::default()
     };
-    let office =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../scenes/radiance-office/office.rad");
+    let office = ircache_testing::project_scenes().join("radiance-office/office.rad");
     let mut desc = ircache_scene::load_scene(&office, &[], &camera).unwrap();
     desc.integrator.kind = "path".into();
     desc.integrator.max_depth = 5;
@@ -604,8 +600,8 @@ fn a_klems_diffuser_transmits_its_closed_form() {
         ("diffuser.xml", [0.35; 3], [0.2; 3]),
         ("tinted.xml", tinted, tinted.map(|t| t * 0.2 / 0.35)),
     ] {
-        let xml = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../scenes/radiance-bsdf")
+        let xml = ircache_testing::project_scenes()
+            .join("radiance-bsdf")
             .join(file)
             .canonicalize()
             .unwrap();

@@ -20,12 +20,9 @@ use ircache_render::splatting::{fill_misses, GBuffer, SplatBuffer};
 use ircache_scene::SceneDesc;
 
 fn cornell_rough(kind: &str, size: u32, spp: u32) -> SceneDesc {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../scenes/cornell-rough/scene.xml"
-    );
+    let path = ircache_testing::project_scenes().join("cornell-rough/scene.xml");
     let mut desc = ircache_scene::load_scene(
-        std::path::Path::new(path),
+        &path,
         &[("max_depth".into(), "3".into())],
         &ircache_scene::obj_scene::ObjCamera::default(),
     )

@@ -22,11 +22,10 @@ use ircache_scene::animation::{load_animation, Animation};
 use ircache_scene::SceneDesc;
 
 fn load(file: &str, size: u32, spp: u32) -> (SceneDesc, Animation) {
-    let path = format!(
-        "{}/../../scenes/cube-in-box/{file}",
-        env!("CARGO_MANIFEST_DIR")
-    );
-    let (mut desc, anim) = load_animation(std::path::Path::new(&path), &[]).expect("loads");
+    let path = ircache_testing::project_scenes()
+        .join("cube-in-box")
+        .join(file);
+    let (mut desc, anim) = load_animation(&path, &[]).expect("loads");
     desc.sensor.film.width = size;
     desc.sensor.film.height = size;
     desc.sensor.spp = spp;
@@ -141,10 +140,10 @@ fn sliding(
     frames: u32,
     overrides: &[(String, String)],
 ) -> (SceneDesc, Animation, std::path::PathBuf) {
-    let scene = format!(
-        "{}/../../scenes/{scene}/scene.xml",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let scene = ircache_testing::project_scenes()
+        .join(scene)
+        .join("scene.xml");
+    let scene = scene.display();
     let dir = ircache_testing::ScratchDir::new(&format!("temporal-{shape}"));
     let path = dir.join("animation.xml");
     std::fs::write(

@@ -1553,8 +1553,8 @@ fn perturbed_shading_follows_mitsuba() {
 /// Radiance's `BSDF` with the Klems matrices of `scenes/radiance-bsdf/<file>`, turned by
 /// `axis`, with Lambertian terms added.
 fn klems(file: &str, axis: [f32; 2], added: [f32; 3]) -> Bsdf {
-    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes/radiance-bsdf")
+    let path = ircache_testing::project_scenes()
+        .join("radiance-bsdf")
         .join(file);
     let data = Arc::new(ircache_scene::radiance::bsdf_xml::read(&path).unwrap());
     let mut b = mat(BsdfDesc::Klems {

@@ -274,11 +274,8 @@ mod tests {
         width: u32,
         max_depth: i32,
     ) -> (SceneDesc, Animation, crate::integrators::ic::IcIntegrator) {
-        let path = concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../scenes/cube-in-box/animation.xml"
-        );
-        let (mut desc, anim) = load_animation(std::path::Path::new(path), &[]).expect("loads");
+        let path = ircache_testing::project_scenes().join("cube-in-box/animation.xml");
+        let (mut desc, anim) = load_animation(&path, &[]).expect("loads");
         desc.sensor.film.width = width;
         desc.sensor.film.height = width;
         desc.integrator.max_depth = max_depth;

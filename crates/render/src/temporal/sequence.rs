@@ -957,13 +957,10 @@ mod tests {
         IcIntegrator,
         rayon::ThreadPool,
     ) {
-        let path = format!(
-            "{}/../../scenes/cube-in-box/{file}",
-            env!("CARGO_MANIFEST_DIR")
-        );
-        let (mut desc, anim) =
-            ircache_scene::animation::load_animation(std::path::Path::new(&path), &[])
-                .expect("loads");
+        let path = ircache_testing::project_scenes()
+            .join("cube-in-box")
+            .join(file);
+        let (mut desc, anim) = ircache_scene::animation::load_animation(&path, &[]).expect("loads");
         desc.sensor.film.width = size;
         desc.sensor.film.height = size;
         desc.integrator.max_depth = 4;
