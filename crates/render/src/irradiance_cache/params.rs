@@ -772,7 +772,7 @@ pub const PARAMS: &[ParamSpec] = &[
         value: "N",
         help: "light samples per pixel sample at the first surface (one when the only light \
                is a delta light; a quarter, rounded up, in the later frames of an animation's \
-               still runs unless --adaptive)",
+               still runs in a scene of one light, unless --adaptive)",
         shapes_records: false,
         get: |p| p.direct_samples.to_string(),
         set: |p, v| {
